@@ -1,0 +1,42 @@
+# Warnings on everywhere; IVOA_WERROR (on in CI) turns them into errors.
+option(IVOA_WERROR "Treat compiler warnings as errors" OFF)
+
+find_program(CCACHE_PROGRAM ccache)
+if(CCACHE_PROGRAM)
+  set(CMAKE_C_COMPILER_LAUNCHER ${CCACHE_PROGRAM})
+  set(CMAKE_CXX_COMPILER_LAUNCHER ${CCACHE_PROGRAM})
+endif()
+
+add_library(ivoa_warnings INTERFACE)
+target_compile_options(ivoa_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor -Woverloaded-virtual
+  $<$<BOOL:${IVOA_WERROR}>:-Werror>)
+
+# ivoa_add_library(name SOURCES ... DEPS ...): a library under libs/ with
+# include/ as its public header root, exported as ivoa::name.
+function(ivoa_add_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
+  add_library(ivoa_${name} ${ARG_SOURCES})
+  add_library(ivoa::${name} ALIAS ivoa_${name})
+  target_include_directories(ivoa_${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  target_link_libraries(ivoa_${name} PUBLIC ${ARG_DEPS} PRIVATE ivoa_warnings ${ARG_PRIVATE_DEPS})
+endfunction()
+
+# ivoa_add_executable(name SOURCES ... DEPS ...): an executable in build/bin.
+function(ivoa_add_executable name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ivoa_warnings ${ARG_DEPS})
+endfunction()
+
+# Add every immediate subfolder of the current folder that has a CMakeLists.txt,
+# so a new module is picked up by creating its folder.
+function(ivoa_add_subfolders)
+  file(GLOB children RELATIVE ${CMAKE_CURRENT_SOURCE_DIR} CONFIGURE_DEPENDS
+       ${CMAKE_CURRENT_SOURCE_DIR}/*/CMakeLists.txt)
+  list(SORT children)
+  foreach(child ${children})
+    get_filename_component(dir ${child} DIRECTORY)
+    add_subdirectory(${dir})
+  endforeach()
+endfunction()

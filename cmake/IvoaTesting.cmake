@@ -1,0 +1,32 @@
+include(GoogleTest)
+
+# ivoa_add_gtest(name SOURCES ... DEPS ... [LABELS ...]): a GoogleTest
+# executable whose cases are registered with CTest one by one.
+function(ivoa_add_gtest name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ivoa_warnings GTest::gtest GTest::gtest_main ${ARG_DEPS})
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
+  gtest_discover_tests(${name}
+    DISCOVERY_TIMEOUT 120
+    PROPERTIES LABELS "${ARG_LABELS};unit")
+endfunction()
+
+# ivoa_add_netns_test(name COMMAND ... [TIMEOUT s] [LABELS ...]): runs COMMAND
+# inside a private network namespace with only a multicast-capable loopback
+# (tests/harness/in_netns.sh), so real udpm LCM traffic never leaves the
+# test. Reported as skipped, with the reason, where namespaces are forbidden.
+function(ivoa_add_netns_test name)
+  cmake_parse_arguments(ARG "" "TIMEOUT" "COMMAND;LABELS" ${ARGN})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 120)
+  endif()
+  add_test(NAME ${name}
+    COMMAND ${CMAKE_SOURCE_DIR}/tests/harness/in_netns.sh ${ARG_COMMAND}
+    WORKING_DIRECTORY ${CMAKE_BINARY_DIR})
+  set_tests_properties(${name} PROPERTIES
+    SKIP_RETURN_CODE 77
+    TIMEOUT ${ARG_TIMEOUT}
+    LABELS "${ARG_LABELS};integration"
+    ENVIRONMENT "IVOA_BUILD_DIR=${CMAKE_BINARY_DIR};IVOA_SOURCE_DIR=${CMAKE_SOURCE_DIR}")
+endfunction()

@@ -1,0 +1,68 @@
+#pragma once
+// The query grid as carried by obstacle_grid_t and introspection_labels_t:
+// building messages from a QueryGrid, and checking that a received grid has
+// the geometry a process was configured with.
+#include <cmath>
+#include <string>
+
+#include "ivoa/core/query_grid.hpp"
+#include "ivoa/obstacle_grid_t.hpp"
+
+namespace CLI {
+class App;
+}
+
+namespace ivoa {
+
+// Adds --grid-x-min ... --safety-radius, --patch-size flags for `config`.
+void add_query_grid_options(CLI::App& app, QueryGridConfig& config);
+
+// An obstacle grid for `grid` with every cell UNKNOWN.
+obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& detector, int64_t utime);
+
+// Copies the geometry fields shared by obstacle_grid_t and introspection_labels_t.
+template <class Msg>
+void set_geometry(Msg& msg, const QueryGridConfig& c, int num_x, int num_y) {
+  msg.x_min = c.x_min;
+  msg.x_max = c.x_max;
+  msg.y_min = c.y_min;
+  msg.y_max = c.y_max;
+  msg.spacing = c.spacing;
+  msg.num_x = num_x;
+  msg.num_y = num_y;
+  msg.safety_radius = c.safety_radius;
+  msg.patch_size = c.patch_size;
+}
+
+template <class Msg>
+QueryGridConfig geometry_of(const Msg& msg) {
+  QueryGridConfig c;
+  c.x_min = msg.x_min;
+  c.x_max = msg.x_max;
+  c.y_min = msg.y_min;
+  c.y_max = msg.y_max;
+  c.spacing = msg.spacing;
+  c.safety_radius = msg.safety_radius;
+  c.patch_size = msg.patch_size;
+  return c;
+}
+
+// Empty if `msg` has the geometry of `grid`, otherwise what differs.
+template <class Msg>
+std::string geometry_mismatch(const Msg& msg, const QueryGrid& grid) {
+  const QueryGridConfig& c = grid.config();
+  auto near = [](double a, double b) { return std::abs(a - b) < 1e-6; };
+  if (msg.num_x != grid.num_x() || msg.num_y != grid.num_y() || msg.num_cells != grid.size())
+    return "grid is " + std::to_string(msg.num_x) + "x" + std::to_string(msg.num_y) + " (" +
+           std::to_string(msg.num_cells) + " cells), configured " + std::to_string(grid.num_x()) + "x" +
+           std::to_string(grid.num_y());
+  if (!near(msg.x_min, c.x_min) || !near(msg.x_max, c.x_max) || !near(msg.y_min, c.y_min) ||
+      !near(msg.y_max, c.y_max) || !near(msg.spacing, c.spacing))
+    return "grid extents or spacing differ from the configured grid";
+  if (!near(msg.safety_radius, c.safety_radius))
+    return "safety radius " + std::to_string(msg.safety_radius) + " m, configured " +
+           std::to_string(c.safety_radius) + " m";
+  return "";
+}
+
+}  // namespace ivoa

@@ -1,0 +1,42 @@
+#pragma once
+// Conversions between LCM image messages and cv::Mat.
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace ivoa {
+class image_t;
+class depth_image_t;
+
+// Thrown for an image message that cannot be decoded; what() says why.
+class ImageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class ColorOutput { kBgr, kGray };
+
+// Decodes any supported image_t (gray, RGB, BGR, the four Bayer layouts,
+// JPEG, PNG) into an 8-bit BGR or gray cv::Mat that owns its data.
+cv::Mat decode_image(const image_t& msg, ColorOutput output = ColorOutput::kBgr);
+
+// Encodes an 8-bit BGR (3 channels) or gray image. `pixelformat` picks the
+// wire format: GRAY, RGB, BGR, a BAYER_* layout (mosaiced here), JPEG or PNG.
+image_t encode_image(const cv::Mat& image, int32_t pixelformat, int64_t utime, int jpeg_quality = 90);
+
+// Samples a BGR image through a Bayer colour filter array (one 8-bit
+// channel), as a Bayer sensor would record it.
+cv::Mat mosaic_bayer(const cv::Mat& bgr, int32_t bayer_pixelformat);
+
+// The OpenCV conversion code that demosaics a Bayer layout to BGR. Note the
+// naming offset: GenICam BayerRG8 (row 0 = R G) is cv::COLOR_BayerBG2BGR.
+int bayer_to_bgr_code(int32_t bayer_pixelformat);
+bool is_bayer(int32_t pixelformat);
+std::string pixelformat_name(int32_t pixelformat);
+
+// Depth images: CV_16UC1 millimetres, 0 = invalid.
+cv::Mat decode_depth(const depth_image_t& msg);
+depth_image_t encode_depth(const cv::Mat& depth_mm, double fx, double fy, double cx, double cy, int64_t utime);
+
+}  // namespace ivoa

@@ -1,0 +1,24 @@
+#pragma once
+// Every ivoa message type with its LCM fingerprint, so tools that see raw
+// payloads (logger, stats, dataset) can tell what a channel carries.
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+#include <vector>
+
+namespace ivoa {
+
+struct MessageTypeInfo {
+  std::string_view name;  // "ivoa.image_t"
+  int64_t fingerprint;    // the first 8 bytes of every encoded message
+};
+
+const std::vector<MessageTypeInfo>& message_types();
+
+// The fingerprint an encoded payload starts with; empty if it is too short.
+std::optional<int64_t> payload_fingerprint(const void* data, size_t size);
+// "ivoa.stereo_image_t", or empty for a payload of another or unknown type.
+std::optional<std::string_view> payload_type_name(const void* data, size_t size);
+
+}  // namespace ivoa

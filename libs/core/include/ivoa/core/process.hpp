@@ -1,0 +1,48 @@
+#pragma once
+// What every executable shares: logging set up one way, common flags
+// (LCM URL, log level, config file), meaningful exit codes, and the loop
+// that handles LCM until SIGINT/SIGTERM.
+#include <functional>
+#include <string>
+
+namespace CLI {
+class App;
+}
+
+namespace ivoa {
+class Bus;
+class Heartbeat;
+
+// Exit codes (documented in the README).
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitFailure = 1,        // runtime failure (LCM, device, ...)
+  kExitUsage = 2,          // bad flags or config
+  kExitBadInput = 3,       // an input file is unusable (calibration, log, model)
+  kExitIoError = 4,        // cannot write output (disk full, permissions)
+};
+
+struct CommonOptions {
+  std::string lcm_url;            // empty = default_lcm_url()
+  std::string log_level = "info";
+};
+
+// Adds --lcm-url, --log-level and --config (a TOML/INI file that sets any
+// flag by its long name, e.g. `conf_pos_thresh = 0.75`).
+void add_common_options(CLI::App& app, CommonOptions& options);
+
+// Parses argv; on --help or a usage error prints and returns the exit code
+// to use, otherwise returns -1 and the caller continues.
+int parse_command_line(CLI::App& app, int argc, char** argv);
+
+// Sets up spdlog (stderr, one pattern for every process).
+void init_logging(const std::string& process_name, const std::string& level);
+
+// Handles LCM until a stop is requested, calling `periodic` (if any) and
+// heartbeat.tick() at least every `poll_ms`. Returns kExitFailure if LCM
+// fails, kExitOk otherwise; with `stop_at_end_of_log` an end of a file://
+// log also ends the loop normally.
+int run_until_stopped(Bus& bus, Heartbeat* heartbeat, const std::function<void()>& periodic = {},
+                      int poll_ms = 50, bool stop_at_end_of_log = false);
+
+}  // namespace ivoa

@@ -1,0 +1,60 @@
+#include "ivoa/core/bus.hpp"
+
+#include <cstdlib>
+
+#include <spdlog/spdlog.h>
+
+namespace ivoa {
+
+std::string with_receive_buffer(const std::string& url) {
+  if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
+  const char sep = url.find('?') == std::string::npos ? '?' : '&';
+  return url + sep + "recv_buf_size=" + std::to_string(kReceiveBufferBytes);
+}
+
+std::string default_lcm_url() {
+  const char* env = std::getenv("LCM_DEFAULT_URL");
+  return with_receive_buffer(env && *env ? env : kProjectDefaultUrl);
+}
+
+// Owns the std::function for LCM 1.3.1, which has no lambda subscribe.
+struct Bus::Subscription {
+  RawHandler handler;
+  void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    handler(rbuf->data, rbuf->data_size, ReceiveInfo{channel, rbuf->recv_utime, rbuf->data_size});
+  }
+};
+
+Bus::Bus(const std::string& url) : url_(url.empty() ? default_lcm_url() : url) {
+  lcm_ = std::make_unique<lcm::LCM>(url_);
+  if (!lcm_->good())
+    throw BusError("cannot start LCM on '" + url_ +
+                   "' (for udpm: is there a multicast route? e.g. ip route add 224.0.0.0/4 dev lo)");
+}
+
+Bus::~Bus() = default;
+
+bool Bus::publish_raw(std::string_view channel, const void* data, size_t size) {
+  std::lock_guard<std::mutex> lock(publish_mutex_);
+  return lcm_->publish(std::string(channel), data, static_cast<unsigned int>(size)) == 0;
+}
+
+void Bus::subscribe_raw(std::string_view channel_regex, RawHandler handler) {
+  auto sub = std::make_unique<Subscription>();
+  sub->handler = std::move(handler);
+  lcm::Subscription* s = lcm_->subscribe(std::string(channel_regex), &Subscription::on_message, sub.get());
+  if (s == nullptr) throw BusError("cannot subscribe to '" + std::string(channel_regex) + "'");
+  // Images arrive in bursts; keep more than LCM's default 30 queued per
+  // subscription so short stalls do not drop messages.
+  s->setQueueCapacity(120);
+  subscriptions_.push_back(std::move(sub));
+}
+
+int Bus::handle(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
+
+void Bus::report_decode_error(const std::string& what) {
+  if (decode_error_handler_) decode_error_handler_(what);
+  else spdlog::warn("{}", what);
+}
+
+}  // namespace ivoa

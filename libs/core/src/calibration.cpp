@@ -1,0 +1,228 @@
+#include "ivoa/core/calibration.hpp"
+
+#include <cmath>
+
+#include <opencv2/core.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include "ivoa/rig_calibration_t.hpp"
+
+namespace ivoa {
+namespace {
+
+void check(bool ok, const std::string& where, const std::string& what) {
+  if (!ok) throw CalibrationError(where + ": " + what);
+}
+
+void validate_rotation(const Eigen::Matrix3d& R, const std::string& where, const std::string& key) {
+  const double orthogonality = (R * R.transpose() - Eigen::Matrix3d::Identity()).norm();
+  check(R.allFinite() && orthogonality < 1e-3 && std::abs(R.determinant() - 1.0) < 1e-3, where,
+        key + " is not a rotation matrix (orthogonality error " + std::to_string(orthogonality) + ")");
+}
+
+void validate_camera(const CameraIntrinsics& cam, const std::string& where, const std::string& key) {
+  check(cam.width > 0 && cam.height > 0, where, key + " image size must be positive, got " +
+                                                    std::to_string(cam.width) + "x" + std::to_string(cam.height));
+  check(cam.K.allFinite() && cam.K(0, 0) > 0 && cam.K(1, 1) > 0, where,
+        key + " focal lengths must be positive and finite");
+  check(cam.K(2, 0) == 0 && cam.K(2, 1) == 0 && cam.K(2, 2) == 1, where, key + " last row must be [0 0 1]");
+  for (double d : cam.D) check(std::isfinite(d), where, key + " distortion must be finite");
+}
+
+Eigen::Matrix3d read_matrix3(const cv::FileStorage& fs, const std::string& key, const std::string& path) {
+  cv::Mat m;
+  fs[key] >> m;
+  check(!m.empty(), path, "missing key '" + key + "' (3x3 matrix)");
+  check(m.rows == 3 && m.cols == 3, path, "key '" + key + "' must be 3x3");
+  m.convertTo(m, CV_64F);
+  Eigen::Matrix3d out;
+  cv::cv2eigen(m, out);
+  return out;
+}
+
+Eigen::Vector3d read_vector3(const cv::FileStorage& fs, const std::string& key, const std::string& path) {
+  cv::Mat m;
+  const cv::FileNode node = fs[key];
+  check(!node.empty(), path, "missing key '" + key + "' (3-vector)");
+  if (node.isSeq()) {  // JPP writes T as a plain YAML sequence
+    std::vector<double> v;
+    node >> v;
+    m = cv::Mat(v, true);
+  } else {
+    node >> m;
+  }
+  check(m.total() == 3, path, "key '" + key + "' must have 3 elements");
+  m.convertTo(m, CV_64F);
+  m = m.reshape(1, 3);
+  return {m.at<double>(0), m.at<double>(1), m.at<double>(2)};
+}
+
+CameraIntrinsics read_camera(const cv::FileStorage& fs, const std::string& name, const std::string& K_key,
+                             const std::string& D_key, const std::string& path) {
+  CameraIntrinsics cam;
+  cam.name = name;
+  const cv::FileNode w = fs[name + "_width"], h = fs[name + "_height"];
+  check(!w.empty() && !h.empty(), path, "missing key '" + name + "_width' or '" + name + "_height'");
+  cam.width = static_cast<int>(w);
+  cam.height = static_cast<int>(h);
+  cam.K = read_matrix3(fs, K_key, path);
+  cv::Mat D;
+  fs[D_key] >> D;
+  check(!D.empty(), path, "missing key '" + D_key + "' (1x5 distortion)");
+  check(D.total() == 5 || D.total() == 4, path, "key '" + D_key + "' must have 4 or 5 elements");
+  D.convertTo(D, CV_64F);
+  for (size_t i = 0; i < D.total(); ++i) cam.D[i] = D.at<double>(static_cast<int>(i));
+  return cam;
+}
+
+Eigen::Isometry3d make_isometry(const Eigen::Matrix3d& R, const Eigen::Vector3d& T) {
+  Eigen::Isometry3d iso = Eigen::Isometry3d::Identity();
+  iso.linear() = R;
+  iso.translation() = T;
+  return iso;
+}
+
+void write_camera(cv::FileStorage& fs, const CameraIntrinsics& cam, const std::string& K_key,
+                  const std::string& D_key) {
+  fs << cam.name + "_width" << cam.width << cam.name + "_height" << cam.height;
+  cv::Mat K;
+  cv::eigen2cv(cam.K, K);
+  fs << K_key << K << D_key << cv::Mat(1, 5, CV_64F, const_cast<double*>(cam.D.data()));
+}
+
+void write_transform(cv::FileStorage& fs, const Eigen::Isometry3d& iso, const std::string& R_key,
+                     const std::string& T_key) {
+  cv::Mat R, T;
+  cv::eigen2cv(Eigen::Matrix3d(iso.linear()), R);
+  cv::eigen2cv(Eigen::Vector3d(iso.translation()), T);
+  fs << R_key << R << T_key << T;
+}
+
+template <size_t N>
+void copy_out(const Eigen::MatrixXd& m, double (&dst)[N]) {  // row-major
+  for (Eigen::Index r = 0; r < m.rows(); ++r)
+    for (Eigen::Index c = 0; c < m.cols(); ++c) dst[r * m.cols() + c] = m(r, c);
+}
+
+Eigen::Matrix3d matrix_in(const double (&src)[9]) {
+  return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(src);
+}
+
+camera_intrinsics_t camera_to_message(const CameraIntrinsics& cam, int64_t utime) {
+  camera_intrinsics_t msg;
+  msg.utime = utime;
+  msg.name = cam.name;
+  msg.width = cam.width;
+  msg.height = cam.height;
+  copy_out(cam.K, msg.K);
+  for (size_t i = 0; i < 5; ++i) msg.D[i] = cam.D[i];
+  return msg;
+}
+
+CameraIntrinsics camera_from_message(const camera_intrinsics_t& msg) {
+  CameraIntrinsics cam;
+  cam.name = msg.name;
+  cam.width = msg.width;
+  cam.height = msg.height;
+  cam.K = matrix_in(msg.K);
+  for (size_t i = 0; i < 5; ++i) cam.D[i] = msg.D[i];
+  return cam;
+}
+
+}  // namespace
+
+void validate(const RigCalibration& rig, const std::string& where) {
+  validate_camera(rig.left, where, "left camera");
+  validate_camera(rig.right, where, "right camera");
+  validate_camera(rig.depth, where, "depth sensor");
+  validate_rotation(rig.stereo_R, where, "stereo R");
+  check(rig.stereo_T.allFinite() && rig.baseline() > 1e-3, where, "stereo T must be a non-zero baseline");
+  validate_rotation(rig.left_to_robot.linear(), where, "left camera -> robot rotation");
+  validate_rotation(rig.depth_to_robot.linear(), where, "depth sensor -> robot rotation");
+  check(rig.left_to_robot.translation().allFinite() && rig.depth_to_robot.translation().allFinite(), where,
+        "camera -> robot translations must be finite");
+  check(rig.depth_min_range > 0 && rig.depth_max_range > rig.depth_min_range, where,
+        "depth range must satisfy 0 < min < max");
+}
+
+RigCalibration load_rig_calibration(const std::string& path) {
+  cv::FileStorage fs;
+  try {
+    fs.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw CalibrationError(path + ": not a readable OpenCV YAML file (" + e.msg + ")");
+  }
+  check(fs.isOpened(), path, "cannot open calibration file");
+  RigCalibration rig;
+  fs["rig_name"] >> rig.rig_name;
+  rig.left = read_camera(fs, "left", "K1", "D1", path);
+  rig.right = read_camera(fs, "right", "K2", "D2", path);
+  rig.stereo_R = read_matrix3(fs, "R", path);
+  rig.stereo_T = read_vector3(fs, "T", path);
+  rig.left_to_robot = make_isometry(read_matrix3(fs, "XR", path), read_vector3(fs, "XT", path));
+  rig.depth = read_camera(fs, "depth", "K_depth", "D_depth", path);
+  rig.depth_to_robot = make_isometry(read_matrix3(fs, "XR_depth", path), read_vector3(fs, "XT_depth", path));
+  if (!fs["depth_min_range"].empty()) fs["depth_min_range"] >> rig.depth_min_range;
+  if (!fs["depth_max_range"].empty()) fs["depth_max_range"] >> rig.depth_max_range;
+  validate(rig, path);
+  return rig;
+}
+
+void save_rig_calibration(const RigCalibration& rig, const std::string& path) {
+  cv::FileStorage fs(path, cv::FileStorage::WRITE);
+  check(fs.isOpened(), path, "cannot open calibration file for writing");
+  fs.writeComment(
+      "IVOA rig calibration. Robot frame: x forward, y left, z up, ground z = 0, metres.\n"
+      "Camera frames are optical (x right, y down, z forward) for the raw images.\n"
+      "K1/D1 left, K2/D2 right, R/T left -> right (p_right = R p_left + T),\n"
+      "XR/XT left camera -> robot (p_robot = XR p_left + XT), *_depth for the depth sensor.");
+  fs << "rig_name" << rig.rig_name;
+  write_camera(fs, rig.left, "K1", "D1");
+  write_camera(fs, rig.right, "K2", "D2");
+  cv::Mat R, T;
+  cv::eigen2cv(rig.stereo_R, R);
+  cv::eigen2cv(rig.stereo_T, T);
+  fs << "R" << R << "T" << T;
+  write_transform(fs, rig.left_to_robot, "XR", "XT");
+  write_camera(fs, rig.depth, "K_depth", "D_depth");
+  write_transform(fs, rig.depth_to_robot, "XR_depth", "XT_depth");
+  fs << "depth_min_range" << rig.depth_min_range << "depth_max_range" << rig.depth_max_range;
+}
+
+rig_calibration_t to_message(const RigCalibration& rig, int64_t utime) {
+  rig_calibration_t msg;
+  msg.utime = utime;
+  msg.rig_name = rig.rig_name;
+  msg.left = camera_to_message(rig.left, 0);
+  msg.right = camera_to_message(rig.right, 0);
+  copy_out(rig.stereo_R, msg.stereo_R);
+  copy_out(rig.stereo_T, msg.stereo_T);
+  copy_out(Eigen::Matrix3d(rig.left_to_robot.linear()), msg.left_to_robot_R);
+  copy_out(Eigen::Vector3d(rig.left_to_robot.translation()), msg.left_to_robot_T);
+  msg.depth = camera_to_message(rig.depth, 0);
+  copy_out(Eigen::Matrix3d(rig.depth_to_robot.linear()), msg.depth_to_robot_R);
+  copy_out(Eigen::Vector3d(rig.depth_to_robot.translation()), msg.depth_to_robot_T);
+  msg.depth_min_range = rig.depth_min_range;
+  msg.depth_max_range = rig.depth_max_range;
+  return msg;
+}
+
+RigCalibration from_message(const rig_calibration_t& msg) {
+  RigCalibration rig;
+  rig.rig_name = msg.rig_name;
+  rig.left = camera_from_message(msg.left);
+  rig.right = camera_from_message(msg.right);
+  rig.stereo_R = matrix_in(msg.stereo_R);
+  rig.stereo_T = {msg.stereo_T[0], msg.stereo_T[1], msg.stereo_T[2]};
+  rig.left_to_robot = make_isometry(matrix_in(msg.left_to_robot_R),
+                                    {msg.left_to_robot_T[0], msg.left_to_robot_T[1], msg.left_to_robot_T[2]});
+  rig.depth = camera_from_message(msg.depth);
+  rig.depth_to_robot = make_isometry(matrix_in(msg.depth_to_robot_R),
+                                     {msg.depth_to_robot_T[0], msg.depth_to_robot_T[1], msg.depth_to_robot_T[2]});
+  rig.depth_min_range = msg.depth_min_range;
+  rig.depth_max_range = msg.depth_max_range;
+  validate(rig, "rig_calibration_t message '" + msg.rig_name + "'");
+  return rig;
+}
+
+}  // namespace ivoa

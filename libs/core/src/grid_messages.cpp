@@ -1,0 +1,46 @@
+#include "ivoa/core/grid_messages.hpp"
+
+#include <CLI/CLI.hpp>
+
+namespace ivoa {
+
+void add_query_grid_options(CLI::App& app, QueryGridConfig& c) {
+  auto* g = "Query grid (robot frame, metres)";
+  app.add_option("--grid-x-min", c.x_min, "nearest grid row ahead of the robot, m")->capture_default_str()->group(g);
+  app.add_option("--grid-x-max", c.x_max, "farthest grid row, m")->capture_default_str()->group(g);
+  app.add_option("--grid-y-min", c.y_min, "rightmost grid column, m")->capture_default_str()->group(g);
+  app.add_option("--grid-y-max", c.y_max, "leftmost grid column, m")->capture_default_str()->group(g);
+  app.add_option("--grid-spacing", c.spacing, "distance between grid points, m")->capture_default_str()->group(g);
+  app.add_option("--safety-radius", c.safety_radius, "footprint radius r checked around each point, m")
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--patch-size", c.patch_size, "introspection patch side, pixels")->capture_default_str()->group(g);
+}
+
+obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& detector, int64_t utime) {
+  obstacle_grid_t msg;
+  msg.utime = utime;
+  msg.detector = detector;
+  msg.depth_utime = 0;
+  set_geometry(msg, grid.config(), grid.num_x(), grid.num_y());
+  const size_t n = static_cast<size_t>(grid.size());
+  msg.state.assign(n, obstacle_grid_t::STATE_UNKNOWN);
+  msg.x.resize(n);
+  msg.y.resize(n);
+  msg.u.resize(n);
+  msg.v.resize(n);
+  msg.in_image.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const QueryCell& cell = grid.cells()[i];
+    msg.x[i] = static_cast<float>(cell.x);
+    msg.y[i] = static_cast<float>(cell.y);
+    msg.u[i] = static_cast<float>(cell.u);
+    msg.v[i] = static_cast<float>(cell.v);
+    msg.in_image[i] = cell.in_image ? 1 : 0;
+  }
+  msg.num_cells = static_cast<int32_t>(n);
+  msg.compute_ms = 0;
+  return msg;
+}
+
+}  // namespace ivoa

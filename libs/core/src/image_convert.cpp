@@ -1,0 +1,205 @@
+#include "ivoa/core/image_convert.hpp"
+
+#include <cstring>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "ivoa/depth_image_t.hpp"
+#include "ivoa/image_t.hpp"
+
+namespace ivoa {
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw ImageError(what);
+}
+
+// Wraps the raw pixels of msg (no copy) after checking sizes.
+cv::Mat wrap_raw(const image_t& msg, int type, int bytes_per_pixel) {
+  require(msg.width > 0 && msg.height > 0, "image has non-positive size " + std::to_string(msg.width) + "x" +
+                                               std::to_string(msg.height));
+  require(msg.row_stride >= msg.width * bytes_per_pixel,
+          "row_stride " + std::to_string(msg.row_stride) + " is smaller than width * " +
+              std::to_string(bytes_per_pixel) + " for " + pixelformat_name(msg.pixelformat));
+  const size_t needed = static_cast<size_t>(msg.row_stride) * static_cast<size_t>(msg.height);
+  require(msg.data.size() >= needed, pixelformat_name(msg.pixelformat) + " image " + std::to_string(msg.width) +
+                                         "x" + std::to_string(msg.height) + " needs " + std::to_string(needed) +
+                                         " bytes, message has " + std::to_string(msg.data.size()));
+  return cv::Mat(msg.height, msg.width, type, const_cast<uint8_t*>(msg.data.data()),
+                 static_cast<size_t>(msg.row_stride));
+}
+
+cv::Mat to_output(const cv::Mat& src, ColorOutput output) {
+  const bool want_color = output == ColorOutput::kBgr;
+  if ((src.channels() == 3) == want_color) return src.clone();
+  cv::Mat out;
+  cv::cvtColor(src, out, want_color ? cv::COLOR_GRAY2BGR : cv::COLOR_BGR2GRAY);
+  return out;
+}
+
+}  // namespace
+
+bool is_bayer(int32_t f) {
+  return f == image_t::PIXEL_FORMAT_BAYER_RGGB || f == image_t::PIXEL_FORMAT_BAYER_BGGR ||
+         f == image_t::PIXEL_FORMAT_BAYER_GBRG || f == image_t::PIXEL_FORMAT_BAYER_GRBG;
+}
+
+std::string pixelformat_name(int32_t f) {
+  switch (f) {
+    case image_t::PIXEL_FORMAT_GRAY: return "GRAY";
+    case image_t::PIXEL_FORMAT_RGB: return "RGB";
+    case image_t::PIXEL_FORMAT_BGR: return "BGR";
+    case image_t::PIXEL_FORMAT_BAYER_RGGB: return "BAYER_RGGB";
+    case image_t::PIXEL_FORMAT_BAYER_BGGR: return "BAYER_BGGR";
+    case image_t::PIXEL_FORMAT_BAYER_GBRG: return "BAYER_GBRG";
+    case image_t::PIXEL_FORMAT_BAYER_GRBG: return "BAYER_GRBG";
+    case image_t::PIXEL_FORMAT_JPEG: return "JPEG";
+    case image_t::PIXEL_FORMAT_PNG: return "PNG";
+    default: return "unknown pixel format " + std::to_string(f);
+  }
+}
+
+int bayer_to_bgr_code(int32_t f) {
+  // OpenCV names Bayer patterns by the second row's second and third pixels.
+  switch (f) {
+    case image_t::PIXEL_FORMAT_BAYER_RGGB: return cv::COLOR_BayerBG2BGR;
+    case image_t::PIXEL_FORMAT_BAYER_BGGR: return cv::COLOR_BayerRG2BGR;
+    case image_t::PIXEL_FORMAT_BAYER_GBRG: return cv::COLOR_BayerGR2BGR;
+    case image_t::PIXEL_FORMAT_BAYER_GRBG: return cv::COLOR_BayerGB2BGR;
+    default: throw ImageError("not a Bayer pixel format: " + pixelformat_name(f));
+  }
+}
+
+cv::Mat mosaic_bayer(const cv::Mat& bgr, int32_t f) {
+  require(bgr.type() == CV_8UC3, "mosaic_bayer needs an 8-bit BGR image");
+  // Channel index (B=0, G=1, R=2) of the filter at (row parity, column parity).
+  int pattern[2][2];
+  switch (f) {
+    case image_t::PIXEL_FORMAT_BAYER_RGGB: pattern[0][0] = 2; pattern[0][1] = 1; pattern[1][0] = 1; pattern[1][1] = 0; break;
+    case image_t::PIXEL_FORMAT_BAYER_BGGR: pattern[0][0] = 0; pattern[0][1] = 1; pattern[1][0] = 1; pattern[1][1] = 2; break;
+    case image_t::PIXEL_FORMAT_BAYER_GBRG: pattern[0][0] = 1; pattern[0][1] = 0; pattern[1][0] = 2; pattern[1][1] = 1; break;
+    case image_t::PIXEL_FORMAT_BAYER_GRBG: pattern[0][0] = 1; pattern[0][1] = 2; pattern[1][0] = 0; pattern[1][1] = 1; break;
+    default: throw ImageError("not a Bayer pixel format: " + pixelformat_name(f));
+  }
+  cv::Mat raw(bgr.size(), CV_8UC1);
+  for (int r = 0; r < bgr.rows; ++r) {
+    const auto* src = bgr.ptr<cv::Vec3b>(r);
+    auto* dst = raw.ptr<uint8_t>(r);
+    const int* row_pattern = pattern[r & 1];
+    for (int c = 0; c < bgr.cols; ++c) dst[c] = src[c][row_pattern[c & 1]];
+  }
+  return raw;
+}
+
+cv::Mat decode_image(const image_t& msg, ColorOutput output) {
+  require(static_cast<size_t>(msg.size) == msg.data.size(),
+          "image size field " + std::to_string(msg.size) + " disagrees with " + std::to_string(msg.data.size()) +
+              " data bytes");
+  const int32_t f = msg.pixelformat;
+  if (f == image_t::PIXEL_FORMAT_GRAY) return to_output(wrap_raw(msg, CV_8UC1, 1), output);
+  if (f == image_t::PIXEL_FORMAT_BGR) return to_output(wrap_raw(msg, CV_8UC3, 3), output);
+  if (f == image_t::PIXEL_FORMAT_RGB) {
+    cv::Mat bgr;
+    cv::cvtColor(wrap_raw(msg, CV_8UC3, 3), bgr, cv::COLOR_RGB2BGR);
+    return output == ColorOutput::kBgr ? bgr : to_output(bgr, output);
+  }
+  if (is_bayer(f)) {
+    cv::Mat bgr;
+    cv::cvtColor(wrap_raw(msg, CV_8UC1, 1), bgr, bayer_to_bgr_code(f));
+    return output == ColorOutput::kBgr ? bgr : to_output(bgr, output);
+  }
+  if (f == image_t::PIXEL_FORMAT_JPEG || f == image_t::PIXEL_FORMAT_PNG) {
+    require(!msg.data.empty(), pixelformat_name(f) + " image has no data");
+    const cv::Mat buffer(1, static_cast<int>(msg.data.size()), CV_8UC1, const_cast<uint8_t*>(msg.data.data()));
+    cv::Mat decoded = cv::imdecode(buffer, output == ColorOutput::kBgr ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE);
+    require(!decoded.empty(), pixelformat_name(f) + " data does not decode");
+    require(decoded.cols == msg.width && decoded.rows == msg.height,
+            pixelformat_name(f) + " decodes to " + std::to_string(decoded.cols) + "x" + std::to_string(decoded.rows) +
+                " but the message says " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
+    return decoded;
+  }
+  throw ImageError("cannot decode " + pixelformat_name(f));
+}
+
+image_t encode_image(const cv::Mat& image, int32_t f, int64_t utime, int jpeg_quality) {
+  require(image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3),
+          "encode_image needs an 8-bit gray or BGR image");
+  const bool color = image.channels() == 3;
+  image_t msg;
+  msg.utime = utime;
+  msg.width = image.cols;
+  msg.height = image.rows;
+  msg.pixelformat = f;
+  cv::Mat raw;
+  if (f == image_t::PIXEL_FORMAT_GRAY) {
+    raw = color ? to_output(image, ColorOutput::kGray) : image;
+  } else if (f == image_t::PIXEL_FORMAT_BGR) {
+    raw = color ? image : to_output(image, ColorOutput::kBgr);
+  } else if (f == image_t::PIXEL_FORMAT_RGB) {
+    cv::cvtColor(color ? image : to_output(image, ColorOutput::kBgr), raw, cv::COLOR_BGR2RGB);
+  } else if (is_bayer(f)) {
+    raw = mosaic_bayer(color ? image : to_output(image, ColorOutput::kBgr), f);
+  } else if (f == image_t::PIXEL_FORMAT_JPEG || f == image_t::PIXEL_FORMAT_PNG) {
+    std::vector<int> params;
+    if (f == image_t::PIXEL_FORMAT_JPEG) params = {cv::IMWRITE_JPEG_QUALITY, jpeg_quality};
+    else params = {cv::IMWRITE_PNG_COMPRESSION, 1};
+    require(cv::imencode(f == image_t::PIXEL_FORMAT_JPEG ? ".jpg" : ".png", image, msg.data, params),
+            "cannot encode " + pixelformat_name(f));
+    msg.row_stride = 0;
+    msg.size = static_cast<int32_t>(msg.data.size());
+    return msg;
+  } else {
+    throw ImageError("cannot encode " + pixelformat_name(f));
+  }
+  const size_t row_bytes = raw.cols * raw.elemSize();
+  msg.row_stride = static_cast<int32_t>(row_bytes);
+  msg.data.resize(row_bytes * static_cast<size_t>(raw.rows));
+  for (int r = 0; r < raw.rows; ++r) std::memcpy(msg.data.data() + row_bytes * r, raw.ptr(r), row_bytes);
+  msg.size = static_cast<int32_t>(msg.data.size());
+  return msg;
+}
+
+cv::Mat decode_depth(const depth_image_t& msg) {
+  require(msg.format == depth_image_t::FORMAT_MM_U16LE,
+          "depth image format " + std::to_string(msg.format) + " is not FORMAT_MM_U16LE");
+  require(msg.width > 0 && msg.height > 0, "depth image has non-positive size " + std::to_string(msg.width) + "x" +
+                                               std::to_string(msg.height));
+  const size_t needed = static_cast<size_t>(msg.width) * static_cast<size_t>(msg.height) * 2;
+  require(static_cast<size_t>(msg.size) == msg.data.size() && msg.data.size() == needed,
+          "depth image " + std::to_string(msg.width) + "x" + std::to_string(msg.height) + " needs " +
+              std::to_string(needed) + " bytes, message has " + std::to_string(msg.data.size()));
+  cv::Mat depth(msg.height, msg.width, CV_16UC1);
+  const uint8_t* src = msg.data.data();
+  for (int r = 0; r < msg.height; ++r) {
+    auto* dst = depth.ptr<uint16_t>(r);
+    for (int c = 0; c < msg.width; ++c, src += 2) dst[c] = static_cast<uint16_t>(src[0] | (src[1] << 8));
+  }
+  return depth;
+}
+
+depth_image_t encode_depth(const cv::Mat& depth_mm, double fx, double fy, double cx, double cy, int64_t utime) {
+  require(depth_mm.type() == CV_16UC1, "encode_depth needs a CV_16UC1 image in millimetres");
+  depth_image_t msg;
+  msg.utime = utime;
+  msg.width = depth_mm.cols;
+  msg.height = depth_mm.rows;
+  msg.fx = fx;
+  msg.fy = fy;
+  msg.cx = cx;
+  msg.cy = cy;
+  msg.format = depth_image_t::FORMAT_MM_U16LE;
+  msg.data.resize(depth_mm.total() * 2);
+  uint8_t* dst = msg.data.data();
+  for (int r = 0; r < depth_mm.rows; ++r) {
+    const auto* src = depth_mm.ptr<uint16_t>(r);
+    for (int c = 0; c < depth_mm.cols; ++c, dst += 2) {
+      dst[0] = static_cast<uint8_t>(src[c] & 0xff);
+      dst[1] = static_cast<uint8_t>(src[c] >> 8);
+    }
+  }
+  msg.size = static_cast<int32_t>(msg.data.size());
+  return msg;
+}
+
+}  // namespace ivoa

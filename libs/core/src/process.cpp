@@ -1,0 +1,60 @@
+#include "ivoa/core/process.hpp"
+
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/bus.hpp"
+#include "ivoa/core/heartbeat.hpp"
+#include "ivoa/core/stop_signal.hpp"
+
+namespace ivoa {
+
+void add_common_options(CLI::App& app, CommonOptions& options) {
+  app.add_option("--lcm-url", options.lcm_url,
+                 "LCM URL (default: $LCM_DEFAULT_URL or " + std::string(kProjectDefaultUrl) +
+                     ", with a 16 MB receive buffer)");
+  app.add_option("--log-level", options.log_level, "trace, debug, info, warn, error")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+  app.set_config("--config", "", "TOML/INI file setting any option by its long name");
+}
+
+int parse_command_line(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitUsage;
+  }
+  return -1;
+}
+
+void init_logging(const std::string& process_name, const std::string& level) {
+  auto logger = spdlog::stderr_color_mt(process_name);
+  logger->set_pattern("%Y-%m-%d %H:%M:%S.%e %^%-5l%$ [%n] %v");
+  logger->set_level(spdlog::level::from_str(level));
+  spdlog::set_default_logger(logger);
+}
+
+int run_until_stopped(Bus& bus, Heartbeat* heartbeat, const std::function<void()>& periodic, int poll_ms,
+                      bool stop_at_end_of_log) {
+  install_stop_handlers();
+  while (!stop_requested()) {
+    const int r = bus.handle(poll_ms);
+    if (r < 0) {
+      if (stop_at_end_of_log) break;
+      spdlog::error("LCM handle failed on '{}'", bus.url());
+      return kExitFailure;
+    }
+    if (periodic) periodic();
+    if (heartbeat) heartbeat->tick();
+  }
+  if (heartbeat) {
+    heartbeat->set_state("stopped");
+    heartbeat->publish_now();
+  }
+  return kExitOk;
+}
+
+}  // namespace ivoa

@@ -1,0 +1,52 @@
+#include "test_rig.hpp"
+
+#include <cmath>
+#include <random>
+
+namespace ivoa::test {
+
+Eigen::Matrix3d optical_to_robot(double pitch_rad) {
+  Eigen::Matrix3d axes;
+  axes << 0, 0, 1,  //
+      -1, 0, 0,     //
+      0, -1, 0;
+  return Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()).toRotationMatrix() * axes;
+}
+
+RigCalibration make_test_rig(double pitch_deg, bool with_distortion) {
+  RigCalibration rig;
+  rig.rig_name = "test_rig";
+  auto camera = [&](const std::string& name, int w, int h, double f) {
+    CameraIntrinsics c;
+    c.name = name;
+    c.width = w;
+    c.height = h;
+    c.K << f, 0, w / 2.0 - 0.5, 0, f, h / 2.0 + 0.25, 0, 0, 1;
+    if (with_distortion && name != "depth") c.D = {-0.12, 0.05, 0.0005, -0.0003, 0.0};
+    return c;
+  };
+  rig.left = camera("left", 960, 600, 600.0);
+  rig.right = camera("right", 960, 600, 602.0);
+  rig.stereo_R = Eigen::AngleAxisd(0.004, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  rig.stereo_T = {-0.12, 0.0005, 0.0};
+  const double pitch = pitch_deg * M_PI / 180.0;
+  rig.left_to_robot.linear() = optical_to_robot(pitch);
+  rig.left_to_robot.translation() = Eigen::Vector3d(0.0, 0.06, 0.30);
+  rig.depth = camera("depth", 640, 480, 570.0);
+  rig.depth_to_robot.linear() = optical_to_robot(pitch);
+  rig.depth_to_robot.translation() = Eigen::Vector3d(0.0, 0.0, 0.35);
+  return rig;
+}
+
+TempDir::TempDir(const std::string& prefix) {
+  std::random_device rd;
+  path_ = std::filesystem::temp_directory_path() / (prefix + "_" + std::to_string(rd()));
+  std::filesystem::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+}
+
+}  // namespace ivoa::test

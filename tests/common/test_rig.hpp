@@ -1,0 +1,29 @@
+#pragma once
+#include <filesystem>
+#include <string>
+
+#include "ivoa/core/calibration.hpp"
+
+namespace ivoa::test {
+
+// A Jackal-like rig: 960x600 stereo, 0.12 m baseline, 0.3 m high, pitched
+// `pitch_deg` down; a 640x480 depth sensor 5 cm above the left camera.
+RigCalibration make_test_rig(double pitch_deg = 15.0, bool with_distortion = false);
+
+// Camera optical frame -> robot frame for a camera looking forward and
+// pitched down by `pitch_rad`.
+Eigen::Matrix3d optical_to_robot(double pitch_rad);
+
+// A fresh, empty folder under the system temp dir, removed at destruction.
+class TempDir {
+ public:
+  explicit TempDir(const std::string& prefix = "ivoa_test");
+  ~TempDir();
+  const std::filesystem::path& path() const { return path_; }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace ivoa::test

@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# The README's test command: installs what is missing, builds, runs every test.
+# Extra arguments go to ctest (e.g. -L unit, -R jpp, --rerun-failed).
+source "$(dirname "$0")/setup/common.sh"
+install_packages
+build_project
+step "Running the tests"
+cd "$IVOA_BUILD_DIR"
+ctest --output-on-failure --timeout 900 -j "${IVOA_TEST_JOBS:-2}" "$@"
