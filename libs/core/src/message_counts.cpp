@@ -57,4 +57,9 @@ void set_counts(process_status_t& m) {
   m.num_counters = common_size("process_status_t counters", m.counter_names, m.counter_values);
 }
 
+void set_counts(sim_ground_truth_t& m) {
+  set_counts(m.surface);
+  set_counts(m.phenomena);
+}
+
 }  // namespace ivoa

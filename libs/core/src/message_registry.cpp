@@ -15,6 +15,7 @@ const std::vector<MessageTypeInfo>& message_types() {
       {"ivoa.introspection_labels_t", introspection_labels_t::getHash()},
       {"ivoa.introspection_t", introspection_t::getHash()},
       {"ivoa.process_status_t", process_status_t::getHash()},
+      {"ivoa.sim_ground_truth_t", sim_ground_truth_t::getHash()},
   };
   return types;
 }

@@ -13,6 +13,7 @@ inline constexpr std::string_view kObstaclesDepth = "OBSTACLES_DEPTH";          
 inline constexpr std::string_view kIntrospectionLabels = "INTROSPECTION_LABELS";// ivoa.introspection_labels_t
 inline constexpr std::string_view kIntrospection = "INTROSPECTION";             // ivoa.introspection_t
 inline constexpr std::string_view kProcessStatus = "PROCESS_STATUS";            // ivoa.process_status_t
+inline constexpr std::string_view kSimGroundTruth = "SIM_GROUND_TRUTH";         // ivoa.sim_ground_truth_t (simulator only)
 
 // LCM 1.3.1 rejects longer names on udpm but not on memq, so unit tests on
 // memq would not notice: check it at compile time.
@@ -28,6 +29,7 @@ constexpr bool valid_channel_name(std::string_view name) {
 static_assert(valid_channel_name(kStereoImages) && valid_channel_name(kDepthImage) &&
               valid_channel_name(kRigCalibration) && valid_channel_name(kObstaclesStereo) &&
               valid_channel_name(kObstaclesDepth) && valid_channel_name(kIntrospectionLabels) &&
-              valid_channel_name(kIntrospection) && valid_channel_name(kProcessStatus));
+              valid_channel_name(kIntrospection) && valid_channel_name(kProcessStatus) &&
+              valid_channel_name(kSimGroundTruth));
 
 }  // namespace ivoa::channels

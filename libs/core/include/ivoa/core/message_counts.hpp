@@ -11,6 +11,7 @@
 #include "ivoa/obstacle_grid_t.hpp"
 #include "ivoa/process_status_t.hpp"
 #include "ivoa/rig_calibration_t.hpp"
+#include "ivoa/sim_ground_truth_t.hpp"
 #include "ivoa/stereo_image_t.hpp"
 
 namespace ivoa {
@@ -24,5 +25,6 @@ void set_counts(obstacle_grid_t& msg);
 void set_counts(introspection_labels_t& msg);
 void set_counts(introspection_t& msg);
 void set_counts(process_status_t& msg);
+void set_counts(sim_ground_truth_t& msg);
 
 }  // namespace ivoa
