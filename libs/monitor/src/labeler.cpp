@@ -1,0 +1,52 @@
+#include "ivoa/monitor/labeler.hpp"
+
+#include <string>
+
+namespace ivoa::monitor {
+
+int8_t label_for(int8_t stereo_state, int8_t depth_state) {
+  using G = obstacle_grid_t;
+  using L = introspection_labels_t;
+  if (stereo_state == G::STATE_UNKNOWN || depth_state == G::STATE_UNKNOWN) return L::LABEL_NONE;
+  const bool stereo_free = stereo_state == G::STATE_FREE;  // O_S
+  const bool depth_free = depth_state == G::STATE_FREE;    // O_M
+  if (depth_free) return stereo_free ? L::LABEL_TN : L::LABEL_FP;
+  return stereo_free ? L::LABEL_FN : L::LABEL_TP;
+}
+
+introspection_labels_t label_frame(const obstacle_grid_t& stereo, const obstacle_grid_t& depth) {
+  const bool same = stereo.num_x == depth.num_x && stereo.num_y == depth.num_y &&
+                    stereo.state.size() == depth.state.size() && stereo.x == depth.x && stereo.y == depth.y &&
+                    stereo.safety_radius == depth.safety_radius;
+  if (!same)
+    throw LabelError("stereo grid (" + stereo.detector + ", " + std::to_string(stereo.num_x) + "x" +
+                     std::to_string(stereo.num_y) + ", r=" + std::to_string(stereo.safety_radius) +
+                     ") and depth grid (" + std::to_string(depth.num_x) + "x" + std::to_string(depth.num_y) +
+                     ", r=" + std::to_string(depth.safety_radius) + ") have different geometry");
+  introspection_labels_t out;
+  out.utime = stereo.utime;
+  out.depth_utime = depth.depth_utime;
+  out.detector = stereo.detector;
+  out.x_min = stereo.x_min;
+  out.x_max = stereo.x_max;
+  out.y_min = stereo.y_min;
+  out.y_max = stereo.y_max;
+  out.spacing = stereo.spacing;
+  out.num_x = stereo.num_x;
+  out.num_y = stereo.num_y;
+  out.safety_radius = stereo.safety_radius;
+  out.patch_size = stereo.patch_size;
+  const size_t n = stereo.state.size();
+  out.label.resize(n);
+  for (size_t i = 0; i < n; ++i) out.label[i] = label_for(stereo.state[i], depth.state[i]);
+  out.stereo_state = stereo.state;
+  out.depth_state = depth.state;
+  out.x = stereo.x;
+  out.y = stereo.y;
+  out.u = stereo.u;
+  out.v = stereo.v;
+  out.num_cells = static_cast<int32_t>(n);
+  return out;
+}
+
+}  // namespace ivoa::monitor
