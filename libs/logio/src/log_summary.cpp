@@ -1,0 +1,78 @@
+#include "ivoa/logio/log_summary.hpp"
+
+#include <cstdio>
+
+#include "ivoa/core/message_registry.hpp"
+#include "ivoa/logio/log_reader.hpp"
+
+namespace ivoa::logio {
+namespace {
+
+int64_t read_be64(const uint8_t* p) {
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
+  return static_cast<int64_t>(v);
+}
+
+bool has_seq(const std::string& type) { return type == "ivoa.stereo_image_t" || type == "ivoa.depth_image_t"; }
+
+void add_seq(ChannelSummary& s, int64_t seq) {
+  if (s.count == 1) {
+    s.first_seq = seq;
+  } else if (seq <= s.last_seq) {
+    ++s.seq_regressions;
+  } else if (seq > s.last_seq + 1) {
+    s.missing_seq += seq - s.last_seq - 1;
+    if (s.gaps.size() < kMaxGapsListed) s.gaps.push_back({s.last_seq, seq});
+  }
+  s.last_seq = seq;
+}
+
+}  // namespace
+
+void LogSummary::add(const LogEvent& event) { add(event.channel, event.timestamp, event.data.data(), event.data.size()); }
+
+void LogSummary::add(const std::string& channel, int64_t timestamp, const void* data, size_t size) {
+  ++events_;
+  bytes_ += size;
+  ChannelSummary& s = channels_[channel];
+  const int64_t fingerprint = payload_fingerprint(data, size).value_or(0);
+  if (s.count == 0) {
+    s.fingerprint = fingerprint;
+    s.type = std::string(payload_type_name(data, size).value_or("unknown"));
+    s.has_seq = has_seq(s.type);
+    s.first_timestamp = timestamp;
+  }
+  ++s.count;
+  s.bytes += size;
+  s.last_timestamp = timestamp;
+  if (fingerprint != s.fingerprint) {
+    ++s.other_fingerprints;
+    return;
+  }
+  if (s.type == "unknown" || size < 16) return;
+  const auto* bytes = static_cast<const uint8_t*>(data);
+  const int64_t utime = read_be64(bytes + 8);
+  if (s.count == 1) s.first_utime = utime;
+  else if (utime < s.last_utime) ++s.utime_regressions;
+  s.last_utime = utime;
+  if (s.has_seq && size >= 24) add_seq(s, read_be64(bytes + 16));
+}
+
+std::string LogSummary::table() const {
+  std::string out;
+  char line[320];
+  std::snprintf(line, sizeof(line), "%-24s %-28s %8s %10s %9s %9s %8s %8s\n", "channel", "type", "count", "MB",
+                "first seq", "last seq", "missing", "utime<");
+  out += line;
+  for (const auto& [name, s] : channels_) {
+    std::snprintf(line, sizeof(line), "%-24s %-28s %8lld %10.1f %9lld %9lld %8lld %8lld\n", name.c_str(),
+                  s.type.c_str(), static_cast<long long>(s.count), static_cast<double>(s.bytes) / 1e6,
+                  static_cast<long long>(s.first_seq), static_cast<long long>(s.last_seq),
+                  static_cast<long long>(s.missing_seq), static_cast<long long>(s.utime_regressions));
+    out += line;
+  }
+  return out;
+}
+
+}  // namespace ivoa::logio
