@@ -1,0 +1,72 @@
+// ivoa-depth-monitor: the supervisor. Turns depth images into per-cell
+// obstacle verdicts and labels each stereo verdict TP/TN/FP/FN (Algorithm 1).
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/process.hpp"
+#include "ivoa/core/stop_signal.hpp"
+#include "monitor_node.hpp"
+
+namespace {
+
+void add_monitor_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
+  const char* g = "Depth monitor";
+  auto& m = o.monitor;
+  app.add_option("--pixel-step", m.pixel_step, "use every n-th depth pixel")->capture_default_str()->group(g);
+  app.add_option("--voxel-size", m.voxel_size, "voxel grid leaf, m")->capture_default_str()->group(g);
+  app.add_option("--obstacle-min-height", m.obstacle_min_height, "points higher are obstacles, m")
+      ->capture_default_str()->group(g);
+  app.add_option("--obstacle-max-height", m.obstacle_max_height, "points higher are ignored (overhangs), m")
+      ->capture_default_str()->group(g);
+  app.add_option("--hole-min-depth", m.hole_min_depth, "points lower than the ground by this are holes, m")
+      ->capture_default_str()->group(g);
+  app.add_option("--min-obstacle-points", m.min_obstacle_points, "obstacle voxels within r for OBSTACLE")
+      ->capture_default_str()->group(g);
+  app.add_option("--min-hole-points", m.min_hole_points, "hole voxels within r for OBSTACLE")
+      ->capture_default_str()->group(g);
+  app.add_option("--min-hole-samples", m.min_hole_samples, "ground-sample rays below the ground for OBSTACLE")
+      ->capture_default_str()->group(g);
+  app.add_option("--min-seen-fraction", m.min_seen_fraction, "ground samples seen for FREE (0-1)")
+      ->capture_default_str()->group(g);
+  app.add_option("--sync-tolerance-us", o.pairing.tolerance_us, "max |stereo - depth| utime to pair, us")
+      ->capture_default_str()->group(g);
+}
+
+void add_channel_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
+  const char* g = "Channels";
+  app.add_option("--depth-channel", o.depth_channel)->capture_default_str()->group(g);
+  app.add_option("--stereo-channel", o.stereo_channel)->capture_default_str()->group(g);
+  app.add_option("--calibration-channel", o.calibration_channel)->capture_default_str()->group(g);
+  app.add_option("--depth-out-channel", o.depth_out_channel)->capture_default_str()->group(g);
+  app.add_option("--labels-out-channel", o.labels_out_channel)->capture_default_str()->group(g);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Depth monitor: per-cell obstacle verdicts from the depth sensor and Algorithm 1 labels"};
+  ivoa::CommonOptions common;
+  ivoa::MonitorNodeOptions options;
+  ivoa::add_common_options(app, common);
+  ivoa::add_query_grid_options(app, options.grid);
+  add_monitor_options(app, options);
+  add_channel_options(app, options);
+  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  ivoa::init_logging("depth_monitor", common.log_level);
+  ivoa::install_stop_handlers();
+  try {
+    ivoa::Bus bus(common.lcm_url);
+    ivoa::Heartbeat heartbeat(bus, "depth_monitor");
+    ivoa::MonitorNode node(bus, heartbeat, options);
+    spdlog::info("listening on {} ({} + {} -> {} + {})", bus.url(), options.depth_channel, options.stereo_channel,
+                 options.depth_out_channel, options.labels_out_channel);
+    const bool offline = bus.url().rfind("file://", 0) == 0;
+    const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, offline);
+    node.flush();
+    return code;
+  } catch (const ivoa::BusError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitFailure;
+  }
+}

@@ -1,0 +1,117 @@
+#include "monitor_node.hpp"
+
+#include <cmath>
+
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/image_convert.hpp"
+#include "ivoa/core/time.hpp"
+#include "ivoa/monitor/labeler.hpp"
+
+namespace ivoa {
+
+MonitorNode::MonitorNode(Bus& bus, Heartbeat& heartbeat, MonitorNodeOptions options)
+    : bus_(bus), heartbeat_(heartbeat), options_(std::move(options)) {
+  bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
+  bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
+                                    [this](const rig_calibration_t& m, const ReceiveInfo&) { on_calibration(m); });
+  bus_.subscribe<depth_image_t>(options_.depth_channel,
+                                [this](const depth_image_t& m, const ReceiveInfo&) { on_depth(m); });
+  bus_.subscribe<obstacle_grid_t>(options_.stereo_channel,
+                                  [this](const obstacle_grid_t& m, const ReceiveInfo&) { on_stereo(m); });
+  heartbeat_.set_state("waiting for calibration");
+}
+
+void MonitorNode::on_calibration(const rig_calibration_t& msg) {
+  rig_calibration_t copy = msg;
+  copy.utime = 0;  // republished every second: compare content, not time
+  std::vector<uint8_t> bytes(static_cast<size_t>(copy.getEncodedSize()));
+  copy.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  if (bytes == calibration_bytes_) return;
+  try {
+    const RigCalibration rig = from_message(msg);
+    if (pipeline_) {
+      spdlog::info("rig calibration changed: rebuilding the monitor");
+      publish(pipeline_->flush());
+    }
+    pipeline_ = std::make_unique<monitor::LabelingPipeline>(rig, options_.grid, options_.monitor, options_.pairing);
+    calibration_bytes_ = std::move(bytes);
+    spdlog::info("calibration '{}': depth {}x{}, {} query cells ({} with a full patch in the left image)",
+                 rig.rig_name, rig.depth.width, rig.depth.height, pipeline_->grid().size(),
+                 pipeline_->grid().count_in_image());
+    heartbeat_.set_state("running");
+  } catch (const std::exception& e) {
+    heartbeat_.bad_input(options_.calibration_channel + ": unusable calibration: " + e.what());
+  }
+}
+
+void MonitorNode::on_depth(const depth_image_t& msg) {
+  heartbeat_.count_in();
+  const std::string where = options_.depth_channel + " utime " + std::to_string(msg.utime);
+  if (!pipeline_) {
+    heartbeat_.bad_input(where + ": no " + options_.calibration_channel + " received yet; skipped");
+    return;
+  }
+  if (!(std::isfinite(msg.fx) && std::isfinite(msg.fy) && std::isfinite(msg.cx) && std::isfinite(msg.cy) &&
+        msg.fx > 0 && msg.fy > 0)) {
+    heartbeat_.bad_input(where + ": intrinsics are not finite and positive");
+    return;
+  }
+  try {
+    cv::Mat depth = decode_depth(msg);
+    if (cv::countNonZero(depth) == 0) {
+      heartbeat_.bad_input(where + ": no valid pixel (zero-filled depth image)");
+      return;
+    }
+    publish(pipeline_->add_depth(msg.utime, std::move(depth)));
+  } catch (const ImageError& e) {
+    heartbeat_.bad_input(where + ": " + e.what());
+  }
+}
+
+void MonitorNode::on_stereo(const obstacle_grid_t& msg) {
+  heartbeat_.count_in();
+  const std::string where = options_.stereo_channel + " utime " + std::to_string(msg.utime);
+  if (!pipeline_) {
+    heartbeat_.bad_input(where + ": no " + options_.calibration_channel + " received yet; skipped");
+    return;
+  }
+  try {
+    publish(pipeline_->add_stereo(msg));
+  } catch (const monitor::LabelError& e) {
+    heartbeat_.bad_input(where + ": " + e.what());
+  }
+}
+
+void MonitorNode::publish(std::vector<monitor::PipelineOutcome> outcomes) {
+  for (auto& o : outcomes) {
+    if (!o.labeled) {
+      ++unmatched_;
+      spdlog::debug("stereo frame {} has no depth frame within the pairing tolerance", o.stereo_utime);
+      continue;
+    }
+    bus_.publish(options_.depth_out_channel, o.labeled->depth_grid);
+    bus_.publish(options_.labels_out_channel, o.labeled->labels);
+    heartbeat_.count_out(2);
+    heartbeat_.latency(o.labeled->monitor_ms);
+    for (int8_t l : o.labeled->labels.label) labelled_cells_ += l != introspection_labels_t::LABEL_NONE;
+  }
+  update_counters();
+}
+
+void MonitorNode::update_counters() {
+  if (!pipeline_) return;
+  const auto& c = pipeline_->counters();
+  heartbeat_.set_counter("frames_labelled", c.paired);
+  heartbeat_.set_counter("stereo_unmatched", unmatched_);
+  heartbeat_.set_counter("stereo_duplicates", c.duplicate_stereo);
+  heartbeat_.set_counter("depth_duplicates", c.duplicate_depth);
+  heartbeat_.set_counter("depth_late", c.late_depth);
+  heartbeat_.set_counter("cells_labelled", labelled_cells_);
+}
+
+void MonitorNode::flush() {
+  if (pipeline_) publish(pipeline_->flush());
+}
+
+}  // namespace ivoa

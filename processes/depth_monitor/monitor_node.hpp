@@ -1,0 +1,48 @@
+#pragma once
+// The depth_monitor process's logic, separate from main() so tests can run
+// it in-process on memq://: subscribes to DEPTH_IMAGE, OBSTACLES_STEREO and
+// RIG_CALIBRATION, publishes OBSTACLES_DEPTH and INTROSPECTION_LABELS.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ivoa/core/bus.hpp"
+#include "ivoa/core/channels.hpp"
+#include "ivoa/core/heartbeat.hpp"
+#include "ivoa/monitor/labeling_pipeline.hpp"
+
+namespace ivoa {
+
+struct MonitorNodeOptions {
+  std::string depth_channel{channels::kDepthImage};
+  std::string stereo_channel{channels::kObstaclesStereo};
+  std::string calibration_channel{channels::kRigCalibration};
+  std::string depth_out_channel{channels::kObstaclesDepth};
+  std::string labels_out_channel{channels::kIntrospectionLabels};
+  QueryGridConfig grid;
+  monitor::DepthMonitorConfig monitor;
+  monitor::PairingConfig pairing;
+};
+
+class MonitorNode {
+ public:
+  MonitorNode(Bus& bus, Heartbeat& heartbeat, MonitorNodeOptions options);
+  // Decides what is still pending (on shutdown, or at the end of a log).
+  void flush();
+
+ private:
+  void on_calibration(const rig_calibration_t& msg);
+  void on_depth(const depth_image_t& msg);
+  void on_stereo(const obstacle_grid_t& msg);
+  void publish(std::vector<monitor::PipelineOutcome> outcomes);
+  void update_counters();
+
+  Bus& bus_;
+  Heartbeat& heartbeat_;
+  MonitorNodeOptions options_;
+  std::vector<uint8_t> calibration_bytes_;  // the calibration the pipeline was built for
+  std::unique_ptr<monitor::LabelingPipeline> pipeline_;
+  int64_t unmatched_ = 0, labelled_cells_ = 0;
+};
+
+}  // namespace ivoa

@@ -1,0 +1,139 @@
+// The depth_monitor process logic on memq://: labels for paired frames,
+// and every kind of bad input counted, skipped, and survived.
+#include <gtest/gtest.h>
+
+#include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/image_convert.hpp"
+#include "monitor_node.hpp"
+#include "synthetic_depth.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa {
+namespace {
+
+using G = obstacle_grid_t;
+using L = introspection_labels_t;
+
+struct NodeFixture {
+  Bus bus{"memq://"};
+  Heartbeat heartbeat{bus, "depth_monitor", "NODE_TEST_STATUS", 3600.0};
+  MonitorNode node{bus, heartbeat, MonitorNodeOptions{}};
+  RigCalibration rig = test::make_test_rig();
+  QueryGrid grid{QueryGridConfig{}, RigGeometry(rig).left};
+  std::vector<introspection_labels_t> labels;
+  std::vector<obstacle_grid_t> depth_grids;
+
+  NodeFixture() {
+    bus.subscribe<introspection_labels_t>(channels::kIntrospectionLabels,
+                                          [this](const introspection_labels_t& m, const ReceiveInfo&) { labels.push_back(m); });
+    bus.subscribe<obstacle_grid_t>(channels::kObstaclesDepth,
+                                   [this](const obstacle_grid_t& m, const ReceiveInfo&) { depth_grids.push_back(m); });
+  }
+  void drain() {
+    while (bus.handle(5) > 0) {
+    }
+  }
+  void send_calibration() {
+    rig_calibration_t msg = to_message(rig, 1);
+    bus.publish(channels::kRigCalibration, msg);
+    drain();
+  }
+  void send_depth(int64_t utime, const cv::Mat& depth) {
+    depth_image_t msg = encode_depth(depth, 570, 570, 319.5, 240.25, utime);
+    bus.publish(channels::kDepthImage, msg);
+    drain();
+  }
+  // A stereo verdict that says FREE everywhere except at cell `obstacle_cell`.
+  void send_stereo(int64_t utime, int obstacle_cell) {
+    obstacle_grid_t msg = make_obstacle_grid(grid, "jppc", utime);
+    for (auto& s : msg.state) s = G::STATE_FREE;
+    msg.state[static_cast<size_t>(obstacle_cell)] = G::STATE_OBSTACLE;
+    bus.publish(channels::kObstaclesStereo, msg);
+    drain();
+  }
+};
+
+TEST(MonitorNode, LabelsPairedFramesAgainstTheDepthVerdict) {
+  NodeFixture f;
+  f.send_calibration();
+  test::DepthScene scene;
+  scene.boxes.push_back({1.55, 1.9, -0.3, 0.2, 0.4});
+  const cv::Mat depth = test::render_depth(f.rig, scene);
+  const int box_cell = f.grid.index(4, 6);   // x = 1.5, y = 0: 5 cm from the box
+  const int floor_cell = f.grid.index(2, 6);  // x = 1.0, y = 0: clear floor
+  f.send_depth(1'000'000, depth);
+  f.send_stereo(997'000, floor_cell);  // stereo sees an obstacle on the clear floor, misses the box
+  ASSERT_EQ(f.labels.size(), 1u);
+  ASSERT_EQ(f.depth_grids.size(), 1u);
+  const auto& l = f.labels[0];
+  EXPECT_EQ(l.utime, 997'000);
+  EXPECT_EQ(l.depth_utime, 1'000'000);
+  EXPECT_EQ(f.depth_grids[0].depth_utime, 1'000'000);
+  EXPECT_EQ(f.depth_grids[0].detector, "depth_monitor");
+  EXPECT_EQ(l.label[static_cast<size_t>(box_cell)], L::LABEL_FN);
+  EXPECT_EQ(l.label[static_cast<size_t>(floor_cell)], L::LABEL_FP);
+  EXPECT_EQ(l.label[static_cast<size_t>(f.grid.index(2, 7))], L::LABEL_TN);  // x = 1.0, y = 0.25
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 0);
+}
+
+TEST(MonitorNode, BadInputIsCountedSkippedAndSurvived) {
+  NodeFixture f;
+  const cv::Mat ground = test::render_depth(f.rig, {});
+  f.send_depth(1'000, ground);  // before any calibration
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 1);
+  EXPECT_NE(f.heartbeat.snapshot().last_error.find("no RIG_CALIBRATION"), std::string::npos);
+
+  f.send_calibration();
+  f.send_depth(2'000, cv::Mat(480, 640, CV_16UC1, cv::Scalar(0)));  // zero-filled
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 2);
+  EXPECT_NE(f.heartbeat.snapshot().last_error.find("zero-filled"), std::string::npos);
+
+  f.send_depth(3'000, cv::Mat(240, 320, CV_16UC1, cv::Scalar(1500)));  // wrong size
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 3);
+  EXPECT_NE(f.heartbeat.snapshot().last_error.find("320x240"), std::string::npos);
+
+  depth_image_t nan_intrinsics = encode_depth(ground, std::nan(""), 570, 320, 240, 4'000);
+  f.bus.publish(channels::kDepthImage, nan_intrinsics);
+  f.drain();
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 4);
+
+  QueryGridConfig other;
+  other.spacing = 0.2;
+  obstacle_grid_t wrong_grid = make_obstacle_grid(QueryGrid(other, RigGeometry(f.rig).left), "jppc", 5'000);
+  f.bus.publish(channels::kObstaclesStereo, wrong_grid);
+  f.drain();
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 5);
+  EXPECT_NE(f.heartbeat.snapshot().last_error.find("does not match the configured grid"), std::string::npos);
+
+  const uint8_t garbage[12] = {0};
+  f.bus.publish_raw(channels::kDepthImage, garbage, sizeof(garbage));
+  f.drain();
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 6);
+
+  // ...and it still works.
+  f.send_depth(100'000, ground);
+  f.send_stereo(100'000, 0);
+  EXPECT_EQ(f.labels.size(), 1u);
+}
+
+TEST(MonitorNode, UnmatchedStereoFramesAreCountedNotLabelled) {
+  NodeFixture f;
+  f.send_calibration();
+  const cv::Mat ground = test::render_depth(f.rig, {});
+  f.send_depth(0, ground);
+  f.send_depth(200'000, ground);  // the depth stream skipped 5 frames
+  f.send_stereo(100'000, 0);
+  EXPECT_TRUE(f.labels.empty());
+  f.heartbeat.tick();
+  const auto status = f.heartbeat.snapshot();
+  bool found = false;
+  for (size_t i = 0; i < status.counter_names.size(); ++i)
+    if (status.counter_names[i] == "stereo_unmatched") {
+      EXPECT_EQ(status.counter_values[i], 1);
+      found = true;
+    }
+  EXPECT_TRUE(found);
+}
+
+}  // namespace
+}  // namespace ivoa
