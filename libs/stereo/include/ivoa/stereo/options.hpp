@@ -1,0 +1,19 @@
+#pragma once
+// Command-line flags (and so --config file keys) for the detector
+// parameters; each flag has the name of its config field.
+namespace CLI {
+class App;
+}
+
+namespace ivoa::stereo {
+struct JppConfig;
+struct SgbmConfig;
+struct DenseConfig;
+struct DetectorConfig;
+
+void add_jpp_options(CLI::App& app, JppConfig& config);    // --conf_pos_thresh, --daisy_R, ...
+void add_sgbm_options(CLI::App& app, SgbmConfig& config);  // --sgbm_num_disparities, ...
+void add_dense_options(CLI::App& app, DenseConfig& config);  // the SGBM flags and --dense_*
+void add_detector_options(CLI::App& app, DetectorConfig& config);
+
+}  // namespace ivoa::stereo

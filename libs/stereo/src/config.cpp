@@ -1,0 +1,43 @@
+#include "ivoa/stereo/config.hpp"
+
+#include <stdexcept>
+
+namespace ivoa::stereo {
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("stereo detector config: " + what);
+}
+
+void validate(const SgbmConfig& c) {
+  require(c.rect_scale > 0 && c.rect_scale <= 1, "sgbm_rect_scale must be in (0, 1]");
+  require(c.num_disparities > 0 && c.num_disparities % 16 == 0, "sgbm_num_disparities must be a positive multiple of 16");
+  require(c.block_size >= 1 && c.block_size % 2 == 1, "sgbm_block_size must be odd and positive");
+  require(c.p2 == 0 || c.p2 > c.p1, "sgbm_p2 must exceed sgbm_p1");
+  require(c.mode == "3way" || c.mode == "sgbm" || c.mode == "hh", "sgbm_mode must be 3way, sgbm or hh");
+}
+
+}  // namespace
+
+void validate(const JppConfig& c) {
+  require(c.rect_scale > 0 && c.rect_scale <= 1, "rect_scale must be in (0, 1]");
+  require(c.daisy_R > 0 && c.daisy_Q >= 1 && c.daisy_T >= 1 && c.daisy_H >= 1,
+          "daisy_R must be > 0 and daisy_Q, daisy_T, daisy_H >= 1");
+  require(c.SAD_window_size >= 0 && c.SAD_window_size <= 50, "SAD_window_size must be in [0, 50]");
+  require(c.conf_pos_thresh > 0, "conf_pos_thresh must be positive");
+  // JPP's config is in mm: 50 there is 0.05 here.
+  require(c.grid_size > 0 && c.grid_size <= 1.0, "grid_size must be in (0, 1] metres (JPP's .cfg uses mm)");
+  require(c.min_window_fraction > 0 && c.min_window_fraction <= 1, "jpp_min_window_fraction must be in (0, 1]");
+  require(c.texture_gate >= 0, "jpp_texture_gate must be >= 0");
+}
+
+void validate(const DenseConfig& c) {
+  validate(c.sgbm);
+  require(c.min_obstacle_height > 0 && c.max_obstacle_height > c.min_obstacle_height,
+          "need 0 < dense_min_obstacle_height < dense_max_obstacle_height");
+  require(c.hole_depth > 0, "dense_hole_depth must be positive");
+  require(c.min_obstacle_points >= 1 && c.min_ground_points >= 1, "dense point counts must be >= 1");
+  require(c.max_range > 0 && c.max_range <= 100, "dense_max_range must be in (0, 100] m");
+}
+
+}  // namespace ivoa::stereo

@@ -1,0 +1,68 @@
+#include "ivoa/stereo/options.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include "ivoa/stereo/config.hpp"
+
+namespace ivoa::stereo {
+
+void add_jpp_options(CLI::App& app, JppConfig& c) {
+  const char* g = "JPP-C (jppc)";
+  auto add = [&](const char* flag, auto& value, const char* help) {
+    app.add_option(flag, value, help)->capture_default_str()->group(g);
+  };
+  add("--rect_scale", c.rect_scale, "rectified image size / raw size (0.5: 960x600 -> 480x300)");
+  add("--daisy_R", c.daisy_R, "DAISY outer ring radius, pixels");
+  add("--daisy_Q", c.daisy_Q, "DAISY rings");
+  add("--daisy_T", c.daisy_T, "DAISY angles per ring");
+  add("--daisy_H", c.daisy_H, "DAISY orientation bins");
+  add("--SAD_window_size", c.SAD_window_size, "matching window half-width, pixels (5: 11x11)");
+  add("--conf_pos_thresh", c.conf_pos_thresh, "CP: window cost below this is a match");
+  add("--conf_neg_thresh", c.conf_neg_thresh, "CN: window cost above this is confidently empty (full JPP only)");
+  add("--grid_size", c.grid_size,
+      "step between ground samples of one footprint check, m (JPP grid_size, mm there; not --grid-spacing)");
+  add("--jpp_min_window_fraction", c.min_window_fraction,
+      "window share that must lie inside both images for a verdict (JPP: none, divides by 121)");
+  add("--jpp_texture_gate", c.texture_gate,
+      "no verdict where the left window's mean positive x-gradient is below this, gray levels/px; 0 = off (JPP)");
+}
+
+void add_sgbm_options(CLI::App& app, SgbmConfig& c) {
+  const char* g = "Dense (SGBM)";
+  auto add = [&](const char* flag, auto& value, const char* help) {
+    return app.add_option(flag, value, help)->capture_default_str()->group(g);
+  };
+  add("--sgbm_rect_scale", c.rect_scale, "rectified image size / raw size");
+  add("--sgbm_mode", c.mode, "3way (fastest), sgbm, hh")->check(CLI::IsMember({"3way", "sgbm", "hh"}));
+  add("--sgbm_min_disparity", c.min_disparity, "pixels");
+  add("--sgbm_num_disparities", c.num_disparities, "disparity search range, pixels, multiple of 16");
+  add("--sgbm_block_size", c.block_size, "matching block side, pixels, odd");
+  add("--sgbm_p1", c.p1, "small-change penalty (0: 8*block^2)");
+  add("--sgbm_p2", c.p2, "large-change penalty (0: 32*block^2)");
+  add("--sgbm_uniqueness_ratio", c.uniqueness_ratio, "percent margin of the best cost");
+  add("--sgbm_speckle_window_size", c.speckle_window_size, "speckle filter region size, pixels (0: off)");
+  add("--sgbm_speckle_range", c.speckle_range, "speckle filter disparity range");
+  add("--sgbm_disp12_max_diff", c.disp12_max_diff, "left-right consistency, pixels (<0: off)");
+  add("--sgbm_pre_filter_cap", c.pre_filter_cap, "prefilter clipping");
+}
+
+void add_dense_options(CLI::App& app, DenseConfig& c) {
+  add_sgbm_options(app, c.sgbm);
+  const char* g = "Dense (SGBM)";
+  auto add = [&](const char* flag, auto& value, const char* help) {
+    app.add_option(flag, value, help)->capture_default_str()->group(g);
+  };
+  add("--dense_min_obstacle_height", c.min_obstacle_height, "points higher than this above the ground are obstacles, m");
+  add("--dense_max_obstacle_height", c.max_obstacle_height, "points higher than this are above the robot, ignored, m");
+  add("--dense_hole_depth", c.hole_depth, "points lower than this below the ground are obstacles (holes, reflections), m");
+  add("--dense_min_obstacle_points", c.min_obstacle_points, "obstacle (or below-ground) points within r for OBSTACLE");
+  add("--dense_min_ground_points", c.min_ground_points, "ground points within r for FREE");
+  add("--dense_max_range", c.max_range, "points farther ahead or aside than this are ignored, m");
+}
+
+void add_detector_options(CLI::App& app, DetectorConfig& c) {
+  add_jpp_options(app, c.jpp);
+  add_dense_options(app, c.dense);
+}
+
+}  // namespace ivoa::stereo
