@@ -1,0 +1,123 @@
+#pragma once
+// Writing and reading the on-disk dataset (see libs/dataset/README.md):
+// per session a raw patch store (memory-mappable), a CSV index and JSON
+// metadata.
+#include <array>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "ivoa/core/query_grid.hpp"
+
+namespace ivoa::dataset {
+
+inline constexpr int kNumClasses = 4;
+inline const std::array<std::string, kNumClasses> kLabelNames = {"TP", "TN", "FP", "FN"};
+inline constexpr int kUnknownSurface = 255;
+
+class DatasetError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct SampleRecord {
+  int64_t frame = 0;
+  int64_t utime = 0;
+  int64_t depth_utime = 0;
+  int32_t cell = 0;
+  int32_t label = 0;
+  int32_t stereo_state = 0;
+  int32_t depth_state = 0;
+  float x = 0, y = 0;
+  float u = 0, v = 0;
+  int32_t phenomena = 0;
+  int32_t phenomenon = 0;
+  int32_t surface = kUnknownSurface;
+};
+
+struct FrameRecord {
+  int64_t utime = 0;
+  int64_t depth_utime = 0;
+  int32_t cells_labelled = 0;
+  int32_t samples = 0;
+};
+
+struct SessionInfo {
+  std::string session;
+  std::string detector;
+  std::string labels_from;  // "recorded" or "rerun"
+  std::vector<std::string> logs;
+  std::string scene;
+  int64_t seed = -1;
+  std::string environment = "unknown";  // indoor, outdoor, unknown
+  std::string rig_name;
+  int patch_size = 100;
+  QueryGridConfig grid;
+  // Filled by the writer / reader:
+  int64_t frames = 0;
+  int64_t samples = 0;
+  std::array<int64_t, kNumClasses> class_counts{};
+};
+
+// Writes one session folder. Patches are appended as they come; close()
+// (or the destructor) writes the index and metadata.
+class SessionWriter {
+ public:
+  SessionWriter(const std::string& dataset_root, SessionInfo info);
+  ~SessionWriter();
+  SessionWriter(const SessionWriter&) = delete;
+  SessionWriter& operator=(const SessionWriter&) = delete;
+
+  // Starts a frame; returns its index for the samples that follow.
+  int64_t add_frame(int64_t utime, int64_t depth_utime, int32_t cells_labelled);
+  // `patch` must be patch_size x patch_size CV_8UC3.
+  void add_sample(SampleRecord sample, const cv::Mat& patch);
+  void close();
+  const SessionInfo& info() const { return info_; }
+
+ private:
+  struct Files;
+  std::string dir_;
+  SessionInfo info_;
+  std::unique_ptr<Files> files_;
+  std::vector<FrameRecord> frames_;
+};
+
+// Reads one session folder; patches are memory-mapped.
+class SessionReader {
+ public:
+  explicit SessionReader(const std::string& session_dir);  // throws DatasetError
+  ~SessionReader();
+  SessionReader(const SessionReader&) = delete;
+  SessionReader& operator=(const SessionReader&) = delete;
+
+  const SessionInfo& info() const { return info_; }
+  const std::vector<SampleRecord>& samples() const { return samples_; }
+  size_t size() const { return samples_.size(); }
+  // A view of patch i (no copy; valid while the reader lives).
+  cv::Mat patch(size_t i) const;
+  const uint8_t* patch_data(size_t i) const;
+
+ private:
+  std::string dir_;
+  SessionInfo info_;
+  std::vector<SampleRecord> samples_;
+  const uint8_t* mapped_ = nullptr;
+  size_t mapped_bytes_ = 0;
+};
+
+// dataset.json: the list of sessions and the patch size; rewritten when a
+// session is added.
+void register_session(const std::string& dataset_root, const std::string& session, int patch_size);
+std::vector<std::string> list_sessions(const std::string& dataset_root);
+
+// A split file: split name -> sessions. Throws DatasetError naming the file,
+// or a session listed in two splits.
+std::map<std::string, std::vector<std::string>> load_split(const std::string& path);
+
+}  // namespace ivoa::dataset

@@ -1,0 +1,279 @@
+#include "ivoa/dataset/dataset_format.hpp"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+namespace fs = std::filesystem;
+
+namespace ivoa::dataset {
+namespace {
+
+constexpr const char* kSamplesHeader =
+    "sample,frame,utime,depth_utime,cell,label,stereo_state,depth_state,x,y,u,v,phenomena,phenomenon,surface";
+
+std::string quote(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string session_json(const SessionInfo& i) {
+  std::ostringstream o;
+  o.precision(10);
+  o << "{\n  \"session\": " << quote(i.session) << ",\n  \"detector\": " << quote(i.detector)
+    << ",\n  \"labels_from\": " << quote(i.labels_from) << ",\n  \"logs\": [";
+  for (size_t k = 0; k < i.logs.size(); ++k) o << (k ? ", " : "") << quote(i.logs[k]);
+  o << "],\n  \"scene\": " << quote(i.scene) << ",\n  \"seed\": " << i.seed
+    << ",\n  \"environment\": " << quote(i.environment) << ",\n  \"rig_name\": " << quote(i.rig_name)
+    << ",\n  \"patch_size\": " << i.patch_size << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples
+    << ",\n  \"class_counts\": {";
+  for (int c = 0; c < kNumClasses; ++c) o << (c ? ", " : "") << quote(kLabelNames[c]) << ": " << i.class_counts[c];
+  const QueryGridConfig& g = i.grid;
+  o << "},\n  \"grid\": {\"x_min\": " << g.x_min << ", \"x_max\": " << g.x_max << ", \"y_min\": " << g.y_min
+    << ", \"y_max\": " << g.y_max << ", \"spacing\": " << g.spacing << ", \"safety_radius\": " << g.safety_radius
+    << ", \"patch_size\": " << g.patch_size << "}\n}\n";
+  return o.str();
+}
+
+template <class T>
+T get(const YAML::Node& node, const std::string& key, const std::string& where) {
+  if (!node[key]) throw DatasetError(where + ": missing key '" + key + "'");
+  try {
+    return node[key].as<T>();
+  } catch (const YAML::Exception& e) {
+    throw DatasetError(where + ": key '" + key + "': " + e.what());
+  }
+}
+
+SessionInfo parse_session_json(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    throw DatasetError(path + ": cannot read session metadata: " + e.what());
+  }
+  SessionInfo i;
+  i.session = get<std::string>(root, "session", path);
+  i.detector = get<std::string>(root, "detector", path);
+  i.labels_from = get<std::string>(root, "labels_from", path);
+  i.logs = get<std::vector<std::string>>(root, "logs", path);
+  i.scene = get<std::string>(root, "scene", path);
+  i.seed = get<int64_t>(root, "seed", path);
+  i.environment = get<std::string>(root, "environment", path);
+  i.rig_name = get<std::string>(root, "rig_name", path);
+  i.patch_size = get<int>(root, "patch_size", path);
+  i.frames = get<int64_t>(root, "frames", path);
+  i.samples = get<int64_t>(root, "samples", path);
+  const YAML::Node counts = root["class_counts"];
+  for (int c = 0; c < kNumClasses; ++c) i.class_counts[c] = get<int64_t>(counts, kLabelNames[c], path);
+  const YAML::Node g = root["grid"];
+  i.grid.x_min = get<double>(g, "x_min", path);
+  i.grid.x_max = get<double>(g, "x_max", path);
+  i.grid.y_min = get<double>(g, "y_min", path);
+  i.grid.y_max = get<double>(g, "y_max", path);
+  i.grid.spacing = get<double>(g, "spacing", path);
+  i.grid.safety_radius = get<double>(g, "safety_radius", path);
+  i.grid.patch_size = get<int>(g, "patch_size", path);
+  return i;
+}
+
+SampleRecord parse_sample_row(const std::string& line, const std::string& where) {
+  SampleRecord s;
+  long long sample = 0, frame = 0, utime = 0, depth_utime = 0;
+  int n = std::sscanf(line.c_str(), "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%f,%f,%f,%f,%d,%d,%d", &sample, &frame, &utime,
+                      &depth_utime, &s.cell, &s.label, &s.stereo_state, &s.depth_state, &s.x, &s.y, &s.u, &s.v,
+                      &s.phenomena, &s.phenomenon, &s.surface);
+  if (n != 15) throw DatasetError(where + ": malformed row '" + line + "'");
+  if (s.label < 0 || s.label >= kNumClasses) throw DatasetError(where + ": label " + std::to_string(s.label) + " out of range");
+  s.frame = frame;
+  s.utime = utime;
+  s.depth_utime = depth_utime;
+  return s;
+}
+
+}  // namespace
+
+struct SessionWriter::Files {
+  std::FILE* patches = nullptr;
+  std::FILE* samples = nullptr;
+  ~Files() {
+    if (patches) std::fclose(patches);
+    if (samples) std::fclose(samples);
+  }
+};
+
+SessionWriter::SessionWriter(const std::string& dataset_root, SessionInfo info)
+    : dir_((fs::path(dataset_root) / info.session).string()), info_(std::move(info)), files_(std::make_unique<Files>()) {
+  if (info_.session.empty() || info_.session.find('/') != std::string::npos)
+    throw DatasetError("session name '" + info_.session + "' must be a non-empty folder name");
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  if (ec) throw DatasetError(dir_ + ": cannot create session folder: " + ec.message());
+  files_->patches = std::fopen((dir_ + "/patches.bin").c_str(), "wb");
+  files_->samples = std::fopen((dir_ + "/samples.csv").c_str(), "w");
+  if (!files_->patches || !files_->samples) throw DatasetError(dir_ + ": cannot write session files");
+  std::fprintf(files_->samples, "%s\n", kSamplesHeader);
+  info_.frames = info_.samples = 0;
+  info_.class_counts = {};
+}
+
+SessionWriter::~SessionWriter() {
+  try {
+    close();
+  } catch (...) {
+  }
+}
+
+int64_t SessionWriter::add_frame(int64_t utime, int64_t depth_utime, int32_t cells_labelled) {
+  frames_.push_back({utime, depth_utime, cells_labelled, 0});
+  return static_cast<int64_t>(frames_.size()) - 1;
+}
+
+void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch) {
+  const int p = info_.patch_size;
+  if (!files_->patches) throw DatasetError(dir_ + ": session already closed");
+  if (patch.rows != p || patch.cols != p || patch.type() != CV_8UC3)
+    throw DatasetError("patch must be " + std::to_string(p) + "x" + std::to_string(p) + " 8-bit BGR");
+  if (s.label < 0 || s.label >= kNumClasses) throw DatasetError("sample label " + std::to_string(s.label) + " out of range");
+  if (s.frame < 0 || s.frame >= static_cast<int64_t>(frames_.size())) throw DatasetError("sample refers to no frame");
+  const cv::Mat contiguous = patch.isContinuous() ? patch : patch.clone();
+  const size_t bytes = static_cast<size_t>(p) * p * 3;
+  if (std::fwrite(contiguous.data, 1, bytes, files_->patches) != bytes)
+    throw DatasetError(dir_ + "/patches.bin: write failed (disk full?)");
+  std::fprintf(files_->samples, "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%.4f,%.4f,%.2f,%.2f,%d,%d,%d\n",
+               static_cast<long long>(info_.samples), static_cast<long long>(s.frame),
+               static_cast<long long>(s.utime), static_cast<long long>(s.depth_utime), s.cell, s.label,
+               s.stereo_state, s.depth_state, s.x, s.y, s.u, s.v, s.phenomena, s.phenomenon, s.surface);
+  ++info_.samples;
+  ++info_.class_counts[static_cast<size_t>(s.label)];
+  ++frames_[static_cast<size_t>(s.frame)].samples;
+}
+
+void SessionWriter::close() {
+  if (!files_->patches) return;
+  const bool ok = std::fflush(files_->patches) == 0 && std::fflush(files_->samples) == 0;
+  std::fclose(files_->patches);
+  std::fclose(files_->samples);
+  files_->patches = files_->samples = nullptr;
+  if (!ok) throw DatasetError(dir_ + ": write failed (disk full?)");
+  info_.frames = static_cast<int64_t>(frames_.size());
+  std::ofstream frames(dir_ + "/frames.csv");
+  frames << "frame,utime,depth_utime,cells_labelled,samples\n";
+  for (size_t k = 0; k < frames_.size(); ++k)
+    frames << k << "," << frames_[k].utime << "," << frames_[k].depth_utime << "," << frames_[k].cells_labelled << ","
+           << frames_[k].samples << "\n";
+  std::ofstream(dir_ + "/session.json") << session_json(info_);
+  if (!frames) throw DatasetError(dir_ + ": write failed (disk full?)");
+  register_session(fs::path(dir_).parent_path().string(), info_.session, info_.patch_size);
+}
+
+SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir) {
+  info_ = parse_session_json(dir_ + "/session.json");
+  std::ifstream in(dir_ + "/samples.csv");
+  if (!in) throw DatasetError(dir_ + "/samples.csv: cannot open");
+  std::string line;
+  std::getline(in, line);
+  if (line != kSamplesHeader) throw DatasetError(dir_ + "/samples.csv: unexpected header '" + line + "'");
+  size_t row = 1;
+  while (std::getline(in, line)) {
+    ++row;
+    if (!line.empty()) samples_.push_back(parse_sample_row(line, dir_ + "/samples.csv line " + std::to_string(row)));
+  }
+  const size_t patch_bytes = static_cast<size_t>(info_.patch_size) * info_.patch_size * 3;
+  const std::string patches = dir_ + "/patches.bin";
+  const int fd = ::open(patches.c_str(), O_RDONLY);
+  if (fd < 0) throw DatasetError(patches + ": cannot open");
+  struct stat st {};
+  fstat(fd, &st);
+  mapped_bytes_ = static_cast<size_t>(st.st_size);
+  if (mapped_bytes_ != samples_.size() * patch_bytes) {
+    ::close(fd);
+    throw DatasetError(patches + ": holds " + std::to_string(mapped_bytes_ / patch_bytes) + " patches, samples.csv lists " +
+                       std::to_string(samples_.size()) + " (truncated dataset?)");
+  }
+  if (mapped_bytes_ > 0) {
+    void* m = mmap(nullptr, mapped_bytes_, PROT_READ, MAP_PRIVATE, fd, 0);
+    if (m == MAP_FAILED) {
+      ::close(fd);
+      throw DatasetError(patches + ": cannot memory-map");
+    }
+    mapped_ = static_cast<const uint8_t*>(m);
+  }
+  ::close(fd);
+}
+
+SessionReader::~SessionReader() {
+  if (mapped_) munmap(const_cast<uint8_t*>(mapped_), mapped_bytes_);
+}
+
+const uint8_t* SessionReader::patch_data(size_t i) const {
+  return mapped_ + i * static_cast<size_t>(info_.patch_size) * info_.patch_size * 3;
+}
+
+cv::Mat SessionReader::patch(size_t i) const {
+  return cv::Mat(info_.patch_size, info_.patch_size, CV_8UC3, const_cast<uint8_t*>(patch_data(i)));
+}
+
+std::vector<std::string> list_sessions(const std::string& dataset_root) {
+  const std::string path = dataset_root + "/dataset.json";
+  if (!fs::exists(path)) return {};
+  try {
+    return YAML::LoadFile(path)["sessions"].as<std::vector<std::string>>();
+  } catch (const YAML::Exception& e) {
+    throw DatasetError(path + ": " + e.what());
+  }
+}
+
+void register_session(const std::string& dataset_root, const std::string& session, int patch_size) {
+  std::vector<std::string> sessions = list_sessions(dataset_root);
+  if (std::find(sessions.begin(), sessions.end(), session) == sessions.end()) sessions.push_back(session);
+  std::sort(sessions.begin(), sessions.end());
+  std::ofstream out(dataset_root + "/dataset.json");
+  out << "{\n  \"format\": \"ivoa-dataset\",\n  \"version\": 1,\n  \"patch_size\": " << patch_size
+      << ",\n  \"label_names\": [\"TP\", \"TN\", \"FP\", \"FN\"],\n  \"sessions\": [";
+  for (size_t k = 0; k < sessions.size(); ++k) out << (k ? ", " : "") << quote(sessions[k]);
+  out << "]\n}\n";
+}
+
+std::map<std::string, std::vector<std::string>> load_split(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    throw DatasetError(path + ": cannot read split file: " + e.what());
+  }
+  if (!root.IsMap()) throw DatasetError(path + ": a split file maps split names to lists of sessions");
+  std::map<std::string, std::vector<std::string>> splits;
+  std::map<std::string, std::string> owner;
+  for (const auto& kv : root) {
+    const std::string name = kv.first.as<std::string>();
+    std::vector<std::string> sessions;
+    try {
+      sessions = kv.second.as<std::vector<std::string>>();
+    } catch (const YAML::Exception&) {
+      throw DatasetError(path + ": split '" + name + "' must be a list of session names");
+    }
+    for (const auto& s : sessions) {
+      if (owner.count(s)) throw DatasetError(path + ": session '" + s + "' is in both '" + owner[s] + "' and '" + name + "'");
+      owner[s] = name;
+    }
+    splits[name] = std::move(sessions);
+  }
+  return splits;
+}
+
+}  // namespace ivoa::dataset

@@ -1,0 +1,144 @@
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "ivoa/dataset/dataset_format.hpp"
+#include "ivoa/dataset/patch.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa::dataset {
+namespace {
+
+cv::Mat numbered_patch(int k, int size = 100) {
+  cv::Mat p(size, size, CV_8UC3);
+  cv::randu(p, 0, 255);
+  p.at<cv::Vec3b>(0, 0) = cv::Vec3b(static_cast<uint8_t>(k), 0, 0);
+  return p;
+}
+
+SessionInfo info(const std::string& name) {
+  SessionInfo i;
+  i.session = name;
+  i.detector = "jppc";
+  i.labels_from = "rerun";
+  i.logs = {"/logs/a.lcmlog"};
+  i.scene = "indoor_office";
+  i.seed = 7;
+  i.environment = "indoor";
+  i.rig_name = "sim";
+  return i;
+}
+
+TEST(DatasetFormat, SessionRoundTripsPatchesIndexAndMetadata) {
+  test::TempDir dir;
+  std::vector<cv::Mat> patches;
+  {
+    SessionWriter w(dir.path().string(), info("s1"));
+    const int64_t f0 = w.add_frame(1000, 1004, 50);
+    const int64_t f1 = w.add_frame(2000, 2004, 40);
+    for (int k = 0; k < 5; ++k) {
+      SampleRecord s;
+      s.frame = k < 3 ? f0 : f1;
+      s.utime = k < 3 ? 1000 : 2000;
+      s.label = k % 4;
+      s.cell = k * 3;
+      s.x = 1.5f;
+      s.u = 480.5f;
+      s.phenomena = 3;
+      s.phenomenon = 2;
+      s.surface = 1;
+      patches.push_back(numbered_patch(k));
+      w.add_sample(s, patches.back());
+    }
+  }
+  EXPECT_EQ(list_sessions(dir.path().string()), std::vector<std::string>{"s1"});
+  const SessionReader r((dir.path() / "s1").string());
+  ASSERT_EQ(r.size(), 5u);
+  EXPECT_EQ(r.info().frames, 2);
+  EXPECT_EQ(r.info().samples, 5);
+  EXPECT_EQ(r.info().class_counts[0], 2);  // labels 0,1,2,3,0
+  EXPECT_EQ(r.info().class_counts[3], 1);
+  EXPECT_EQ(r.info().environment, "indoor");
+  EXPECT_EQ(r.info().seed, 7);
+  EXPECT_DOUBLE_EQ(r.info().grid.safety_radius, 0.1);
+  for (size_t k = 0; k < 5; ++k) {
+    EXPECT_EQ(cv::norm(r.patch(k), patches[k], cv::NORM_INF), 0) << k;
+    EXPECT_EQ(r.samples()[k].label, static_cast<int>(k % 4));
+    EXPECT_EQ(r.samples()[k].cell, static_cast<int>(k * 3));
+  }
+  EXPECT_EQ(r.samples()[4].frame, 1);
+  EXPECT_FLOAT_EQ(r.samples()[0].u, 480.5f);
+  EXPECT_EQ(r.samples()[0].phenomenon, 2);
+}
+
+TEST(DatasetFormat, TruncatedPatchStoreIsReported) {
+  test::TempDir dir;
+  {
+    SessionWriter w(dir.path().string(), info("s2"));
+    w.add_frame(1, 1, 1);
+    SampleRecord s;
+    w.add_sample(s, numbered_patch(1));
+    w.add_sample(s, numbered_patch(2));
+  }
+  std::filesystem::resize_file(dir.path() / "s2" / "patches.bin", 100 * 100 * 3 + 17);
+  try {
+    SessionReader r((dir.path() / "s2").string());
+    FAIL();
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DatasetFormat, RejectsWrongPatchesAndLabels) {
+  test::TempDir dir;
+  SessionWriter w(dir.path().string(), info("s3"));
+  w.add_frame(1, 1, 1);
+  SampleRecord s;
+  EXPECT_THROW(w.add_sample(s, numbered_patch(0, 64)), DatasetError);
+  s.label = 7;
+  EXPECT_THROW(w.add_sample(s, numbered_patch(0)), DatasetError);
+}
+
+TEST(DatasetFormat, SplitFileBySessionRejectsOverlap) {
+  test::TempDir dir;
+  std::ofstream(dir.file("ok.yaml")) << "train: [a, b]\nval: [c]\ntest: [d, e]\n";
+  const auto splits = load_split(dir.file("ok.yaml"));
+  EXPECT_EQ(splits.at("train"), (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(splits.at("test").size(), 2u);
+  std::ofstream(dir.file("bad.yaml")) << "train: [a, b]\ntest: [b]\n";
+  try {
+    load_split(dir.file("bad.yaml"));
+    FAIL();
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("'b'"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load_split(dir.file("missing.yaml")), DatasetError);
+}
+
+TEST(Patch, ExtractsCentredPatchesInsideTheImageOnly) {
+  cv::Mat image(600, 960, CV_8UC3);
+  cv::randu(image, 0, 255);
+  const cv::Mat p = extract_patch(image, 200.2, 300.7, 100);
+  ASSERT_FALSE(p.empty());
+  EXPECT_EQ(cv::norm(p, image(cv::Rect(150, 251, 100, 100)), cv::NORM_INF), 0);
+  EXPECT_TRUE(extract_patch(image, 30, 300, 100).empty());
+  EXPECT_TRUE(extract_patch(image, 500, 580, 100).empty());
+}
+
+TEST(Patch, TruthSummaryUsesThePatchCentre) {
+  cv::Mat phen(600, 960, CV_8UC1, cv::Scalar(0)), surf(600, 960, CV_8UC1, cv::Scalar(1));
+  // Reflection (1) over most of the centre, glare (4) in a corner of it,
+  // texture-less (2) only in the outer ring, which must not count.
+  phen(cv::Rect(475, 275, 50, 50)).setTo(1);
+  phen(cv::Rect(475, 275, 10, 10)).setTo(5);
+  phen(cv::Rect(450, 250, 10, 10)).setTo(2);
+  surf(cv::Rect(475, 275, 50, 30)).setTo(2);
+  const PatchTruth t = summarize_truth(phen, surf, 500, 300, 100);
+  EXPECT_EQ(t.phenomena, 5);
+  EXPECT_EQ(t.phenomenon, 1);
+  EXPECT_EQ(t.surface, 2);
+}
+
+}  // namespace
+}  // namespace ivoa::dataset
