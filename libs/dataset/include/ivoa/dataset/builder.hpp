@@ -1,0 +1,69 @@
+#pragma once
+// Turns LCM logs into a dataset session. Labels either come from the log
+// (the INTROSPECTION_LABELS the live processes recorded) or are made again
+// offline by re-running a stereo detector and the depth monitor on the
+// log's raw images, so one raw log trains introspection for any perception
+// model. Both paths share the monitor's LabelingPipeline with the live
+// process.
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ivoa/core/channels.hpp"
+#include "ivoa/dataset/dataset_format.hpp"
+#include "ivoa/monitor/labeling_pipeline.hpp"
+#include "ivoa/stereo/config.hpp"
+
+namespace ivoa::dataset {
+
+inline constexpr const char* kRecordedLabels = "recorded";
+
+struct BuildOptions {
+  // "recorded" (use the log's labels), or a detector to re-run ("jppc", "dense").
+  std::string labels = kRecordedLabels;
+  stereo::DetectorConfig detector;
+  QueryGridConfig grid;  // for re-run labels; recorded labels carry their own
+  monitor::DepthMonitorConfig monitor;
+  monitor::PairingConfig pairing;
+  std::string environment;  // "" = from the scene name (indoor_*/outdoor_*) if known
+  std::string stereo_channel{channels::kStereoImages};
+  std::string depth_channel{channels::kDepthImage};
+  std::string calibration_channel{channels::kRigCalibration};
+  std::string labels_channel{channels::kIntrospectionLabels};
+  std::string truth_channel{channels::kSimGroundTruth};
+};
+
+struct BuildReport {
+  int64_t events = 0;
+  int64_t stereo_frames = 0;
+  int64_t frames_labelled = 0;   // frames that gave samples
+  int64_t frames_unmatched = 0;  // no depth frame within the pairing tolerance
+  int64_t samples = 0;
+  int64_t bad_messages = 0;      // undecodable or inconsistent, skipped
+  std::vector<std::string> problems;  // log damage (with byte offsets) and bad messages
+  std::array<int64_t, kNumClasses> class_counts{};
+};
+
+// Called with (bytes done, bytes total) while reading.
+using ProgressCallback = std::function<void(uint64_t, uint64_t)>;
+
+class SessionBuilder {
+ public:
+  // Throws DatasetError / std::invalid_argument for a bad option.
+  SessionBuilder(const std::string& dataset_root, const std::string& session, BuildOptions options);
+  ~SessionBuilder();
+
+  // Reads one log (call again for the next file of a split session). A
+  // damaged log yields everything before the damage, and the problem
+  // (byte offset) goes to the report. Throws DatasetError for a log that
+  // cannot be opened or holds no RIG_CALIBRATION.
+  void add_log(const std::string& path, const ProgressCallback& progress = {});
+  BuildReport finish();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ivoa::dataset

@@ -1,0 +1,292 @@
+#include "ivoa/dataset/builder.hpp"
+
+#include <algorithm>
+#include <deque>
+#include <map>
+#include <optional>
+
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/camera_model.hpp"
+#include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/image_convert.hpp"
+#include "ivoa/dataset/patch.hpp"
+#include "ivoa/core/message_counts.hpp"
+#include "ivoa/logio/log_reader.hpp"
+#include "ivoa/monitor/labeler.hpp"
+#include "ivoa/sim_ground_truth_t.hpp"
+#include "ivoa/stereo/detector.hpp"
+
+namespace ivoa::dataset {
+namespace {
+
+// Frames kept while their labels may still come: the labels of a frame
+// follow it within a few frames (detector and monitor latency).
+constexpr size_t kMaxCachedFrames = 90;
+
+struct Truth {
+  cv::Mat phenomena, surface;
+};
+
+template <class Msg>
+bool decode(const logio::LogEvent& e, Msg& msg) {
+  return msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) >= 0;
+}
+
+std::string environment_of(const std::string& scene) {
+  if (scene.rfind("indoor", 0) == 0) return "indoor";
+  if (scene.rfind("outdoor", 0) == 0) return "outdoor";
+  return "unknown";
+}
+
+template <class Map>
+void trim(Map& m, size_t max) {
+  while (m.size() > max) m.erase(m.begin());
+}
+
+}  // namespace
+
+struct SessionBuilder::Impl {
+  std::string root, session;
+  BuildOptions options;
+  BuildReport report;
+  std::unique_ptr<SessionWriter> writer;
+  SessionInfo info;
+
+  std::vector<uint8_t> calibration_bytes;
+  std::optional<RigCalibration> rig;
+  std::unique_ptr<stereo::ObstacleDetector> detector;
+  std::unique_ptr<monitor::LabelingPipeline> pipeline;
+
+  std::map<int64_t, cv::Mat> left_images;  // utime -> raw left BGR
+  std::map<int64_t, Truth> truths;         // utime -> simulator truth
+  std::deque<introspection_labels_t> ready;  // labels waiting for their frame's truth
+
+  bool rerun() const { return options.labels != kRecordedLabels; }
+  void bad(const std::string& what);
+  void on_calibration(const logio::LogEvent& e);
+  void on_stereo(const logio::LogEvent& e);
+  void on_depth(const logio::LogEvent& e);
+  void on_labels(const logio::LogEvent& e);
+  void on_truth(const logio::LogEvent& e);
+  void take(std::vector<monitor::PipelineOutcome> outcomes);
+  void emit_ready(bool all);
+  void emit(const introspection_labels_t& labels);
+  void open_writer();
+};
+
+void SessionBuilder::Impl::bad(const std::string& what) {
+  ++report.bad_messages;
+  if (report.problems.size() < 100) report.problems.push_back(what);
+  spdlog::warn("skipped: {}", what);
+}
+
+void SessionBuilder::Impl::open_writer() {
+  if (writer) return;
+  info.patch_size = rerun() ? options.grid.patch_size : info.patch_size;
+  if (info.environment.empty() || info.environment == "unknown")
+    info.environment = options.environment.empty() ? environment_of(info.scene) : options.environment;
+  writer = std::make_unique<SessionWriter>(root, info);
+}
+
+void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
+  rig_calibration_t msg;
+  if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.rig_calibration_t");
+  msg.utime = 0;  // republished every second: compare content only
+  std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
+  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  if (bytes == calibration_bytes) return;
+  try {
+    rig = from_message(msg);
+  } catch (const CalibrationError& err) {
+    return bad(std::string("unusable calibration: ") + err.what());
+  }
+  calibration_bytes = std::move(bytes);
+  info.rig_name = rig->rig_name;
+  if (rerun()) {
+    if (pipeline) take(pipeline->flush());
+    detector = stereo::make_detector(options.labels, *rig, options.detector);
+    pipeline = std::make_unique<monitor::LabelingPipeline>(*rig, options.grid, options.monitor, options.pairing);
+  }
+}
+
+void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
+  stereo_image_t msg;
+  if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.stereo_image_t");
+  ++report.stereo_frames;
+  try {
+    cv::Mat left = decode_image(msg.left);
+    if (rerun()) {
+      if (!detector) return bad("stereo frame " + std::to_string(msg.utime) + " before any calibration");
+      detector->set_frame(left, decode_image(msg.right));
+      obstacle_grid_t grid = make_obstacle_grid(pipeline->grid(), detector->name(), msg.utime);
+      detector->evaluate(pipeline->grid(), grid);
+      left_images[msg.utime] = std::move(left);
+      take(pipeline->add_stereo(std::move(grid)));
+    } else {
+      left_images[msg.utime] = std::move(left);
+    }
+  } catch (const std::exception& err) {
+    return bad("stereo frame " + std::to_string(msg.utime) + ": " + err.what());
+  }
+  trim(left_images, kMaxCachedFrames);
+  emit_ready(false);
+}
+
+void SessionBuilder::Impl::on_depth(const logio::LogEvent& e) {
+  if (!rerun()) return;
+  depth_image_t msg;
+  if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.depth_image_t");
+  if (!pipeline) return bad("depth frame " + std::to_string(msg.utime) + " before any calibration");
+  try {
+    cv::Mat depth = decode_depth(msg);
+    if (cv::countNonZero(depth) == 0) return bad("depth frame " + std::to_string(msg.utime) + ": zero-filled");
+    take(pipeline->add_depth(msg.utime, std::move(depth)));
+  } catch (const std::exception& err) {
+    bad("depth frame " + std::to_string(msg.utime) + ": " + err.what());
+  }
+}
+
+void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
+  if (rerun()) return;
+  introspection_labels_t msg;
+  if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.introspection_labels_t");
+  if (info.detector.empty()) {
+    info.detector = msg.detector;
+    info.grid = geometry_of(msg);
+    info.patch_size = msg.patch_size;
+  } else if (msg.detector != info.detector) {
+    return bad("labels for detector '" + msg.detector + "' in a session labelled for '" + info.detector + "'");
+  }
+  ready.push_back(std::move(msg));
+}
+
+void SessionBuilder::Impl::on_truth(const logio::LogEvent& e) {
+  sim_ground_truth_t msg;
+  if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.sim_ground_truth_t");
+  if (info.scene.empty()) {
+    info.scene = msg.scene;
+    info.seed = msg.seed;
+  }
+  try {
+    truths[msg.utime] = {decode_image(msg.phenomena, ColorOutput::kGray), decode_image(msg.surface, ColorOutput::kGray)};
+  } catch (const ImageError& err) {
+    return bad("truth " + std::to_string(msg.utime) + ": " + err.what());
+  }
+  trim(truths, kMaxCachedFrames);
+}
+
+void SessionBuilder::Impl::take(std::vector<monitor::PipelineOutcome> outcomes) {
+  for (auto& o : outcomes) {
+    if (!o.labeled) {
+      ++report.frames_unmatched;
+      continue;
+    }
+    ready.push_back(std::move(o.labeled->labels));
+  }
+}
+
+// A frame's labels are emitted once a newer stereo frame has been read (its
+// truth, published with it, is in by then) or at the end of the session.
+void SessionBuilder::Impl::emit_ready(bool all) {
+  const int64_t newest = left_images.empty() ? 0 : left_images.rbegin()->first;
+  while (!ready.empty() && (all || ready.front().utime < newest)) {
+    emit(ready.front());
+    ready.pop_front();
+  }
+}
+
+void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
+  const auto image = left_images.find(labels.utime);
+  if (image == left_images.end()) {
+    return bad("labels for frame " + std::to_string(labels.utime) + " whose stereo images are not in the log");
+  }
+  open_writer();
+  const auto truth = truths.find(labels.utime);
+  int32_t labelled = 0;
+  for (int8_t l : labels.label) labelled += l != introspection_labels_t::LABEL_NONE;
+  const int64_t frame = writer->add_frame(labels.utime, labels.depth_utime, labelled);
+  int64_t samples = 0;
+  for (size_t i = 0; i < labels.label.size(); ++i) {
+    if (labels.label[i] == introspection_labels_t::LABEL_NONE) continue;
+    const cv::Mat patch = extract_patch(image->second, labels.u[i], labels.v[i], info.patch_size);
+    if (patch.empty()) continue;  // the patch would leave the image
+    SampleRecord s;
+    s.frame = frame;
+    s.utime = labels.utime;
+    s.depth_utime = labels.depth_utime;
+    s.cell = static_cast<int32_t>(i);
+    s.label = labels.label[i];
+    s.stereo_state = labels.stereo_state[i];
+    s.depth_state = labels.depth_state[i];
+    s.x = labels.x[i];
+    s.y = labels.y[i];
+    s.u = labels.u[i];
+    s.v = labels.v[i];
+    if (truth != truths.end()) {
+      const PatchTruth t = summarize_truth(truth->second.phenomena, truth->second.surface, s.u, s.v, info.patch_size);
+      s.phenomena = t.phenomena;
+      s.phenomenon = t.phenomenon;
+      s.surface = t.surface;
+    }
+    writer->add_sample(s, patch);
+    ++report.class_counts[static_cast<size_t>(s.label)];
+    ++samples;
+  }
+  report.samples += samples;
+  report.frames_labelled += samples > 0;
+}
+
+SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::string& session, BuildOptions options)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->root = dataset_root;
+  impl_->session = session;
+  impl_->options = std::move(options);
+  if (impl_->rerun()) {
+    const auto names = stereo::detector_names();
+    if (std::find(names.begin(), names.end(), impl_->options.labels) == names.end())
+      throw std::invalid_argument("labels '" + impl_->options.labels + "': use 'recorded' or a detector name");
+    impl_->info.detector = impl_->options.labels;
+    impl_->info.grid = impl_->options.grid;
+    impl_->info.patch_size = impl_->options.grid.patch_size;
+  }
+  impl_->info.session = session;
+  impl_->info.labels_from = impl_->rerun() ? "rerun" : "recorded";
+}
+
+SessionBuilder::~SessionBuilder() = default;
+
+void SessionBuilder::add_log(const std::string& path, const ProgressCallback& progress) {
+  Impl& m = *impl_;
+  m.info.logs.push_back(path);
+  logio::LogReader reader(path);  // throws LogReadError for a missing file
+  logio::LogEvent e;
+  const auto& o = m.options;
+  while (reader.next(e)) {
+    ++m.report.events;
+    if (e.channel == o.calibration_channel) m.on_calibration(e);
+    else if (!m.rig) continue;  // nothing is usable before the calibration
+    else if (e.channel == o.stereo_channel) m.on_stereo(e);
+    else if (e.channel == o.depth_channel) m.on_depth(e);
+    else if (e.channel == o.labels_channel) m.on_labels(e);
+    else if (e.channel == o.truth_channel) m.on_truth(e);
+    // other channels: ignored
+    if (progress && (m.report.events & 15) == 0) progress(reader.position(), reader.size());
+  }
+  if (progress) progress(reader.position(), reader.size());
+  for (const auto& p : reader.problems()) m.report.problems.push_back(path + ": " + p.describe());
+  if (!m.rig)
+    throw DatasetError(path + ": no " + o.calibration_channel +
+                       " message in the log; a log must hold the rig calibration (record it with ivoa-logger)");
+}
+
+BuildReport SessionBuilder::finish() {
+  Impl& m = *impl_;
+  if (m.pipeline) m.take(m.pipeline->flush());
+  m.emit_ready(true);
+  m.open_writer();  // an empty session is still written, so it can be listed
+  m.writer->close();
+  return m.report;
+}
+
+}  // namespace ivoa::dataset

@@ -1,0 +1,151 @@
+// ivoa-dataset: LCM logs -> training dataset (one session per log, or per
+// group of split files), and a summary of existing datasets.
+//
+//   ivoa-dataset build --out data/ --labels jppc session1.lcmlog session2.lcmlog
+//   ivoa-dataset build --out data/ --labels recorded --session s7 s7.lcmlog.00 s7.lcmlog.01
+//   ivoa-dataset info data/ [--split split.yaml]
+#include <cstdio>
+#include <filesystem>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/process.hpp"
+#include "ivoa/core/progress.hpp"
+#include "ivoa/dataset/builder.hpp"
+#include "ivoa/logio/log_reader.hpp"
+#include "ivoa/stereo/options.hpp"
+
+namespace fs = std::filesystem;
+using namespace ivoa;
+
+namespace {
+
+// "run-3.lcmlog.02" -> "run-3": the session a (split) log file belongs to.
+std::string session_name_of(const std::string& path) {
+  std::string name = fs::path(path).filename().string();
+  const auto dot = name.rfind('.');
+  if (dot != std::string::npos && name.size() - dot == 3 && std::isdigit(name[dot + 1]) && std::isdigit(name[dot + 2]))
+    name = name.substr(0, dot);
+  for (const char* ext : {".lcmlog", ".lcm", ".log"}) {
+    const std::string e(ext);
+    if (name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0)
+      name = name.substr(0, name.size() - e.size());
+  }
+  return name;
+}
+
+std::string class_counts(const std::array<int64_t, dataset::kNumClasses>& c) {
+  std::string out;
+  for (int k = 0; k < dataset::kNumClasses; ++k)
+    out += (k ? "  " : "") + dataset::kLabelNames[static_cast<size_t>(k)] + " " + std::to_string(c[static_cast<size_t>(k)]);
+  return out;
+}
+
+int build_session(const std::string& out, const std::string& session, const std::vector<std::string>& logs,
+                  const dataset::BuildOptions& options) {
+  uint64_t total = 0;
+  for (const auto& log : logs) total += fs::exists(log) ? fs::file_size(log) : 0;
+  Progress progress("session " + session, static_cast<double>(total) / 1e6, "MB");
+  dataset::SessionBuilder builder(out, session, options);
+  uint64_t before = 0;
+  for (const auto& log : logs) {
+    builder.add_log(log, [&](uint64_t done, uint64_t) { progress.update(static_cast<double>(before + done) / 1e6); });
+    before += fs::file_size(log);
+  }
+  const dataset::BuildReport r = builder.finish();
+  progress.finish(std::to_string(r.stereo_frames) + " frames");
+  std::printf("%-28s frames %5lld labelled %5lld unmatched %4lld  samples %7lld  %s\n", session.c_str(),
+              static_cast<long long>(r.stereo_frames), static_cast<long long>(r.frames_labelled),
+              static_cast<long long>(r.frames_unmatched), static_cast<long long>(r.samples),
+              class_counts(r.class_counts).c_str());
+  for (const auto& p : r.problems) spdlog::warn("{}: {}", session, p);
+  return r.problems.empty() ? kExitOk : kExitBadInput;
+}
+
+int run_build(const std::string& out, const std::string& session, const std::vector<std::string>& logs,
+              const dataset::BuildOptions& options) {
+  // Logs of one session (explicit --session, or split files name.NN) go together.
+  std::vector<std::pair<std::string, std::vector<std::string>>> sessions;
+  for (const auto& log : logs) {
+    const std::string name = session.empty() ? session_name_of(log) : session;
+    if (sessions.empty() || sessions.back().first != name) sessions.push_back({name, {}});
+    sessions.back().second.push_back(log);
+  }
+  int worst = kExitOk;
+  for (const auto& [name, files] : sessions) {
+    try {
+      worst = std::max(worst, build_session(out, name, files, options));
+    } catch (const logio::LogReadError& e) {
+      spdlog::error("{}", e.what());
+      worst = kExitBadInput;
+    } catch (const dataset::DatasetError& e) {
+      spdlog::error("{}", e.what());
+      worst = kExitBadInput;
+    }
+  }
+  return worst;
+}
+
+int run_info(const std::string& root, const std::string& split_path) {
+  std::map<std::string, std::string> split_of;
+  if (!split_path.empty())
+    for (const auto& [split, sessions] : dataset::load_split(split_path))
+      for (const auto& s : sessions) split_of[s] = split;
+  std::array<int64_t, dataset::kNumClasses> total{};
+  for (const auto& name : dataset::list_sessions(root)) {
+    const dataset::SessionReader r(root + "/" + name);
+    const auto& i = r.info();
+    std::printf("%-28s %-6s %-8s %-8s frames %5lld samples %7lld  %s\n", name.c_str(),
+                split_of.count(name) ? split_of[name].c_str() : "-", i.environment.c_str(), i.detector.c_str(),
+                static_cast<long long>(i.frames), static_cast<long long>(i.samples),
+                class_counts(i.class_counts).c_str());
+    for (int k = 0; k < dataset::kNumClasses; ++k) total[static_cast<size_t>(k)] += i.class_counts[static_cast<size_t>(k)];
+  }
+  std::printf("total: %s\n", class_counts(total).c_str());
+  for (const auto& [session, split] : split_of)
+    if (!fs::exists(root + "/" + session + "/session.json"))
+      spdlog::warn("split '{}' names session '{}', which is not in {}", split, session, root);
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Build introspection datasets from LCM logs, and summarise them"};
+  app.require_subcommand(1);
+  CommonOptions common;
+  add_common_options(app, common);
+
+  auto* build = app.add_subcommand("build", "logs -> dataset sessions");
+  std::string out, session;
+  std::vector<std::string> logs;
+  dataset::BuildOptions options;
+  build->add_option("--out", out, "dataset folder (created; sessions are added to it)")->required();
+  build->add_option("--labels", options.labels,
+                    "'recorded' (the log's INTROSPECTION_LABELS) or a detector to re-run offline: jppc, dense")
+      ->capture_default_str();
+  build->add_option("--session", session, "session name for all logs (default: per log, from the file name)");
+  build->add_option("--environment", options.environment, "indoor or outdoor (default: from the simulated scene name)");
+  build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
+      ->capture_default_str();
+  build->add_option("logs", logs, "LCM log files, in order")->required()->check(CLI::ExistingFile);
+  add_query_grid_options(*build, options.grid);
+  stereo::add_detector_options(*build, options.detector);
+
+  auto* info = app.add_subcommand("info", "sessions, class counts and splits of a dataset");
+  std::string root, split;
+  info->add_option("dataset", root, "dataset folder")->required()->check(CLI::ExistingDirectory);
+  info->add_option("--split", split, "a split file to check against the dataset")->check(CLI::ExistingFile);
+
+  if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
+  init_logging("dataset", common.log_level);
+  try {
+    if (*build) return run_build(out, session, logs, options);
+    return run_info(root, split);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return kExitBadInput;
+  }
+}
