@@ -75,4 +75,47 @@ std::string LogSummary::table() const {
   return out;
 }
 
+std::string json_quote(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string fingerprint_hex(int64_t fingerprint) {
+  char buf[24];
+  std::snprintf(buf, sizeof(buf), "\"0x%016llx\"", static_cast<unsigned long long>(fingerprint));
+  return buf;
+}
+
+std::string channel_json(const ChannelSummary& s) {
+  std::string out = "{\"type\": " + json_quote(s.type) + ", \"fingerprint\": " + fingerprint_hex(s.fingerprint) +
+                    ", \"count\": " + std::to_string(s.count) + ", \"bytes\": " + std::to_string(s.bytes) +
+                    ", \"first_timestamp\": " + std::to_string(s.first_timestamp) +
+                    ", \"last_timestamp\": " + std::to_string(s.last_timestamp);
+  if (s.type != "unknown")
+    out += ", \"first_utime\": " + std::to_string(s.first_utime) + ", \"last_utime\": " + std::to_string(s.last_utime) +
+           ", \"utime_regressions\": " + std::to_string(s.utime_regressions);
+  if (s.has_seq) {
+    out += ", \"first_seq\": " + std::to_string(s.first_seq) + ", \"last_seq\": " + std::to_string(s.last_seq) +
+           ", \"missing_seq\": " + std::to_string(s.missing_seq) +
+           ", \"seq_regressions\": " + std::to_string(s.seq_regressions) + ", \"gaps\": [";
+    for (size_t i = 0; i < s.gaps.size(); ++i)
+      out += (i ? ", [" : "[") + std::to_string(s.gaps[i].after) + ", " + std::to_string(s.gaps[i].next) + "]";
+    out += "]";
+  }
+  if (s.other_fingerprints > 0) out += ", \"other_types\": " + std::to_string(s.other_fingerprints);
+  return out + "}";
+}
+
 }  // namespace ivoa::logio

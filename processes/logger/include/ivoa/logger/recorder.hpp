@@ -1,0 +1,92 @@
+#pragma once
+// The logger's core, without LCM: messages come in on the receive thread
+// (on_message only filters, copies and queues, so LCM is never held up by
+// the disk), a writer thread writes them to a SplitLog. finish() writes out
+// everything still queued before closing: a stop loses nothing received.
+// If the disk cannot keep up, the queue's byte bound holds memory in check
+// and refused messages are counted and reported, never silently lost.
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "ivoa/logger/channel_filter.hpp"
+#include "ivoa/logger/event_queue.hpp"
+#include "ivoa/logger/session_counters.hpp"
+#include "ivoa/logger/split_log.hpp"
+
+namespace ivoa::logger {
+
+struct RecorderOptions {
+  SplitLogOptions log;
+  std::string channels = ".*";  // include regex
+  std::string exclude;          // exclude regex, empty = none
+  uint64_t max_queue_bytes = 1024ull << 20;
+  double max_write_bytes_per_s = 0;  // cap on the disk write rate, 0 = none
+  double calibration_warning_s = 5;  // warn if no calibration arrived by then
+};
+
+struct RecorderStatus {
+  int64_t received = 0, written = 0, dropped = 0, dropped_bytes = 0, bytes_written = 0, files = 0;
+  int64_t queue_depth = 0, queue_bytes = 0, peak_queue_bytes = 0;
+  int64_t unwritten = 0;  // received but neither written nor dropped: queued, or lost to a write error
+  bool calibration_seen = false;
+  bool failed = false;
+  std::string error;
+};
+
+class Recorder {
+ public:
+  // Opens the first file and starts the writer thread. Throws
+  // logio::LogWriteError (cannot create the log) or std::invalid_argument
+  // (bad regex).
+  explicit Recorder(RecorderOptions options);
+  ~Recorder();
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  // Receive thread only. Returns false if the message was for a channel
+  // that is not recorded, or was refused because the queue is full.
+  bool on_message(const std::string& channel, int64_t timestamp, const void* data, size_t size);
+
+  // Call now and then from the receive thread: logs warnings (disk too
+  // slow, messages dropped, no calibration yet) and returns a one-line
+  // state for the heartbeat.
+  std::string check_health();
+
+  // Takes no more messages, writes out all queued ones, closes the log.
+  // Returns true if every message received is on disk. Idempotent.
+  bool finish();
+
+  bool failed() const { return failed_.load(); }
+  RecorderStatus status() const;
+  const std::vector<std::string>& files() const { return log_.files(); }
+
+ private:
+  void write_loop();
+  void fail(const std::string& error);
+  void throttle(double start_ms);
+
+  RecorderOptions options_;
+  ChannelFilter filter_;
+  SessionCounters counters_;
+  SplitLog log_;
+  EventQueue queue_;
+  std::atomic<bool> failed_{false};
+  std::atomic<bool> calibration_seen_{false};
+  mutable std::mutex error_mutex_;
+  std::string error_;
+  std::thread writer_;
+  bool finished_ = false;
+
+  // check_health() state (receive thread only).
+  double start_ms_;
+  double last_drop_warning_ms_ = -1e18;
+  int64_t dropped_reported_ = 0;
+  bool queue_warned_ = false;
+  bool calibration_warned_ = false;
+};
+
+}  // namespace ivoa::logger

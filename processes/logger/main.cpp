@@ -1,0 +1,208 @@
+// ivoa-logger: records LCM traffic into standard LCM log files (replay them
+// with lcm-logplayer, browse them with lcm-spy). Unlike lcm-logger 1.3.1 it
+// writes out everything it received before exiting on SIGINT/SIGTERM,
+// counts what it could not keep if the disk is too slow, and on a write
+// error leaves a readable file and exits with code 4.
+#include <unistd.h>
+
+#include <csignal>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/bus.hpp"
+#include "ivoa/core/channels.hpp"
+#include "ivoa/core/heartbeat.hpp"
+#include "ivoa/core/process.hpp"
+#include "ivoa/core/stop_signal.hpp"
+#include "ivoa/core/time.hpp"
+#include "ivoa/logger/recorder.hpp"
+
+namespace {
+
+using ivoa::logger::Recorder;
+using ivoa::logger::RecorderOptions;
+using ivoa::logger::RecorderStatus;
+
+// Messages LCM had already taken in when the stop came are still handled,
+// within this bound (traffic may go on arriving).
+constexpr int kFinalHandleLimit = 2000;
+constexpr double kFinalHandleMs = 500;
+
+std::string expand_time_pattern(const std::string& pattern) {
+  const std::time_t now = std::time(nullptr);
+  std::tm local{};
+  localtime_r(&now, &local);
+  std::string out(4096, '\0');
+  out.resize(std::strftime(out.data(), out.size(), pattern.c_str(), &local));
+  return out;
+}
+
+std::string hostname() {
+  char buf[256] = {0};
+  gethostname(buf, sizeof(buf) - 1);
+  return buf;
+}
+
+double mb(int64_t bytes) { return static_cast<double>(bytes) / 1e6; }
+
+// Heartbeat counters are increments; the recorder keeps totals.
+class StatusReporter {
+ public:
+  explicit StatusReporter(ivoa::Heartbeat& heartbeat) : heartbeat_(heartbeat) {}
+  void update(const RecorderStatus& s, const std::string& state) {
+    heartbeat_.count_in(s.received - last_.received);
+    heartbeat_.count_out(s.written - last_.written);
+    heartbeat_.count_dropped(s.dropped - last_.dropped);
+    last_ = s;
+    heartbeat_.set_counter("bytes_written", s.bytes_written);
+    heartbeat_.set_counter("dropped_bytes", s.dropped_bytes);
+    heartbeat_.set_counter("queue_depth", s.queue_depth);
+    heartbeat_.set_counter("queue_bytes", s.queue_bytes);
+    heartbeat_.set_counter("peak_queue_bytes", s.peak_queue_bytes);
+    heartbeat_.set_counter("files", s.files);
+    heartbeat_.set_counter("unwritten", s.unwritten);
+    heartbeat_.set_state(state);
+  }
+
+ private:
+  ivoa::Heartbeat& heartbeat_;
+  RecorderStatus last_;
+};
+
+void handle_what_lcm_already_has(ivoa::Bus& bus) {
+  const double until = ivoa::monotonic_ms() + kFinalHandleMs;
+  for (int i = 0; i < kFinalHandleLimit && ivoa::monotonic_ms() < until; ++i)
+    if (bus.handle(0) <= 0) break;
+}
+
+int report_end(const Recorder& recorder, double seconds) {
+  const RecorderStatus s = recorder.status();
+  std::string files;
+  for (const auto& f : recorder.files()) files += (files.empty() ? "" : ", ") + f;
+  spdlog::info("received {}, written {}, dropped {}; {:.1f} MB in {:.1f} s ({:.1f} MB/s), queue peak {:.1f} MB; {}",
+               s.received, s.written, s.dropped, mb(s.bytes_written), seconds,
+               seconds > 0 ? mb(s.bytes_written) / seconds : 0.0, mb(s.peak_queue_bytes), files);
+  if (s.failed) {
+    spdlog::error("{}; {} messages received were not written. The log ends with the last whole event and is readable.",
+                  s.error, s.unwritten);
+    return ivoa::kExitIoError;
+  }
+  if (s.dropped > 0)
+    spdlog::error("LOST {} messages ({:.1f} MB) because the disk could not keep up (raise --max-queue-mb or use a "
+                  "faster disk)",
+                  s.dropped, mb(s.dropped_bytes));
+  return ivoa::kExitOk;
+}
+
+int record(const ivoa::CommonOptions& common, RecorderOptions options, const std::string& ready_file) {
+  std::unique_ptr<ivoa::Bus> bus;
+  try {
+    bus = std::make_unique<ivoa::Bus>(common.lcm_url);
+  } catch (const ivoa::BusError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitFailure;
+  }
+  const bool reading_a_log = bus->url().rfind("file://", 0) == 0;
+  options.log.identity.lcm_url = bus->url();
+  std::unique_ptr<Recorder> recorder;
+  try {
+    const auto parent = std::filesystem::path(options.log.path).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent);
+    recorder = std::make_unique<Recorder>(std::move(options));
+  } catch (const std::invalid_argument& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitUsage;
+  } catch (const std::exception& e) {  // LogWriteError, filesystem_error
+    spdlog::error("{}", e.what());
+    return ivoa::kExitIoError;
+  }
+  ivoa::Heartbeat heartbeat(*bus, "logger");
+  StatusReporter reporter(heartbeat);
+  bus->subscribe_raw(".*", [&](const void* data, size_t size, const ivoa::ReceiveInfo& info) {
+    recorder->on_message(info.channel, info.recv_utime, data, size);
+  });
+  bus->handle(0);  // udpm joins the multicast group on the first handle
+  if (!ready_file.empty()) std::ofstream(ready_file) << "ready\n";
+
+  const double start_ms = ivoa::monotonic_ms();
+  int code = ivoa::kExitOk;
+  while (!ivoa::stop_requested() && !recorder->failed()) {
+    if (bus->handle(50) < 0) {
+      if (!reading_a_log) {
+        spdlog::error("LCM handle failed on '{}'", bus->url());
+        code = ivoa::kExitFailure;
+      }
+      break;  // a file:// input has ended
+    }
+    reporter.update(recorder->status(), recorder->check_health());
+    heartbeat.tick();
+  }
+  if (!recorder->failed()) {
+    if (ivoa::stop_requested()) handle_what_lcm_already_has(*bus);
+    const RecorderStatus s = recorder->status();
+    spdlog::info("stopping: writing the {} queued messages ({:.1f} MB) to disk", s.queue_depth, mb(s.queue_bytes));
+    reporter.update(s, "draining");
+    heartbeat.publish_now();
+  }
+  recorder->finish();
+  const int end_code = report_end(*recorder, (ivoa::monotonic_ms() - start_ms) / 1000.0);
+  reporter.update(recorder->status(), end_code == ivoa::kExitOk ? "stopped" : "error: " + recorder->status().error);
+  heartbeat.publish_now();
+  return code != ivoa::kExitOk ? code : end_code;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "Record LCM channels into standard LCM log files (replay: lcm-logplayer; browse: lcm-spy).\n"
+      "On SIGINT/SIGTERM everything received is written before exiting. Exit codes: 0 ok, 1 LCM failure,\n"
+      "2 bad flags, 4 cannot write the log (the file written so far stays readable)."};
+  ivoa::CommonOptions common;
+  ivoa::add_common_options(app, common);
+  std::string file = "ivoa-%Y%m%d-%H%M%S.lcmlog", ready_file;
+  RecorderOptions options;
+  double split_mb = 0, max_queue_mb = 1024, max_write_mb_s = 0;
+  bool force = false, no_sidecar = false;
+  app.add_option("file", file, "log file name; strftime patterns (%Y, %H, ...) are expanded at start")
+      ->capture_default_str();
+  app.add_option("-c,--channels", options.channels, "record channels matching this regex (whole name)")
+      ->capture_default_str();
+  app.add_option("-x,--exclude", options.exclude, "but not those matching this regex");
+  app.add_option("--split-mb", split_mb, "start a new numbered file (FILE.00, FILE.01, ...) before one passes this size")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--calibration-channel", options.log.calibration_channel,
+                 "always recorded, and copied to the start of every split file so each is self-contained "
+                 "(empty: none)")
+      ->capture_default_str();
+  app.add_option("--max-queue-mb", max_queue_mb, "memory for messages waiting for the disk; beyond it new ones are "
+                                                 "dropped and counted")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-write-mb-s", max_write_mb_s, "cap the disk write rate (0 = none)")->check(CLI::NonNegativeNumber);
+  app.add_flag("-f,--force", force, "overwrite existing files");
+  app.add_flag("--no-sidecar", no_sidecar, "do not write FILE.json next to each log");
+  app.add_option("--ready-file", ready_file, "create this file once subscribed (lets scripts start publishers)");
+  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  ivoa::init_logging("logger", common.log_level);
+  ivoa::install_stop_handlers();
+  std::signal(SIGXFSZ, SIG_IGN);  // over a file size limit, write() fails with EFBIG instead
+
+  options.log.path = expand_time_pattern(file);
+  if (options.log.path.empty()) {
+    spdlog::error("the file name pattern '{}' expands to nothing", file);
+    return ivoa::kExitUsage;
+  }
+  options.log.split_bytes = static_cast<uint64_t>(split_mb * 1e6);
+  options.log.overwrite = force;
+  options.log.sidecars = !no_sidecar;
+  options.log.identity = {"ivoa-logger", IVOA_VERSION, IVOA_GIT_DESCRIBE, hostname(), "", options.channels,
+                          options.exclude};
+  options.max_queue_bytes = static_cast<uint64_t>(max_queue_mb * 1e6);
+  options.max_write_bytes_per_s = max_write_mb_s * 1e6;
+  return record(common, std::move(options), ready_file);
+}

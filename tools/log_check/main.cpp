@@ -1,0 +1,159 @@
+// ivoa-log-check: what an LCM log holds and whether it is intact. Per
+// channel: type, count, size, sequence-number gaps, utime regressions.
+// For a damaged or truncated log: the byte offset of the first bad event
+// and how many good events come before it. Several files (a split
+// session, in order) are checked as one recording.
+#include <fstream>
+#include <map>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/process.hpp"
+#include "ivoa/logio/log_reader.hpp"
+#include "ivoa/logio/log_summary.hpp"
+
+namespace {
+
+using ivoa::logio::LogSummary;
+
+struct FileResult {
+  std::string path;
+  uint64_t size = 0;
+  int64_t events = 0;
+  std::string first_channel;
+  std::vector<ivoa::logio::LogProblem> problems;
+  std::vector<int64_t> events_before_problem;  // per problem
+  std::string error;  // could not be read at all
+};
+
+FileResult check_file(const std::string& path, bool resync, LogSummary& summary) {
+  FileResult r;
+  r.path = path;
+  try {
+    ivoa::logio::LogReader reader(path, {resync});
+    r.size = reader.size();
+    ivoa::logio::LogEvent event;
+    size_t problems_seen = 0;
+    while (true) {
+      const bool got = reader.next(event);
+      for (; problems_seen < reader.problems().size(); ++problems_seen) r.events_before_problem.push_back(r.events);
+      if (!got) break;
+      if (r.events++ == 0) r.first_channel = event.channel;
+      summary.add(event);
+    }
+    r.problems = reader.problems();
+  } catch (const ivoa::logio::LogReadError& e) {
+    r.error = e.what();
+  }
+  return r;
+}
+
+void print_file(const FileResult& r) {
+  if (!r.error.empty()) {
+    std::printf("%s: UNREADABLE: %s\n", r.path.c_str(), r.error.c_str());
+    return;
+  }
+  std::printf("%s: %lld events, %.1f MB, first channel %s, %s\n", r.path.c_str(), static_cast<long long>(r.events),
+              static_cast<double>(r.size) / 1e6, r.first_channel.empty() ? "-" : r.first_channel.c_str(),
+              r.problems.empty() ? "intact" : "DAMAGED");
+  for (size_t i = 0; i < r.problems.size(); ++i)
+    std::printf("  %s; the %lld events before it are intact\n", r.problems[i].describe().c_str(),
+                static_cast<long long>(r.events_before_problem[i]));
+}
+
+std::string results_json(const std::vector<FileResult>& files, const LogSummary& summary) {
+  using ivoa::logio::json_quote;
+  std::string out = "{\"files\": [";
+  for (size_t i = 0; i < files.size(); ++i) {
+    const FileResult& f = files[i];
+    out += std::string(i ? ",\n  " : "\n  ") + "{\"path\": " + json_quote(f.path) +
+           ", \"bytes\": " + std::to_string(f.size) + ", \"events\": " + std::to_string(f.events) +
+           ", \"first_channel\": " + json_quote(f.first_channel) + ", \"error\": " + json_quote(f.error) +
+           ", \"problems\": [";
+    for (size_t k = 0; k < f.problems.size(); ++k)
+      out += std::string(k ? ", " : "") + "{\"offset\": " + std::to_string(f.problems[k].offset) +
+             ", \"what\": " + json_quote(f.problems[k].what) +
+             ", \"skipped_bytes\": " + std::to_string(f.problems[k].skipped_bytes) +
+             ", \"events_before\": " + std::to_string(f.events_before_problem[k]) + "}";
+    out += "]}";
+  }
+  out += "],\n\"events\": " + std::to_string(summary.events()) + ",\n\"channels\": {";
+  const char* sep = "\n  ";
+  for (const auto& [name, channel] : summary.channels()) {
+    out += sep + json_quote(name) + ": " + ivoa::logio::channel_json(channel);
+    sep = ",\n  ";
+  }
+  return out + "}}\n";
+}
+
+// CHANNEL=N pairs; false (with a message) if one does not hold.
+bool expectations_hold(const std::vector<std::string>& expect, const LogSummary& summary) {
+  bool ok = true;
+  for (const auto& arg : expect) {
+    const auto eq = arg.find('=');
+    const std::string channel = arg.substr(0, eq);
+    const long long want = std::stoll(arg.substr(eq + 1));
+    const auto it = summary.channels().find(channel);
+    const long long got = it == summary.channels().end() ? 0 : it->second.count;
+    if (got != want) {
+      spdlog::error("{}: expected {} messages, the log has {}", channel, want, got);
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+bool sequences_complete(const LogSummary& summary) {
+  bool ok = true;
+  for (const auto& [name, s] : summary.channels()) {
+    if (s.missing_seq == 0 && s.seq_regressions == 0) continue;
+    spdlog::error("{}: {} messages missing by sequence number, {} repeated or out of order", name, s.missing_seq,
+                  s.seq_regressions);
+    ok = false;
+  }
+  return ok;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage.\n"
+               "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 3 a log is damaged or "
+               "unreadable."};
+  ivoa::CommonOptions common;
+  ivoa::add_common_options(app, common);
+  std::vector<std::string> files, expect;
+  std::string json_path;
+  bool resync = false, no_gaps = false;
+  app.add_option("files", files, "log files, in recording order (a split session is checked as one)")->required();
+  app.add_flag("--resync", resync, "skip damaged parts and read on (default: stop at the first damage)");
+  app.add_option("--json", json_path, "also write the results as JSON to this file");
+  app.add_option("--expect", expect, "CHANNEL=N: fail unless the log has exactly N messages on CHANNEL")
+      ->delimiter(',')
+      ->check([](const std::string& s) {
+        const auto eq = s.find('=');
+        return eq == std::string::npos || eq == 0 || s.find_first_not_of("0123456789", eq + 1) != std::string::npos ||
+                       eq + 1 == s.size()
+                   ? std::string("use CHANNEL=N")
+                   : std::string();
+      });
+  app.add_flag("--no-gaps", no_gaps, "fail if a sequence-numbered channel misses or repeats a message");
+  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  ivoa::init_logging("log-check", common.log_level);
+
+  LogSummary summary;
+  std::vector<FileResult> results;
+  bool damaged = false;
+  for (const auto& path : files) {
+    results.push_back(check_file(path, resync, summary));
+    print_file(results.back());
+    damaged = damaged || !results.back().error.empty() || !results.back().problems.empty();
+  }
+  std::printf("\n%s", summary.table().c_str());
+  if (!json_path.empty()) std::ofstream(json_path) << results_json(results, summary);
+  const bool expected = expectations_hold(expect, summary);
+  const bool complete = !no_gaps || sequences_complete(summary);
+  if (damaged) return ivoa::kExitBadInput;
+  return expected && complete ? ivoa::kExitOk : ivoa::kExitFailure;
+}
