@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace ivoa::stereo {
@@ -58,20 +59,27 @@ std::optional<double> JppMatcher::cost(cv::Point l, cv::Point r) {
   return static_cast<double>(sum) / compared;
 }
 
-PointCheck JppMatcher::confident_positive(cv::Point l, cv::Point r) {
+PointCheck JppMatcher::confident_positive(cv::Point l, cv::Point r, double* cost_out) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (cost_out) *cost_out = nan;
   if (!inside(l) || !inside(r)) return PointCheck::kUnobserved;
   ++cp_tests_;
   const uint64_t key = pair_key(l, r);
-  if (const auto it = cp_cache_.find(key); it != cp_cache_.end()) {
+  auto it = cp_cache_.find(key);
+  if (it != cp_cache_.end()) {
     ++cp_cache_hits_;
-    return it->second;
+  } else {
+    CachedCheck check{PointCheck::kUnobserved, nan};
+    if (config_.texture_gate <= 0 || texture(l) >= config_.texture_gate) {
+      if (const auto c = cost(l, r)) {
+        check.cost = *c;
+        check.verdict = *c < config_.conf_pos_thresh ? PointCheck::kMatch : PointCheck::kNoMatch;
+      }
+    }
+    it = cp_cache_.emplace(key, check).first;
   }
-  PointCheck verdict = PointCheck::kUnobserved;
-  if (config_.texture_gate <= 0 || texture(l) >= config_.texture_gate) {
-    if (const auto c = cost(l, r)) verdict = *c < config_.conf_pos_thresh ? PointCheck::kMatch : PointCheck::kNoMatch;
-  }
-  cp_cache_.emplace(key, verdict);
-  return verdict;
+  if (cost_out) *cost_out = it->second.cost;
+  return it->second.verdict;
 }
 
 bool JppMatcher::confident_negative(cv::Point l, cv::Point r) {

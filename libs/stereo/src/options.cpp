@@ -6,12 +6,15 @@
 
 namespace ivoa::stereo {
 
-void add_jpp_options(CLI::App& app, JppConfig& c) {
-  const char* g = "JPP-C (jppc)";
+namespace {
+const char* kJppGroup = "JPP-C (jppc)";
+const char* kSgbmGroup = "Dense (SGBM)";
+}  // namespace
+
+void add_jpp_matcher_options(CLI::App& app, JppConfig& c) {
   auto add = [&](const char* flag, auto& value, const char* help) {
-    app.add_option(flag, value, help)->capture_default_str()->group(g);
+    app.add_option(flag, value, help)->capture_default_str()->group(kJppGroup);
   };
-  add("--rect_scale", c.rect_scale, "rectified image size / raw size (0.5: 960x600 -> 480x300)");
   add("--daisy_R", c.daisy_R, "DAISY outer ring radius, pixels");
   add("--daisy_Q", c.daisy_Q, "DAISY rings");
   add("--daisy_T", c.daisy_T, "DAISY angles per ring");
@@ -19,20 +22,27 @@ void add_jpp_options(CLI::App& app, JppConfig& c) {
   add("--SAD_window_size", c.SAD_window_size, "matching window half-width, pixels (5: 11x11)");
   add("--conf_pos_thresh", c.conf_pos_thresh, "CP: window cost below this is a match");
   add("--conf_neg_thresh", c.conf_neg_thresh, "CN: window cost above this is confidently empty (full JPP only)");
-  add("--grid_size", c.grid_size,
-      "step between ground samples of one footprint check, m (JPP grid_size, mm there; not --grid-spacing)");
   add("--jpp_min_window_fraction", c.min_window_fraction,
       "window share that must lie inside both images for a verdict (JPP: none, divides by 121)");
   add("--jpp_texture_gate", c.texture_gate,
       "no verdict where the left window's mean positive x-gradient is below this, gray levels/px; 0 = off (JPP)");
 }
 
-void add_sgbm_options(CLI::App& app, SgbmConfig& c) {
-  const char* g = "Dense (SGBM)";
+void add_jpp_options(CLI::App& app, JppConfig& c) {
+  app.add_option("--rect_scale", c.rect_scale, "rectified image size / raw size (0.5: 960x600 -> 480x300)")
+      ->capture_default_str()
+      ->group(kJppGroup);
+  app.add_option("--grid_size", c.grid_size,
+                 "step between ground samples of one footprint check, m (JPP grid_size, mm there; not --grid-spacing)")
+      ->capture_default_str()
+      ->group(kJppGroup);
+  add_jpp_matcher_options(app, c);
+}
+
+void add_sgbm_matcher_options(CLI::App& app, SgbmConfig& c) {
   auto add = [&](const char* flag, auto& value, const char* help) {
-    return app.add_option(flag, value, help)->capture_default_str()->group(g);
+    return app.add_option(flag, value, help)->capture_default_str()->group(kSgbmGroup);
   };
-  add("--sgbm_rect_scale", c.rect_scale, "rectified image size / raw size");
   add("--sgbm_mode", c.mode, "3way (fastest), sgbm, hh")->check(CLI::IsMember({"3way", "sgbm", "hh"}));
   add("--sgbm_min_disparity", c.min_disparity, "pixels");
   add("--sgbm_num_disparities", c.num_disparities, "disparity search range, pixels, multiple of 16");
@@ -47,10 +57,12 @@ void add_sgbm_options(CLI::App& app, SgbmConfig& c) {
 }
 
 void add_dense_options(CLI::App& app, DenseConfig& c) {
-  add_sgbm_options(app, c.sgbm);
-  const char* g = "Dense (SGBM)";
+  app.add_option("--sgbm_rect_scale", c.sgbm.rect_scale, "rectified image size / raw size")
+      ->capture_default_str()
+      ->group(kSgbmGroup);
+  add_sgbm_matcher_options(app, c.sgbm);
   auto add = [&](const char* flag, auto& value, const char* help) {
-    app.add_option(flag, value, help)->capture_default_str()->group(g);
+    app.add_option(flag, value, help)->capture_default_str()->group(kSgbmGroup);
   };
   add("--dense_min_obstacle_height", c.min_obstacle_height, "points higher than this above the ground are obstacles, m");
   add("--dense_max_obstacle_height", c.max_obstacle_height, "points higher than this are above the robot, ignored, m");

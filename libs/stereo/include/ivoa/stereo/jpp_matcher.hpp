@@ -38,8 +38,9 @@ class JppMatcher {
 
   // CP, cached per frame on the (left, right) pixel pair. JPP caches on the
   // left pixel only, so two hypotheses through one left pixel at different
-  // disparities shared a verdict; that aliasing is fixed here.
-  PointCheck confident_positive(cv::Point left, cv::Point right);
+  // disparities shared a verdict; that aliasing is fixed here. `cost`, if
+  // given, receives the window cost (NaN when unobserved).
+  PointCheck confident_positive(cv::Point left, cv::Point right, double* cost = nullptr);
   // CN: true iff the cost exceeds conf_neg_thresh; false when unobserved.
   bool confident_negative(cv::Point left, cv::Point right);
 
@@ -59,7 +60,11 @@ class JppMatcher {
 
   JppConfig config_;
   DaisyDescriptors left_, right_;
-  std::unordered_map<uint64_t, PointCheck> cp_cache_;
+  struct CachedCheck {
+    PointCheck verdict;
+    double cost;
+  };
+  std::unordered_map<uint64_t, CachedCheck> cp_cache_;
   int64_t cp_tests_ = 0, cp_cache_hits_ = 0;
 };
 

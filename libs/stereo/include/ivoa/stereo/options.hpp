@@ -11,9 +11,12 @@ struct SgbmConfig;
 struct DenseConfig;
 struct DetectorConfig;
 
-void add_jpp_options(CLI::App& app, JppConfig& config);    // --conf_pos_thresh, --daisy_R, ...
-void add_sgbm_options(CLI::App& app, SgbmConfig& config);  // --sgbm_num_disparities, ...
-void add_dense_options(CLI::App& app, DenseConfig& config);  // the SGBM flags and --dense_*
+// Matching only (descriptor, window, thresholds): for tools on rectified pairs.
+void add_jpp_matcher_options(CLI::App& app, JppConfig& config);    // --conf_pos_thresh, --daisy_R, ...
+void add_sgbm_matcher_options(CLI::App& app, SgbmConfig& config);  // --sgbm_num_disparities, ...
+// Everything, including the rectification scales and JPP's --grid_size.
+void add_jpp_options(CLI::App& app, JppConfig& config);
+void add_dense_options(CLI::App& app, DenseConfig& config);  // SGBM flags and --dense_*
 void add_detector_options(CLI::App& app, DetectorConfig& config);
 
 }  // namespace ivoa::stereo
