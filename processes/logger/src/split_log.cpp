@@ -36,7 +36,6 @@ void SplitLog::open_part(int part, int64_t timestamp) {
     // The copy carries the new file's first timestamp, so a replay of this
     // file alone does not pause before its first real event.
     write_to_current(calibration_->channel, timestamp, calibration_->data);
-    starts_with_calibration_ = true;
   }
   opening_bytes_ = writer_->bytes();
   update_sidecar(false, "");
@@ -62,6 +61,7 @@ void SplitLog::write_to_current(const std::string& channel, int64_t timestamp, c
     update_sidecar(false, e.what());
     throw;
   }
+  if (summary_.events() == 0) starts_with_calibration_ = channel == options_.calibration_channel;
   summary_.add(channel, timestamp, data.data(), data.size());
   counters_.bytes_written.fetch_add(static_cast<int64_t>(channel.size() + data.size()));
 }

@@ -1,0 +1,237 @@
+// libs/logio: the writer's files are standard LCM logs (lcm::LogFile reads
+// them and the reader reads lcm::LogFile's), damage is reported at its byte
+// offset with every good event before it kept, and a refused write leaves
+// a file that ends with its last whole event.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "ivoa/core/message_counts.hpp"
+#include "ivoa/logio/log_format.hpp"
+#include "ivoa/logio/log_reader.hpp"
+#include "ivoa/logio/log_summary.hpp"
+#include "ivoa/logio/log_writer.hpp"
+#include "logger_test_util.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa::logio {
+namespace {
+
+using test::numbered_bytes;
+using test::read_back;
+
+// Writes `n` events of `size` bytes on channel "CH<i>"; returns each event's offset.
+std::vector<uint64_t> write_log(const std::string& path, int n, size_t size) {
+  LogWriter writer(path);
+  std::vector<uint64_t> offsets;
+  for (int i = 0; i < n; ++i) {
+    offsets.push_back(writer.bytes());
+    const auto data = numbered_bytes(size, static_cast<uint8_t>(i));
+    writer.write("CH" + std::to_string(i), 1000 + i, data.data(), data.size());
+  }
+  writer.close();
+  return offsets;
+}
+
+void overwrite_byte(const std::string& path, uint64_t offset, char value) {
+  std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+  f.seekp(static_cast<std::streamoff>(offset));
+  f.put(value);
+}
+
+TEST(LogWriter, LcmLogFileReadsWhatItWrites) {
+  test::TempDir dir;
+  const std::string path = dir.file("w.lcmlog");
+  write_log(path, 4, 3000);
+  lcm::LogFile log(path, "r");
+  ASSERT_TRUE(log.good());
+  for (int i = 0; i < 4; ++i) {
+    const lcm::LogEvent* e = log.readNextEvent();
+    ASSERT_NE(e, nullptr) << "event " << i;
+    EXPECT_EQ(e->eventnum, i);
+    EXPECT_EQ(e->timestamp, 1000 + i);
+    EXPECT_EQ(e->channel, "CH" + std::to_string(i));
+    const auto expected = numbered_bytes(3000, static_cast<uint8_t>(i));
+    ASSERT_EQ(e->datalen, 3000);
+    EXPECT_EQ(0, std::memcmp(e->data, expected.data(), expected.size()));
+  }
+  EXPECT_EQ(log.readNextEvent(), nullptr);
+}
+
+TEST(LogReader, ReadsWhatLcmLogFileWrote) {
+  test::TempDir dir;
+  const std::string path = dir.file("lcm.lcmlog");
+  {
+    lcm::LogFile log(path, "w");
+    for (int i = 0; i < 3; ++i) {
+      auto data = numbered_bytes(100 + static_cast<size_t>(i), static_cast<uint8_t>(i));
+      lcm::LogEvent e{};
+      e.timestamp = 50 + i;
+      e.channel = "LCM_" + std::to_string(i);
+      e.datalen = static_cast<int32_t>(data.size());
+      e.data = data.data();
+      ASSERT_EQ(log.writeEvent(&e), 0);
+    }
+  }
+  const auto r = read_back(path);
+  ASSERT_TRUE(r.problems.empty());
+  ASSERT_EQ(r.events.size(), 3u);
+  EXPECT_EQ(r.events[2].channel, "LCM_2");
+  EXPECT_EQ(r.events[2].timestamp, 52);
+  EXPECT_EQ(r.events[2].event_number, 2);
+  EXPECT_EQ(r.events[2].data, numbered_bytes(102, 2));
+}
+
+TEST(LogWriter, RefusesAnExistingFileUnlessAskedToOverwrite) {
+  test::TempDir dir;
+  const std::string path = dir.file("exists.lcmlog");
+  write_log(path, 1, 10);
+  EXPECT_THROW(LogWriter{path}, LogWriteError);
+  LogWriterOptions overwrite;
+  overwrite.overwrite = true;
+  LogWriter writer(path, overwrite);
+  writer.close();
+  EXPECT_EQ(std::filesystem::file_size(path), 0u);
+}
+
+TEST(LogReader, TruncatedEventIsReportedAtItsOffsetAfterTheGoodOnes) {
+  test::TempDir dir;
+  const std::string path = dir.file("cut.lcmlog");
+  const auto offsets = write_log(path, 5, 1000);
+  std::filesystem::resize_file(path, offsets[3] + 500);  // inside event 3's message
+  const auto r = read_back(path);
+  ASSERT_EQ(r.events.size(), 3u);
+  EXPECT_EQ(r.events[2].data, numbered_bytes(1000, 2));
+  ASSERT_EQ(r.problems.size(), 1u);
+  EXPECT_EQ(r.problems[0].offset, offsets[3]);
+  EXPECT_NE(r.problems[0].what.find("truncated"), std::string::npos) << r.problems[0].what;
+  EXPECT_NE(r.problems[0].describe().find("byte " + std::to_string(offsets[3])), std::string::npos);
+}
+
+TEST(LogReader, EndInsideAnEventHeaderIsReported) {
+  test::TempDir dir;
+  const std::string path = dir.file("cut_header.lcmlog");
+  const auto offsets = write_log(path, 3, 100);
+  std::filesystem::resize_file(path, offsets[2] + 10);
+  const auto r = read_back(path);
+  EXPECT_EQ(r.events.size(), 2u);
+  ASSERT_EQ(r.problems.size(), 1u);
+  EXPECT_EQ(r.problems[0].offset, offsets[2]);
+  EXPECT_NE(r.problems[0].what.find("10 bytes into an event header"), std::string::npos) << r.problems[0].what;
+}
+
+TEST(LogReader, CorruptEventStopsReadingThereByDefault) {
+  test::TempDir dir;
+  const std::string path = dir.file("bad_sync.lcmlog");
+  const auto offsets = write_log(path, 4, 200);
+  overwrite_byte(path, offsets[1], 0x00);  // event 1's sync word
+  const auto r = read_back(path);
+  EXPECT_EQ(r.events.size(), 1u);
+  ASSERT_EQ(r.problems.size(), 1u);
+  EXPECT_EQ(r.problems[0].offset, offsets[1]);
+  EXPECT_NE(r.problems[0].what.find("sync word"), std::string::npos) << r.problems[0].what;
+}
+
+TEST(LogReader, ResyncSkipsOnlyTheDamagedEvent) {
+  test::TempDir dir;
+  const std::string path = dir.file("bad_length.lcmlog");
+  const auto offsets = write_log(path, 4, 200);
+  overwrite_byte(path, offsets[1] + 20, 0x7F);  // event 1's channel length, now absurd
+  const auto r = read_back(path, /*resync=*/true);
+  ASSERT_EQ(r.events.size(), 3u);
+  EXPECT_EQ(r.events[1].channel, "CH2");
+  EXPECT_EQ(r.events[1].offset, offsets[2]);
+  ASSERT_EQ(r.problems.size(), 1u);
+  EXPECT_EQ(r.problems[0].offset, offsets[1]);
+  EXPECT_EQ(r.problems[0].skipped_bytes, offsets[2] - offsets[1]);
+  EXPECT_NE(r.problems[0].what.find("channel name length"), std::string::npos) << r.problems[0].what;
+}
+
+TEST(LogReader, MissingFileThrowsNamingIt) {
+  try {
+    LogReader reader("/nonexistent/x.lcmlog");
+    FAIL() << "no exception";
+  } catch (const LogReadError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/x.lcmlog"), std::string::npos);
+  }
+}
+
+TEST(LogWriter, ARefusedWriteLeavesTheFileEndingWithItsLastWholeEvent) {
+  test::TempDir dir;
+  const std::string path = dir.file("limited.lcmlog");
+  const size_t event_size = 1'000'000;
+  LogWriter writer(path);
+  {
+    test::FileSizeLimit limit(2'500'000);  // room for two events and half of a third
+    const auto data = numbered_bytes(event_size, 1);
+    writer.write("BIG", 1, data.data(), data.size());
+    writer.write("BIG", 2, data.data(), data.size());
+    try {
+      writer.write("BIG", 3, data.data(), data.size());
+      FAIL() << "the third write should have failed";
+    } catch (const LogWriteError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::strerror(EFBIG)), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(writer.write("BIG", 4, data.data(), 10), LogWriteError);
+  }
+  writer.close();
+  EXPECT_EQ(writer.events(), 2);
+  EXPECT_EQ(std::filesystem::file_size(path), writer.bytes());
+  const auto r = read_back(path);
+  EXPECT_TRUE(r.problems.empty());
+  EXPECT_EQ(r.events.size(), 2u);
+  lcm::LogFile log(path, "r");
+  int lcm_events = 0;
+  while (log.readNextEvent() != nullptr) ++lcm_events;
+  EXPECT_EQ(lcm_events, 2);
+}
+
+std::vector<uint8_t> encoded_stereo(int64_t seq, int64_t utime) {
+  stereo_image_t msg;
+  msg.utime = utime;
+  msg.seq = seq;
+  set_counts(msg);
+  std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
+  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+TEST(LogSummary, CountsSequenceGapsRepeatsAndUtimeRegressions) {
+  LogSummary summary;
+  for (const int64_t seq : {0, 1, 2, 5, 6, 6, 9}) {
+    const auto bytes = encoded_stereo(seq, seq == 9 ? 1 : 100 + seq);
+    summary.add("STEREO_IMAGES", 7, bytes.data(), bytes.size());
+  }
+  const ChannelSummary& s = summary.channels().at("STEREO_IMAGES");
+  EXPECT_EQ(s.type, "ivoa.stereo_image_t");
+  EXPECT_EQ(s.count, 7);
+  EXPECT_EQ(s.first_seq, 0);
+  EXPECT_EQ(s.last_seq, 9);
+  EXPECT_EQ(s.missing_seq, 4);  // 3, 4, 7, 8
+  ASSERT_EQ(s.gaps.size(), 2u);
+  EXPECT_EQ(s.gaps[0].after, 2);
+  EXPECT_EQ(s.gaps[0].next, 5);
+  EXPECT_EQ(s.seq_regressions, 1);
+  EXPECT_EQ(s.utime_regressions, 1);
+}
+
+TEST(LogSummary, UnknownPayloadsAreCountedButNotDecoded) {
+  LogSummary summary;
+  const auto blob = numbered_bytes(64, 3);
+  summary.add("FOREIGN", 1, blob.data(), blob.size());
+  summary.add("FOREIGN", 2, blob.data(), 3);  // shorter than a fingerprint
+  const ChannelSummary& s = summary.channels().at("FOREIGN");
+  EXPECT_EQ(s.type, "unknown");
+  EXPECT_EQ(s.count, 2);
+  EXPECT_EQ(s.bytes, 67u);
+  EXPECT_FALSE(s.has_seq);
+  EXPECT_EQ(s.other_fingerprints, 1);
+  EXPECT_NE(channel_json(s).find("\"type\": \"unknown\""), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ivoa::logio

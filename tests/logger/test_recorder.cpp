@@ -1,0 +1,186 @@
+// The logger's core without LCM: every accepted channel (known type or
+// not) reaches the log, split files each start with the newest
+// calibration, finish() writes out the whole queue, a full queue is
+// counted, and a refused write leaves a readable log and says why.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "ivoa/core/calibration.hpp"
+#include "ivoa/core/message_counts.hpp"
+#include "ivoa/logger/recorder.hpp"
+#include "ivoa/logger/sidecar.hpp"
+#include "logger_test_util.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa::logger {
+namespace {
+
+using test::numbered_bytes;
+using test::read_back;
+
+RecorderOptions options_in(const test::TempDir& dir, const std::string& name = "rec.lcmlog") {
+  RecorderOptions o;
+  o.log.path = dir.file(name);
+  o.log.identity.version = "test";
+  return o;
+}
+
+std::vector<uint8_t> calibration_payload(int64_t utime) {
+  rig_calibration_t msg = to_message(test::make_test_rig(), utime);
+  set_counts(msg);
+  std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
+  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+void offer(Recorder& r, const std::string& channel, const std::vector<uint8_t>& data, int64_t timestamp = 1) {
+  r.on_message(channel, timestamp, data.data(), data.size());
+}
+
+std::string file_text(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+TEST(Recorder, LogsEveryChannelIncludingOnesOfNoKnownType) {
+  test::TempDir dir;
+  Recorder recorder(options_in(dir));
+  const auto calibration = calibration_payload(5);
+  const auto foreign = numbered_bytes(5000, 9);
+  offer(recorder, "RIG_CALIBRATION", calibration, 10);
+  offer(recorder, "SOMEONE_ELSES_CHANNEL", foreign, 11);
+  ASSERT_TRUE(recorder.finish());
+  const auto r = read_back(dir.file("rec.lcmlog"));
+  ASSERT_TRUE(r.problems.empty());
+  ASSERT_EQ(r.events.size(), 2u);
+  EXPECT_EQ(r.events[0].data, calibration);
+  EXPECT_EQ(r.events[1].channel, "SOMEONE_ELSES_CHANNEL");
+  EXPECT_EQ(r.events[1].timestamp, 11);
+  EXPECT_EQ(r.events[1].data, foreign);
+  const std::string sidecar = file_text(sidecar_path(dir.file("rec.lcmlog")));
+  EXPECT_NE(sidecar.find("\"SOMEONE_ELSES_CHANNEL\": {\"type\": \"unknown\""), std::string::npos) << sidecar;
+  EXPECT_NE(sidecar.find("\"RIG_CALIBRATION\": {\"type\": \"ivoa.rig_calibration_t\""), std::string::npos);
+  EXPECT_NE(sidecar.find("\"complete\": true"), std::string::npos);
+  EXPECT_NE(sidecar.find("\"starts_with_calibration\": true"), std::string::npos);
+}
+
+TEST(Recorder, FiltersChannelsButAlwaysKeepsTheCalibration) {
+  test::TempDir dir;
+  RecorderOptions o = options_in(dir);
+  o.channels = "STEREO_.*";
+  o.exclude = "STEREO_PREVIEW";
+  Recorder recorder(o);
+  const auto blob = numbered_bytes(100, 1);
+  for (const char* channel : {"STEREO_IMAGES", "STEREO_PREVIEW", "DEPTH_IMAGE", "X_STEREO_IMAGES"})
+    offer(recorder, channel, blob);
+  offer(recorder, "RIG_CALIBRATION", calibration_payload(1));
+  ASSERT_TRUE(recorder.finish());
+  EXPECT_EQ(recorder.status().received, 2);
+  const auto r = read_back(dir.file("rec.lcmlog"));
+  ASSERT_EQ(r.events.size(), 2u);
+  EXPECT_EQ(r.events[0].channel, "STEREO_IMAGES");
+  EXPECT_EQ(r.events[1].channel, "RIG_CALIBRATION");
+}
+
+TEST(Recorder, SplitFilesEachStartWithTheNewestCalibration) {
+  test::TempDir dir;
+  RecorderOptions o = options_in(dir, "split.lcmlog");
+  o.log.split_bytes = 5'000'000;
+  Recorder recorder(o);
+  const auto first = calibration_payload(1), second = calibration_payload(2);
+  const auto blob = numbered_bytes(1'000'000, 7);
+  offer(recorder, "RIG_CALIBRATION", first);
+  for (int i = 0; i < 12; ++i) offer(recorder, "BLOB", blob);
+  offer(recorder, "RIG_CALIBRATION", second);
+  for (int i = 0; i < 12; ++i) offer(recorder, "BLOB", blob);
+  ASSERT_TRUE(recorder.finish());
+
+  const auto& files = recorder.files();
+  ASSERT_GE(files.size(), 5u);
+  EXPECT_EQ(files[0], dir.file("split.lcmlog.00"));
+  EXPECT_EQ(files[1], dir.file("split.lcmlog.01"));
+  int blobs = 0;
+  bool second_seen = false;
+  for (const auto& path : files) {
+    EXPECT_LE(std::filesystem::file_size(path), o.log.split_bytes) << path;
+    const auto r = read_back(path);
+    ASSERT_TRUE(r.problems.empty()) << path;
+    ASSERT_FALSE(r.events.empty()) << path;
+    EXPECT_EQ(r.events[0].channel, "RIG_CALIBRATION") << path;
+    EXPECT_EQ(r.events[0].data, second_seen ? second : first) << path;
+    for (const auto& e : r.events) {
+      blobs += e.channel == "BLOB";
+      second_seen = second_seen || (e.channel == "RIG_CALIBRATION" && e.data == second);
+    }
+    EXPECT_NE(file_text(sidecar_path(path)).find("\"starts_with_calibration\": true"), std::string::npos) << path;
+  }
+  EXPECT_TRUE(second_seen);
+  EXPECT_EQ(blobs, 24);
+  EXPECT_EQ(recorder.status().written, 26);  // the copies are not counted as received messages
+}
+
+TEST(Recorder, FinishWritesOutEverythingQueued) {
+  test::TempDir dir;
+  RecorderOptions o = options_in(dir);
+  o.max_write_bytes_per_s = 20e6;  // 20 MB take at least a second: a backlog builds up
+  Recorder recorder(o);
+  const auto blob = numbered_bytes(1'000'000, 3);
+  for (int i = 0; i < 20; ++i) offer(recorder, "BLOB", blob);
+  EXPECT_GT(recorder.status().queue_depth, 0);
+  ASSERT_TRUE(recorder.finish());
+  const RecorderStatus s = recorder.status();
+  EXPECT_EQ(s.received, 20);
+  EXPECT_EQ(s.written, 20);
+  EXPECT_EQ(s.queue_depth, 0);
+  EXPECT_EQ(read_back(dir.file("rec.lcmlog")).events.size(), 20u);
+}
+
+TEST(Recorder, MessagesRefusedByAFullQueueAreCounted) {
+  test::TempDir dir;
+  RecorderOptions o = options_in(dir);
+  o.max_queue_bytes = 250'000;
+  o.max_write_bytes_per_s = 2e6;  // 0.05 s per message: far slower than offering them
+  Recorder recorder(o);
+  const auto blob = numbered_bytes(100'000, 3);
+  for (int i = 0; i < 10; ++i) offer(recorder, "BLOB", blob);
+  EXPECT_FALSE(recorder.finish());
+  const RecorderStatus s = recorder.status();
+  EXPECT_GT(s.dropped, 0);
+  EXPECT_EQ(s.dropped_bytes, s.dropped * 100'000);
+  EXPECT_EQ(s.received, s.written + s.dropped);
+  EXPECT_EQ(static_cast<int64_t>(read_back(dir.file("rec.lcmlog")).events.size()), s.written);
+  EXPECT_NE(file_text(sidecar_path(dir.file("rec.lcmlog"))).find("\"dropped\": " + std::to_string(s.dropped)),
+            std::string::npos);
+}
+
+TEST(Recorder, AWriteErrorLeavesAReadableLogAndSaysWhy) {
+  test::TempDir dir;
+  const std::string path = dir.file("rec.lcmlog");
+  Recorder recorder(options_in(dir));
+  const auto blob = numbered_bytes(1'000'000, 5);
+  {
+    test::FileSizeLimit limit(3'500'000);
+    for (int i = 0; i < 10; ++i) offer(recorder, "BLOB", blob);
+    EXPECT_FALSE(recorder.finish());
+  }
+  const RecorderStatus s = recorder.status();
+  EXPECT_TRUE(s.failed);
+  EXPECT_TRUE(recorder.failed());
+  EXPECT_NE(s.error.find(std::strerror(EFBIG)), std::string::npos) << s.error;
+  EXPECT_EQ(s.written, 3);
+  EXPECT_EQ(s.unwritten, 7);
+  const auto r = read_back(path);
+  EXPECT_TRUE(r.problems.empty());
+  EXPECT_EQ(r.events.size(), 3u);
+  const std::string sidecar = file_text(sidecar_path(path));
+  EXPECT_NE(sidecar.find("\"complete\": false"), std::string::npos) << sidecar;
+  EXPECT_NE(sidecar.find(std::strerror(EFBIG)), std::string::npos) << sidecar;
+}
+
+}  // namespace
+}  // namespace ivoa::logger
