@@ -34,9 +34,9 @@ double value_noise(double u, double v, double cell, uint32_t seed) {
 
 // World-anchored texture, grey level around `mean` (carpet/concrete-like
 // blotches from 1 cm to 10 cm).
-double texture(double u, double v, uint32_t seed, double mean) {
-  const double t = 0.45 * value_noise(u, v, 0.012, seed) + 0.35 * value_noise(u, v, 0.035, seed + 1) +
-                   0.20 * value_noise(u, v, 0.10, seed + 2);
+double texture(double u, double v, uint32_t seed, double mean, double scale = 1.0) {
+  const double t = 0.45 * value_noise(u, v, 0.012 * scale, seed) + 0.35 * value_noise(u, v, 0.035 * scale, seed + 1) +
+                   0.20 * value_noise(u, v, 0.10 * scale, seed + 2);
   return mean + (t - 0.5) * 2.0 * 90.0;
 }
 
@@ -70,7 +70,7 @@ bool hit_boxes(const SyntheticScene& scene, const Ray& ray, double& t_best, doub
     // texture-less box shows its edges.
     const double shade = axis == 0 ? 1.0 : axis == 1 ? 0.85 : 1.15;
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    gray = shade * (box.textured ? texture(p[a1], p[a2], box.seed + 17 * static_cast<uint32_t>(axis), box.gray) : box.gray);
+    gray = shade * (box.textured ? texture(p[a1], p[a2], box.seed + 17 * static_cast<uint32_t>(axis), box.gray, box.texture_scale) : box.gray);
     hit = true;
   }
   return hit;
@@ -151,7 +151,5 @@ bool footprint_occupied(const SyntheticScene& scene, double x, double y, double 
   }
   return false;
 }
-
-SyntheticScene floor_only() { return SyntheticScene{}; }
 
 }  // namespace ivoa::test

@@ -19,6 +19,7 @@ struct SceneBox {
   bool textured = true;
   double gray = 150;          // mean (textured) or flat grey level
   uint32_t seed = 7;
+  double texture_scale = 1;   // blob sizes 1.2, 3.5 and 10 cm times this
 };
 
 // A floor rectangle that reflects like a wet or polished floor: the pixel is
@@ -46,7 +47,5 @@ void render_pair(const SyntheticScene& scene, const RigCalibration& rig, cv::Mat
 // Ground truth: does a box reach within `radius` (horizontal disc) of (x, y)?
 bool footprint_occupied(const SyntheticScene& scene, double x, double y, double radius);
 
-// A textured floor with a textured box, a reflection, ... used by several tests.
-SyntheticScene floor_only();
 
 }  // namespace ivoa::test

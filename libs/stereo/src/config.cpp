@@ -37,6 +37,7 @@ void validate(const DenseConfig& c) {
           "need 0 < dense_min_obstacle_height < dense_max_obstacle_height");
   require(c.hole_depth > 0, "dense_hole_depth must be positive");
   require(c.min_obstacle_points >= 1 && c.min_ground_points >= 1, "dense point counts must be >= 1");
+  require(c.min_obstacle_fraction >= 0 && c.min_obstacle_fraction <= 1, "dense_min_obstacle_fraction must be in [0, 1]");
   require(c.max_range > 0 && c.max_range <= 100, "dense_max_range must be in (0, 100] m");
 }
 

@@ -1,5 +1,6 @@
 #include "ivoa/stereo/daisy.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -53,6 +54,12 @@ DaisyDescriptors::DaisyDescriptors(const DaisyParams& params) : params_(params) 
       const double angle = 2.0 * M_PI * t / params.T;
       samples_.push_back({r - 1, radius * std::cos(angle), radius * std::sin(angle)});
     }
+  }
+  for (const Sample& s : samples_) {
+    reach_.left = std::max(reach_.left, static_cast<int>(std::ceil(-s.dx - 1e-9)));
+    reach_.right = std::max(reach_.right, static_cast<int>(std::ceil(s.dx - 1e-9)));
+    reach_.up = std::max(reach_.up, static_cast<int>(std::ceil(-s.dy - 1e-9)));
+    reach_.down = std::max(reach_.down, static_cast<int>(std::ceil(s.dy - 1e-9)));
   }
   // Cube i >= 1 adds ring sigma i*R/(2Q) to the base layer, incrementally.
   for (int i = 1; i < params.Q; ++i) {

@@ -1,5 +1,6 @@
 #include "ivoa/stereo/dense_detector.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ivoa::stereo {
@@ -90,7 +91,9 @@ DenseDetector::Counts DenseDetector::count_points(double x, double y, double rad
 
 Verdict DenseDetector::check(double x, double y, double radius) {
   const Counts c = count_points(x, y, radius);
-  if (c.above >= config_.min_obstacle_points || c.below >= config_.min_obstacle_points) return Verdict::kObstacle;
+  const double needed = std::max<double>(config_.min_obstacle_points,
+                                         config_.min_obstacle_fraction * (c.ground + c.above + c.below));
+  if (c.above >= needed || c.below >= needed) return Verdict::kObstacle;
   if (c.ground >= config_.min_ground_points) return Verdict::kFree;
   return Verdict::kUnknown;
 }

@@ -43,14 +43,19 @@ void JppMatcher::set_images(const cv::Mat& left_gray, const cv::Mat& right_gray)
 
 std::optional<double> JppMatcher::cost(cv::Point l, cv::Point r) {
   if (!inside(l) || !inside(r)) return std::nullopt;
-  const int w = config_.SAD_window_size, width = size().width, height = size().height;
+  const int w = config_.SAD_window_size;
   const int stride = left_.stride();
-  // Window columns and rows inside both images.
-  const int dx_lo = std::max({-w, -l.x, -r.x}), dx_hi = std::min({w, width - 1 - l.x, width - 1 - r.x});
-  const int dy_lo = std::max({-w, -l.y, -r.y}), dy_hi = std::min({w, height - 1 - l.y, height - 1 - r.y});
-  const int compared = (dx_hi - dx_lo + 1) * (dy_hi - dy_lo + 1);
+  // Window pixels whose descriptors are complete (every sample point inside
+  // the image) on both sides. DAISY reads zeros beyond the border, so JPP's
+  // descriptors near the right edge (samples reach 5 px ahead) never matched.
+  const DaisyDescriptors::Reach reach = left_.reach();
+  const int x_min = reach.left, x_max = size().width - 1 - reach.right;
+  const int y_min = reach.up, y_max = size().height - 1 - reach.down;
+  const int dx_lo = std::max({-w, x_min - l.x, x_min - r.x}), dx_hi = std::min({w, x_max - l.x, x_max - r.x});
+  const int dy_lo = std::max({-w, y_min - l.y, y_min - r.y}), dy_hi = std::min({w, y_max - l.y, y_max - r.y});
+  const int compared = std::max(0, dx_hi - dx_lo + 1) * std::max(0, dy_hi - dy_lo + 1);
   const int window = (2 * w + 1) * (2 * w + 1);
-  if (compared < config_.min_window_fraction * window) return std::nullopt;
+  if (compared == 0 || compared < config_.min_window_fraction * window) return std::nullopt;
   float sum = 0;
   for (int dy = dy_lo; dy <= dy_hi; ++dy) {
     for (int dx = dx_lo; dx <= dx_hi; ++dx)

@@ -68,6 +68,7 @@ void add_dense_options(CLI::App& app, DenseConfig& c) {
   add("--dense_max_obstacle_height", c.max_obstacle_height, "points higher than this are above the robot, ignored, m");
   add("--dense_hole_depth", c.hole_depth, "points lower than this below the ground are obstacles (holes, reflections), m");
   add("--dense_min_obstacle_points", c.min_obstacle_points, "obstacle (or below-ground) points within r for OBSTACLE");
+  add("--dense_min_obstacle_fraction", c.min_obstacle_fraction, "and at least this share of the valid points within r");
   add("--dense_min_ground_points", c.min_ground_points, "ground points within r for FREE");
   add("--dense_max_range", c.max_range, "points farther ahead or aside than this are ignored, m");
 }

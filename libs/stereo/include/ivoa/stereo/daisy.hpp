@@ -53,6 +53,13 @@ class DaisyDescriptors {
   // gradient of the [0, 1] image, smoothed to sigma 1.6), for texture measures.
   const cv::Mat& base_layer(int h = 0) const { return cubes_[0][static_cast<size_t>(h)]; }
 
+  // How far the sample points reach from the pixel, whole pixels: a
+  // descriptor is complete only at least this far inside the image.
+  struct Reach {
+    int left = 0, right = 0, up = 0, down = 0;
+  };
+  Reach reach() const { return reach_; }
+
   // Descriptors computed since the last set_image (for benchmarks).
   int64_t computed_count() const { return computed_count_; }
 
@@ -66,6 +73,7 @@ class DaisyDescriptors {
   DaisyParams params_;
   int size_ = 0, stride_ = 0;
   std::vector<Sample> samples_;
+  Reach reach_;
   std::vector<double> cube_increments_;      // incremental blur sigma of cube i from cube i-1
   std::vector<std::vector<cv::Mat>> cubes_;  // [cube][bin], CV_32F
   cv::Size image_size_;

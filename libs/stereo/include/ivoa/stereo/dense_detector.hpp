@@ -2,10 +2,11 @@
 // The dense stereo detector: SGBM disparity on the rectified pair, every
 // valid pixel unprojected to a robot-frame point, points binned on the
 // ground plane. A footprint (a horizontal disc of radius r) is
-//  - OBSTACLE if it holds >= min_obstacle_points points standing above the
-//    ground (z in [min_obstacle_height, max_obstacle_height]) or
-//    >= min_obstacle_points points clearly below it (z < -hole_depth: what
-//    stereo sees in reflections, wet floors and holes);
+//  - OBSTACLE if enough of its points stand above the ground (z in
+//    [min_obstacle_height, max_obstacle_height]) or enough lie clearly below
+//    it (z < -hole_depth: what stereo sees in reflections, wet floors and
+//    holes); enough = min_obstacle_points and min_obstacle_fraction of the
+//    disc's valid points;
 //  - FREE if it holds >= min_ground_points ground points and no obstacle;
 //  - UNKNOWN otherwise (too few valid points, e.g. no disparity there).
 #include <vector>

@@ -30,10 +30,12 @@ class JppMatcher {
   void set_images(const cv::Mat& left_gray, const cv::Mat& right_gray);
   cv::Size size() const { return left_.image_size(); }
 
-  // Mean per-pixel L1 descriptor distance over the window pixels that lie
-  // inside both images; empty if the centres are outside or fewer than
-  // min_window_fraction of the window is inside. (JPP divides by the full
-  // window, biasing border windows towards "match".)
+  // Mean per-pixel L1 descriptor distance over the window pixels whose
+  // descriptors are complete in both images; empty if the centres are
+  // outside or fewer than min_window_fraction of the window is usable. (JPP
+  // divides by the full window, biasing border windows towards "match", and
+  // compares zero-padded descriptors near the right edge, biasing them
+  // towards "no match".)
   std::optional<double> cost(cv::Point left, cv::Point right);
 
   // CP, cached per frame on the (left, right) pixel pair. JPP caches on the
