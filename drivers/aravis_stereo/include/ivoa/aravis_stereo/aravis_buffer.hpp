@@ -1,0 +1,18 @@
+#pragma once
+// Copies an Aravis buffer into a CameraFrame, refusing incomplete ones.
+#include <arv.h>
+
+#include "ivoa/aravis_stereo/aravis_camera.hpp"
+#include "ivoa/aravis_stereo/camera_source.hpp"
+
+namespace ivoa::aravis_stereo {
+
+// A complete frame with tightly packed rows, or (complete = false) the
+// reason the buffer cannot be used: lost packets, unmapped pixel format,
+// wrong size. Never returns partial pixels.
+FrameResult buffer_to_frame(ArvBuffer* buffer, Side side, TimestampSource timestamps);
+
+// "missing packets", "timeout", ... for log lines.
+const char* buffer_status_name(ArvBufferStatus status);
+
+}  // namespace ivoa::aravis_stereo

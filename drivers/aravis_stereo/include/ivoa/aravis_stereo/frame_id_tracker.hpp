@@ -1,0 +1,29 @@
+#pragma once
+// Follows one camera's frame counter to count frames that never arrived.
+// GigE Vision 1.x block ids are 16 bits and skip 0 (65535 is followed by 1);
+// USB3 Vision and GigE Vision 2 extended ids are 64 bits. A counter that
+// moves back (a late or repeated frame) is reported, not counted as a gap.
+#include <cstdint>
+#include <optional>
+
+namespace ivoa::aravis_stereo {
+
+class FrameIdTracker {
+ public:
+  enum class Kind { kFirst, kNext, kBackwards };
+  struct Step {
+    Kind kind = Kind::kFirst;
+    int64_t missed = 0;  // frames skipped between the previous id and this one
+  };
+
+  // Ids are taken as 16-bit block ids until one above 65535 is seen.
+  Step observe(uint64_t frame_id);
+  // Forget the last id (after a reconnect the camera may restart its counter).
+  void reset() { last_.reset(); }
+
+ private:
+  std::optional<uint64_t> last_;
+  bool wide_ids_ = false;
+};
+
+}  // namespace ivoa::aravis_stereo

@@ -1,0 +1,14 @@
+#pragma once
+// GenICam pixel formats (as Aravis numbers them) <-> ivoa image_t formats.
+// Only 8-bit layouts the rest of the system decodes are mapped.
+#include <cstdint>
+#include <optional>
+
+namespace ivoa::aravis_stereo {
+
+// ARV_PIXEL_FORMAT_* -> image_t::PIXEL_FORMAT_*; nothing if unmapped.
+std::optional<int32_t> ivoa_pixelformat_from_genicam(uint32_t arv_pixel_format);
+// image_t::PIXEL_FORMAT_* -> ARV_PIXEL_FORMAT_*; nothing if unmapped.
+std::optional<uint32_t> genicam_pixelformat_from_ivoa(int32_t ivoa_pixel_format);
+
+}  // namespace ivoa::aravis_stereo

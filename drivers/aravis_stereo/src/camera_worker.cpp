@@ -1,0 +1,140 @@
+#include "ivoa/aravis_stereo/camera_worker.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/time.hpp"
+
+namespace ivoa::aravis_stereo {
+namespace {
+
+// How often the thread checks for silence when nothing else wakes it.
+constexpr auto kPollInterval = std::chrono::milliseconds(50);
+
+CameraEvent status_event(CameraEvent::Type type, Side side, std::string detail) {
+  CameraEvent event;
+  event.type = type;
+  event.side = side;
+  event.detail = std::move(detail);
+  return event;
+}
+
+}  // namespace
+
+CameraWorker::CameraWorker(Side side, std::unique_ptr<CameraSource> source, const WorkerOptions& options,
+                           EventQueue& events)
+    : side_(side), source_(std::move(source)), options_(options), events_(events), backoff_(options.backoff) {}
+
+CameraWorker::~CameraWorker() { stop(); }
+
+void CameraWorker::start() {
+  if (thread_.joinable()) return;
+  stopping_ = false;
+  thread_ = std::thread([this] { run(); });
+}
+
+void CameraWorker::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void CameraWorker::trigger() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    trigger_requested_ = true;
+  }
+  wake_.notify_all();
+}
+
+void CameraWorker::on_frame(FrameResult&& result) {
+  last_frame_ms_ = monotonic_ms();
+  CameraEvent event;
+  event.side = side_;
+  if (result.complete) {
+    event.type = CameraEvent::Type::kFrame;
+    event.frame = std::move(result.frame);
+  } else {
+    event.type = CameraEvent::Type::kIncomplete;
+    event.detail = std::move(result.problem);
+  }
+  events_.push(std::move(event));
+}
+
+void CameraWorker::wait_for(double seconds) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  wake_.wait_for(lock, std::chrono::duration<double>(seconds), [this] { return stopping_; });
+}
+
+bool CameraWorker::open_camera() {
+  try {
+    source_->start([this](FrameResult&& r) { on_frame(std::move(r)); });
+  } catch (const CameraConfigError& e) {
+    spdlog::error("{}: {}", source_->describe(), e.what());
+    events_.push(status_event(CameraEvent::Type::kFatal, side_, e.what()));
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+    return false;
+  } catch (const std::exception& e) {
+    const double delay = backoff_.next_delay_s();
+    spdlog::warn("{}: cannot open: {}; retrying in {:.1f} s (attempt {})", source_->describe(), e.what(), delay,
+                 backoff_.failures());
+    wait_for(delay);
+    return false;
+  }
+  connected_ = true;
+  last_frame_ms_ = monotonic_ms();
+  if (lost_at_ms_ >= 0)
+    spdlog::info("{}: reconnected after {:.1f} s", source_->describe(), (monotonic_ms() - lost_at_ms_) / 1000.0);
+  lost_at_ms_ = -1;
+  backoff_.succeeded();
+  events_.push(status_event(CameraEvent::Type::kConnected, side_, source_->describe()));
+  return true;
+}
+
+void CameraWorker::close_camera(const std::string& reason) {
+  spdlog::warn("{}: {}; closing it and reconnecting", source_->describe(), reason);
+  events_.push(status_event(CameraEvent::Type::kDisconnected, side_, reason));
+  connected_ = false;
+  ++reconnects_;
+  lost_at_ms_ = monotonic_ms();
+  source_->stop();
+}
+
+void CameraWorker::run() {
+  while (true) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (stopping_) break;
+    }
+    if (!connected_) {
+      open_camera();
+      continue;
+    }
+    bool fire = false;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait_for(lock, kPollInterval, [this] { return stopping_ || trigger_requested_; });
+      if (stopping_) break;
+      fire = trigger_requested_;
+      trigger_requested_ = false;
+    }
+    if (fire) {
+      try {
+        source_->software_trigger();
+      } catch (const std::exception& e) {
+        close_camera(std::string("software trigger failed: ") + e.what());
+        continue;
+      }
+    }
+    const double silent_s = (monotonic_ms() - last_frame_ms_) / 1000.0;
+    if (source_->control_lost()) close_camera("lost control of the camera (heartbeat failed)");
+    else if (silent_s > options_.frame_timeout_s) close_camera("no frame for " + fmt::format("{:.1f}", silent_s) + " s");
+  }
+  if (connected_) source_->stop();
+  connected_ = false;
+}
+
+}  // namespace ivoa::aravis_stereo

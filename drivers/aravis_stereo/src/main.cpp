@@ -1,0 +1,132 @@
+// ivoa-aravis-stereo: the stereo camera driver. Two GenICam cameras (FLIR /
+// Point Grey GigE Vision or USB3 Vision) through Aravis -> STEREO_IMAGES,
+// plus RIG_CALIBRATION from the rig file and the PROCESS_STATUS heartbeat.
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <arv.h>
+
+#include "ivoa/aravis_stereo/aravis_camera.hpp"
+#include "ivoa/aravis_stereo/stereo_driver.hpp"
+#include "ivoa/core/bus.hpp"
+#include "ivoa/core/calibration.hpp"
+#include "ivoa/core/heartbeat.hpp"
+#include "ivoa/core/process.hpp"
+
+namespace {
+
+using namespace ivoa::aravis_stereo;
+
+struct Flags {
+  ivoa::CommonOptions common;
+  std::string left, right, rig_path;
+  AravisCameraConfig camera;
+  StereoDriverOptions driver;
+  std::string output = "raw";
+  std::string timestamps = "host";
+  bool no_packet_resend = false;
+};
+
+void add_options(CLI::App& app, Flags& f) {
+  ivoa::add_common_options(app, f.common);
+  app.add_option("--left", f.left, "left camera: IP address, Aravis id (Vendor-Model-Serial), serial number or MAC")
+      ->required();
+  app.add_option("--right", f.right, "right camera: IP address, Aravis id, serial number or MAC")->required();
+  app.add_option("--rig", f.rig_path, "rig calibration file (OpenCV YAML, see example_rig.yaml)")->required();
+  auto& c = f.camera;
+  app.add_option("--pixel-format", c.pixel_format, "GenICam pixel format: BayerRG8, BayerBG8, BayerGB8, BayerGR8, Mono8")
+      ->capture_default_str();
+  app.add_option("--width", c.width, "image width, pixels (0 = keep the camera's)")->capture_default_str();
+  app.add_option("--height", c.height, "image height, pixels (0 = keep the camera's)")->capture_default_str();
+  app.add_option("--offset-x", c.offset_x, "region of interest origin, pixels")->capture_default_str();
+  app.add_option("--offset-y", c.offset_y, "region of interest origin, pixels")->capture_default_str();
+  app.add_option("--frame-rate", c.frame_rate_hz, "frames per second (free-running, or the software-trigger rate)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 500.0));
+  app.add_option("--exposure-us", c.exposure_us, "fixed exposure, microseconds (0 = continuous auto exposure)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--gain", c.gain, "fixed gain in camera units, dB on FLIR (negative = continuous auto gain)")
+      ->capture_default_str();
+  app.add_option("--packet-size", c.packet_size,
+                 "GigE packet size, bytes: 9000 with jumbo frames (MTU 9000), 1400 without; 0 = negotiate")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 16384));
+  app.add_option("--packet-delay-ns", c.packet_delay_ns, "GigE inter-packet delay, ns (0 = keep the camera's)")
+      ->capture_default_str();
+  app.add_flag("--no-packet-resend", f.no_packet_resend, "never ask a GigE camera to resend lost packets");
+  app.add_option("--trigger", c.trigger, "none (free-running), software, or a hardware line such as Line0")
+      ->capture_default_str();
+  app.add_option("--buffers", c.buffers, "stream buffers per camera")->capture_default_str()->check(CLI::Range(2, 64));
+  app.add_option("--timestamps", f.timestamps,
+                 "pair by host receive time, or by the cameras' clocks (only with PTP-synchronised cameras)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"host", "device"}));
+  auto& d = f.driver;
+  app.add_option("--output", f.output, "published pixels: raw (the camera's Bayer/mono, smallest), bgr or gray")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"raw", "bgr", "gray"}));
+  app.add_option("--pair-tolerance-ms", d.pair_tolerance_ms,
+                 "max left/right time difference of a pair, ms (0 = half the frame period)")
+      ->capture_default_str();
+  app.add_option("--frame-timeout", d.worker.frame_timeout_s, "seconds without a frame before a camera is reopened")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--reconnect-initial", d.worker.backoff.initial_s, "first wait between reopen attempts, seconds")
+      ->capture_default_str();
+  app.add_option("--reconnect-max", d.worker.backoff.max_s, "longest wait between reopen attempts, seconds")
+      ->capture_default_str();
+  app.add_option("--startup-timeout", d.startup_timeout_s,
+                 "exit with an error if a camera has not opened after this many seconds (0 = wait forever)")
+      ->capture_default_str();
+  app.add_option("--stereo-channel", d.stereo_channel, "channel for ivoa.stereo_image_t")->capture_default_str();
+  app.add_option("--rig-channel", d.rig_channel, "channel for ivoa.rig_calibration_t")->capture_default_str();
+  app.add_option("--rig-rate", d.rig_rate_hz, "RIG_CALIBRATION publications per second")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 100.0));
+  app.add_option("--source-name", d.source_name, "the 'source' field of published pairs")->capture_default_str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Stereo camera driver: two GenICam cameras (FLIR/Point Grey GigE Vision or USB3 Vision) through "
+               "Aravis -> STEREO_IMAGES, RIG_CALIBRATION and PROCESS_STATUS. GigE tuning: " +
+               std::string(kGigeTuningHint) + "."};
+  Flags f;
+  add_options(app, f);
+  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  ivoa::init_logging("aravis_stereo", f.common.log_level);
+
+  f.driver.output = *parse_output_format(f.output);
+  f.driver.frame_rate_hz = f.camera.frame_rate_hz;
+  f.driver.software_trigger = f.camera.trigger == "software";
+  f.driver.rig_path = f.rig_path;
+  f.camera.packet_resend = !f.no_packet_resend;
+  f.camera.timestamps = f.timestamps == "device" ? TimestampSource::kDevice : TimestampSource::kHost;
+
+  ivoa::RigCalibration rig;
+  try {
+    rig = ivoa::load_rig_calibration(f.rig_path);
+  } catch (const ivoa::CalibrationError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitBadInput;
+  }
+
+  int exit_code = ivoa::kExitOk;
+  try {
+    ivoa::Bus bus(f.common.lcm_url);
+    ivoa::Heartbeat heartbeat(bus, "aravis_stereo");
+    AravisCameraConfig left = f.camera, right = f.camera;
+    left.device = f.left;
+    right.device = f.right;
+    StereoDriver driver(bus, heartbeat, rig, f.driver, std::make_unique<AravisCamera>(Side::kLeft, left),
+                        std::make_unique<AravisCamera>(Side::kRight, right));
+    exit_code = driver.run();
+  } catch (const ivoa::BusError& e) {
+    spdlog::error("{}", e.what());
+    exit_code = ivoa::kExitFailure;
+  }
+  arv_shutdown();
+  return exit_code;
+}

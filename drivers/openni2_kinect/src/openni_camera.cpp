@@ -1,0 +1,232 @@
+#include "ivoa/openni2_kinect/openni_camera.hpp"
+
+#include <filesystem>
+
+#include <OpenNI.h>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/process.hpp"
+
+namespace ivoa::openni2_kinect {
+namespace {
+
+constexpr int kWidth = 640;
+constexpr int kHeight = 480;
+constexpr int kFps = 30;
+
+const char* const kNoDeviceHelp =
+    "Is the sensor plugged in and powered (a Kinect v1 needs its mains adapter)? Debian's OpenNI2 drives only "
+    "PrimeSense/Asus sensors: a Kinect v1 (045e:02ae) needs libfreenect's OpenNI2 driver (libFreenectDriver.so, "
+    "built from libfreenect with -DBUILD_OPENNI2_DRIVER=ON and copied into "
+    "/usr/lib/x86_64-linux-gnu/OpenNI2/Drivers/), and USB access for your user (udev rule)";
+
+bool is_recording_path(const std::string& device) {
+  const std::filesystem::path path(device);
+  return path.extension() == ".oni" || std::filesystem::is_regular_file(path);
+}
+
+std::string extended_error() {
+  const std::string text = openni::OpenNI::getExtendedError();
+  return text.empty() ? "no details from OpenNI2" : text;
+}
+
+// Prefers width x height in `format`, at the nominal rate if offered.
+bool pick_mode(const openni::SensorInfo* info, openni::PixelFormat format, openni::VideoMode* out) {
+  if (info == nullptr) return false;
+  const auto& modes = info->getSupportedVideoModes();
+  bool found = false;
+  for (int i = 0; i < modes.getSize(); ++i) {
+    const openni::VideoMode& m = modes[i];
+    if (m.getResolutionX() != kWidth || m.getResolutionY() != kHeight || m.getPixelFormat() != format) continue;
+    if (!found || m.getFps() == kFps) *out = m;
+    found = true;
+  }
+  return found;
+}
+
+}  // namespace
+
+struct OpenNiCamera::Impl {
+  OpenNiOptions options;
+  bool file = false;
+  bool initialized = false;
+  bool registered = false;
+  int frames_in_file = 0;
+  int depth_frames_read = 0;
+  openni::Device device;
+  openni::VideoStream depth;
+  openni::VideoStream color;
+  openni::Recorder recorder;
+  std::string description;
+
+  void open_device() {
+    file = is_recording_path(options.device);
+    if (file && !std::filesystem::is_regular_file(options.device))
+      throw DeviceError(options.device + ": recording not found", kExitBadInput);
+    if (openni::OpenNI::initialize() != openni::STATUS_OK)
+      throw DeviceError("OpenNI2 does not initialise: " + extended_error(), kExitFailure);
+    initialized = true;
+    const bool any = options.device.empty() || options.device == "ANY_DEVICE";
+    if (any) {
+      openni::Array<openni::DeviceInfo> devices;
+      openni::OpenNI::enumerateDevices(&devices);
+      if (devices.getSize() == 0) throw DeviceError(std::string("no OpenNI2 device found. ") + kNoDeviceHelp, kExitFailure);
+    }
+    if (device.open(any ? openni::ANY_DEVICE : options.device.c_str()) != openni::STATUS_OK) {
+      if (file) throw DeviceError(options.device + ": not a playable .oni recording: " + extended_error(), kExitBadInput);
+      throw DeviceError("cannot open OpenNI2 device '" + options.device + "': " + extended_error() + ". " + kNoDeviceHelp,
+                        kExitFailure);
+    }
+    const openni::DeviceInfo& info = device.getDeviceInfo();
+    description = std::string(info.getVendor()) + " " + info.getName() + " (" + info.getUri() + ")";
+  }
+
+  void create_stream(openni::VideoStream& stream, openni::SensorType sensor, openni::PixelFormat format,
+                     const char* what) {
+    if (stream.create(device, sensor) != openni::STATUS_OK)
+      throw DeviceError(description + " has no " + what + " stream: " + extended_error(), kExitFailure);
+    if (file) return;  // a recording plays the modes it was made with
+    openni::VideoMode mode;
+    if (!pick_mode(device.getSensorInfo(sensor), format, &mode) || stream.setVideoMode(mode) != openni::STATUS_OK)
+      spdlog::warn("{}: no {}x{} {} mode; using the device's default", description, kWidth, kHeight, what);
+    stream.setMirroringEnabled(false);  // geometry needs the unmirrored image
+  }
+
+  void set_registration() {
+    if (!options.register_depth) return;
+    if (file) {
+      spdlog::info("{}: a recording plays depth as recorded (registration cannot be changed)", options.device);
+      return;
+    }
+    if (!device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR))
+      throw DeviceError(description + " does not support depth-to-colour registration (--register)", kExitUsage);
+    if (device.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) != openni::STATUS_OK)
+      throw DeviceError(description + ": cannot turn on registration: " + extended_error(), kExitFailure);
+    registered = true;
+  }
+
+  void start_streams() {
+    if (depth.start() != openni::STATUS_OK)
+      throw DeviceError(description + ": depth stream does not start: " + extended_error(), kExitFailure);
+    if (color.isValid() && color.start() != openni::STATUS_OK)
+      throw DeviceError(description + ": colour stream does not start: " + extended_error(), kExitFailure);
+    if (color.isValid() && !file && device.setDepthColorSyncEnabled(true) != openni::STATUS_OK)
+      spdlog::info("{}: depth/colour frame sync not available", description);
+  }
+
+  void set_up_playback() {
+    if (!file) return;
+    openni::PlaybackControl* playback = device.getPlaybackControl();
+    if (playback == nullptr) return;
+    playback->setSpeed(options.playback_speed > 0 ? static_cast<float>(options.playback_speed) : -1.0f);
+    playback->setRepeatEnabled(options.loop);
+    frames_in_file = playback->getNumberOfFrames(depth);
+  }
+
+  void start_recording() {
+    if (options.record_path.empty()) return;
+    if (recorder.create(options.record_path.c_str()) != openni::STATUS_OK ||
+        recorder.attach(depth, false) != openni::STATUS_OK ||
+        (color.isValid() && recorder.attach(color, options.lossy_color) != openni::STATUS_OK) ||
+        recorder.start() != openni::STATUS_OK)
+      throw DeviceError(options.record_path + ": cannot record: " + extended_error(), kExitIoError);
+    spdlog::info("recording to {}", options.record_path);
+  }
+
+  void close() {
+    if (recorder.isValid()) {
+      recorder.stop();
+      recorder.destroy();
+    }
+    if (depth.isValid()) {
+      depth.stop();
+      depth.destroy();
+    }
+    if (color.isValid()) {
+      color.stop();
+      color.destroy();
+    }
+    if (device.isValid()) device.close();
+    if (initialized) openni::OpenNI::shutdown();
+    initialized = false;
+  }
+};
+
+OpenNiCamera::OpenNiCamera(const OpenNiOptions& options) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.options = options;
+  try {
+    m.open_device();
+    m.create_stream(m.depth, openni::SENSOR_DEPTH, openni::PIXEL_FORMAT_DEPTH_1_MM, "depth");
+    if (options.color) m.create_stream(m.color, openni::SENSOR_COLOR, openni::PIXEL_FORMAT_RGB888, "colour");
+    m.set_registration();
+    m.start_streams();
+    m.set_up_playback();
+    m.start_recording();
+  } catch (...) {
+    m.close();
+    throw;
+  }
+}
+
+OpenNiCamera::~OpenNiCamera() { impl_->close(); }
+
+OpenNiCamera::Ready OpenNiCamera::wait(int timeout_ms) {
+  Impl& m = *impl_;
+  if (m.file && !m.options.loop && m.frames_in_file > 0 && m.depth_frames_read >= m.frames_in_file)
+    return Ready::kEndOfRecording;
+  openni::VideoStream* streams[2] = {&m.depth, &m.color};
+  const int count = m.color.isValid() ? 2 : 1;
+  int ready = -1;
+  if (openni::OpenNI::waitForAnyStream(streams, count, &ready, timeout_ms) != openni::STATUS_OK) return Ready::kTimeout;
+  return ready == 0 ? Ready::kDepth : Ready::kColor;
+}
+
+DepthFrame OpenNiCamera::read_depth() {
+  openni::VideoFrameRef frame;
+  if (impl_->depth.readFrame(&frame) != openni::STATUS_OK || !frame.isValid())
+    throw DeviceError("depth frame cannot be read: " + extended_error(), kExitFailure);
+  ++impl_->depth_frames_read;
+  const openni::PixelFormat format = frame.getVideoMode().getPixelFormat();
+  const cv::Mat wrapped(frame.getHeight(), frame.getWidth(), CV_16UC1, const_cast<void*>(frame.getData()),
+                        static_cast<size_t>(frame.getStrideInBytes()));
+  DepthFrame out;
+  if (format == openni::PIXEL_FORMAT_DEPTH_1_MM) out.depth_mm = wrapped.clone();
+  else if (format == openni::PIXEL_FORMAT_DEPTH_100_UM) wrapped.convertTo(out.depth_mm, CV_16U, 0.1);
+  else throw DeviceError("depth stream delivers pixel format " + std::to_string(format) + ", not millimetres",
+                         kExitFailure);
+  out.frame_index = frame.getFrameIndex();
+  out.device_time_us = frame.getTimestamp();
+  return out;
+}
+
+ColorFrame OpenNiCamera::read_color() {
+  openni::VideoFrameRef frame;
+  if (impl_->color.readFrame(&frame) != openni::STATUS_OK || !frame.isValid())
+    throw DeviceError("colour frame cannot be read: " + extended_error(), kExitFailure);
+  if (frame.getVideoMode().getPixelFormat() != openni::PIXEL_FORMAT_RGB888)
+    throw DeviceError("colour stream is not RGB888", kExitFailure);
+  const cv::Mat wrapped(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
+                        static_cast<size_t>(frame.getStrideInBytes()));
+  ColorFrame out;
+  out.rgb = wrapped.clone();
+  out.frame_index = frame.getFrameIndex();
+  out.device_time_us = frame.getTimestamp();
+  return out;
+}
+
+bool OpenNiCamera::depth_fov_intrinsics(PinholeIntrinsics* out) const {
+  const double hfov = impl_->depth.getHorizontalFieldOfView();
+  const double vfov = impl_->depth.getVerticalFieldOfView();
+  if (!(hfov > 0 && vfov > 0)) return false;
+  *out = intrinsics_from_fov(depth_width(), depth_height(), hfov, vfov);
+  return true;
+}
+
+int OpenNiCamera::depth_width() const { return impl_->depth.getVideoMode().getResolutionX(); }
+int OpenNiCamera::depth_height() const { return impl_->depth.getVideoMode().getResolutionY(); }
+bool OpenNiCamera::registered() const { return impl_->registered; }
+bool OpenNiCamera::is_recording_file() const { return impl_->file; }
+std::string OpenNiCamera::description() const { return impl_->description; }
+
+}  // namespace ivoa::openni2_kinect

@@ -1,0 +1,54 @@
+#include "ivoa/sim_hardware/frame_stamp.hpp"
+
+namespace ivoa::sim_hardware {
+namespace {
+
+uint32_t check_byte(uint32_t tick) {
+  return ((tick >> 16) ^ (tick >> 8) ^ tick ^ 0xA5u) & 0xFFu;
+}
+
+uint32_t stamp_word(uint32_t tick) {
+  tick &= kStampTickMask;
+  return (tick << 8) | check_byte(tick);
+}
+
+bool fits(const cv::Mat& image) {
+  return image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3) &&
+         image.cols >= kStampWidthPx && image.rows >= kStampBlockPx;
+}
+
+}  // namespace
+
+void write_stamp(cv::Mat& image, uint32_t tick) {
+  if (!fits(image)) return;
+  const uint32_t word = stamp_word(tick);
+  for (int bit = 0; bit < kStampBits; ++bit) {
+    const bool one = (word >> (kStampBits - 1 - bit)) & 1u;
+    const cv::Rect block(bit * kStampBlockPx, 0, kStampBlockPx, kStampBlockPx);
+    image(block).setTo(cv::Scalar::all(one ? 255 : 0));
+  }
+}
+
+std::optional<uint32_t> read_stamp(const cv::Mat& image) {
+  if (!fits(image)) return std::nullopt;
+  uint32_t word = 0;
+  const int centre = kStampBlockPx / 2;
+  for (int bit = 0; bit < kStampBits; ++bit) {
+    const int x = bit * kStampBlockPx + centre;
+    // Gray, or the mean of B, G, R: a stamp block is the same in every channel.
+    int value = 0;
+    if (image.channels() == 1) {
+      value = image.at<uint8_t>(centre, x);
+    } else {
+      const auto& p = image.at<cv::Vec3b>(centre, x);
+      value = (p[0] + p[1] + p[2]) / 3;
+    }
+    if (value > 64 && value < 192) return std::nullopt;  // not a black/white block
+    word = (word << 1) | (value >= 192 ? 1u : 0u);
+  }
+  const uint32_t tick = word >> 8;
+  if ((word & 0xFFu) != check_byte(tick)) return std::nullopt;
+  return tick;
+}
+
+}  // namespace ivoa::sim_hardware
