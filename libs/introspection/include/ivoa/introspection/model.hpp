@@ -1,0 +1,113 @@
+#pragma once
+// The introspection model: a CNN that predicts, per image patch, whether the
+// stereo detector's verdict there is a TP, TN, FP or FN, with Monte-Carlo
+// dropout uncertainty. LibTorch stays behind this header.
+//
+// Full-frame inference gives the paper's heatmaps: the left image is cut
+// into patch_size x patch_size patches at `stride` (cell (r, c) is the patch
+// whose top-left corner is (c * stride, r * stride)), each patch gets the
+// mean class probabilities over T dropout passes and their variance. For a
+// 960x600 image with 100 px patches at stride 20 that is 26 rows x 44
+// columns: floor((600-100)/20)+1 by floor((960-100)/20)+1. The paper's
+// "49 x 26" would need the image padded by 50 px left and right; we do not
+// pad (no patch sees invented pixels).
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace ivoa::introspection {
+
+inline constexpr int kNumClasses = 4;  // TP, TN, FP, FN (introspection_labels_t.LABEL_*)
+
+class ModelError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// What a model file says about itself.
+struct ModelInfo {
+  std::string architecture;   // "slidenet" (default) or "alexnet" or "scripted"
+  std::string detector;       // the perception model it was trained to introspect
+  int patch_size = 100;       // pixels of the left image per patch
+  int stride = 20;            // heatmap stride, pixels
+  int input_size = 100;       // patches are resized to this before the network
+  double dropout = 0.5;
+  std::array<float, 3> mean{0.485f, 0.456f, 0.406f};  // RGB, on [0, 1]
+  std::array<float, 3> std{0.229f, 0.224f, 0.225f};
+  std::vector<std::string> classes{"TP", "TN", "FP", "FN"};
+  double uncertainty_threshold = 0.01;  // recommended gate (predicted-class variance)
+  std::string training_summary;         // JSON: data, steps, validation metrics
+  std::string id;                       // file name and content hash
+};
+
+enum class QueryLookup { kNearest, kBilinear };
+
+struct InferenceConfig {
+  int mc_passes = 20;       // T
+  int threads = 2;          // LibTorch intra-op threads (it defaults to 1 on this kind of machine)
+  int mean_filter = 3;      // odd window of the mean filter over each heatmap; 1 = off
+  double uncertainty_threshold = -1;  // < 0: the model's recommended value
+  QueryLookup lookup = QueryLookup::kNearest;
+  uint64_t seed = 0;        // dropout masks; 0 = from the clock
+  std::string device = "cpu";  // "cpu" or "cuda" (LibTorch built with CUDA)
+};
+
+// Heatmaps of one frame, rows x cols, CV_32F. Probabilities and variances
+// are mean-filtered (InferenceConfig::mean_filter).
+struct Heatmaps {
+  int rows = 0, cols = 0, patch_size = 0, stride = 0;
+  std::array<cv::Mat, kNumClasses> probability;  // mean over passes
+  std::array<cv::Mat, kNumClasses> variance;     // variance over passes (n - 1)
+  cv::Mat uncertainty;   // mean over classes of the variance (the paper's heatmap)
+  cv::Mat predicted;     // CV_8U, argmax class
+  cv::Mat predicted_variance;  // variance of the predicted class's probability (the gate)
+  double compute_ms = 0;
+  cv::Point2d cell_centre(int r, int c) const {
+    return {c * stride + patch_size / 2.0, r * stride + patch_size / 2.0};
+  }
+};
+
+struct Prediction {
+  int predicted = 0;                          // class index
+  std::array<float, kNumClasses> probability{};
+  float variance = 0;      // of the predicted class (the gate)
+  float uncertainty = 0;   // mean over classes
+  bool announced = false;  // variance <= threshold
+};
+
+// Per-patch outputs (evaluation, clustering).
+struct PatchOutputs {
+  std::vector<Prediction> predictions;
+  std::vector<std::vector<float>> embeddings;  // FC2 (256-d, post-ReLU, no dropout), if asked
+};
+
+class IntrospectionModel {
+ public:
+  // Loads a model file written by ivoa-train (or an externally scripted
+  // TorchScript model, see README). Throws ModelError naming the file and
+  // what is wrong with it.
+  static std::unique_ptr<IntrospectionModel> load(const std::string& path, const InferenceConfig& config = {});
+  virtual ~IntrospectionModel() = default;
+
+  virtual const ModelInfo& info() const = 0;
+  double threshold() const;
+
+  // Full-frame heatmaps of a left image (8-bit BGR).
+  virtual Heatmaps run(const cv::Mat& left_bgr) = 0;
+  // The prediction at image point (u, v) from the heatmaps.
+  Prediction predict_at(const Heatmaps& heatmaps, double u, double v) const;
+
+  // Patches (patch_size square, 8-bit BGR); MC dropout when mc_passes > 1.
+  virtual PatchOutputs run_patches(const std::vector<cv::Mat>& patches, bool with_embeddings) = 0;
+
+ protected:
+  explicit IntrospectionModel(InferenceConfig config) : config_(config) {}
+  InferenceConfig config_;
+};
+
+}  // namespace ivoa::introspection

@@ -1,0 +1,76 @@
+#pragma once
+// Training an introspection model on a dataset (libs/dataset format) with
+// session splits. Defaults follow the paper and the reference code where
+// they are known (SGD, lr 0.005, momentum 0.9, dropout 0.5, class-balanced
+// sampling with replacement); a CPU needs a smaller batch than the
+// reference's 2048, and the reference has no schedule, seeds or
+// augmentation, which we add.
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace ivoa::introspection {
+
+struct TrainConfig {
+  std::string dataset;            // dataset folder
+  std::string split_file;         // YAML: split name -> sessions
+  std::string train_split = "train";
+  std::string val_split = "val";
+  std::string output;             // model file to write (the best model)
+  std::string architecture = "slidenet";
+  std::string init;               // optional model file to start from (fine-tuning)
+  bool resume = false;            // continue from output + ".checkpoint" if present
+
+  int64_t steps = 4000;           // optimiser steps
+  int batch_size = 128;
+  double learning_rate = 0.005;   // paper / reference
+  double momentum = 0.9;          // paper / reference
+  double weight_decay = 5e-4;
+  int64_t warmup_steps = 200;     // linear warm-up, then cosine decay to 1% (reference: constant)
+  double dropout = 0.5;
+  // Class-balanced sampling: each class is drawn equally often; the FN
+  // class's share is multiplied by this (the reference uses 0.1 outdoors).
+  double fn_weight = 1.0;
+  bool augment = true;            // photometric: brightness, contrast, gamma, channel gains, noise
+  uint64_t seed = 1;
+  int threads = 2;
+  std::string device = "cpu";
+  int64_t validate_every = 250;
+  int64_t checkpoint_every = 500;
+  int64_t max_val_samples = 20000;  // validation subset (deterministic, spread over sessions)
+  // The uncertainty gate stored in the model: the predicted-class variance
+  // below which this fraction of validation samples is retained.
+  double threshold_retain = 0.7;
+  int threshold_passes = 20;
+};
+
+struct TrainStatus {
+  int64_t step = 0, steps = 0;
+  double loss = 0;           // running mean
+  double accuracy = 0;       // running mean, training batches
+  double learning_rate = 0;
+  double patches_per_s = 0;
+  double val_mean_class_accuracy = -1;  // last validation (-1 before the first)
+  double best_val_mean_class_accuracy = -1;
+};
+
+struct TrainReport {
+  TrainStatus last;
+  int64_t best_step = 0;
+  double best_val_mean_class_accuracy = 0;
+  double best_val_accuracy = 0;
+  std::array<double, 4> best_val_class_accuracy{};
+  double uncertainty_threshold = 0;
+  double val_accuracy_retained = 0;       // mean per-class accuracy of the retained val samples
+  std::array<int64_t, 4> train_class_counts{};
+  int64_t val_samples = 0;
+  double seconds = 0;
+};
+
+// Trains and writes config.output. Throws std::runtime_error naming the
+// problem (missing split, empty class, unreadable dataset).
+TrainReport train_model(const TrainConfig& config, const std::function<void(const TrainStatus&)>& progress = {});
+
+}  // namespace ivoa::introspection

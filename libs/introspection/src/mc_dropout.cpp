@@ -1,0 +1,43 @@
+#include "mc_dropout.hpp"
+
+namespace ivoa::introspection {
+namespace {
+
+// [T, in] keep-masks scaled by 1/(1-p), as inverted dropout does in training.
+torch::Tensor sample_masks(int passes, int64_t width, double p, torch::Generator& generator,
+                           const torch::TensorOptions& options) {
+  // Drawn on the CPU (small) so one generator serves any device.
+  const auto keep = torch::rand({passes, width}, generator, torch::kFloat) >= p;
+  return (keep.to(torch::kFloat) * static_cast<float>(1.0 / (1.0 - p))).to(options.device());
+}
+
+}  // namespace
+
+McStats mc_dropout_head(IntrospectionNetImpl& net, const torch::Tensor& features, int passes,
+                        torch::Generator& generator) {
+  torch::NoGradGuard no_grad;
+  const double p = net.dropout_p;
+  const auto options = features.options();
+  const int64_t n = features.size(0), f = features.size(1);
+  const auto w1 = net.fc1->weight.t();  // [F, H1]
+  const int64_t h1 = w1.size(1);
+  // FC1 with input dropout for all passes in one product:
+  // x (m_t * W1) for t = 1..T  ==  x [m_1 W1 | ... | m_T W1].
+  const auto m1 = sample_masks(passes, f, p, generator, options);                 // [T, F]
+  const auto w1_all = (m1.unsqueeze(2) * w1.unsqueeze(0)).permute({1, 0, 2}).reshape({f, passes * h1});
+  auto h = torch::mm(features, w1_all).view({n, passes, h1}).permute({1, 0, 2});  // [T, N, H1]
+  h = torch::relu(h + net.fc1->bias);
+  const auto w2 = net.fc2->weight.t();  // [H1, 256]
+  const auto m2 = sample_masks(passes, h1, p, generator, options);
+  h = torch::relu(torch::bmm(h, m2.unsqueeze(2) * w2.unsqueeze(0)) + net.fc2->bias);  // [T, N, 256]
+  const auto probs = torch::softmax(torch::matmul(h, net.fc3->weight.t()) + net.fc3->bias, -1);  // [T, N, 4]
+  return {probs.mean(0), probs.var(0, /*unbiased=*/true), probs};
+}
+
+McStats deterministic_head(IntrospectionNetImpl& net, const torch::Tensor& features) {
+  torch::NoGradGuard no_grad;
+  const auto probs = torch::softmax(net.fc3(torch::relu(net.fc2(torch::relu(net.fc1(features))))), -1);
+  return {probs, torch::zeros_like(probs), probs.unsqueeze(0)};
+}
+
+}  // namespace ivoa::introspection

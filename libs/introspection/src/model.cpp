@@ -1,0 +1,283 @@
+#include "ivoa/introspection/model.hpp"
+
+#include <filesystem>
+
+#include <ATen/CPUGeneratorImpl.h>
+#include <opencv2/imgproc.hpp>
+#include <torch/script.h>
+
+#include "ivoa/core/time.hpp"
+#include "mc_dropout.hpp"
+#include "model_file.hpp"
+#include "tensors.hpp"
+
+namespace ivoa::introspection {
+namespace {
+
+constexpr int64_t kPatchBatch = 256;  // patches per forward when running patch by patch
+
+torch::Generator make_generator(uint64_t seed) {
+  return at::detail::createCPUGenerator(seed ? seed : static_cast<uint64_t>(now_utime()));
+}
+
+torch::Device device_of(const std::string& name) {
+  if (name == "cpu") return torch::kCPU;
+  if (name == "cuda") {
+    if (!torch::cuda::is_available()) throw ModelError("device 'cuda' requested but this LibTorch has no usable CUDA");
+    return torch::kCUDA;
+  }
+  throw ModelError("unknown device '" + name + "' (cpu, cuda)");
+}
+
+cv::Mat filtered(const cv::Mat& m, int window) {
+  if (window <= 1) return m;
+  cv::Mat out;
+  cv::blur(m, out, cv::Size(window, window), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+  return out;
+}
+
+// MC statistics of rows x cols cells -> the heatmaps, mean-filtered.
+Heatmaps make_heatmaps(const McStats& stats, int rows, int cols, const ModelInfo& info, int window) {
+  Heatmaps h;
+  h.rows = rows;
+  h.cols = cols;
+  h.patch_size = info.patch_size;
+  h.stride = info.stride;
+  const auto mean = stats.mean.to(torch::kCPU), var = stats.variance.to(torch::kCPU);
+  for (int c = 0; c < kNumClasses; ++c) {
+    h.probability[static_cast<size_t>(c)] = filtered(to_mat(mean.select(1, c), rows, cols), window);
+    h.variance[static_cast<size_t>(c)] = filtered(to_mat(var.select(1, c), rows, cols), window);
+  }
+  h.uncertainty = (h.variance[0] + h.variance[1] + h.variance[2] + h.variance[3]) / 4.0;
+  h.predicted = cv::Mat(rows, cols, CV_8U);
+  h.predicted_variance = cv::Mat(rows, cols, CV_32F);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      int best = 0;
+      for (int k = 1; k < kNumClasses; ++k)
+        if (h.probability[static_cast<size_t>(k)].at<float>(r, c) > h.probability[static_cast<size_t>(best)].at<float>(r, c))
+          best = k;
+      h.predicted.at<uint8_t>(r, c) = static_cast<uint8_t>(best);
+      h.predicted_variance.at<float>(r, c) = h.variance[static_cast<size_t>(best)].at<float>(r, c);
+    }
+  return h;
+}
+
+Prediction prediction_of(const float* mean, const float* var, double threshold) {
+  Prediction p;
+  for (int k = 0; k < kNumClasses; ++k) p.probability[static_cast<size_t>(k)] = mean[k];
+  p.predicted = static_cast<int>(std::max_element(mean, mean + kNumClasses) - mean);
+  p.variance = var[p.predicted];
+  p.uncertainty = (var[0] + var[1] + var[2] + var[3]) / 4.0f;
+  p.announced = p.variance <= threshold;
+  return p;
+}
+
+// All patches of the heatmap grid, for models that run patch by patch.
+std::vector<cv::Mat> grid_patches(const cv::Mat& image, const ModelInfo& info, int& rows, int& cols) {
+  rows = (image.rows - info.patch_size) / info.stride + 1;
+  cols = (image.cols - info.patch_size) / info.stride + 1;
+  std::vector<cv::Mat> patches;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      patches.push_back(image(cv::Rect(c * info.stride, r * info.stride, info.patch_size, info.patch_size)));
+  return patches;
+}
+
+void check_image(const cv::Mat& image, const ModelInfo& info) {
+  if (image.type() != CV_8UC3) throw ModelError("introspection needs an 8-bit BGR image");
+  if (image.rows < info.patch_size || image.cols < info.patch_size)
+    throw ModelError("image " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                     " is smaller than one patch");
+}
+
+class NativeIntrospectionModel : public IntrospectionModel {
+ public:
+  NativeIntrospectionModel(NativeModel model, const InferenceConfig& config)
+      : IntrospectionModel(config), model_(std::move(model)), device_(device_of(config.device)),
+        generator_(make_generator(config.seed)) {
+    model_.net->to(device_);
+    model_.net->eval();
+  }
+  const ModelInfo& info() const override { return model_.info; }
+
+  Heatmaps run(const cv::Mat& left) override {
+    check_image(left, model_.info);
+    torch::NoGradGuard no_grad;
+    const double start = monotonic_ms();
+    int64_t rows = 0, cols = 0;
+    torch::Tensor features;
+    if (auto* slide = dynamic_cast<SlideNetImpl*>(model_.net.get())) {
+      features = slide->cell_features(image_to_tensor(left, model_.info).to(device_), rows, cols);
+    } else {
+      int r = 0, c = 0;
+      features = patch_features(grid_patches(left, model_.info, r, c));
+      rows = r;
+      cols = c;
+    }
+    Heatmaps h = make_heatmaps(head(features), static_cast<int>(rows), static_cast<int>(cols), model_.info,
+                               config_.mean_filter);
+    h.compute_ms = monotonic_ms() - start;
+    return h;
+  }
+
+  PatchOutputs run_patches(const std::vector<cv::Mat>& patches, bool with_embeddings) override {
+    torch::NoGradGuard no_grad;
+    PatchOutputs out;
+    for (size_t begin = 0; begin < patches.size(); begin += kPatchBatch) {
+      const std::vector<cv::Mat> batch(patches.begin() + static_cast<long>(begin),
+                                       patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
+      const auto features = patch_features(batch);
+      const McStats s = head(features);
+      const auto mean = s.mean.to(torch::kCPU).contiguous(), var = s.variance.to(torch::kCPU).contiguous();
+      for (int64_t i = 0; i < mean.size(0); ++i)
+        out.predictions.push_back(
+            prediction_of(mean[i].data_ptr<float>(), var[i].data_ptr<float>(), threshold()));
+      if (with_embeddings) {
+        const auto e = model_.net->embedding(features).to(torch::kCPU).contiguous();
+        for (int64_t i = 0; i < e.size(0); ++i)
+          out.embeddings.emplace_back(e[i].data_ptr<float>(), e[i].data_ptr<float>() + e.size(1));
+      }
+    }
+    return out;
+  }
+
+ private:
+  torch::Tensor patch_features(const std::vector<cv::Mat>& patches) {
+    std::vector<torch::Tensor> parts;
+    for (size_t begin = 0; begin < patches.size(); begin += kPatchBatch) {
+      const std::vector<cv::Mat> batch(patches.begin() + static_cast<long>(begin),
+                                       patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
+      parts.push_back(model_.net->features(patches_to_tensor(batch, model_.info).to(device_)));
+    }
+    return torch::cat(parts);
+  }
+  McStats head(const torch::Tensor& features) {
+    return config_.mc_passes > 1 ? mc_dropout_head(*model_.net, features, config_.mc_passes, generator_)
+                                 : deterministic_head(*model_.net, features);
+  }
+
+  NativeModel model_;
+  torch::Device device_;
+  torch::Generator generator_;
+};
+
+// An externally scripted TorchScript model (see README): forward() maps
+// normalised [B, 3, S, S] patches to logits [B, 4]; MC dropout runs the
+// whole model T times with only its Dropout modules in training mode.
+class ScriptedIntrospectionModel : public IntrospectionModel {
+ public:
+  ScriptedIntrospectionModel(torch::jit::Module module, ModelInfo info, const InferenceConfig& config)
+      : IntrospectionModel(config), module_(std::move(module)), info_(std::move(info)) {
+    module_.eval();
+    for (auto m : module_.modules())
+      if (m.type()->name() && m.type()->name()->name().find("Dropout") != std::string::npos) m.train(true);
+    torch::manual_seed(config.seed ? config.seed : static_cast<uint64_t>(now_utime()));
+  }
+  const ModelInfo& info() const override { return info_; }
+
+  Heatmaps run(const cv::Mat& left) override {
+    check_image(left, info_);
+    const double start = monotonic_ms();
+    int rows = 0, cols = 0;
+    const McStats s = stats(grid_patches(left, info_, rows, cols));
+    Heatmaps h = make_heatmaps(s, rows, cols, info_, config_.mean_filter);
+    h.compute_ms = monotonic_ms() - start;
+    return h;
+  }
+
+  PatchOutputs run_patches(const std::vector<cv::Mat>& patches, bool with_embeddings) override {
+    if (with_embeddings) throw ModelError(info_.id + ": scripted models do not provide embeddings");
+    const McStats s = stats(patches);
+    PatchOutputs out;
+    const auto mean = s.mean.contiguous(), var = s.variance.contiguous();
+    for (int64_t i = 0; i < mean.size(0); ++i)
+      out.predictions.push_back(prediction_of(mean[i].data_ptr<float>(), var[i].data_ptr<float>(), threshold()));
+    return out;
+  }
+
+ private:
+  McStats stats(const std::vector<cv::Mat>& patches) {
+    torch::NoGradGuard no_grad;
+    const int passes = std::max(config_.mc_passes, 1);
+    std::vector<torch::Tensor> all;
+    for (size_t begin = 0; begin < patches.size(); begin += kPatchBatch) {
+      const std::vector<cv::Mat> batch(patches.begin() + static_cast<long>(begin),
+                                       patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
+      const auto x = patches_to_tensor(batch, info_);
+      std::vector<torch::Tensor> runs;
+      for (int t = 0; t < passes; ++t) runs.push_back(torch::softmax(module_.forward({x}).toTensor(), -1));
+      all.push_back(torch::stack(runs));  // [T, B, 4]
+    }
+    const auto probs = torch::cat(all, 1);
+    return {probs.mean(0), passes > 1 ? probs.var(0, true) : torch::zeros_like(probs[0]), probs};
+  }
+
+  torch::jit::Module module_;
+  ModelInfo info_;
+};
+
+std::unique_ptr<IntrospectionModel> load_scripted(const std::string& path, const InferenceConfig& config) {
+  torch::jit::Module module;
+  try {
+    module = torch::jit::load(path);
+  } catch (const c10::Error& e) {
+    throw ModelError(path + ": not a TorchScript model (" + std::string(e.what_without_backtrace()).substr(0, 200) + ")");
+  }
+  if (!module.find_method("forward")) throw ModelError(path + ": scripted model has no forward()");
+  if (!module.hasattr(kMetadataKey))
+    throw ModelError(path + ": scripted model has no '" + std::string(kMetadataKey) +
+                     "' buffer (JSON metadata as a uint8 tensor; see README)");
+  const auto t = module.attr(kMetadataKey).toTensor().contiguous();
+  ModelInfo info = info_from_json(std::string(reinterpret_cast<const char*>(t.data_ptr<uint8_t>()),
+                                              static_cast<size_t>(t.numel())),
+                                  path);
+  info.id = path;
+  return std::make_unique<ScriptedIntrospectionModel>(std::move(module), std::move(info), config);
+}
+
+}  // namespace
+
+std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& path, const InferenceConfig& config) {
+  if (config.mc_passes < 1) throw ModelError("mc_passes must be >= 1");
+  if (config.mean_filter < 1 || config.mean_filter % 2 == 0) throw ModelError("mean_filter must be odd and >= 1");
+  torch::set_num_threads(std::max(config.threads, 1));
+  std::string json;
+  bool native = false;
+  try {
+    native = read_metadata(path, json) && info_from_json(json, path).architecture != "scripted";
+  } catch (const c10::Error&) {
+  }
+  if (native) return std::make_unique<NativeIntrospectionModel>(load_native_model(path), config);
+  if (!std::filesystem::exists(path)) throw ModelError(path + ": no such model file");
+  return load_scripted(path, config);
+}
+
+double IntrospectionModel::threshold() const {
+  return config_.uncertainty_threshold >= 0 ? config_.uncertainty_threshold : info().uncertainty_threshold;
+}
+
+Prediction IntrospectionModel::predict_at(const Heatmaps& h, double u, double v) const {
+  const double fc = (u - h.patch_size / 2.0) / h.stride, fr = (v - h.patch_size / 2.0) / h.stride;
+  std::array<float, kNumClasses> mean{}, var{};
+  if (config_.lookup == QueryLookup::kNearest) {
+    const int c = std::clamp(static_cast<int>(std::lround(fc)), 0, h.cols - 1);
+    const int r = std::clamp(static_cast<int>(std::lround(fr)), 0, h.rows - 1);
+    for (int k = 0; k < kNumClasses; ++k) {
+      mean[static_cast<size_t>(k)] = h.probability[static_cast<size_t>(k)].at<float>(r, c);
+      var[static_cast<size_t>(k)] = h.variance[static_cast<size_t>(k)].at<float>(r, c);
+    }
+  } else {
+    const double cc = std::clamp(fc, 0.0, h.cols - 1.0), rr = std::clamp(fr, 0.0, h.rows - 1.0);
+    cv::Mat patch;
+    for (int k = 0; k < kNumClasses; ++k) {
+      cv::getRectSubPix(h.probability[static_cast<size_t>(k)], {1, 1}, cv::Point2f(float(cc), float(rr)), patch);
+      mean[static_cast<size_t>(k)] = patch.at<float>(0, 0);
+      cv::getRectSubPix(h.variance[static_cast<size_t>(k)], {1, 1}, cv::Point2f(float(cc), float(rr)), patch);
+      var[static_cast<size_t>(k)] = patch.at<float>(0, 0);
+    }
+  }
+  return prediction_of(mean.data(), var.data(), threshold());
+}
+
+}  // namespace ivoa::introspection

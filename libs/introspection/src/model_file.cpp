@@ -1,0 +1,147 @@
+#include "model_file.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <cstring>
+
+#include <torch/script.h>
+#include <yaml-cpp/yaml.h>
+
+namespace ivoa::introspection {
+namespace {
+
+std::string quote(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (c == '\n') {
+      out += "\\n";
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string file_hash(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream buf;
+  buf << in.rdbuf();
+  std::ostringstream hex;
+  hex << std::hex << std::hash<std::string>{}(buf.str());
+  return hex.str().substr(0, 12);
+}
+
+torch::Tensor to_bytes(const std::string& s) {
+  auto t = torch::empty({static_cast<int64_t>(s.size())}, torch::kUInt8);
+  std::memcpy(t.data_ptr<uint8_t>(), s.data(), s.size());
+  return t;
+}
+
+std::string from_bytes(const torch::Tensor& t) {
+  const auto c = t.to(torch::kCPU).contiguous();
+  return std::string(reinterpret_cast<const char*>(c.data_ptr<uint8_t>()), static_cast<size_t>(c.numel()));
+}
+
+}  // namespace
+
+std::string info_to_json(const ModelInfo& i) {
+  std::ostringstream o;
+  o.precision(8);
+  o << "{\"format\": " << quote(kFormat) << ", \"version\": 1, \"architecture\": " << quote(i.architecture)
+    << ", \"detector\": " << quote(i.detector) << ", \"patch_size\": " << i.patch_size << ", \"stride\": " << i.stride
+    << ", \"input_size\": " << i.input_size << ", \"dropout\": " << i.dropout << ", \"color\": \"RGB\""
+    << ", \"mean\": [" << i.mean[0] << ", " << i.mean[1] << ", " << i.mean[2] << "], \"std\": [" << i.std[0] << ", "
+    << i.std[1] << ", " << i.std[2] << "], \"classes\": [";
+  for (size_t k = 0; k < i.classes.size(); ++k) o << (k ? ", " : "") << quote(i.classes[k]);
+  o << "], \"uncertainty_threshold\": " << i.uncertainty_threshold
+    << ", \"training\": " << (i.training_summary.empty() ? "{}" : i.training_summary) << "}";
+  return o.str();
+}
+
+ModelInfo info_from_json(const std::string& json, const std::string& where) {
+  ModelInfo i;
+  try {
+    const YAML::Node n = YAML::Load(json);
+    if (!n["format"] || n["format"].as<std::string>() != kFormat)
+      throw ModelError(where + ": metadata is not '" + kFormat + "'");
+    i.architecture = n["architecture"].as<std::string>();
+    i.detector = n["detector"].as<std::string>("");
+    i.patch_size = n["patch_size"].as<int>();
+    i.stride = n["stride"].as<int>();
+    i.input_size = n["input_size"].as<int>();
+    i.dropout = n["dropout"].as<double>();
+    for (int c = 0; c < 3; ++c) {
+      i.mean[static_cast<size_t>(c)] = n["mean"][c].as<float>();
+      i.std[static_cast<size_t>(c)] = n["std"][c].as<float>();
+    }
+    i.classes = n["classes"].as<std::vector<std::string>>();
+    i.uncertainty_threshold = n["uncertainty_threshold"].as<double>(0.01);
+    if (n["training"]) {
+      YAML::Emitter e;
+      e << YAML::Flow << YAML::DoubleQuoted << n["training"];
+      i.training_summary = e.c_str();
+    }
+  } catch (const YAML::Exception& e) {
+    throw ModelError(where + ": malformed model metadata: " + e.what());
+  }
+  const std::vector<std::string> expected{"TP", "TN", "FP", "FN"};
+  if (i.classes != expected) throw ModelError(where + ": the model's classes are not TP, TN, FP, FN in that order");
+  if (i.patch_size <= 0 || i.stride <= 0 || i.input_size <= 0 || !(i.dropout > 0 && i.dropout < 1))
+    throw ModelError(where + ": patch_size, stride, input_size must be positive and dropout in (0, 1)");
+  return i;
+}
+
+void save_model(IntrospectionNetImpl& net, const ModelInfo& info, const std::string& path) {
+  torch::serialize::OutputArchive archive;
+  net.save(archive);
+  archive.write(kMetadataKey, to_bytes(info_to_json(info)), /*is_buffer=*/true);
+  const std::string tmp = path + ".tmp";
+  archive.save_to(tmp);
+  std::filesystem::rename(tmp, path);  // never leave a half-written model under the real name
+}
+
+bool read_metadata(const std::string& path, std::string& json) {
+  torch::serialize::InputArchive archive;
+  archive.load_from(path);
+  torch::Tensor t;
+  if (!archive.try_read(kMetadataKey, t, /*is_buffer=*/true)) return false;
+  json = from_bytes(t);
+  return true;
+}
+
+NativeModel load_native_model(const std::string& path) {
+  if (!std::filesystem::exists(path)) throw ModelError(path + ": no such model file");
+  std::string json;
+  try {
+    if (!read_metadata(path, json))
+      throw ModelError(path + ": not an IVOA model (no '" + std::string(kMetadataKey) + "' metadata)");
+  } catch (const c10::Error& e) {
+    throw ModelError(path + ": not a LibTorch/TorchScript file (" + std::string(e.what_without_backtrace()) + ")");
+  }
+  NativeModel m;
+  m.info = info_from_json(json, path);
+  try {
+    m.net = make_network(m.info.architecture, m.info.dropout);
+  } catch (const std::invalid_argument& e) {
+    throw ModelError(path + ": " + e.what());
+  }
+  if (m.info.input_size != input_size_of(m.info.architecture))
+    throw ModelError(path + ": input_size " + std::to_string(m.info.input_size) + " does not fit architecture " +
+                     m.info.architecture);
+  try {
+    torch::serialize::InputArchive archive;
+    archive.load_from(path);
+    m.net->load(archive);
+  } catch (const c10::Error& e) {
+    throw ModelError(path + ": parameters do not fit architecture '" + m.info.architecture +
+                     "': " + std::string(e.what_without_backtrace()).substr(0, 300));
+  }
+  m.info.id = std::filesystem::path(path).filename().string() + "#" + file_hash(path);
+  m.net->eval();
+  return m;
+}
+
+}  // namespace ivoa::introspection

@@ -1,0 +1,69 @@
+#pragma once
+// The networks (LibTorch; private to the library).
+//
+// Both end in the paper's head: dropout -> FC1 -> ReLU -> dropout -> FC2
+// (256) -> ReLU -> FC3 (4). MC-dropout inference runs the trunk once and
+// only the head T times (dropout exists only there).
+//
+// "slidenet" (default): AlexNet-shaped, 5 conv + 3 FC, built so the trunk
+// run once over a whole image yields exactly the trunk outputs of every
+// 100x100 patch at stride 20: every convolution is unpadded ("valid") and
+// every stride divides the patch stride, so a patch at image offset 20k
+// maps to offset 20k/s in each layer's output:
+//   conv1 5x5/5 (patch 100 -> 20)   conv2 3x3 (18)   maxpool 2/2 (9)
+//   conv3 3x3 (7)   conv4 3x3 (5)   conv5 3x3 (3)   maxpool 2/1 (2)
+// FC1 then reads the 2x2x64 block of each cell: on a whole image it is a
+// 2x2 convolution with stride 2 (the patch stride, 20, over the trunk's 10).
+//
+// "alexnet": the reference model (torchvision AlexNet trunk at 224x224,
+// head 9216 -> 2048 -> 256 -> 4), for parity and for users with GPUs and
+// pretrained weights. Patches are resized to 224 and run one by one.
+#include <string>
+
+#include <torch/torch.h>
+
+namespace ivoa::introspection {
+
+class IntrospectionNetImpl : public torch::nn::Module {
+ public:
+  IntrospectionNetImpl(int64_t features, int64_t fc1_width, double dropout);
+
+  // Normalised patches [B, 3, S, S] -> FC1 inputs [B, F].
+  virtual torch::Tensor features(const torch::Tensor& patches) = 0;
+  // Training/deterministic forward: logits [B, 4] (dropout per the module's mode).
+  torch::Tensor forward(const torch::Tensor& patches) { return head(features(patches)); }
+  torch::Tensor head(const torch::Tensor& features);
+  // FC2 output after ReLU, no dropout: the 256-d embedding used for clustering.
+  torch::Tensor embedding(const torch::Tensor& features);
+
+  torch::nn::Linear fc1{nullptr}, fc2{nullptr}, fc3{nullptr};
+  torch::nn::Dropout drop1{nullptr}, drop2{nullptr};
+  double dropout_p;
+};
+
+class SlideNetImpl : public IntrospectionNetImpl {
+ public:
+  static constexpr int kPatch = 100, kStride = 20, kTrunkStride = 10;
+  SlideNetImpl(double dropout = 0.5);
+  torch::Tensor features(const torch::Tensor& patches) override;
+  // Normalised image [1, 3, H, W] -> FC1 inputs of every cell [rows * cols, F],
+  // row-major; rows/cols are set to the heatmap size.
+  torch::Tensor cell_features(const torch::Tensor& image, int64_t& rows, int64_t& cols);
+  torch::nn::Sequential trunk{nullptr};
+};
+TORCH_MODULE(SlideNet);
+
+class AlexNet224Impl : public IntrospectionNetImpl {
+ public:
+  static constexpr int kInput = 224;
+  AlexNet224Impl(double dropout = 0.5);
+  torch::Tensor features(const torch::Tensor& patches) override;
+  torch::nn::Sequential trunk{nullptr};
+};
+TORCH_MODULE(AlexNet224);
+
+// "slidenet" or "alexnet"; throws std::invalid_argument otherwise.
+std::shared_ptr<IntrospectionNetImpl> make_network(const std::string& architecture, double dropout);
+int input_size_of(const std::string& architecture);
+
+}  // namespace ivoa::introspection

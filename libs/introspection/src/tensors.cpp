@@ -1,0 +1,59 @@
+#include "tensors.hpp"
+
+#include <cstring>
+
+#include <opencv2/imgproc.hpp>
+
+namespace ivoa::introspection {
+
+torch::Tensor to_unit_rgb(const torch::Tensor& bgr_uint8) {
+  // BGR -> RGB by flipping the channel axis.
+  return bgr_uint8.flip({3}).permute({0, 3, 1, 2}).to(torch::kFloat).div_(255.0);
+}
+
+torch::Tensor normalize(const torch::Tensor& unit_rgb, const ModelInfo& info) {
+  const auto mean = torch::tensor({info.mean[0], info.mean[1], info.mean[2]}).view({1, 3, 1, 1});
+  const auto std = torch::tensor({info.std[0], info.std[1], info.std[2]}).view({1, 3, 1, 1});
+  auto x = (unit_rgb - mean.to(unit_rgb.device())) / std.to(unit_rgb.device());
+  if (x.size(2) != info.input_size)
+    x = torch::nn::functional::interpolate(x, torch::nn::functional::InterpolateFuncOptions()
+                                                  .size(std::vector<int64_t>{info.input_size, info.input_size})
+                                                  .mode(torch::kBilinear)
+                                                  .align_corners(false));
+  return x.contiguous();
+}
+
+torch::Tensor normalize_patches(const torch::Tensor& bgr_uint8, const ModelInfo& info) {
+  return normalize(to_unit_rgb(bgr_uint8), info);
+}
+
+torch::Tensor image_to_tensor(const cv::Mat& bgr, const ModelInfo& info) {
+  CV_Assert(bgr.type() == CV_8UC3);
+  const cv::Mat contiguous = bgr.isContinuous() ? bgr : bgr.clone();
+  const auto raw = torch::from_blob(contiguous.data, {1, bgr.rows, bgr.cols, 3}, torch::kUInt8);
+  ModelInfo whole = info;
+  whole.input_size = bgr.rows;  // whole images are not resized
+  return normalize(to_unit_rgb(raw), whole);
+}
+
+torch::Tensor patches_to_tensor(const std::vector<cv::Mat>& patches, const ModelInfo& info) {
+  if (patches.empty()) return torch::empty({0, 3, info.input_size, info.input_size});
+  const int s = patches[0].rows;
+  auto raw = torch::empty({static_cast<int64_t>(patches.size()), s, s, 3}, torch::kUInt8);
+  const size_t bytes = static_cast<size_t>(s) * s * 3;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    CV_Assert(patches[i].type() == CV_8UC3 && patches[i].rows == s && patches[i].cols == s);
+    const cv::Mat p = patches[i].isContinuous() ? patches[i] : patches[i].clone();
+    std::memcpy(raw.data_ptr<uint8_t>() + i * bytes, p.data, bytes);
+  }
+  return normalize_patches(raw, info);
+}
+
+cv::Mat to_mat(const torch::Tensor& values, int rows, int cols) {
+  const auto v = values.to(torch::kCPU).to(torch::kFloat).contiguous();
+  cv::Mat out(rows, cols, CV_32F);
+  std::memcpy(out.data, v.data_ptr<float>(), static_cast<size_t>(rows) * cols * sizeof(float));
+  return out;
+}
+
+}  // namespace ivoa::introspection

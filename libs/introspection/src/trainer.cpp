@@ -1,0 +1,330 @@
+#include "ivoa/introspection/training.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <ATen/CPUGeneratorImpl.h>
+#include <spdlog/spdlog.h>
+#include <torch/torch.h>
+
+#include "ivoa/core/time.hpp"
+#include "ivoa/dataset/dataset_format.hpp"
+#include "mc_dropout.hpp"
+#include "model_file.hpp"
+#include "tensors.hpp"
+
+namespace ivoa::introspection {
+namespace {
+
+struct SampleRef {
+  uint32_t session;
+  uint32_t index;
+};
+
+// The samples of one split, grouped by class, patches memory-mapped.
+struct SplitData {
+  std::vector<std::unique_ptr<dataset::SessionReader>> sessions;
+  std::array<std::vector<SampleRef>, kNumClasses> by_class;
+  std::vector<std::string> names;
+  int patch_size = 0;
+
+  size_t size() const {
+    size_t n = 0;
+    for (const auto& c : by_class) n += c.size();
+    return n;
+  }
+};
+
+SplitData load_split_data(const TrainConfig& c, const std::string& split) {
+  const auto splits = dataset::load_split(c.split_file);
+  const auto it = splits.find(split);
+  if (it == splits.end() || it->second.empty())
+    throw std::runtime_error(c.split_file + ": no sessions in split '" + split + "'");
+  SplitData d;
+  for (const auto& name : it->second) {
+    auto reader = std::make_unique<dataset::SessionReader>(c.dataset + "/" + name);
+    if (d.patch_size == 0) d.patch_size = reader->info().patch_size;
+    if (reader->info().patch_size != d.patch_size)
+      throw std::runtime_error(name + ": patch size differs from the other sessions");
+    const auto session = static_cast<uint32_t>(d.sessions.size());
+    for (size_t i = 0; i < reader->size(); ++i)
+      d.by_class[static_cast<size_t>(reader->samples()[i].label)].push_back({session, static_cast<uint32_t>(i)});
+    d.names.push_back(name);
+    d.sessions.push_back(std::move(reader));
+  }
+  return d;
+}
+
+torch::Tensor gather_patches(const SplitData& d, const std::vector<SampleRef>& refs) {
+  const int p = d.patch_size;
+  const size_t bytes = static_cast<size_t>(p) * p * 3;
+  auto out = torch::empty({static_cast<int64_t>(refs.size()), p, p, 3}, torch::kUInt8);
+  for (size_t i = 0; i < refs.size(); ++i)
+    std::memcpy(out.data_ptr<uint8_t>() + i * bytes, d.sessions[refs[i].session]->patch_data(refs[i].index), bytes);
+  return out;
+}
+
+int label_of(const SplitData& d, const SampleRef& r) { return d.sessions[r.session]->samples()[r.index].label; }
+
+// Photometric changes a camera sees from frame to frame and rig to rig:
+// exposure, contrast, gamma, white balance, sensor noise. No geometric
+// flips: JPP's descriptor uses the positive horizontal gradient only, so a
+// mirrored patch can fail differently.
+torch::Tensor augment(torch::Tensor x, torch::Generator& g) {
+  const int64_t b = x.size(0);
+  auto uniform = [&](std::vector<int64_t> shape, double lo, double hi) {
+    return torch::rand(shape, g) * (hi - lo) + lo;
+  };
+  const auto mean = x.mean({1, 2, 3}, true);
+  x = (x - mean) * uniform({b, 1, 1, 1}, 0.7, 1.3) + mean;   // contrast
+  x = x * uniform({b, 1, 1, 1}, 0.6, 1.4);                   // exposure
+  x = x * uniform({b, 3, 1, 1}, 0.9, 1.1);                   // white balance
+  x = x.clamp(0, 1).pow(uniform({b, 1, 1, 1}, 0.8, 1.25));   // gamma
+  x = x + torch::randn(x.sizes(), g) * uniform({b, 1, 1, 1}, 0.0, 0.03);  // noise
+  return x.clamp_(0, 1);
+}
+
+struct Confusion {
+  std::array<std::array<int64_t, kNumClasses>, kNumClasses> m{};  // [true][predicted]
+  void add(int truth, int predicted) { ++m[static_cast<size_t>(truth)][static_cast<size_t>(predicted)]; }
+  double class_accuracy(int c) const {
+    int64_t n = 0;
+    for (auto v : m[static_cast<size_t>(c)]) n += v;
+    return n ? static_cast<double>(m[static_cast<size_t>(c)][static_cast<size_t>(c)]) / static_cast<double>(n) : -1;
+  }
+  // Mean over the classes present: the paper's headline metric.
+  double mean_class_accuracy() const {
+    double sum = 0;
+    int present = 0;
+    for (int c = 0; c < kNumClasses; ++c)
+      if (class_accuracy(c) >= 0) {
+        sum += class_accuracy(c);
+        ++present;
+      }
+    return present ? sum / present : 0;
+  }
+  double accuracy() const {
+    int64_t right = 0, all = 0;
+    for (int t = 0; t < kNumClasses; ++t)
+      for (int p = 0; p < kNumClasses; ++p) {
+        all += m[static_cast<size_t>(t)][static_cast<size_t>(p)];
+        right += t == p ? m[static_cast<size_t>(t)][static_cast<size_t>(p)] : 0;
+      }
+    return all ? static_cast<double>(right) / static_cast<double>(all) : 0;
+  }
+};
+
+// A fixed, deterministic validation subset spread over all sessions and classes.
+std::vector<SampleRef> validation_subset(const SplitData& d, int64_t max_samples) {
+  std::vector<SampleRef> all;
+  for (const auto& c : d.by_class) all.insert(all.end(), c.begin(), c.end());
+  if (static_cast<int64_t>(all.size()) <= max_samples) return all;
+  std::vector<SampleRef> out;
+  const double step = static_cast<double>(all.size()) / static_cast<double>(max_samples);
+  for (int64_t k = 0; k < max_samples; ++k) out.push_back(all[static_cast<size_t>(static_cast<double>(k) * step)]);
+  return out;
+}
+
+struct ValOutputs {
+  Confusion confusion;
+  std::vector<int> truth, predicted;
+  std::vector<float> variance;  // predicted-class variance (MC only)
+};
+
+ValOutputs run_validation(IntrospectionNetImpl& net, const SplitData& d, const std::vector<SampleRef>& refs,
+                          const ModelInfo& info, torch::Device device, int passes, torch::Generator& g) {
+  torch::NoGradGuard no_grad;
+  net.eval();
+  ValOutputs out;
+  constexpr size_t kBatch = 256;
+  for (size_t begin = 0; begin < refs.size(); begin += kBatch) {
+    const std::vector<SampleRef> batch(refs.begin() + static_cast<long>(begin),
+                                       refs.begin() + static_cast<long>(std::min(refs.size(), begin + kBatch)));
+    const auto features = net.features(normalize_patches(gather_patches(d, batch), info).to(device));
+    const McStats s = passes > 1 ? mc_dropout_head(net, features, passes, g) : deterministic_head(net, features);
+    const auto predicted = s.mean.argmax(1).to(torch::kCPU);
+    const auto variance = s.variance.gather(1, s.mean.argmax(1, true)).squeeze(1).to(torch::kCPU);
+    for (size_t i = 0; i < batch.size(); ++i) {
+      const int t = label_of(d, batch[i]), p = static_cast<int>(predicted[static_cast<int64_t>(i)].item<int64_t>());
+      out.confusion.add(t, p);
+      out.truth.push_back(t);
+      out.predicted.push_back(p);
+      out.variance.push_back(variance[static_cast<int64_t>(i)].item<float>());
+    }
+  }
+  return out;
+}
+
+double learning_rate_at(const TrainConfig& c, int64_t step) {
+  if (step < c.warmup_steps) return c.learning_rate * static_cast<double>(step + 1) / static_cast<double>(c.warmup_steps);
+  const double t = static_cast<double>(step - c.warmup_steps) / static_cast<double>(std::max<int64_t>(c.steps - c.warmup_steps, 1));
+  return c.learning_rate * (0.01 + 0.99 * 0.5 * (1.0 + std::cos(M_PI * std::min(t, 1.0))));
+}
+
+std::string json_list(const std::vector<std::string>& v) {
+  std::string s = "[";
+  for (size_t k = 0; k < v.size(); ++k) s += (k ? ", \"" : "\"") + v[k] + "\"";
+  return s + "]";
+}
+
+std::string training_summary(const TrainConfig& c, const SplitData& train, const SplitData& val, const TrainReport& r,
+                             int64_t step) {
+  std::ostringstream o;
+  o.precision(5);
+  o << "{\"dataset\": \"" << c.dataset << "\", \"split_file\": \"" << c.split_file << "\", \"train_sessions\": "
+    << json_list(train.names) << ", \"val_sessions\": " << json_list(val.names) << ", \"train_class_counts\": ["
+    << r.train_class_counts[0] << ", " << r.train_class_counts[1] << ", " << r.train_class_counts[2] << ", "
+    << r.train_class_counts[3] << "], \"steps\": " << step << ", \"batch_size\": " << c.batch_size
+    << ", \"learning_rate\": " << c.learning_rate << ", \"momentum\": " << c.momentum << ", \"seed\": " << c.seed
+    << ", \"augment\": " << (c.augment ? "true" : "false") << ", \"fn_weight\": " << c.fn_weight
+    << ", \"best_step\": " << r.best_step << ", \"val_mean_class_accuracy\": " << r.best_val_mean_class_accuracy
+    << ", \"val_accuracy\": " << r.best_val_accuracy << ", \"val_accuracy_retained\": " << r.val_accuracy_retained
+    << ", \"threshold_retain\": " << c.threshold_retain << "}";
+  return o.str();
+}
+
+// The predicted-class variance below which `retain` of the samples lie, and
+// the mean per-class accuracy of those samples.
+std::pair<double, double> calibrate_threshold(const ValOutputs& v, double retain) {
+  std::vector<float> sorted = v.variance;
+  std::sort(sorted.begin(), sorted.end());
+  if (sorted.empty()) return {0.01, 0};
+  const double threshold = sorted[std::min(sorted.size() - 1, static_cast<size_t>(retain * static_cast<double>(sorted.size())))];
+  Confusion kept;
+  for (size_t i = 0; i < v.truth.size(); ++i)
+    if (v.variance[i] <= threshold) kept.add(v.truth[i], v.predicted[i]);
+  return {threshold, kept.mean_class_accuracy()};
+}
+
+}  // namespace
+
+TrainReport train_model(const TrainConfig& c, const std::function<void(const TrainStatus&)>& progress) {
+  const double start = monotonic_ms();
+  torch::set_num_threads(std::max(c.threads, 1));
+  torch::manual_seed(c.seed);
+  const torch::Device device = c.device == "cuda" ? torch::kCUDA : torch::kCPU;
+  if (c.output.empty()) throw std::runtime_error("no output model file given");
+  const SplitData train = load_split_data(c, c.train_split);
+  const SplitData val = load_split_data(c, c.val_split);
+  TrainReport report;
+  std::vector<int> classes;  // the classes the training split has
+  for (int k = 0; k < kNumClasses; ++k) {
+    report.train_class_counts[static_cast<size_t>(k)] = static_cast<int64_t>(train.by_class[static_cast<size_t>(k)].size());
+    if (!train.by_class[static_cast<size_t>(k)].empty()) classes.push_back(k);
+    else spdlog::warn("training split has no {} samples: the model cannot learn that class", dataset::kLabelNames[static_cast<size_t>(k)]);
+  }
+  if (classes.size() < 2) throw std::runtime_error("training split has fewer than two classes");
+
+  ModelInfo info;
+  info.architecture = c.architecture;
+  info.patch_size = train.patch_size;
+  info.input_size = input_size_of(c.architecture);
+  info.dropout = c.dropout;
+  info.detector = train.sessions[0]->info().detector;
+  // Start from scratch, from a given model (fine-tuning), or from the last
+  // checkpoint (resume); the optimiser is made for the network's final parameters.
+  const std::string checkpoint = c.output + ".checkpoint";
+  const bool resuming = c.resume && std::filesystem::exists(checkpoint + ".model");
+  std::shared_ptr<IntrospectionNetImpl> net;
+  if (resuming || !c.init.empty()) {
+    NativeModel start_from = load_native_model(resuming ? checkpoint + ".model" : c.init);
+    if (start_from.info.architecture != c.architecture)
+      throw std::runtime_error(start_from.info.id + ": architecture is not " + c.architecture);
+    net = start_from.net;
+  } else {
+    net = make_network(c.architecture, c.dropout);
+  }
+  net->to(device);
+  torch::optim::SGD optimizer(net->parameters(),
+                              torch::optim::SGDOptions(c.learning_rate).momentum(c.momentum).weight_decay(c.weight_decay));
+  int64_t first_step = 0;
+  if (resuming) {
+    torch::load(optimizer, checkpoint + ".optimizer");
+    std::ifstream(checkpoint + ".step") >> first_step >> report.best_val_mean_class_accuracy >> report.best_step;
+    spdlog::info("resuming from {} at step {}", checkpoint, first_step);
+  }
+
+  // Class-balanced sampling with replacement: pick a class, then a sample.
+  std::vector<double> class_weights;
+  for (int k : classes) class_weights.push_back(k == 3 ? c.fn_weight : 1.0);
+  std::mt19937_64 rng(c.seed * 7919 + static_cast<uint64_t>(first_step));
+  std::discrete_distribution<size_t> pick_class(class_weights.begin(), class_weights.end());
+  auto generator = at::detail::createCPUGenerator(c.seed + static_cast<uint64_t>(first_step));
+  const std::vector<SampleRef> val_refs = validation_subset(val, c.max_val_samples);
+  report.val_samples = static_cast<int64_t>(val_refs.size());
+
+  TrainStatus status;
+  status.steps = c.steps;
+  status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
+  double loss_sum = 0, acc_sum = 0, window = 0;
+  const double loop_start = monotonic_ms();
+  for (int64_t step = first_step; step < c.steps; ++step) {
+    net->train();
+    std::vector<SampleRef> batch;
+    torch::Tensor labels = torch::empty({c.batch_size}, torch::kLong);
+    for (int i = 0; i < c.batch_size; ++i) {
+      const auto& pool = train.by_class[static_cast<size_t>(classes[pick_class(rng)])];
+      batch.push_back(pool[std::uniform_int_distribution<size_t>(0, pool.size() - 1)(rng)]);
+      labels[i] = label_of(train, batch.back());
+    }
+    auto x = to_unit_rgb(gather_patches(train, batch));
+    if (c.augment) x = augment(x, generator);
+    x = normalize(x, info).to(device);
+    labels = labels.to(device);
+    for (auto& group : optimizer.param_groups())
+      static_cast<torch::optim::SGDOptions&>(group.options()).lr(learning_rate_at(c, step));
+    optimizer.zero_grad();
+    const auto logits = net->forward(x);
+    const auto loss = torch::nn::functional::cross_entropy(logits, labels);
+    loss.backward();
+    optimizer.step();
+
+    loss_sum = loss_sum * 0.98 + loss.item<double>();
+    acc_sum = acc_sum * 0.98 + logits.argmax(1).eq(labels).to(torch::kFloat).mean().item<double>();
+    window = window * 0.98 + 1.0;
+    status.step = step + 1;
+    status.loss = loss_sum / window;
+    status.accuracy = acc_sum / window;
+    status.learning_rate = learning_rate_at(c, step);
+    status.patches_per_s = static_cast<double>((step + 1 - first_step) * c.batch_size) / ((monotonic_ms() - loop_start) / 1000.0);
+
+    const bool last = step + 1 == c.steps;
+    if ((step + 1) % c.validate_every == 0 || last) {
+      const ValOutputs v = run_validation(*net, val, val_refs, info, device, 1, generator);
+      status.val_mean_class_accuracy = v.confusion.mean_class_accuracy();
+      if (status.val_mean_class_accuracy > report.best_val_mean_class_accuracy) {
+        report.best_val_mean_class_accuracy = status.val_mean_class_accuracy;
+        report.best_val_accuracy = v.confusion.accuracy();
+        for (int k = 0; k < kNumClasses; ++k) report.best_val_class_accuracy[static_cast<size_t>(k)] = v.confusion.class_accuracy(k);
+        report.best_step = step + 1;
+        info.training_summary = training_summary(c, train, val, report, step + 1);
+        save_model(*net, info, c.output);  // the best so far, complete at every moment
+      }
+      status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
+    }
+    if ((step + 1) % c.checkpoint_every == 0 || last) {
+      save_model(*net, info, checkpoint + ".model");
+      torch::save(optimizer, checkpoint + ".optimizer");
+      std::ofstream(checkpoint + ".step") << step + 1 << " " << report.best_val_mean_class_accuracy << " "
+                                          << report.best_step << "\n";
+    }
+    if (progress) progress(status);
+  }
+
+  // Calibrate the uncertainty gate of the best model on validation data.
+  NativeModel best = load_native_model(c.output);
+  best.net->to(device);
+  const ValOutputs mc = run_validation(*best.net, val, val_refs, best.info, device, c.threshold_passes, generator);
+  std::tie(report.uncertainty_threshold, report.val_accuracy_retained) = calibrate_threshold(mc, c.threshold_retain);
+  best.info.uncertainty_threshold = report.uncertainty_threshold;
+  best.info.training_summary = training_summary(c, train, val, report, report.best_step);
+  save_model(*best.net, best.info, c.output);
+  report.last = status;
+  report.seconds = (monotonic_ms() - start) / 1000.0;
+  return report;
+}
+
+}  // namespace ivoa::introspection
