@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 
@@ -72,6 +73,7 @@ void write_pfm(const std::string& path, const cv::Mat& disparity) {
 
 cv::Mat load_disparity(const std::string& path, double divisor) {
   if (!(divisor > 0)) throw DisparityFileError("disparity divisor must be positive");
+  if (!std::filesystem::exists(path)) throw DisparityFileError(path + ": no such file");
   cv::Mat disparity;
   const std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
   if (ext == ".pfm" || ext == ".PFM") {

@@ -1,5 +1,6 @@
 #include "ivoa/stereo/detector.hpp"
 
+#include <opencv2/core/check.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "ivoa/stereo/dense_detector.hpp"
@@ -9,8 +10,8 @@ namespace ivoa::stereo {
 namespace {
 
 std::string describe(const cv::Mat& m) {
-  return std::to_string(m.cols) + "x" + std::to_string(m.rows) + " with " + std::to_string(m.channels()) +
-         " channel(s) of depth " + std::to_string(m.depth());
+  if (m.empty()) return "empty";
+  return std::to_string(m.cols) + "x" + std::to_string(m.rows) + " " + cv::typeToString(m.type());
 }
 
 void to_gray(const cv::Mat& in, cv::Mat& out, const CameraIntrinsics& camera, const std::string& side) {

@@ -1,0 +1,151 @@
+#include "stereo_detector_node.hpp"
+
+#include <chrono>
+
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/calibration.hpp"
+#include "ivoa/core/camera_model.hpp"
+#include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/image_convert.hpp"
+#include "ivoa/core/message_counts.hpp"
+#include "ivoa/core/time.hpp"
+
+namespace ivoa {
+namespace {
+
+// The calibration message without its publication time: equal bytes mean
+// the same calibration (it is re-published at >= 1 Hz).
+std::vector<uint8_t> calibration_content(rig_calibration_t msg) {
+  msg.utime = 0;
+  set_counts(msg);
+  std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
+  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+std::string frame_name(const std::string& channel, const stereo_image_t& msg) {
+  return channel + " seq " + std::to_string(msg.seq) + " (utime " + std::to_string(msg.utime) + ")";
+}
+
+}  // namespace
+
+StereoDetectorNode::StereoDetectorNode(Bus& bus, Heartbeat& heartbeat, StereoDetectorOptions options)
+    : bus_(bus), heartbeat_(heartbeat), options_(std::move(options)) {
+  heartbeat_.set_counter(kFramesWithoutCalibration, 0);
+  heartbeat_.set_counter(kCalibrationsApplied, 0);
+}
+
+StereoDetectorNode::~StereoDetectorNode() { stop(); }
+
+void StereoDetectorNode::set_calibration(const RigCalibration& rig) {
+  std::lock_guard<std::mutex> lock(calibration_mutex_);
+  calibration_ = rig;
+  calibration_bytes_ = calibration_content(to_message(rig, 0));
+  ++calibration_version_;
+}
+
+void StereoDetectorNode::start() {
+  bus_.subscribe<stereo_image_t>(options_.stereo_channel,
+                                 [this](const stereo_image_t& msg, const ReceiveInfo&) { on_stereo(msg); });
+  bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
+                                    [this](const rig_calibration_t& msg, const ReceiveInfo&) { on_calibration(msg); });
+  heartbeat_.set_state("waiting for calibration");
+  worker_ = std::thread([this] { run_worker(); });
+}
+
+void StereoDetectorNode::stop() {
+  stopping_ = true;
+  mailbox_.close();
+  if (worker_.joinable()) worker_.join();
+}
+
+void StereoDetectorNode::on_stereo(const stereo_image_t& msg) {
+  heartbeat_.count_in();
+  const uint64_t dropped_before = mailbox_.dropped();
+  mailbox_.put(Frame{msg, monotonic_ms()});
+  if (mailbox_.dropped() != dropped_before) heartbeat_.count_dropped();
+}
+
+void StereoDetectorNode::on_calibration(const rig_calibration_t& msg) {
+  std::vector<uint8_t> bytes = calibration_content(msg);
+  std::lock_guard<std::mutex> lock(calibration_mutex_);
+  if (bytes == calibration_bytes_) return;
+  try {
+    calibration_ = from_message(msg);  // validates
+  } catch (const CalibrationError& e) {
+    heartbeat_.bad_input(std::string("ignoring calibration: ") + e.what());
+    return;
+  }
+  calibration_bytes_ = std::move(bytes);
+  ++calibration_version_;
+}
+
+bool StereoDetectorNode::update_detector() {
+  std::optional<RigCalibration> rig;
+  {
+    std::lock_guard<std::mutex> lock(calibration_mutex_);
+    if (calibration_version_ == detector_version_) return detector_ != nullptr;
+    rig = calibration_;
+    detector_version_ = calibration_version_;
+  }
+  if (!rig) return false;
+  try {
+    detector_ = stereo::make_detector(options_.model, *rig, options_.detector);
+    grid_ = std::make_unique<QueryGrid>(options_.grid, CameraModel(rig->left, rig->left_to_robot));
+  } catch (const std::exception& e) {  // e.g. a calibration OpenCV cannot rectify
+    detector_.reset();
+    heartbeat_.bad_input(std::string("cannot use calibration '") + rig->rig_name + "': " + e.what());
+    return false;
+  }
+  heartbeat_.add_to_counter(kCalibrationsApplied, 1);
+  heartbeat_.set_state("running");
+  spdlog::info("{} detector ready for rig '{}' ({}x{}), {} grid cells ({} with the patch in view)", options_.model,
+               rig->rig_name, rig->left.width, rig->left.height, grid_->size(), grid_->count_in_image());
+  return true;
+}
+
+void StereoDetectorNode::run_worker() {
+  while (!stopping_) {
+    const std::optional<Frame> frame = mailbox_.take(std::chrono::milliseconds(100));
+    if (frame) process(*frame);
+  }
+}
+
+void StereoDetectorNode::process(const Frame& frame) {
+  const std::string name = frame_name(options_.stereo_channel, frame.msg);
+  if (!update_detector()) {
+    heartbeat_.add_to_counter(kFramesWithoutCalibration, 1);
+    if (!warned_no_calibration_)
+      spdlog::warn("skipping {}: no calibration yet on {} (frames are counted as {})", name,
+                   options_.calibration_channel, kFramesWithoutCalibration);
+    warned_no_calibration_ = true;
+    return;
+  }
+  warned_no_calibration_ = false;
+  const double start_ms = monotonic_ms();
+  obstacle_grid_t out = make_obstacle_grid(*grid_, detector_->name(), frame.msg.utime);
+  try {
+    const cv::Mat left = decode_image(frame.msg.left, ColorOutput::kGray);
+    const cv::Mat right = decode_image(frame.msg.right, ColorOutput::kGray);
+    detector_->set_frame(left, right);
+    detector_->evaluate(*grid_, out);
+  } catch (const ImageError& e) {
+    heartbeat_.bad_input(name + ": " + e.what());
+    return;
+  } catch (const stereo::FrameError& e) {
+    heartbeat_.bad_input(name + ": " + e.what());
+    return;
+  }
+  out.compute_ms = monotonic_ms() - start_ms;
+  if (!bus_.publish(options_.output_channel, out)) {
+    spdlog::error("publishing on {} failed", options_.output_channel);
+    return;
+  }
+  heartbeat_.count_out();
+  heartbeat_.latency(monotonic_ms() - frame.received_ms);
+  const int64_t published = ++published_;
+  if (options_.max_frames > 0 && published >= options_.max_frames) finished_ = true;
+}
+
+}  // namespace ivoa
