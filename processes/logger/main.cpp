@@ -132,6 +132,7 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
   int code = ivoa::kExitOk;
   while (!ivoa::stop_requested() && !recorder->failed()) {
     if (bus->handle(50) < 0) {
+      if (ivoa::stop_requested()) break;  // the signal interrupted LCM's wait
       if (!reading_a_log) {
         spdlog::error("LCM handle failed on '{}'", bus->url());
         code = ivoa::kExitFailure;
@@ -172,7 +173,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("-c,--channels", options.channels, "record channels matching this regex (whole name)")
       ->capture_default_str();
-  app.add_option("-x,--exclude", options.exclude, "but not those matching this regex");
+  app.add_option("-x,--exclude", options.exclude,
+                 "but not those matching this regex (the default skips the probe every LCM process sends at start)")
+      ->capture_default_str();
   app.add_option("--split-mb", split_mb, "start a new numbered file (FILE.00, FILE.01, ...) before one passes this size")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--calibration-channel", options.log.calibration_channel,

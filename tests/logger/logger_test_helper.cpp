@@ -56,6 +56,7 @@ int publish(ivoa::Bus& bus, const PublishOptions& o) {
 
 struct WaitOptions {
   std::string process = "logger";
+  int pid = 0;  // 0: any process of that name
   int64_t min_in = -1;
   std::string counter;
   int64_t min_counter = 0;
@@ -75,7 +76,7 @@ int wait(ivoa::Bus& bus, const WaitOptions& o) {
   ivoa::process_status_t last;
   bus.subscribe<ivoa::process_status_t>(ivoa::channels::kProcessStatus,
                                         [&](const ivoa::process_status_t& s, const ivoa::ReceiveInfo&) {
-                                          if (s.name != o.process) return;
+                                          if (s.name != o.process || (o.pid != 0 && s.pid != o.pid)) return;
                                           last = s;
                                           met = met || condition_met(s, o);
                                         });
@@ -102,6 +103,7 @@ int main(int argc, char** argv) {
   WaitOptions w;
   auto* wt = app.add_subcommand("wait", "wait until a process's heartbeat shows a condition");
   wt->add_option("--process", w.process)->capture_default_str();
+  wt->add_option("--pid", w.pid, "only the process with this pid");
   wt->add_option("--min-in", w.min_in, "messages_in at least this");
   wt->add_option("--counter", w.counter, "a named counter ...");
   wt->add_option("--min-counter", w.min_counter, "... at least this")->capture_default_str();

@@ -66,10 +66,10 @@ std::string LogSummary::table() const {
                 "first seq", "last seq", "missing", "utime<");
   out += line;
   for (const auto& [name, s] : channels_) {
-    std::snprintf(line, sizeof(line), "%-24s %-28s %8lld %10.1f %9lld %9lld %8lld %8lld\n", name.c_str(),
-                  s.type.c_str(), static_cast<long long>(s.count), static_cast<double>(s.bytes) / 1e6,
-                  static_cast<long long>(s.first_seq), static_cast<long long>(s.last_seq),
-                  static_cast<long long>(s.missing_seq), static_cast<long long>(s.utime_regressions));
+    const auto seq = [&s](int64_t v) { return s.has_seq ? std::to_string(v) : std::string("-"); };
+    std::snprintf(line, sizeof(line), "%-24s %-28s %8lld %10.1f %9s %9s %8s %8lld\n", name.c_str(), s.type.c_str(),
+                  static_cast<long long>(s.count), static_cast<double>(s.bytes) / 1e6, seq(s.first_seq).c_str(),
+                  seq(s.last_seq).c_str(), seq(s.missing_seq).c_str(), static_cast<long long>(s.utime_regressions));
     out += line;
   }
   return out;

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# ivoa-logger on a disk that refuses writes, first over a file-size limit
+# (RLIMIT_FSIZE, which gives the same short writes and errors a full disk
+# does), then on a really full tmpfs where mounting one is permitted. Each
+# time it must exit with code 4 (kExitIoError) saying why, and leave a log
+# that ends with its last whole event: intact for ivoa-log-check and
+# replayable by lcm-logplayer, with a sidecar that records the error.
+# Input comes from a log (file:// URL), so no network is needed.
+set -euo pipefail
+B=${IVOA_BUILD_DIR:?}
+
+# check_failed_log DIR WORK REASON: the logger that wrote DIR/out.lcmlog
+# (exit code and stderr in WORK) exited 4 and left a good log.
+check_failed_log() {
+  local dir=$1 work=$2 reason=$3 code
+  code=$(cat "$work/code")
+  [ "$code" = 4 ] || { echo "FAIL: exit code $code, expected 4"; cat "$work/stderr"; return 1; }
+  grep -q "$reason" "$work/stderr" || { echo "FAIL: stderr does not say '$reason'"; cat "$work/stderr"; return 1; }
+  "$B/bin/ivoa-log-check" --json "$work/check.json" "$dir/out.lcmlog" >/dev/null
+  timeout 20 lcm-logplayer --speed=0 --lcm-url="file://$work/replayed.lcmlog?mode=w" "$dir/out.lcmlog" >/dev/null
+  "$B/bin/ivoa-log-check" --json "$work/replayed.json" "$work/replayed.lcmlog" >/dev/null
+  python3 - "$dir" "$work" "$reason" <<'PY'
+import json, sys
+d, work, reason = sys.argv[1:4]
+events = json.load(open(work + "/check.json"))["events"]
+assert 0 < events < 40, f"expected a partial log, got {events} of 40 events"
+assert json.load(open(work + "/replayed.json"))["events"] == events, "lcm-logplayer did not replay every event"
+side = json.load(open(d + "/out.lcmlog.json"))
+assert side["complete"] is False and reason in side["error"], side
+assert side["events"] == events and side["session"]["written"] == events, side
+print(f"OK ({reason}): exit 4, {events} whole events kept and replayable, sidecar says: {side['error']}")
+PY
+}
+
+# run_logger DIR WORK [PREFIX...]: records the input log into DIR/out.lcmlog.
+run_logger() {
+  local dir=$1 work=$2
+  shift 2
+  set +e
+  "$@" "$B/bin/ivoa-logger" --lcm-url "file://$input?speed=0" "$dir/out.lcmlog" 2>"$work/stderr"
+  echo $? >"$work/code"
+  set -e
+}
+
+if [ "${1:-}" = --on-full-tmpfs ]; then  # the second half, in a private mount namespace
+  input=$2 dir=$3 work=$4
+  mount -t tmpfs -o size=30m tmpfs "$dir"
+  run_logger "$dir" "$work"
+  check_failed_log "$dir" "$work" "No space left on device"
+  exit 0
+fi
+
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+input=$out/in.lcmlog
+"$B/tests/ivoa-test-publish" --lcm-url "file://$input?mode=w" --count 20 --rate 1000 --depth 2>/dev/null
+
+mkdir "$out/limit"
+run_logger "$out/limit" "$out/limit" prlimit --fsize=30000000
+check_failed_log "$out/limit" "$out/limit" "File too large"
+
+# An existing log is never overwritten without --force.
+set +e
+"$B/bin/ivoa-logger" --lcm-url "file://$input?speed=0" "$out/limit/out.lcmlog" 2>"$out/exists.err"
+code=$?
+set -e
+[ $code = 4 ] && grep -q "use --force" "$out/exists.err" || { echo "FAIL: existing file: exit $code"; exit 1; }
+echo "OK: an existing log is refused with exit 4"
+
+mkdir "$out/tmpfs" "$out/work"
+if unshare -m true 2>/dev/null; then
+  unshare -m "$0" --on-full-tmpfs "$input" "$out/tmpfs" "$out/work"
+else
+  echo "NOTE: no mount namespace here (unshare -m not permitted); the full-tmpfs case was not run"
+fi
