@@ -31,13 +31,13 @@ McStats mc_dropout_head(IntrospectionNetImpl& net, const torch::Tensor& features
   const auto m2 = sample_masks(passes, h1, p, generator, options);
   h = torch::relu(torch::bmm(h, m2.unsqueeze(2) * w2.unsqueeze(0)) + net.fc2->bias);  // [T, N, 256]
   const auto probs = torch::softmax(torch::matmul(h, net.fc3->weight.t()) + net.fc3->bias, -1);  // [T, N, 4]
-  return {probs.mean(0), probs.var(0, /*unbiased=*/true), probs};
+  return {probs.mean(0), probs.var(0, /*unbiased=*/true), probs, m1, m2};
 }
 
 McStats deterministic_head(IntrospectionNetImpl& net, const torch::Tensor& features) {
   torch::NoGradGuard no_grad;
   const auto probs = torch::softmax(net.fc3(torch::relu(net.fc2(torch::relu(net.fc1(features))))), -1);
-  return {probs, torch::zeros_like(probs), probs.unsqueeze(0)};
+  return {probs, torch::zeros_like(probs), probs.unsqueeze(0), {}, {}};
 }
 
 }  // namespace ivoa::introspection

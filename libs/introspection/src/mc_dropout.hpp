@@ -15,6 +15,7 @@ struct McStats {
   torch::Tensor mean;      // [N, 4] mean softmax probability over passes
   torch::Tensor variance;  // [N, 4] variance over passes (unbiased, n - 1)
   torch::Tensor passes;    // [T, N, 4] every pass's probabilities
+  torch::Tensor fc1_masks, fc2_masks;  // [T, F], [T, H1]: the dropout masks used (scaled keep masks)
 };
 
 // features [N, F] (FC1 inputs); passes >= 2.

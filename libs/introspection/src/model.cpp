@@ -210,7 +210,7 @@ class ScriptedIntrospectionModel : public IntrospectionModel {
       all.push_back(torch::stack(runs));  // [T, B, 4]
     }
     const auto probs = torch::cat(all, 1);
-    return {probs.mean(0), passes > 1 ? probs.var(0, true) : torch::zeros_like(probs[0]), probs};
+    return {probs.mean(0), passes > 1 ? probs.var(0, true) : torch::zeros_like(probs[0]), probs, {}, {}};
   }
 
   torch::jit::Module module_;

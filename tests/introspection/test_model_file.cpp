@@ -1,0 +1,131 @@
+// Model files round-trip exactly with their metadata; bad files are refused
+// with the reason; full-frame heatmaps agree with patch-by-patch inference.
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "ivoa/introspection/model.hpp"
+#include "model_file.hpp"
+#include "networks.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa::introspection {
+namespace {
+
+std::string write_random_model(const test::TempDir& dir, const std::string& architecture = "slidenet") {
+  torch::manual_seed(9);
+  auto net = make_network(architecture, 0.5);
+  ModelInfo info;
+  info.architecture = architecture;
+  info.input_size = input_size_of(architecture);
+  info.detector = "jppc";
+  info.uncertainty_threshold = 0.0123;
+  info.training_summary = "{\"steps\": 7}";
+  const std::string path = dir.file(architecture + ".pt");
+  save_model(*net, info, path);
+  return path;
+}
+
+cv::Mat random_image(int w, int h) {
+  cv::Mat m(h, w, CV_8UC3);
+  cv::randu(m, 0, 255);
+  return m;
+}
+
+TEST(ModelFile, SavedAndLoadedModelGivesIdenticalOutputsAndMetadata) {
+  test::TempDir dir;
+  const std::string path = write_random_model(dir);
+  InferenceConfig deterministic;
+  deterministic.mc_passes = 1;
+  const auto a = IntrospectionModel::load(path, deterministic);
+  const auto b = IntrospectionModel::load(path, deterministic);
+  EXPECT_EQ(a->info().architecture, "slidenet");
+  EXPECT_EQ(a->info().detector, "jppc");
+  EXPECT_DOUBLE_EQ(a->info().uncertainty_threshold, 0.0123);
+  EXPECT_NE(a->info().training_summary.find("steps"), std::string::npos);
+  EXPECT_NE(a->info().id.find("slidenet.pt#"), std::string::npos);
+  const cv::Mat image = random_image(300, 220);
+  const Heatmaps ha = a->run(image), hb = b->run(image);
+  for (int k = 0; k < kNumClasses; ++k)
+    EXPECT_EQ(cv::norm(ha.probability[static_cast<size_t>(k)], hb.probability[static_cast<size_t>(k)], cv::NORM_INF), 0);
+}
+
+TEST(ModelFile, HeatmapCellsEqualTheirPatches) {
+  test::TempDir dir;
+  InferenceConfig c;
+  c.mc_passes = 1;
+  c.mean_filter = 1;
+  const auto model = IntrospectionModel::load(write_random_model(dir), c);
+  const cv::Mat image = random_image(340, 260);
+  const Heatmaps h = model->run(image);
+  ASSERT_EQ(h.rows, 9);
+  ASSERT_EQ(h.cols, 13);
+  std::vector<cv::Mat> patches;
+  for (int r = 0; r < h.rows; ++r)
+    for (int col = 0; col < h.cols; ++col) patches.push_back(image(cv::Rect(col * 20, r * 20, 100, 100)).clone());
+  const PatchOutputs out = model->run_patches(patches, true);
+  ASSERT_EQ(out.predictions.size(), patches.size());
+  ASSERT_EQ(out.embeddings.size(), patches.size());
+  EXPECT_EQ(out.embeddings[0].size(), 256u);
+  for (int r = 0; r < h.rows; ++r)
+    for (int col = 0; col < h.cols; ++col)
+      for (int k = 0; k < kNumClasses; ++k)
+        EXPECT_NEAR(h.probability[static_cast<size_t>(k)].at<float>(r, col),
+                    out.predictions[static_cast<size_t>(r * h.cols + col)].probability[static_cast<size_t>(k)], 1e-5);
+}
+
+TEST(ModelFile, McHeatmapsHaveVarianceAndGateByThreshold) {
+  test::TempDir dir;
+  InferenceConfig c;
+  c.mc_passes = 20;
+  c.seed = 4;
+  c.uncertainty_threshold = 1.0;  // everything announced
+  const auto model = IntrospectionModel::load(write_random_model(dir), c);
+  const Heatmaps h = model->run(random_image(300, 220));
+  double max_var = 0;
+  cv::minMaxLoc(h.uncertainty, nullptr, &max_var);
+  EXPECT_GT(max_var, 0.0);
+  const Prediction p = model->predict_at(h, 150, 110);
+  EXPECT_TRUE(p.announced);
+  EXPECT_NEAR(p.probability[0] + p.probability[1] + p.probability[2] + p.probability[3], 1.0, 1e-4);
+  EXPECT_EQ(p.predicted, h.predicted.at<uint8_t>(3, 5));  // (150-50)/20 = 5, (110-50)/20 = 3
+}
+
+TEST(ModelFile, BadFilesAreRefusedWithTheReason) {
+  test::TempDir dir;
+  auto expect_refusal = [](const std::string& path, const std::string& reason) {
+    try {
+      IntrospectionModel::load(path);
+      FAIL() << path;
+    } catch (const ModelError& e) {
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << e.what();
+    }
+  };
+  expect_refusal(dir.file("missing.pt"), "no such model file");
+  std::ofstream(dir.file("garbage.pt")) << "not a model";
+  expect_refusal(dir.file("garbage.pt"), "not a TorchScript model");
+  // A torch file without our metadata.
+  torch::serialize::OutputArchive archive;
+  archive.write("w", torch::zeros({3}));
+  archive.save_to(dir.file("foreign.pt"));
+  expect_refusal(dir.file("foreign.pt"), "no forward()");
+  // Metadata claiming another architecture than the weights.
+  const std::string slide = write_random_model(dir);
+  {
+    auto net = make_network("slidenet", 0.5);
+    ModelInfo info;
+    info.architecture = "alexnet";
+    info.input_size = 224;
+    const std::string json = info_to_json(info);
+    auto t = torch::empty({static_cast<int64_t>(json.size())}, torch::kUInt8);
+    std::memcpy(t.data_ptr<uint8_t>(), json.data(), json.size());
+    torch::serialize::OutputArchive b;
+    net->save(b);
+    b.write(kMetadataKey, t, true);
+    b.save_to(dir.file("mismatch.pt"));
+  }
+  expect_refusal(dir.file("mismatch.pt"), "do not fit architecture 'alexnet'");
+}
+
+}  // namespace
+}  // namespace ivoa::introspection
