@@ -19,6 +19,7 @@
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/core/time.hpp"
+#include "ivoa/logger/receive_buffer.hpp"
 #include "ivoa/logger/recorder.hpp"
 
 namespace {
@@ -73,6 +74,20 @@ class StatusReporter {
   RecorderStatus last_;
 };
 
+void enlarge_receive_buffer(const std::string& url, double mb) {
+  const int port = ivoa::logger::udpm_port(url);
+  if (port == 0 || mb <= 0) return;
+  const auto r = ivoa::logger::force_receive_buffer(port, static_cast<int>(mb * 1e6));
+  if (r.sockets == 0) spdlog::warn("found no UDP socket on port {} to enlarge its receive buffer", port);
+  else if (r.permitted)
+    spdlog::info("kernel receive buffer of LCM's socket raised to {:.0f} MB ({:.0f} MB as the kernel counts it)", mb,
+                 r.bytes / 1e6);
+  else
+    spdlog::warn("kernel receive buffer stays at {:.0f} MB (raising it needs CAP_NET_ADMIN, or sysctl "
+                 "net.core.rmem_max); a logger kept off the CPU for long can lose images in the kernel",
+                 r.bytes / 1e6);
+}
+
 void handle_what_lcm_already_has(ivoa::Bus& bus) {
   const double until = ivoa::monotonic_ms() + kFinalHandleMs;
   for (int i = 0; i < kFinalHandleLimit && ivoa::monotonic_ms() < until; ++i)
@@ -98,7 +113,8 @@ int report_end(const Recorder& recorder, double seconds) {
   return ivoa::kExitOk;
 }
 
-int record(const ivoa::CommonOptions& common, RecorderOptions options, const std::string& ready_file) {
+int record(const ivoa::CommonOptions& common, RecorderOptions options, const std::string& ready_file,
+           double socket_buffer_mb) {
   std::unique_ptr<ivoa::Bus> bus;
   try {
     bus = std::make_unique<ivoa::Bus>(common.lcm_url);
@@ -125,7 +141,8 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
   bus->subscribe_raw(".*", [&](const void* data, size_t size, const ivoa::ReceiveInfo& info) {
     recorder->on_message(info.channel, info.recv_utime, data, size);
   });
-  bus->handle(0);  // udpm joins the multicast group on the first handle
+  bus->handle(0);  // udpm joins the multicast group (and opens its socket) on the first handle
+  enlarge_receive_buffer(bus->url(), socket_buffer_mb);
   if (!ready_file.empty()) std::ofstream(ready_file) << "ready\n";
 
   const double start_ms = ivoa::monotonic_ms();
@@ -167,7 +184,7 @@ int main(int argc, char** argv) {
   ivoa::add_common_options(app, common);
   std::string file = "ivoa-%Y%m%d-%H%M%S.lcmlog", ready_file;
   RecorderOptions options;
-  double split_mb = 0, max_queue_mb = 1024, max_write_mb_s = 0;
+  double split_mb = 0, max_queue_mb = 1024, max_write_mb_s = 0, socket_buffer_mb = 64;
   bool force = false, no_sidecar = false;
   app.add_option("file", file, "log file name; strftime patterns (%Y, %H, ...) are expanded at start")
       ->capture_default_str();
@@ -187,6 +204,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   app.add_option("--max-write-mb-s", max_write_mb_s, "cap the disk write rate (0 = none)")->check(CLI::NonNegativeNumber);
+  app.add_option("--socket-buffer-mb", socket_buffer_mb,
+                 "kernel receive buffer for LCM's udpm socket, past net.core.rmem_max where permitted "
+                 "(CAP_NET_ADMIN); 0 = as LCM sets it")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_flag("-f,--force", force, "overwrite existing files");
   app.add_flag("--no-sidecar", no_sidecar, "do not write FILE.json next to each log");
   app.add_option("--ready-file", ready_file, "create this file once subscribed (lets scripts start publishers)");
@@ -207,5 +229,5 @@ int main(int argc, char** argv) {
                           options.exclude};
   options.max_queue_bytes = static_cast<uint64_t>(max_queue_mb * 1e6);
   options.max_write_bytes_per_s = max_write_mb_s * 1e6;
-  return record(common, std::move(options), ready_file);
+  return record(common, std::move(options), ready_file, socket_buffer_mb);
 }

@@ -40,8 +40,21 @@ need_mb=$(((1 + baseline) * 130 * seconds))
 avail_mb=$(df -Pm "$out" | awk 'NR == 2 { print $4 }')
 [ "$avail_mb" -gt "$need_mb" ] || { echo "need ${need_mb} MB free in $parent, have ${avail_mb} MB" >&2; exit 1; }
 
+# The kernel's receive buffer (bytes, as it counts them) of PID's socket on the LCM port.
+receive_buffer() {
+  local port=${LCM_DEFAULT_URL##*:}
+  ss -uamnp "sport = :${port%%\?*}" | awk -v pid="pid=$1," '
+    index($0, pid) { found = 1; next }
+    found && match($0, /rb[0-9]+/) { print substr($0, RSTART + 2, RLENGTH - 2); exit }'
+}
 cpu_seconds() { awk '{ printf "%.1f", ($14 + $15) / 100 }' "/proc/$1/stat"; }
 peak_rss_mb() { awk '/VmHWM/ { printf "%.0f", $2 / 1024 }' "/proc/$1/status"; }
+# Datagrams the kernel dropped because PID's UDP receive buffer was full.
+socket_drops() {
+  local inodes
+  inodes=$(ls -l "/proc/$1/fd" 2>/dev/null | sed -n 's/.*socket:\[\([0-9]*\)\]$/\1/p' | tr '\n' ' ')
+  awk -v inodes=" $inodes " 'NR > 1 && index(inodes, " " $10 " ") { d += $NF } END { print d + 0 }' /proc/net/udp
+}
 
 "$build/bin/ivoa-logger" "$out/ivoa.lcmlog" --lcm-url "$url" --ready-file "$out/ready" 2>"$out/ivoa.err" &
 ours=$!
@@ -64,11 +77,13 @@ end=$(date +%s.%N)
 wait $extras
 sleep $grace_s  # the baseline has no other way to tell it has everything
 
-ours_cpu=$(cpu_seconds $ours) ours_rss=$(peak_rss_mb $ours)
+ours_rb=$(receive_buffer $ours)
+[ $baseline = 1 ] && theirs_rb=$(receive_buffer $theirs)
+ours_cpu=$(cpu_seconds $ours) ours_rss=$(peak_rss_mb $ours) ours_drops=$(socket_drops $ours)
 stop=$(date +%s.%N)
 kill -INT $ours
 if [ $baseline = 1 ]; then
-  theirs_cpu=$(cpu_seconds $theirs) theirs_rss=$(peak_rss_mb $theirs)
+  theirs_cpu=$(cpu_seconds $theirs) theirs_rss=$(peak_rss_mb $theirs) theirs_drops=$(socket_drops $theirs)
   kill -INT $theirs
   wait $theirs || true
 fi
@@ -91,10 +106,11 @@ theirs_mb=$([ $baseline = 1 ] && size_mb "$out/debian.lcmlog" || echo 0)
 
 python3 - "$seconds" "$frames" "$start" "$end" "$stop" "$ours_exit" "$ours_mb" "$theirs_mb" \
   "$ours_cpu" "$ours_rss" "${theirs_cpu:-0}" "${theirs_rss:-0}" "$baseline" "$ours_counts" "$theirs_counts" \
+  "$ours_drops" "${theirs_drops:-0}" "${ours_rb:-0}" "${theirs_rb:-0}" \
   "$(grep -o 'received.*queue peak [0-9.]* MB' "$out/ivoa.err" | tail -1)" <<'PY'
 import sys
 (seconds, frames, start, end, stop, ours_exit, ours_mb, theirs_mb, ours_cpu, ours_rss, theirs_cpu, theirs_rss,
- baseline, ours_counts, theirs_counts, summary) = sys.argv[1:]
+ baseline, ours_counts, theirs_counts, ours_drops, theirs_drops, ours_rb, theirs_rb, summary) = sys.argv[1:]
 frames, baseline = int(frames), baseline == "1"
 publish_s = float(end) - float(start)
 def parse(text):
@@ -113,8 +129,10 @@ gaps = {k: v[1] for k, v in ours.items() if v[1]}
 print(f"\nivoa-logger sequence gaps: {gaps or 'none'}")
 print(f"publishing took {publish_s:.1f} s; traffic {int(ours_mb) / publish_s:.0f} MB/s")
 print(f"ivoa-logger: {int(ours_mb)} MB written, {int(ours_mb) / publish_s:.0f} MB/s sustained while recording; "
-      f"exit {float(ours_exit) - float(stop):.2f} s after SIGINT; CPU {ours_cpu} s; peak RSS {ours_rss} MB")
+      f"exit {float(ours_exit) - float(stop):.2f} s after SIGINT; CPU {ours_cpu} s; peak RSS {ours_rss} MB; "
+      f"socket buffer {int(ours_rb) / 1e6:.0f} MB, datagrams dropped by the kernel: {ours_drops}")
 print(f"  its summary: {summary}")
 if baseline:
-    print(f"lcm-logger : {int(theirs_mb)} MB written; CPU {theirs_cpu} s; peak RSS {theirs_rss} MB")
+    print(f"lcm-logger : {int(theirs_mb)} MB written; CPU {theirs_cpu} s; peak RSS {theirs_rss} MB; "
+          f"socket buffer {int(theirs_rb) / 1e6:.0f} MB, datagrams dropped by the kernel: {theirs_drops}")
 PY

@@ -1,0 +1,52 @@
+#include "ivoa/logger/receive_buffer.hpp"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <regex>
+
+namespace ivoa::logger {
+namespace {
+
+bool is_udp_socket_on_port(int fd, int port) {
+  struct stat st {};
+  if (fstat(fd, &st) != 0 || !S_ISSOCK(st.st_mode)) return false;
+  int type = 0;
+  socklen_t len = sizeof(type);
+  if (getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &len) != 0 || type != SOCK_DGRAM) return false;
+  sockaddr_in address{};
+  len = sizeof(address);
+  if (getsockname(fd, reinterpret_cast<sockaddr*>(&address), &len) != 0 || address.sin_family != AF_INET)
+    return false;
+  return ntohs(address.sin_port) == port;
+}
+
+}  // namespace
+
+int udpm_port(const std::string& url) {
+  static const std::regex udpm(R"(udpm://[^:/?]*(:(\d+))?.*)");
+  std::smatch m;
+  if (!std::regex_match(url, m, udpm)) return 0;
+  return m[2].matched ? std::stoi(m[2].str()) : 7667;
+}
+
+ReceiveBufferResult force_receive_buffer(int port, int bytes) {
+  ReceiveBufferResult result;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd", error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const int fd = std::stoi(name);
+    if (!is_udp_socket_on_port(fd, port)) continue;
+    ++result.sockets;
+    result.permitted = setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof(bytes)) == 0;
+    socklen_t len = sizeof(result.bytes);
+    getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &result.bytes, &len);
+  }
+  return result;
+}
+
+}  // namespace ivoa::logger
