@@ -1,0 +1,117 @@
+#include "introspection_node.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/image_convert.hpp"
+#include "ivoa/core/stop_signal.hpp"
+#include "ivoa/core/time.hpp"
+
+namespace ivoa {
+namespace {
+
+std::vector<float> flatten(const cv::Mat& m) { return std::vector<float>(m.begin<float>(), m.end<float>()); }
+
+}  // namespace
+
+introspection_t make_introspection_message(const introspection::IntrospectionModel& model,
+                                           const introspection::Heatmaps& h, int64_t utime, int image_width,
+                                           int image_height, const obstacle_grid_t* grid, int mc_passes) {
+  introspection_t msg;
+  msg.utime = utime;
+  msg.model_id = model.info().id;
+  msg.mc_passes = mc_passes;
+  msg.uncertainty_threshold = static_cast<float>(model.threshold());
+  msg.image_width = image_width;
+  msg.image_height = image_height;
+  msg.patch_size = h.patch_size;
+  msg.stride = h.stride;
+  msg.rows = h.rows;
+  msg.cols = h.cols;
+  msg.prob_tp = flatten(h.probability[0]);
+  msg.prob_tn = flatten(h.probability[1]);
+  msg.prob_fp = flatten(h.probability[2]);
+  msg.prob_fn = flatten(h.probability[3]);
+  msg.uncertainty = flatten(h.uncertainty);
+  msg.class_variance = flatten(h.predicted_variance);
+  if (grid) {
+    for (size_t i = 0; i < grid->state.size(); ++i) {
+      if (!grid->in_image[i]) continue;
+      const auto p = model.predict_at(h, grid->u[i], grid->v[i]);
+      msg.query_x.push_back(grid->x[i]);
+      msg.query_y.push_back(grid->y[i]);
+      msg.query_u.push_back(grid->u[i]);
+      msg.query_v.push_back(grid->v[i]);
+      msg.query_class.push_back(static_cast<int8_t>(p.predicted));
+      msg.query_probability.push_back(p.probability[static_cast<size_t>(p.predicted)]);
+      msg.query_uncertainty.push_back(p.variance);
+      msg.query_announced.push_back(p.announced ? 1 : 0);
+    }
+  }
+  msg.compute_ms = h.compute_ms;
+  return msg;
+}
+
+IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
+                                     std::unique_ptr<introspection::IntrospectionModel> model,
+                                     IntrospectionNodeOptions options, int mc_passes)
+    : bus_(bus), heartbeat_(heartbeat), model_(std::move(model)), options_(std::move(options)), mc_passes_(mc_passes) {
+  bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
+  bus_.subscribe<stereo_image_t>(options_.stereo_channel, [this](const stereo_image_t& m, const ReceiveInfo&) {
+    heartbeat_.count_in();
+    frames_.put({m, monotonic_ms()});
+  });
+  if (!options_.grid_channel.empty())
+    bus_.subscribe<obstacle_grid_t>(options_.grid_channel, [this](const obstacle_grid_t& m, const ReceiveInfo&) {
+      std::lock_guard<std::mutex> lock(grid_mutex_);
+      latest_grid_ = m;
+    });
+  heartbeat_.set_state("running");
+  worker_ = std::thread([this] { work(); });
+}
+
+IntrospectionNode::~IntrospectionNode() {
+  frames_.close();
+  worker_.join();
+}
+
+void IntrospectionNode::work() {
+  while (!frames_.closed()) {
+    auto frame = frames_.take(std::chrono::milliseconds(100));
+    if (!frame) continue;
+    process(*frame);
+    heartbeat_.set_counter("frames_skipped", static_cast<int64_t>(frames_.dropped()));
+    heartbeat_.set_counter("frames_done", frames_done_.load());
+  }
+}
+
+void IntrospectionNode::process(const Frame& frame) {
+  const std::string where = options_.stereo_channel + " utime " + std::to_string(frame.msg.utime);
+  cv::Mat left;
+  try {
+    left = decode_image(frame.msg.left);
+  } catch (const ImageError& e) {
+    heartbeat_.bad_input(where + ": left image: " + e.what());
+    return;
+  }
+  introspection::Heatmaps h;
+  try {
+    h = model_->run(left);
+  } catch (const introspection::ModelError& e) {
+    heartbeat_.bad_input(where + ": " + e.what());
+    return;
+  }
+  std::optional<obstacle_grid_t> grid;
+  {
+    std::lock_guard<std::mutex> lock(grid_mutex_);
+    grid = latest_grid_;
+  }
+  introspection_t msg = make_introspection_message(*model_, h, frame.msg.utime, left.cols, left.rows,
+                                                   grid ? &*grid : nullptr, mc_passes_);
+  msg.compute_ms = monotonic_ms() - frame.received_ms;
+  bus_.publish(options_.out_channel, msg);
+  heartbeat_.count_out();
+  heartbeat_.latency(msg.compute_ms);
+  ++frames_done_;
+}
+
+}  // namespace ivoa

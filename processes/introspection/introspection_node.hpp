@@ -1,0 +1,61 @@
+#pragma once
+// The introspection process's logic: newest left image in, heatmaps and
+// per-query-cell predictions out. A receive handler drops each stereo frame
+// into a latest-value mailbox; a worker thread runs the CNN on the newest
+// one, so a slow CPU skips frames (counted) instead of falling behind.
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "ivoa/core/bus.hpp"
+#include "ivoa/core/channels.hpp"
+#include "ivoa/core/heartbeat.hpp"
+#include "ivoa/core/mailbox.hpp"
+#include "ivoa/introspection/model.hpp"
+#include "ivoa/introspection_t.hpp"
+
+namespace ivoa {
+
+struct IntrospectionNodeOptions {
+  std::string stereo_channel{channels::kStereoImages};
+  std::string grid_channel{channels::kObstaclesStereo};  // "" = no query cells
+  std::string out_channel{channels::kIntrospection};
+};
+
+// Builds the message for one frame (exposed for tests).
+introspection_t make_introspection_message(const introspection::IntrospectionModel& model,
+                                           const introspection::Heatmaps& heatmaps, int64_t utime, int image_width,
+                                           int image_height, const obstacle_grid_t* query_grid, int mc_passes);
+
+class IntrospectionNode {
+ public:
+  IntrospectionNode(Bus& bus, Heartbeat& heartbeat, std::unique_ptr<introspection::IntrospectionModel> model,
+                    IntrospectionNodeOptions options, int mc_passes);
+  ~IntrospectionNode();  // stops the worker
+
+  int64_t frames_done() const { return frames_done_.load(); }
+
+ private:
+  struct Frame {
+    stereo_image_t msg;
+    double received_ms;
+  };
+  void work();
+  void process(const Frame& frame);
+
+  Bus& bus_;
+  Heartbeat& heartbeat_;
+  std::unique_ptr<introspection::IntrospectionModel> model_;
+  IntrospectionNodeOptions options_;
+  int mc_passes_;
+  LatestMailbox<Frame> frames_;
+  std::mutex grid_mutex_;
+  std::optional<obstacle_grid_t> latest_grid_;  // query cells: fixed geometry, from the newest grid
+  std::atomic<int64_t> frames_done_{0};
+  std::thread worker_;
+};
+
+}  // namespace ivoa
