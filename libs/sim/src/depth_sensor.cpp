@@ -1,0 +1,115 @@
+#include "depth_sensor.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "noise.hpp"
+
+namespace ivoa::sim::detail {
+namespace {
+
+// A smooth random field with values spread evenly over [0, 1): blobs of
+// dropouts appear where it falls below a pixel's dropout probability.
+class BlobField {
+ public:
+  static const BlobField& instance() {
+    static const BlobField field;
+    return field;
+  }
+  float at(int x, int y) const { return v_[static_cast<size_t>((y & (kN - 1)) * kN + (x & (kN - 1)))]; }
+
+ private:
+  static constexpr int kN = 256;
+  BlobField() : v_(kN * kN) {
+    Rng rng(0xb10bULL);
+    const int cells = 32;  // blobs ~8 px across
+    std::vector<float> lattice(cells * cells);
+    for (float& l : lattice) l = static_cast<float>(rng.uniform());
+    std::vector<std::pair<float, int>> order;
+    for (int y = 0; y < kN; ++y)
+      for (int x = 0; x < kN; ++x) {
+        const double fx = x * cells / static_cast<double>(kN), fy = y * cells / static_cast<double>(kN);
+        const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+        const double tx = fx - x0, ty = fy - y0, sx = tx * tx * (3 - 2 * tx), sy = ty * ty * (3 - 2 * ty);
+        auto l = [&](int i, int j) { return lattice[static_cast<size_t>((j % cells) * cells + (i % cells))]; };
+        const double a = l(x0, y0) + (l(x0 + 1, y0) - l(x0, y0)) * sx;
+        const double b = l(x0, y0 + 1) + (l(x0 + 1, y0 + 1) - l(x0, y0 + 1)) * sx;
+        order.emplace_back(static_cast<float>(a + (b - a) * sy), y * kN + x);
+      }
+    // Rank transform: uniform marginal, so a threshold p drops a fraction p.
+    std::sort(order.begin(), order.end());
+    for (size_t i = 0; i < order.size(); ++i)
+      v_[static_cast<size_t>(order[i].second)] = static_cast<float>(i) / static_cast<float>(order.size());
+  }
+  std::vector<float> v_;
+};
+
+float smoothstep(float a, float b, float x) {
+  const float t = std::clamp((x - a) / (b - a), 0.0f, 1.0f);
+  return t * t * (3 - 2 * t);
+}
+
+}  // namespace
+
+cv::Mat depth_image(const std::vector<Ranged>& ranged, int width, int height, double focal, double min_range,
+                    double max_range, const DepthSensorConfig& c, uint64_t frame) {
+  const size_t n = static_cast<size_t>(width) * height;
+  std::vector<float> z(n);
+  for (size_t i = 0; i < n; ++i) z[i] = ranged[i].depth;
+  std::vector<uint8_t> invalid(n, 0);
+  // Depth edges: structured light cannot resolve a pixel that straddles a jump.
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(y) * width + x;
+      const float zi = z[i];
+      if (!std::isfinite(zi)) continue;
+      const float tol = static_cast<float>(c.edge_ratio) * zi;
+      auto jump = [&](size_t j) { return !std::isfinite(z[j]) || std::abs(z[j] - zi) > tol; };
+      if ((x > 0 && jump(i - 1)) || (x + 1 < width && jump(i + 1)) || (y > 0 && jump(i - width)) ||
+          (y + 1 < height && jump(i + width)))
+        invalid[i] = 1;
+    }
+  // Projector shadows: the projector sits to the right of the IR camera, so a
+  // point is unlit when something to its right in the image maps at or left
+  // of it in the projector (scan right to left keeping the minimum).
+  const float fb = static_cast<float>(focal * c.projector_baseline);
+  for (int y = 0; y < height; ++y) {
+    float min_proj = 1e30f;
+    for (int x = width - 1; x >= 0; --x) {
+      const size_t i = static_cast<size_t>(y) * width + x;
+      if (!std::isfinite(z[i])) continue;
+      const float proj = static_cast<float>(x) - fb / z[i];
+      if (proj >= min_proj - 0.5f) invalid[i] = 1;
+      else min_proj = std::min(min_proj, proj);
+    }
+  }
+  const NoiseTable& table = NoiseTable::instance();
+  const BlobField& blobs = BlobField::instance();
+  const uint64_t h = hash_combine(frame, 0xdeb7u);
+  const int bx = static_cast<int>(h & 0xff), by = static_cast<int>((h >> 8) & 0xff);
+  cv::Mat out(height, width, CV_16UC1);
+  for (int y = 0; y < height; ++y) {
+    uint16_t* dst = out.ptr<uint16_t>(y);
+    const uint32_t offset = NoiseTable::offset(frame, 7, static_cast<uint32_t>(y));
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(y) * width + x;
+      dst[x] = 0;
+      const float zi = z[i];
+      if (invalid[i] || !std::isfinite(zi) || zi < min_range || zi > max_range) continue;
+      const Ranged& r = ranged[i];
+      const float ret = r.ir_return * 4.0f / std::max(0.25f, zi * zi);
+      const float p_dark = smoothstep(static_cast<float>(c.dark_return), static_cast<float>(c.dark_return) * 0.3f, ret);
+      const float p_spec = std::min(0.9f, static_cast<float>(c.specular_dropout) * r.specular);
+      const float p_sun = std::min(0.95f, static_cast<float>(c.sunlight_dropout) * r.sunlit * (zi / 4.0f) * (zi / 4.0f));
+      const float keep = (1 - p_dark) * (1 - p_spec) * (1 - p_sun);
+      if (blobs.at(x + bx, y + by) < 1.0f - keep) continue;
+      if (table.uniforms()[(offset + static_cast<uint32_t>(x)) & NoiseTable::kMask] < c.random_dropout) continue;
+      const float sigma = static_cast<float>(c.noise_coefficient) * zi * zi;
+      const float noisy = zi + sigma * table.normals()[(offset + 7919u * static_cast<uint32_t>(x)) & NoiseTable::kMask];
+      dst[x] = static_cast<uint16_t>(std::clamp(std::lround(noisy * 1000.0f), 0L, 65535L));
+    }
+  }
+  return out;
+}
+
+}  // namespace ivoa::sim::detail

@@ -1,0 +1,106 @@
+#include "texture.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ivoa::sim {
+namespace {
+
+uint32_t encode_texel(const Rgbf& c) {
+  auto ch = [](float v) {
+    const float e = std::sqrt(std::max(0.0f, std::min(1.0f, v))) * 255.0f + 0.5f;
+    return static_cast<uint32_t>(e);
+  };
+  return ch(c.r) | (ch(c.g) << 8) | (ch(c.b) << 16);
+}
+
+}  // namespace
+
+Texture::Texture(int size, double texel_m, const std::vector<Rgbf>& linear)
+    : size_(size), inv_texel_(static_cast<float>(1.0 / texel_m)) {
+  std::vector<Rgbf> level = linear;
+  int n = size;
+  double sum_r = 0, sum_g = 0, sum_b = 0;
+  for (const Rgbf& c : linear) {
+    sum_r += c.r;
+    sum_g += c.g;
+    sum_b += c.b;
+  }
+  const double count = static_cast<double>(linear.size());
+  mean_ = Rgbf(static_cast<float>(sum_r / count), static_cast<float>(sum_g / count), static_cast<float>(sum_b / count));
+  while (n >= 1) {
+    offsets_.push_back(data_.size());
+    for (const Rgbf& c : level) data_.push_back(encode_texel(c));
+    ++levels_;
+    if (n == 1) break;
+    const int m = n / 2;
+    std::vector<Rgbf> next(static_cast<size_t>(m) * m);
+    for (int y = 0; y < m; ++y)
+      for (int x = 0; x < m; ++x) {
+        const size_t a = static_cast<size_t>(2 * y) * n + 2 * x;
+        next[static_cast<size_t>(y) * m + x] = (level[a] + level[a + 1] + level[a + n] + level[a + n + 1]) * 0.25f;
+      }
+    level.swap(next);
+    n = m;
+  }
+}
+
+namespace {
+
+// Pads a level with a copy of its last column and row.
+std::vector<Rgbf> padded(const std::vector<Rgbf>& v, int nx, int ny) {
+  std::vector<Rgbf> out(static_cast<size_t>(nx + 1) * (ny + 1));
+  for (int y = 0; y <= ny; ++y)
+    for (int x = 0; x <= nx; ++x)
+      out[static_cast<size_t>(y) * (nx + 1) + x] = v[static_cast<size_t>(std::min(y, ny - 1)) * nx + std::min(x, nx - 1)];
+  return out;
+}
+
+}  // namespace
+
+RadianceMap::RadianceMap(float x0, float y0, float cell, int nx, int ny, std::vector<Rgbf> values, int levels)
+    : x0_(x0), y0_(y0) {
+  std::vector<Rgbf> current = std::move(values);
+  for (int l = 0; l < levels; ++l) {
+    Level lv;
+    lv.nx = nx;
+    lv.ny = ny;
+    lv.stride = nx + 1;
+    lv.cell = cell;
+    lv.inv_cell = 1.0f / cell;
+    lv.max_x = static_cast<float>(nx - 1) - 1e-3f;
+    lv.max_y = static_cast<float>(ny - 1) - 1e-3f;
+    lv.v = padded(current, nx, ny);
+    levels_.push_back(std::move(lv));
+    if (nx < 2 || ny < 2) break;
+    const int mx = (nx + 1) / 2, my = (ny + 1) / 2;
+    std::vector<Rgbf> next(static_cast<size_t>(mx) * my);
+    for (int y = 0; y < my; ++y)
+      for (int x = 0; x < mx; ++x) {
+        Rgbf s(0.0f);
+        for (int dy = 0; dy < 2; ++dy)
+          for (int dx = 0; dx < 2; ++dx)
+            s += current[static_cast<size_t>(std::min(ny - 1, 2 * y + dy)) * nx + std::min(nx - 1, 2 * x + dx)];
+        next[static_cast<size_t>(y) * mx + x] = s * 0.25f;
+      }
+    current.swap(next);
+    nx = mx;
+    ny = my;
+    cell *= 2;
+  }
+}
+
+float ScalarMap::sample(float x, float y, float outside) const {
+  if (v_.empty()) return outside;
+  const float gx = (x - x0_) * inv_cell_ - 0.5f, gy = (y - y0_) * inv_cell_ - 0.5f;
+  if (gx < -1 || gy < -1 || gx > static_cast<float>(nx_) || gy > static_cast<float>(ny_)) return outside;
+  const float cx = std::max(0.0f, std::min(static_cast<float>(nx_ - 1) - 1e-3f, gx));
+  const float cy = std::max(0.0f, std::min(static_cast<float>(ny_ - 1) - 1e-3f, gy));
+  const int ix = static_cast<int>(cx), iy = static_cast<int>(cy);
+  const float fx = cx - static_cast<float>(ix), fy = cy - static_cast<float>(iy);
+  const int ix1 = std::min(ix + 1, nx_ - 1), iy1 = std::min(iy + 1, ny_ - 1);
+  auto at = [&](int xx, int yy) { return v_[static_cast<size_t>(yy) * nx_ + xx]; };
+  return (at(ix, iy) * (1 - fx) + at(ix1, iy) * fx) * (1 - fy) + (at(ix, iy1) * (1 - fx) + at(ix1, iy1) * fx) * fy;
+}
+
+}  // namespace ivoa::sim

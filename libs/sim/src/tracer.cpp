@@ -1,0 +1,504 @@
+#include "tracer.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "ivoa/sim_ground_truth_t.hpp"
+
+namespace ivoa::sim::detail {
+namespace {
+
+using GT = sim_ground_truth_t;
+
+float wrap_angle(float a) {
+  while (a > static_cast<float>(M_PI)) a -= static_cast<float>(2 * M_PI);
+  while (a <= -static_cast<float>(M_PI)) a += static_cast<float>(2 * M_PI);
+  return a;
+}
+
+float pow5(float x) {
+  const float x2 = x * x;
+  return x2 * x2 * x;
+}
+
+// atan2 to ~1e-4 rad: only used for texture coordinates around cylinders.
+float fast_atan2(float y, float x) {
+  const float ax = std::abs(x), ay = std::abs(y);
+  const float mx = std::max(ax, ay);
+  if (mx == 0) return 0;
+  const float a = std::min(ax, ay) / mx, s = a * a;
+  float r = ((-0.0464964749f * s + 0.15931422f) * s - 0.327622764f) * s * a + a;
+  if (ay > ax) r = 1.57079637f - r;
+  if (x < 0) r = 3.14159274f - r;
+  return y < 0 ? -r : r;
+}
+
+// Where on a solid a ray landed: its normal, texture coordinates, material.
+struct SolidPoint {
+  const Prism* prism;
+  float nx, ny, nz;
+  float u, v, z;
+  uint16_t material;
+  bool base;  // on the baseboard band
+};
+
+}  // namespace
+
+Tracer::Tracer(const SceneData& scene, const CameraRays& rays, const Pose2D& pose, bool accelerate)
+    : scene_(scene), rays_(rays), pose_(pose) {
+  cos_yaw_ = static_cast<float>(std::cos(pose.yaw));
+  sin_yaw_ = static_cast<float>(std::sin(pose.yaw));
+  const Eigen::Vector2d o = robot_to_world(pose, rays.origin().x(), rays.origin().y());
+  ox_ = static_cast<float>(o.x());
+  oy_ = static_cast<float>(o.y());
+  oz_ = static_cast<float>(rays.origin().z());
+  if (scene.has_ceiling) s_ceiling_up_ = scene.ceiling_height - oz_;
+  build_candidates(accelerate);
+  for (size_t i = 0; i < scene.lights.size(); ++i) {
+    const PointLight& l = scene.lights[i];
+    if (l.glare > 0 && std::hypot(l.position.x() - ox_, l.position.y() - oy_) < 30.0f)
+      glare_lights_.push_back(static_cast<uint32_t>(i));
+  }
+}
+
+void Tracer::build_candidates(bool accelerate) {
+  const int num_bins = rays_.num_bins();
+  const float az0 = rays_.az_min(), bw = rays_.bin_width();
+  const float yaw = static_cast<float>(pose_.yaw);
+  std::vector<Candidate> all;
+  std::vector<std::pair<int, int>> spans;  // bin ranges (inclusive), up to 3 per candidate
+  std::vector<int> span_owner;
+  for (size_t i = 0; i < scene_.prisms.size(); ++i) {
+    const Prism& p = scene_.prisms[i];
+    Candidate c;
+    c.prism = static_cast<uint32_t>(i);
+    c.circle = p.shape == Prism::kCircle;
+    c.hx = p.hx;
+    c.hy = p.hy;
+    c.z0 = p.z0;
+    c.z1 = p.z1;
+    const float dxw = p.cx - ox_, dyw = p.cy - oy_, d = std::hypot(dxw, dyw);
+    if (c.circle) {
+      c.c = cos_yaw_;
+      c.s = sin_yaw_;
+      c.lox = ox_ - p.cx;
+      c.loy = oy_ - p.cy;
+      c.s_min = std::max(0.0f, d - p.hx);
+    } else {
+      const float theta = std::atan2(p.sin_yaw, p.cos_yaw);
+      c.c = std::cos(yaw - theta);
+      c.s = std::sin(yaw - theta);
+      to_local(p, ox_, oy_, c.lox, c.loy);
+      c.s_min = static_cast<float>(std::max(0.0, footprint_distance(p, ox_, oy_)));
+    }
+    const size_t index = all.size();
+    all.push_back(c);
+    if (!accelerate) continue;
+    // Angular extent in the robot frame.
+    float lo, hi;
+    const float centre = std::atan2(dyw, dxw);
+    if (c.s_min <= 0.01f) {  // the camera is inside or on the footprint: every direction
+      lo = -static_cast<float>(M_PI);
+      hi = static_cast<float>(M_PI);
+    } else if (c.circle) {
+      const float half = std::asin(std::min(1.0f, p.hx / d));
+      lo = centre - half;
+      hi = centre + half;
+    } else {
+      float mn = 0, mx = 0;
+      for (int k = 0; k < 4; ++k) {
+        const float lx = (k & 1) ? p.hx : -p.hx, ly = (k & 2) ? p.hy : -p.hy;
+        const float wx = p.cx + p.cos_yaw * lx - p.sin_yaw * ly - ox_, wy = p.cy + p.sin_yaw * lx + p.cos_yaw * ly - oy_;
+        const float a = wrap_angle(std::atan2(wy, wx) - centre);
+        mn = std::min(mn, a);
+        mx = std::max(mx, a);
+      }
+      lo = centre + mn;
+      hi = centre + mx;
+    }
+    lo -= yaw;
+    hi -= yaw;
+    const float shift = wrap_angle(lo) - lo;  // bring lo into (-pi, pi]
+    lo += shift;
+    hi += shift;
+    for (int k = -1; k <= 1; ++k) {
+      const float a = lo + static_cast<float>(k * 2 * M_PI), b = hi + static_cast<float>(k * 2 * M_PI);
+      const int b0 = std::max(0, static_cast<int>(std::floor((a - az0) / bw)));
+      const int b1 = std::min(num_bins - 1, static_cast<int>(std::floor((b - az0) / bw)));
+      if (b0 <= b1) {
+        spans.emplace_back(b0, b1);
+        span_owner.push_back(static_cast<int>(index));
+      }
+    }
+  }
+  if (!accelerate) {
+    brute_force_ = true;
+    candidates_ = std::move(all);
+    bin_start_ = {0, static_cast<uint32_t>(candidates_.size())};
+    return;
+  }
+  std::vector<uint32_t> count(static_cast<size_t>(num_bins) + 1, 0);
+  for (const auto& [b0, b1] : spans)
+    for (int b = b0; b <= b1; ++b) ++count[static_cast<size_t>(b)];
+  bin_start_.assign(static_cast<size_t>(num_bins) + 1, 0);
+  for (int b = 0; b < num_bins; ++b) bin_start_[static_cast<size_t>(b) + 1] = bin_start_[static_cast<size_t>(b)] + count[static_cast<size_t>(b)];
+  candidates_.resize(bin_start_.back());
+  std::vector<uint32_t> fill(bin_start_.begin(), bin_start_.end() - 1);
+  for (size_t k = 0; k < spans.size(); ++k)
+    for (int b = spans[k].first; b <= spans[k].second; ++b)
+      candidates_[fill[static_cast<size_t>(b)]++] = all[static_cast<size_t>(span_owner[k])];
+  for (int b = 0; b < num_bins; ++b)
+    std::sort(candidates_.begin() + bin_start_[static_cast<size_t>(b)], candidates_.begin() + bin_start_[static_cast<size_t>(b) + 1],
+              [](const Candidate& x, const Candidate& y) { return x.s_min < y.s_min || (x.s_min == y.s_min && x.prism < y.prism); });
+}
+
+Tracer::Ray Tracer::make_ray(const PixelRay& r) const {
+  Ray ray;
+  ray.ux = r.ux;
+  ray.uy = r.uy;
+  ray.wx = cos_yaw_ * r.ux - sin_yaw_ * r.uy;
+  ray.wy = sin_yaw_ * r.ux + cos_yaw_ * r.uy;
+  ray.slope = r.slope;
+  ray.inv_slope = r.inv_slope;
+  ray.len = r.len;
+  ray.bin = r.bin;
+  return ray;
+}
+
+Tracer::Hit Tracer::nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored) const {
+  Hit best;
+  best.s = s_hi;
+  const size_t begin = brute_force_ ? 0 : bin_start_[static_cast<size_t>(ray.bin)];
+  const size_t end = brute_force_ ? candidates_.size() : bin_start_[static_cast<size_t>(ray.bin) + 1];
+  for (size_t k = begin; k < end; ++k) {
+    const Candidate& c = candidates_[k];
+    if (!brute_force_ && c.s_min > best.s) break;
+    const float dx = c.c * ray.ux - c.s * ray.uy, dy = c.s * ray.ux + c.c * ray.uy;
+    float t_in, t_out;
+    Face face = kFaceRound;
+    if (c.circle) circle_interval(c.lox, c.loy, dx, dy, c.hx, t_in, t_out);
+    else rect_interval(c.lox, c.loy, dx, dy, c.hx, c.hy, t_in, t_out, face);
+    if (!(t_in <= t_out) || t_out < s_lo) continue;
+    const float zlo = mirrored ? -c.z1 : c.z0, zhi = mirrored ? -c.z0 : c.z1;
+    const float a = (zlo - oz_) * ray.inv_slope, b = (zhi - oz_) * ray.inv_slope;
+    float entry = t_in;
+    if (std::min(a, b) > entry) {
+      entry = std::min(a, b);
+      face = ((ray.slope < 0) != mirrored) ? kFaceTop : kFaceBottom;
+    }
+    entry = std::max(entry, s_lo);
+    if (entry > std::min(t_out, std::max(a, b))) continue;
+    const bool better = entry < best.s ||
+                        (entry == best.s && best.candidate >= 0 && c.prism < candidates_[static_cast<size_t>(best.candidate)].prism);
+    if (better) {
+      best.s = entry;
+      best.candidate = static_cast<int>(k);
+      best.face = face;
+    }
+  }
+  return best;
+}
+
+namespace {
+
+SolidPoint solid_point(const Prism& p, float lx, float ly, float z, Face face) {
+  SolidPoint sp{&p, 0, 0, 0, 0, 0, z, p.material, false};
+  switch (face) {
+    case kFaceMinusX:
+    case kFacePlusX: {
+      const float sign = face == kFaceMinusX ? -1.0f : 1.0f;
+      sp.nx = sign * p.cos_yaw;
+      sp.ny = sign * p.sin_yaw;
+      sp.u = ly;
+      sp.v = z;
+      break;
+    }
+    case kFaceMinusY:
+    case kFacePlusY: {
+      const float sign = face == kFaceMinusY ? -1.0f : 1.0f;
+      sp.nx = -sign * p.sin_yaw;
+      sp.ny = sign * p.cos_yaw;
+      sp.u = lx;
+      sp.v = z;
+      break;
+    }
+    case kFaceRound: {
+      const float inv_r = 1.0f / p.hx;
+      sp.nx = lx * inv_r;
+      sp.ny = ly * inv_r;
+      sp.u = fast_atan2(ly, lx) * p.hx;
+      sp.v = z;
+      break;
+    }
+    case kFaceTop:
+    case kFaceBottom:
+      sp.nz = face == kFaceTop ? 1.0f : -1.0f;
+      sp.u = lx;
+      sp.v = ly;
+      sp.material = p.top_material;
+      break;
+  }
+  sp.u += p.u_offset;
+  sp.v += p.v_offset;
+  if (sp.nz == 0 && z < p.base_height) {
+    sp.material = p.base_material;
+    sp.base = true;
+  }
+  return sp;
+}
+
+}  // namespace
+
+Shaded Tracer::shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float extra_blur) const {
+  const Candidate& c = candidates_[static_cast<size_t>(hit.candidate)];
+  const Prism& p = scene_.prisms[c.prism];
+  const float s = hit.s;
+  const float dx = c.c * ray.ux - c.s * ray.uy, dy = c.s * ray.ux + c.c * ray.uy;
+  const float zr = oz_ + ray.slope * s;
+  const SolidPoint sp = solid_point(p, c.lox + s * dx, c.loy + s * dy, mirrored ? -zr : zr, hit.face);
+  const MaterialData& m = scene_.materials[sp.material];
+  const float dz = mirrored ? -ray.slope : ray.slope;
+  const float cos_i = std::abs(sp.nx * ray.wx + sp.ny * ray.wy + sp.nz * dz) / ray.len;
+  const float footprint = s * ray.len * rays_.pixel_angle() / std::sqrt(std::max(cos_i, 0.05f)) + extra_blur;
+  const Rgbf albedo = m.texture->sample(sp.u, sp.v, footprint) * p.tint * m.diffuse_scale;
+  Rgbf e = p.ambient + p.directional * std::max(0.0f, sp.nx * p.light_dir.x() + sp.ny * p.light_dir.y() + sp.nz * p.light_dir.z());
+  if (scene_.sky.has_sun) {
+    const Eigen::Vector3f& sun = scene_.sky.sun_dir;
+    e += scene_.sky.sun_irradiance * (std::max(0.0f, sp.nx * sun.x() + sp.ny * sun.y() + sp.nz * sun.z()) * p.sun_visibility);
+  }
+  if (sp.nz == 0 && p.z0 < 0.05f && sp.z < 0.3f) {  // contact shade near the ground
+    const float t = sp.z * (1.0f / 0.3f);
+    e = e * (0.7f + 0.3f * t * (2.0f - t));
+  }
+  Shaded out;
+  out.radiance = albedo * e + m.emission;
+  out.depth = s;
+  out.surface = sp.base ? GT::SURFACE_BASEBOARD : p.surface;
+  out.phenomena = m.phenomena & (GT::PHENOMENON_TEXTURELESS | GT::PHENOMENON_REPETITIVE);
+  if (sp.base) out.phenomena |= m.phenomena & GT::PHENOMENON_DARK_STRIPE;
+  return out;
+}
+
+const FloorFeature* Tracer::floor_feature(float x, float y, uint16_t& material) const {
+  material = scene_.floor_material;
+  const PlanGrid& g = scene_.grid;
+  if (!g.inside(x, y)) return nullptr;
+  const int cell = g.index(x, y);
+  const uint32_t begin = g.feature_start[static_cast<size_t>(cell)], end = g.feature_start[static_cast<size_t>(cell) + 1];
+  for (uint32_t k = end; k > begin; --k) {
+    const FloorFeature& f = scene_.floor_features[g.features[k - 1]];
+    if (!feature_contains(f, x, y)) continue;
+    if (f.kind == FloorFeature::kPit) return &f;
+    if (f.kind == FloorFeature::kPuddle) {
+      const PuddleMask& mask = scene_.puddle_masks[static_cast<size_t>(f.mask)];
+      float lx, ly;
+      to_local(f, x, y, lx, ly);
+      const float gx = (lx + f.hx) / mask.cell, gy = (ly + f.hy) / mask.cell;
+      const int ix = std::clamp(static_cast<int>(gx), 0, mask.nx - 2), iy = std::clamp(static_cast<int>(gy), 0, mask.ny - 2);
+      const float fx = gx - static_cast<float>(ix), fy = gy - static_cast<float>(iy);
+      const float* row0 = mask.field.data() + static_cast<size_t>(iy) * mask.nx + ix;
+      const float* row1 = row0 + mask.nx;
+      const float v = (row0[0] * (1 - fx) + row0[1] * fx) * (1 - fy) + (row1[0] * (1 - fx) + row1[1] * fx) * fy;
+      if (v <= 0) continue;
+    }
+    material = f.material;
+    return nullptr;
+  }
+  return nullptr;
+}
+
+Rgbf Tracer::sky(float dx, float dy, float dz, float blur) const {
+  const SkyData& sky = scene_.sky;
+  const float t = std::sqrt(std::max(dz, 0.0f));
+  Rgbf c = lerp(sky.horizon, sky.zenith, t);
+  if (sky.has_sun) {
+    const float cosang = dx * sky.sun_dir.x() + dy * sky.sun_dir.y() + dz * sky.sun_dir.z();
+    const float w = std::max(sky.sun_radius, blur);
+    const float lobe = std::exp((cosang - 1.0f) / (w * w));
+    const float halo = std::exp((cosang - 1.0f) / 0.02f);
+    c += sky.sun_irradiance * (lobe / (2.0f * static_cast<float>(M_PI) * w * w) + halo * 0.4f);
+  }
+  return c;
+}
+
+Rgbf Tracer::light_lobes(const Ray& ray, float x, float y, float roughness) const {
+  Rgbf sum(0.0f);
+  const float w = std::max(roughness, 0.01f);
+  const float rx = ray.wx / ray.len, ry = ray.wy / ray.len, rz = -ray.slope / ray.len;  // mirrored view ray
+  for (uint32_t i : glare_lights_) {
+    const PointLight& l = scene_.lights[i];
+    const float vx = l.position.x() - x, vy = l.position.y() - y, vz = l.position.z();
+    const float d2 = vx * vx + vy * vy + vz * vz, inv_d = 1.0f / std::sqrt(d2);
+    const float cosang = (rx * vx + ry * vy + rz * vz) * inv_d;
+    const float lobe = std::exp((cosang - 1.0f) / (w * w));
+    if (lobe < 1e-4f) continue;
+    const float e = l.glare * (vz * inv_d) / d2;  // downward emitter
+    sum += Rgbf(1.0f, 0.85f, 0.65f) * (e * lobe / (2.0f * static_cast<float>(M_PI) * w * w));
+  }
+  return sum;
+}
+
+Rgbf Tracer::reflection(const Ray& ray, float s_floor, float roughness, bool& emitter) const {
+  // Mirror world: the ray goes on below the floor; the ceiling mirrors to z = -H.
+  const float s_hi = scene_.has_ceiling ? (-scene_.ceiling_height - oz_) * ray.inv_slope : kInf;
+  const Hit hit = nearest(ray, s_floor, s_hi, true);
+  const float pa = rays_.pixel_angle();
+  const float s = hit.candidate >= 0 ? hit.s : s_hi;
+  const float blur = 2.0f * roughness * (s - s_floor) * ray.len;
+  emitter = false;
+  if (hit.candidate >= 0) {
+    const Shaded sh = shade_solid(ray, hit, true, blur);
+    emitter = scene_.materials[scene_.prisms[candidates_[static_cast<size_t>(hit.candidate)].prism].material].emission.r > 0;
+    return sh.radiance;
+  }
+  if (scene_.has_ceiling) {
+    const float x = ox_ + s_hi * ray.wx, y = oy_ + s_hi * ray.wy;
+    return scene_.ceiling_radiance.sample(x, y, s_hi * ray.len * pa + blur);
+  }
+  return sky(ray.wx / ray.len, ray.wy / ray.len, -ray.slope / ray.len, roughness + pa);
+}
+
+Shaded Tracer::shade_pit(const Ray& ray, const FloorFeature& pit, float s_floor) const {
+  float lox, loy, dx, dy;
+  to_local(pit, ox_, oy_, lox, loy);
+  dir_to_local(pit, ray.wx, ray.wy, dx, dy);
+  float t_out;
+  if (pit.ellipse) {
+    const float ex = lox / pit.hx, ey = loy / pit.hy, dex = dx / pit.hx, dey = dy / pit.hy;
+    const float a = dex * dex + dey * dey, b = ex * dex + ey * dey, c = ex * ex + ey * ey - 1.0f;
+    t_out = (-b + std::sqrt(std::max(0.0f, b * b - a * c))) / a;
+  } else {
+    float t_in;
+    Face face;
+    rect_interval(lox, loy, dx, dy, pit.hx, pit.hy, t_in, t_out, face);
+  }
+  t_out = std::max(t_out, s_floor);
+  const float z_exit = oz_ + ray.slope * t_out;
+  float s, u, v, z;
+  if (z_exit >= -pit.depth) {  // the far wall of the pit
+    s = t_out;
+    z = z_exit;
+    u = (lox + s * dx) + (loy + s * dy);
+    v = z;
+  } else {  // its bottom
+    s = (-pit.depth - oz_) * ray.inv_slope;
+    z = -pit.depth;
+    u = ox_ + s * ray.wx;
+    v = oy_ + s * ray.wy;
+  }
+  const MaterialData& m = scene_.materials[pit.material];
+  const float footprint = s * ray.len * rays_.pixel_angle() * 2.0f;
+  const Rgbf albedo = m.texture->sample(u, v, footprint);
+  const float shade = 0.25f + 0.75f * std::exp(z / 0.25f);  // darker deeper down
+  Shaded out;
+  out.radiance = albedo * (scene_.pit_irradiance * shade);
+  out.depth = s;
+  out.surface = GT::SURFACE_PIT;
+  return out;
+}
+
+Shaded Tracer::shade_floor(const Ray& ray, const PixelRay& pr) const {
+  const float x = static_cast<float>(pose_.x) + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
+  const float y = static_cast<float>(pose_.y) + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+  uint16_t mid;
+  if (const FloorFeature* pit = floor_feature(x, y, mid)) return shade_pit(ray, *pit, pr.s_floor);
+  const MaterialData& m = scene_.materials[mid];
+  const Rgbf albedo = m.texture->sample(x, y, pr.floor_footprint) * m.diffuse_scale;
+  const Rgbf e = scene_.floor_irradiance.empty() ? scene_.floor_irradiance_outside : scene_.floor_irradiance.sample(x, y);
+  Shaded out;
+  out.radiance = albedo * e;
+  out.depth = pr.s_floor;
+  out.surface = GT::SURFACE_FLOOR;
+  out.phenomena = m.phenomena & (GT::PHENOMENON_TEXTURELESS | GT::PHENOMENON_REPETITIVE);
+  if (m.f0 > 0) {
+    const float cos_i = -ray.slope / ray.len;
+    const float fresnel = m.f0 + (1.0f - m.f0) * pow5(1.0f - cos_i);
+    bool emitter;
+    const Rgbf mirrored = reflection(ray, pr.s_floor, m.roughness, emitter);
+    const Rgbf specular = (mirrored + light_lobes(ray, x, y, m.roughness)) * fresnel;
+    out.radiance = out.radiance * (1.0f - fresnel) + specular;
+    out.specular = specular.luminance();
+    if (out.specular > 0.35f * out.radiance.luminance()) out.phenomena |= GT::PHENOMENON_REFLECTION;
+  }
+  return out;
+}
+
+Shaded Tracer::shade(int pixel) const {
+  const PixelRay& pr = rays_.ray(pixel);
+  const Ray ray = make_ray(pr);
+  float s_hi = pr.s_floor;
+  const bool up = pr.slope > 0;
+  if (up && scene_.has_ceiling) s_hi = s_ceiling_up_ * ray.inv_slope;
+  const Hit hit = nearest(ray, 0.0f, s_hi, false);
+  Shaded out;
+  if (hit.candidate >= 0) {
+    out = shade_solid(ray, hit, false, 0.0f);
+  } else if (!up) {
+    out = shade_floor(ray, pr);
+  } else if (scene_.has_ceiling) {
+    const float x = ox_ + s_hi * ray.wx, y = oy_ + s_hi * ray.wy;
+    out.radiance = scene_.ceiling_radiance.sample(x, y, s_hi * ray.len * rays_.pixel_angle());
+    out.depth = s_hi;
+    out.surface = GT::SURFACE_CEILING;
+  } else {
+    out.radiance = sky(ray.wx / ray.len, ray.wy / ray.len, ray.slope / ray.len, rays_.pixel_angle());
+    out.depth = kInf;
+    out.surface = GT::SURFACE_SKY;
+    return out;
+  }
+  out.depth *= pr.planar;
+  return out;
+}
+
+Ranged Tracer::range(int pixel) const {
+  const PixelRay& pr = rays_.ray(pixel);
+  const Ray ray = make_ray(pr);
+  float s_hi = pr.s_floor;
+  const bool up = pr.slope > 0;
+  if (up && scene_.has_ceiling) s_hi = s_ceiling_up_ * ray.inv_slope;
+  const Hit hit = nearest(ray, 0.0f, s_hi, false);
+  const SkyData& sky = scene_.sky;
+  const float sun_strength = sky.has_sun ? sky.sun_irradiance.luminance() / 300.0f : 0.0f;
+  Ranged out;
+  if (hit.candidate >= 0) {
+    const Candidate& c = candidates_[static_cast<size_t>(hit.candidate)];
+    const Prism& p = scene_.prisms[c.prism];
+    const float dx = c.c * ray.ux - c.s * ray.uy, dy = c.s * ray.ux + c.c * ray.uy;
+    const SolidPoint sp = solid_point(p, c.lox + hit.s * dx, c.loy + hit.s * dy, oz_ + ray.slope * hit.s, hit.face);
+    const MaterialData& m = scene_.materials[sp.material];
+    const float cos_i = std::abs(sp.nx * ray.wx + sp.ny * ray.wy + sp.nz * ray.slope) / ray.len;
+    out.depth = hit.s * pr.planar;
+    out.ir_return = m.ir_albedo * cos_i;
+    if (sky.has_sun)
+      out.sunlit = sun_strength * p.sun_visibility *
+                   std::max(0.0f, sp.nx * sky.sun_dir.x() + sp.ny * sky.sun_dir.y() + sp.nz * sky.sun_dir.z());
+    return out;
+  }
+  if (!up) {
+    const float x = static_cast<float>(pose_.x) + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
+    const float y = static_cast<float>(pose_.y) + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+    uint16_t mid;
+    if (const FloorFeature* pit = floor_feature(x, y, mid)) {
+      const Shaded sh = shade_pit(ray, *pit, pr.s_floor);
+      out.depth = sh.depth * pr.planar;
+      out.ir_return = scene_.materials[pit->material].ir_albedo * 0.7f;
+      return out;
+    }
+    const MaterialData& m = scene_.materials[mid];
+    const float cos_i = -ray.slope / ray.len;
+    out.depth = pr.s_floor * pr.planar;
+    out.ir_return = m.ir_albedo * cos_i;
+    out.specular = m.f0 * std::max(0.0f, 1.0f - m.roughness / 0.1f);
+    if (sky.has_sun) out.sunlit = sun_strength * sky.sun_dir.z() * scene_.floor_sunlit.sample(x, y, 1.0f);
+    return out;
+  }
+  if (scene_.has_ceiling) {
+    out.depth = s_hi * pr.planar;
+    out.ir_return = 0.6f * ray.slope / ray.len;
+    return out;
+  }
+  out.depth = kInf;
+  return out;
+}
+
+}  // namespace ivoa::sim::detail

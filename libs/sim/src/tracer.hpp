@@ -1,0 +1,90 @@
+#pragma once
+// Ray casting one camera for one frame. Acceleration: every solid's angular
+// extent as seen from the camera is binned by azimuth once per frame, sorted
+// by distance; a pixel tests only the solids of its azimuth bin, nearest
+// first, and stops as soon as the next one starts beyond its current hit.
+// The ground is intersected analytically (precomputed per pixel), and a
+// mirror-like floor continues the same 2-D ray with z mirrored, so the
+// reflection reuses the bin's list.
+#include <cstdint>
+#include <vector>
+
+#include "camera_rays.hpp"
+#include "color.hpp"
+#include "geometry.hpp"
+#include "ivoa/sim/pose.hpp"
+#include "scene_data.hpp"
+
+namespace ivoa::sim::detail {
+
+// What a camera pixel sees.
+struct Shaded {
+  Rgbf radiance;
+  float depth = 0;       // planar depth of the first surface (inf: sky)
+  float specular = 0;    // luminance of the mirror / highlight part of the radiance
+  uint8_t surface = 0;   // SURFACE_*
+  uint8_t phenomena = 0; // PHENOMENON_* known from the geometry and materials
+};
+
+// What a depth-sensor pixel sees.
+struct Ranged {
+  float depth = 0;       // planar depth (inf: nothing)
+  float ir_return = 0;   // IR albedo x cosine of incidence
+  float specular = 0;    // mirror reflectance (and smoothness) of the surface
+  float sunlit = 0;      // direct sun on the surface, 0..1 scaled by irradiance
+};
+
+class Tracer {
+ public:
+  Tracer(const SceneData& scene, const CameraRays& rays, const Pose2D& pose, bool accelerate);
+
+  Shaded shade(int pixel) const;
+  Ranged range(int pixel) const;
+  size_t num_candidates() const { return candidates_.size(); }
+
+ private:
+  struct Candidate {
+    float s_min;          // horizontal distance from the camera to the footprint
+    uint32_t prism;
+    uint8_t circle;
+    float lox, loy;       // camera origin in the footprint's frame (circle: origin - centre, world)
+    float c, s;           // robot-frame direction -> footprint frame
+    float hx, hy, z0, z1;
+  };
+  struct Hit {
+    float s = kInf;       // horizontal distance along the ray
+    int candidate = -1;
+    Face face = kFaceRound;
+  };
+  struct Ray {            // one pixel's ray in this frame
+    float ux, uy;         // robot frame horizontal direction
+    float wx, wy;         // world frame
+    float slope, inv_slope, len;
+    int bin;
+  };
+
+  void build_candidates(bool accelerate);
+  Ray make_ray(const PixelRay& r) const;
+  // Nearest solid along the ray with s in [s_lo, s_hi); mirrored: below the floor.
+  Hit nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored) const;
+  Shaded shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float extra_blur) const;
+  Shaded shade_floor(const Ray& ray, const PixelRay& pr) const;
+  Shaded shade_pit(const Ray& ray, const FloorFeature& pit, float s_floor) const;
+  Rgbf reflection(const Ray& ray, float s_floor, float roughness, bool& emitter) const;
+  Rgbf sky(float dx, float dy, float dz, float blur) const;
+  Rgbf light_lobes(const Ray& ray, float x, float y, float roughness) const;
+  const FloorFeature* floor_feature(float x, float y, uint16_t& material) const;
+
+  const SceneData& scene_;
+  const CameraRays& rays_;
+  float ox_, oy_, oz_;    // camera origin, world
+  float cos_yaw_, sin_yaw_;
+  Pose2D pose_;
+  float s_ceiling_up_ = kInf;  // (ceiling - oz): divide by slope
+  std::vector<Candidate> candidates_;
+  std::vector<uint32_t> bin_start_;  // candidates of bin b: [bin_start_[b], bin_start_[b + 1])
+  bool brute_force_ = false;
+  std::vector<uint32_t> glare_lights_;  // lights that make highlight lobes on glossy floors
+};
+
+}  // namespace ivoa::sim::detail
