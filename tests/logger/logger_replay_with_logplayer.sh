@@ -2,8 +2,9 @@
 # A log made by ivoa-logger replays with Debian's lcm-logplayer: every
 # message reaches a live subscriber (ivoa-lcm-stats) with no sequence gap,
 # and a second ivoa-logger recording the replay gets the same messages
-# with the same utimes. Also checks channel selection in a running
-# logger: --channels/--exclude, with the rig calibration always kept.
+# with the same utimes. Java LCM (what lcm-spy runs on) reads the log and
+# decodes every ivoa message in it. Also checks channel selection in a
+# running logger: --channels/--exclude, with the rig calibration always kept.
 set -euo pipefail
 B=${IVOA_BUILD_DIR:?}
 . "$IVOA_SOURCE_DIR/tests/harness/wait_for.sh"
@@ -51,9 +52,24 @@ wait $stats
 stop_logger again $((60 + 60 + 3 + 5 + 5))
 "$B/bin/ivoa-log-check" --no-gaps --json "$out/again.json" "$out/again.lcmlog" >/dev/null
 
+jar=$B/share/java/lcmtypes_ivoa.jar
+if command -v javac >/dev/null && [ -f "$jar" ]; then
+  javac -d "$out/java" -cp /usr/share/java/lcm.jar "$IVOA_SOURCE_DIR/tests/logger/LogDecodeCheck.java"
+  # (ClassDiscoverer's complaints about lcm-spy's chart classes are noise.)
+  CLASSPATH=$jar java -cp "/usr/share/java/lcm.jar:$jar:$out/java" LogDecodeCheck "$out/all.lcmlog" 2>/dev/null |
+    grep -E '^[A-Z_0-9]+ decoded [0-9]+ undecodable [0-9]+$' >"$out/java.txt"
+else
+  echo "NOTE: no javac or no types jar; the Java decoding check was not run"
+fi
+
 python3 - "$out" <<'PY'
-import json, sys
+import json, os, sys
 out = sys.argv[1]
+if os.path.exists(out + "/java.txt"):
+    java = {l.split()[0]: (int(l.split()[2]), int(l.split()[4])) for l in open(out + "/java.txt")}
+    assert java == {"STEREO_IMAGES": (60, 0), "DEPTH_IMAGE": (60, 0), "RIG_CALIBRATION": (3, 0),
+                    "FOREIGN_DATA": (0, 5), "FOREIGN_SKIP": (0, 5)}, java
+    print("OK: Java LCM decodes every ivoa message in the log (as lcm-spy does):", java)
 some = json.load(open(out + "/some.json"))["channels"]
 assert {k: v["count"] for k, v in some.items()} == {"STEREO_IMAGES": 60, "FOREIGN_DATA": 5, "RIG_CALIBRATION": 3}, some
 stats = json.load(open(out + "/replay_stats.json"))["channels"]
