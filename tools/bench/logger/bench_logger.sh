@@ -8,27 +8,30 @@
 # is read back and counted against what was published.
 #
 #   tools/bench/logger/bench_logger.sh [--seconds 60] [--dir /tmp] [--build build] [--no-baseline]
+#                                      [--logger-args "--socket-buffer-mb 0"]
 #
 # Needs 2 x ~125 MB/s of disk and about 7.5 GB per logger per minute in
 # --dir; the logs are deleted after counting.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 src=$(cd "$here/../../.." && pwd)
-seconds=60 parent=${TMPDIR:-/tmp} build=${IVOA_BUILD_DIR:-$src/build} baseline=1 grace_s=2
+seconds=60 parent=${TMPDIR:-/tmp} build=${IVOA_BUILD_DIR:-$src/build} baseline=1 grace_s=2 logger_args=""
 while [ $# -gt 0 ]; do
   case $1 in
     --seconds) seconds=$2; shift 2 ;;
     --dir) parent=$2; shift 2 ;;
     --build) build=$2; shift 2 ;;
     --no-baseline) baseline=0; shift ;;
+    --logger-args) logger_args=$2; shift 2 ;;
     -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
     *) echo "unknown argument $1" >&2; exit 2 ;;
   esac
 done
 build=$(cd "$build" && pwd)
 if [ "${IVOA_IN_NETNS:-0}" != 1 ]; then
+  echo "command: $0 $*"
   exec "$src/tests/harness/in_netns.sh" "$0" --seconds "$seconds" --dir "$parent" --build "$build" \
-    $([ $baseline = 1 ] || echo --no-baseline)
+    --logger-args "$logger_args" $([ $baseline = 1 ] || echo --no-baseline)
 fi
 . "$src/tests/harness/wait_for.sh"
 
@@ -56,7 +59,8 @@ socket_drops() {
   awk -v inodes=" $inodes " 'NR > 1 && index(inodes, " " $10 " ") { d += $NF } END { print d + 0 }' /proc/net/udp
 }
 
-"$build/bin/ivoa-logger" "$out/ivoa.lcmlog" --lcm-url "$url" --ready-file "$out/ready" 2>"$out/ivoa.err" &
+# shellcheck disable=SC2086 # extra arguments are split on purpose
+"$build/bin/ivoa-logger" "$out/ivoa.lcmlog" --lcm-url "$url" --ready-file "$out/ready" $logger_args 2>"$out/ivoa.err" &
 ours=$!
 wait_for_file "$out/ready" 10
 if [ $baseline = 1 ]; then
@@ -68,6 +72,7 @@ if [ $baseline = 1 ]; then
   done
 fi
 
+echo "ivoa-logger ${logger_args:-(default options)}; $(nproc) CPUs, load average $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "publishing $frames stereo pairs + $frames depth images at 30 Hz, $seconds calibrations at 1 Hz ($url)"
 "$build/tests/ivoa-test-logger-helper" publish --calibrations "$seconds" --foreign 0 --rate 1 &
 extras=$!
@@ -107,10 +112,10 @@ theirs_mb=$([ $baseline = 1 ] && size_mb "$out/debian.lcmlog" || echo 0)
 python3 - "$seconds" "$frames" "$start" "$end" "$stop" "$ours_exit" "$ours_mb" "$theirs_mb" \
   "$ours_cpu" "$ours_rss" "${theirs_cpu:-0}" "${theirs_rss:-0}" "$baseline" "$ours_counts" "$theirs_counts" \
   "$ours_drops" "${theirs_drops:-0}" "${ours_rb:-0}" "${theirs_rb:-0}" \
-  "$(grep -o 'received.*queue peak [0-9.]* MB' "$out/ivoa.err" | tail -1)" <<'PY'
+  "$(grep -o 'received.*queue peak [0-9.]* MB' "$out/ivoa.err" | tail -1)" "$(cut -d' ' -f1-3 /proc/loadavg)" <<'PY'
 import sys
 (seconds, frames, start, end, stop, ours_exit, ours_mb, theirs_mb, ours_cpu, ours_rss, theirs_cpu, theirs_rss,
- baseline, ours_counts, theirs_counts, ours_drops, theirs_drops, ours_rb, theirs_rb, summary) = sys.argv[1:]
+ baseline, ours_counts, theirs_counts, ours_drops, theirs_drops, ours_rb, theirs_rb, summary, load) = sys.argv[1:]
 frames, baseline = int(frames), baseline == "1"
 publish_s = float(end) - float(start)
 def parse(text):
@@ -127,7 +132,7 @@ for name, n in published.items():
 print(f"{'total':<18}{sum(published.values()):>10}{'':>13}{lost_ours:>7}" + (f"{'':>18}{lost_theirs:>7}" if baseline else ""))
 gaps = {k: v[1] for k, v in ours.items() if v[1]}
 print(f"\nivoa-logger sequence gaps: {gaps or 'none'}")
-print(f"publishing took {publish_s:.1f} s; traffic {int(ours_mb) / publish_s:.0f} MB/s")
+print(f"publishing took {publish_s:.1f} s; traffic {int(ours_mb) / publish_s:.0f} MB/s; load average at the end {load}")
 print(f"ivoa-logger: {int(ours_mb)} MB written, {int(ours_mb) / publish_s:.0f} MB/s sustained while recording; "
       f"exit {float(ours_exit) - float(stop):.2f} s after SIGINT; CPU {ours_cpu} s; peak RSS {ours_rss} MB; "
       f"socket buffer {int(ours_rb) / 1e6:.0f} MB, datagrams dropped by the kernel: {ours_drops}")
