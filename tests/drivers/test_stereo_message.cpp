@@ -13,7 +13,7 @@ namespace {
 
 TEST(AravisBuffer, IncompleteBufferGivesNoPixelsAndSaysWhy) {
   ArvBuffer* buffer = arv_buffer_new_allocate(320 * 240);  // never filled: status "cleared"
-  const FrameResult result = buffer_to_frame(buffer, Side::kRight, TimestampSource::kHost);
+  const FrameResult result = buffer_to_frame(buffer, Side::kRight);
   g_object_unref(buffer);
   EXPECT_FALSE(result.complete);
   EXPECT_TRUE(result.frame.data.empty());

@@ -178,3 +178,94 @@ TEST(FrameIdTracker, WideIdsDoNotWrapAt16Bits) {
 
 }  // namespace
 }  // namespace ivoa::aravis_stereo
+
+namespace ivoa::aravis_stereo {
+namespace {
+
+// Three pairs with right id = left id + 100 lock the offset.
+void lock_with_offset_100(StereoPairer& pairer) {
+  for (int i = 0; i < 3; ++i) {
+    pairer.add(frame(Side::kLeft, i * kPeriod, 1 + i));
+    ASSERT_TRUE(pairer.add(frame(Side::kRight, i * kPeriod + 500, 101 + i)));
+  }
+  ASSERT_TRUE(pairer.locked());
+}
+
+TEST(StereoPairerLock, ALateFrameCannotPairWithItsNeighboursPartner) {
+  // Right frame 3 reaches the host 0.6 periods late: by time alone it is
+  // nearer left frame 4 than left frame 3.
+  const int64_t late = 3 * kPeriod + 6 * kPeriod / 10;
+  {
+    PairingOptions time_only = options();
+    time_only.lock_after_pairs = 0;
+    StereoPairer pairer(time_only);
+    for (int i = 0; i < 3; ++i) {
+      pairer.add(frame(Side::kLeft, i * kPeriod, 1 + i));
+      pairer.add(frame(Side::kRight, i * kPeriod + 500, 101 + i));
+    }
+    pairer.add(frame(Side::kLeft, 3 * kPeriod, 4));
+    pairer.add(frame(Side::kLeft, 4 * kPeriod, 5));
+    auto wrong = pairer.add(frame(Side::kRight, late, 104));
+    ASSERT_TRUE(wrong) << "time-only pairing takes the neighbour";
+    EXPECT_EQ(wrong->left.frame_id, 5u);
+  }
+  StereoPairer pairer(options());
+  lock_with_offset_100(pairer);
+  pairer.add(frame(Side::kLeft, 3 * kPeriod, 4));
+  pairer.add(frame(Side::kLeft, 4 * kPeriod, 5));
+  EXPECT_FALSE(pairer.add(frame(Side::kRight, late, 104))) << "its numbered partner is too far in time: no pair";
+  auto next = pairer.add(frame(Side::kRight, 4 * kPeriod + 500, 105));
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->left.frame_id, 5u);
+  EXPECT_EQ(next->right.frame_id, 105u);
+  EXPECT_TRUE(pairer.locked());
+}
+
+TEST(StereoPairerLock, SurvivesLostFramesAndThe16BitWrap) {
+  StereoPairer pairer(options());
+  // Right ids wrap from 65535 to 1 while the left ids do not.
+  const uint64_t right_ids[] = {65533, 65534, 65535, 1, 2, 3, 4};
+  for (int i = 0; i < 7; ++i) {
+    if (i == 4) continue;  // left frame 4 incomplete: never delivered
+    pairer.add(frame(Side::kLeft, i * kPeriod, 1000 + i));
+    auto pair = pairer.add(frame(Side::kRight, i * kPeriod + 300, right_ids[i]));
+    if (i != 4) {
+      ASSERT_TRUE(pair) << "frame " << i;
+      EXPECT_EQ(pair->left.frame_id, 1000u + i);
+    }
+  }
+  EXPECT_TRUE(pairer.locked());
+  EXPECT_EQ(pairer.counts().missed[0], 1);
+  EXPECT_EQ(pairer.counts().missed[1], 1);
+  EXPECT_EQ(pairer.counts().unlocks, 0);
+}
+
+TEST(StereoPairerLock, DriftingCamerasUnlockAndPairByTimeAgain) {
+  StereoPairer pairer(options());
+  lock_with_offset_100(pairer);
+  // The right camera's clock slipped most of a period: numbered partners are
+  // now far apart in time, the next-numbered frame is the close one.
+  for (int i = 3; i < 6; ++i) {
+    pairer.add(frame(Side::kLeft, i * kPeriod, 1 + i));
+    EXPECT_FALSE(pairer.add(frame(Side::kRight, i * kPeriod - 8 * kPeriod / 10, 101 + i)));
+  }
+  EXPECT_FALSE(pairer.locked());
+  EXPECT_EQ(pairer.counts().unlocks, 1);
+  pairer.add(frame(Side::kLeft, 6 * kPeriod, 7));
+  auto pair = pairer.add(frame(Side::kRight, 7 * kPeriod - 8 * kPeriod / 10, 108));
+  ASSERT_TRUE(pair);
+  EXPECT_EQ(pair->left.frame_id, 7u);
+  EXPECT_EQ(pair->right.frame_id, 108u);
+}
+
+TEST(FrameIdTracker, UnwrapsIntoASequence) {
+  FrameIdTracker ids;
+  EXPECT_EQ(ids.observe(65534).sequence, 0);
+  EXPECT_EQ(ids.observe(65535).sequence, 1);
+  EXPECT_EQ(ids.observe(1).sequence, 2);
+  EXPECT_EQ(ids.observe(4).sequence, 5);
+  EXPECT_EQ(ids.observe(3).sequence, 4);  // a late frame keeps its place
+}
+
+}  // namespace
+}  // namespace ivoa::aravis_stereo

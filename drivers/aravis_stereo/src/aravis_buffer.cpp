@@ -38,7 +38,7 @@ const char* buffer_status_name(ArvBufferStatus status) {
   }
 }
 
-FrameResult buffer_to_frame(ArvBuffer* buffer, Side side, TimestampSource timestamps) {
+FrameResult buffer_to_frame(ArvBuffer* buffer, Side side) {
   const uint64_t frame_id = arv_buffer_get_frame_id(buffer);
   const ArvBufferStatus status = arv_buffer_get_status(buffer);
   if (status != ARV_BUFFER_STATUS_SUCCESS) return incomplete(frame_id, buffer_status_name(status));
@@ -71,10 +71,9 @@ FrameResult buffer_to_frame(ArvBuffer* buffer, Side side, TimestampSource timest
   f.width = width;
   f.height = height;
   f.pixelformat = *format;
-  const int64_t host_us = static_cast<int64_t>(arv_buffer_get_system_timestamp(buffer) / 1000);
-  f.utime = host_us;
-  f.pairing_time_us =
-      timestamps == TimestampSource::kHost ? host_us : static_cast<int64_t>(arv_buffer_get_timestamp(buffer) / 1000);
+  f.utime = static_cast<int64_t>(arv_buffer_get_system_timestamp(buffer) / 1000);
+  f.device_time_us = static_cast<int64_t>(arv_buffer_get_timestamp(buffer) / 1000);
+  f.pairing_time_us = f.utime;
   f.data.resize(row_bytes * static_cast<size_t>(height));
   for (int y = 0; y < height; ++y) std::memcpy(f.data.data() + row_bytes * y, pixels + stride * y, row_bytes);
   return r;

@@ -209,7 +209,7 @@ struct AravisCamera::Impl {
     auto* self = static_cast<Impl*>(self_ptr);
     ArvBuffer* buffer = arv_stream_try_pop_buffer(stream);
     if (buffer == nullptr) return;
-    FrameResult result = buffer_to_frame(buffer, self->side, self->config.timestamps);
+    FrameResult result = buffer_to_frame(buffer, self->side);
     arv_stream_push_buffer(stream, buffer);
     if (self->on_frame) self->on_frame(std::move(result));
   }

@@ -32,12 +32,16 @@ void CameraWorker::start() {
   thread_ = std::thread([this] { run(); });
 }
 
-void CameraWorker::stop() {
+void CameraWorker::request_stop() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stopping_ = true;
   }
   wake_.notify_all();
+}
+
+void CameraWorker::stop() {
+  request_stop();
   if (thread_.joinable()) thread_.join();
 }
 

@@ -23,7 +23,7 @@ struct Flags {
   AravisCameraConfig camera;
   StereoDriverOptions driver;
   std::string output = "raw";
-  std::string timestamps = "host";
+  std::string timestamps = "mapped";
   bool no_packet_resend = false;
 };
 
@@ -59,9 +59,10 @@ void add_options(CLI::App& app, Flags& f) {
       ->capture_default_str();
   app.add_option("--buffers", c.buffers, "stream buffers per camera")->capture_default_str()->check(CLI::Range(2, 64));
   app.add_option("--timestamps", f.timestamps,
-                 "pair by host receive time, or by the cameras' clocks (only with PTP-synchronised cameras)")
+                 "pair by: mapped (each camera's clock mapped onto the host's: no receive jitter), host (receive "
+                 "time), device (the cameras' clocks as they are: only for PTP-synchronised cameras)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"host", "device"}));
+      ->check(CLI::IsMember({"mapped", "host", "device"}));
   auto& d = f.driver;
   app.add_option("--output", f.output, "published pixels: raw (the camera's Bayer/mono, smallest), bgr or gray")
       ->capture_default_str()
@@ -103,7 +104,9 @@ int main(int argc, char** argv) {
   f.driver.software_trigger = f.camera.trigger == "software";
   f.driver.rig_path = f.rig_path;
   f.camera.packet_resend = !f.no_packet_resend;
-  f.camera.timestamps = f.timestamps == "device" ? TimestampSource::kDevice : TimestampSource::kHost;
+  f.driver.clock = f.timestamps == "device" ? PairingClock::kDevice
+                   : f.timestamps == "host" ? PairingClock::kHost
+                                            : PairingClock::kMapped;
 
   ivoa::RigCalibration rig;
   try {

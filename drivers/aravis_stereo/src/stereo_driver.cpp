@@ -36,6 +36,7 @@ struct StereoDriver::State {
   CameraWorker left;
   CameraWorker right;
   StereoPairer pairer;
+  ClockMapper clocks[2];
   int64_t seq = 0;
   int64_t incomplete[2] = {0, 0};
   int64_t publish_failures = 0;
@@ -68,9 +69,23 @@ struct StereoDriver::State {
                    side_name(frame.side), frame.width, frame.height, options.rig_path, cam.width, cam.height);
   }
 
+  // Sets the time the frame is paired by and, unless pairing by raw device
+  // clocks (not epoch-based), the utime it is published with.
+  void apply_clock(CameraFrame& frame) {
+    switch (options.clock) {
+      case PairingClock::kHost: frame.pairing_time_us = frame.utime; break;
+      case PairingClock::kDevice: frame.pairing_time_us = frame.device_time_us; break;
+      case PairingClock::kMapped:
+        frame.utime = frame.pairing_time_us =
+            clocks[static_cast<int>(frame.side)].map(frame.device_time_us, frame.utime);
+        break;
+    }
+  }
+
   void on_frame(CameraFrame&& frame) {
     heartbeat.count_in();
     check_size_against_rig(frame);
+    apply_clock(frame);
     auto pair = pairer.add(std::move(frame));
     if (!pair) return;
     try {
@@ -106,6 +121,7 @@ struct StereoDriver::State {
         break;
       case CameraEvent::Type::kConnected:
         pairer.reset(event.side);  // its frame counter and clock may have restarted
+        clocks[i].reset();
         connected[i] = ever_connected[i] = true;
         update_state();
         break;
@@ -133,6 +149,7 @@ struct StereoDriver::State {
     heartbeat.set_counter("missed_left", c.missed[0]);
     heartbeat.set_counter("missed_right", c.missed[1]);
     heartbeat.set_counter("reconnects", left.reconnects() + right.reconnects());
+    heartbeat.set_counter("pairing_unlocks", c.unlocks);
     heartbeat.set_counter("queue_overflow", overflow);
     heartbeat.set_counter("publish_failures", publish_failures);
   }
@@ -197,6 +214,8 @@ int StereoDriver::run() {
     s.heartbeat.tick();
   }
   if (stop_requested()) spdlog::info("stopping (signal {})", stop_signal());
+  s.left.request_stop();
+  s.right.request_stop();
   s.left.stop();
   s.right.stop();
   s.publish_counters();

@@ -136,6 +136,7 @@ int main(int argc, char** argv) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   for (int i = 0; i < 2; ++i)
-    if (cameras[i]) spdlog::info("{} camera served {} frames", rig_camera_name(static_cast<RigCamera>(i)), cameras[i]->frames());
+    if (cameras[i]) spdlog::info("{} camera served {} frames ({} off beat: fired over a quarter period late)",
+                   rig_camera_name(static_cast<RigCamera>(i)), cameras[i]->frames(), cameras[i]->off_beat_frames());
   return ivoa::kExitOk;
 }

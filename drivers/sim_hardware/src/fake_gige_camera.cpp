@@ -1,5 +1,6 @@
 #include "ivoa/sim_hardware/fake_gige_camera.hpp"
 
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 
@@ -35,14 +36,21 @@ SceneFiller::SceneFiller(const StereoScene& scene, RigCamera camera, ArvFakeCame
   arv_fake_camera_set_fill_pattern(fake_, &SceneFiller::fill, this);
 }
 
-uint32_t SceneFiller::tick_of(ArvBuffer* buffer) const {
-  if (arv_fake_camera_is_in_software_trigger_mode(fake_)) return static_cast<uint32_t>(arv_buffer_get_frame_id(buffer));
+FrameStamp SceneFiller::stamp_of(ArvBuffer* buffer) {
+  if (arv_fake_camera_is_in_software_trigger_mode(fake_))
+    return {static_cast<uint32_t>(arv_buffer_get_frame_id(buffer)), false};
   guint32 period_us = 0;
   arv_fake_camera_read_register(fake_, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US, &period_us);
   if (period_us == 0) period_us = 40000;
   const uint64_t time_us = arv_buffer_get_timestamp(buffer) / 1000;
   // Frames fire on multiples of the period; round so a few ms late still counts.
-  return static_cast<uint32_t>((time_us + period_us / 2) / period_us);
+  const uint64_t tick = (time_us + period_us / 2) / period_us;
+  // A starved simulator thread fires late: more than a quarter period off
+  // its slot, which instant the frame shows is ambiguous; say so.
+  const int64_t off_us = static_cast<int64_t>(time_us) - static_cast<int64_t>(tick * period_us);
+  const bool off_beat = std::llabs(off_us) > period_us / 4;
+  if (off_beat) ++off_beat_;
+  return {static_cast<uint32_t>(tick), off_beat};
 }
 
 // Runs on the fake camera's thread, under its fill mutex.
@@ -50,7 +58,7 @@ void SceneFiller::fill(ArvBuffer* buffer, void* self_ptr, guint32, guint32, ArvP
   auto* self = static_cast<SceneFiller*>(self_ptr);
   const int width = arv_buffer_get_image_width(buffer);
   const int height = arv_buffer_get_image_height(buffer);
-  const cv::Mat raw = sensor_image(self->scene_.render(self->camera_, self->tick_of(buffer), {width, height}), format);
+  const cv::Mat raw = sensor_image(self->scene_.render(self->camera_, self->stamp_of(buffer), {width, height}), format);
   if (raw.empty()) {
     if (!self->warned_format_.exchange(true))
       spdlog::warn("{} fake camera: pixel format 0x{:08x} is not served (8-bit Bayer or Mono8 only)",

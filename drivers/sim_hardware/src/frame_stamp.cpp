@@ -3,13 +3,14 @@
 namespace ivoa::sim_hardware {
 namespace {
 
-uint32_t check_byte(uint32_t tick) {
-  return ((tick >> 16) ^ (tick >> 8) ^ tick ^ 0xA5u) & 0xFFu;
+uint32_t check_byte(uint32_t payload) {
+  return ((payload >> 16) ^ (payload >> 8) ^ payload ^ 0xA5u) & 0xFFu;
 }
 
-uint32_t stamp_word(uint32_t tick) {
-  tick &= kStampTickMask;
-  return (tick << 8) | check_byte(tick);
+// tick (23 bits), off-beat flag (1 bit), check (8 bits).
+uint32_t stamp_word(const FrameStamp& stamp) {
+  const uint32_t payload = ((stamp.tick & kStampTickMask) << 1) | (stamp.off_beat ? 1u : 0u);
+  return (payload << 8) | check_byte(payload);
 }
 
 bool fits(const cv::Mat& image) {
@@ -19,9 +20,9 @@ bool fits(const cv::Mat& image) {
 
 }  // namespace
 
-void write_stamp(cv::Mat& image, uint32_t tick) {
+void write_stamp(cv::Mat& image, const FrameStamp& stamp) {
   if (!fits(image)) return;
-  const uint32_t word = stamp_word(tick);
+  const uint32_t word = stamp_word(stamp);
   for (int bit = 0; bit < kStampBits; ++bit) {
     const bool one = (word >> (kStampBits - 1 - bit)) & 1u;
     const cv::Rect block(bit * kStampBlockPx, 0, kStampBlockPx, kStampBlockPx);
@@ -29,7 +30,7 @@ void write_stamp(cv::Mat& image, uint32_t tick) {
   }
 }
 
-std::optional<uint32_t> read_stamp(const cv::Mat& image) {
+std::optional<FrameStamp> read_stamp(const cv::Mat& image) {
   if (!fits(image)) return std::nullopt;
   uint32_t word = 0;
   const int centre = kStampBlockPx / 2;
@@ -46,9 +47,9 @@ std::optional<uint32_t> read_stamp(const cv::Mat& image) {
     if (value > 64 && value < 192) return std::nullopt;  // not a black/white block
     word = (word << 1) | (value >= 192 ? 1u : 0u);
   }
-  const uint32_t tick = word >> 8;
-  if ((word & 0xFFu) != check_byte(tick)) return std::nullopt;
-  return tick;
+  const uint32_t payload = word >> 8;
+  if ((word & 0xFFu) != check_byte(payload)) return std::nullopt;
+  return FrameStamp{payload >> 1, (payload & 1u) != 0};
 }
 
 }  // namespace ivoa::sim_hardware

@@ -85,10 +85,10 @@ cv::Mat StereoScene::file_frame(RigCamera camera, uint32_t tick, cv::Size size) 
   return it->second.clone();
 }
 
-cv::Mat StereoScene::render(RigCamera camera, uint32_t tick, cv::Size size) const {
-  tick &= kStampTickMask;
+cv::Mat StereoScene::render(RigCamera camera, const FrameStamp& stamp, cv::Size size) const {
+  const uint32_t tick = stamp.tick & kStampTickMask;
   cv::Mat image = is_pattern() ? render_pattern(camera, tick, size) : file_frame(camera, tick, size);
-  if (stamp_) write_stamp(image, tick);
+  if (stamp_) write_stamp(image, {tick, stamp.off_beat});
   return image;
 }
 

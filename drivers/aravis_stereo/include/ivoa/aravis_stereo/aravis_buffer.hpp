@@ -9,8 +9,9 @@ namespace ivoa::aravis_stereo {
 
 // A complete frame with tightly packed rows, or (complete = false) the
 // reason the buffer cannot be used: lost packets, unmapped pixel format,
-// wrong size. Never returns partial pixels.
-FrameResult buffer_to_frame(ArvBuffer* buffer, Side side, TimestampSource timestamps);
+// wrong size. Never returns partial pixels. pairing_time_us is the host
+// receive time until the driver chooses otherwise.
+FrameResult buffer_to_frame(ArvBuffer* buffer, Side side);
 
 // "missing packets", "timeout", ... for log lines.
 const char* buffer_status_name(ArvBufferStatus status);

@@ -8,11 +8,6 @@
 
 namespace ivoa::aravis_stereo {
 
-enum class TimestampSource {
-  kHost,    // when the frame's first packet reached this computer (comparable across cameras)
-  kDevice,  // the camera's clock: only comparable across cameras synchronised by PTP
-};
-
 struct AravisCameraConfig {
   std::string device;                     // IP address, Aravis id (Vendor-Model-Serial), serial number or MAC
   std::string pixel_format = "BayerRG8";  // GenICam PixelFormat: BayerRG8, BayerBG8, BayerGB8, BayerGR8, Mono8, RGB8
@@ -28,7 +23,6 @@ struct AravisCameraConfig {
   bool packet_resend = true;              // ask a GigE camera to resend lost packets
   std::string trigger = "none";           // none | software | a hardware input line, e.g. Line0
   int buffers = 8;                        // stream buffers in flight
-  TimestampSource timestamps = TimestampSource::kHost;
 };
 
 class AravisCamera : public CameraSource {

@@ -13,8 +13,9 @@ inline Side other_side(Side side) { return side == Side::kLeft ? Side::kRight : 
 
 struct CameraFrame {
   Side side = Side::kLeft;
-  int64_t pairing_time_us = 0;  // the clock frames are paired by (host receive time or device clock), us
-  int64_t utime = 0;            // host time of the frame, us since the epoch (published as utime)
+  int64_t utime = 0;            // when the frame reached the host, us since the epoch
+  int64_t device_time_us = 0;   // the camera's own timestamp, us (0 = none)
+  int64_t pairing_time_us = 0;  // the time frames are paired by (see PairingClock), us
   uint64_t frame_id = 0;        // the camera's frame counter (GigE Vision: 16-bit block id, wraps 65535 -> 1)
   int width = 0;                // pixels
   int height = 0;               // pixels

@@ -29,8 +29,11 @@ class CameraWorker {
   CameraWorker& operator=(const CameraWorker&) = delete;
 
   void start();
-  // Stops the thread and closes the camera (may wait for the camera's own
-  // timeouts if it is unreachable).
+  // Asks the thread to close the camera and end; returns at once, so that
+  // two cameras close in parallel.
+  void request_stop();
+  // request_stop() and waits for the thread. Closing an unreachable camera
+  // waits for its own timeouts (Aravis: several seconds).
   void stop();
   // Asks the camera thread to fire a software trigger.
   void trigger();

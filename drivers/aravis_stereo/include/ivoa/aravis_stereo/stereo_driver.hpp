@@ -7,6 +7,7 @@
 #include <string>
 
 #include "ivoa/aravis_stereo/camera_worker.hpp"
+#include "ivoa/aravis_stereo/clock_mapper.hpp"
 #include "ivoa/aravis_stereo/stereo_message.hpp"
 #include "ivoa/core/calibration.hpp"
 #include "ivoa/core/channels.hpp"
@@ -21,6 +22,7 @@ namespace ivoa::aravis_stereo {
 struct StereoDriverOptions {
   OutputFormat output = OutputFormat::kRaw;
   double pair_tolerance_ms = 0;   // max left/right time difference of a pair; 0 = half the frame period
+  PairingClock clock = PairingClock::kMapped;  // also the published utime, except kDevice (host receive time)
   double frame_rate_hz = 30;      // camera rate (sets the default tolerance and the software-trigger rate)
   bool software_trigger = false;  // fire both cameras from this loop at frame_rate_hz
   WorkerOptions worker;           // frame timeout and reconnect back-off

@@ -18,7 +18,8 @@ namespace ivoa::sim_hardware {
 // interface) with a scene. The tick shown is the frame time in frame periods
 // when free-running (two cameras at one rate fire together, so a true pair
 // shows one tick) and the frame id in software-trigger mode (one trigger,
-// one frame per camera). The fake camera must stop (be destroyed) before
+// one frame per camera); frames fired more than a quarter period off their
+// slot are stamped "off beat". The fake camera must stop (be destroyed) before
 // its filler is.
 class SceneFiller {
  public:
@@ -27,15 +28,17 @@ class SceneFiller {
   SceneFiller& operator=(const SceneFiller&) = delete;
 
   int64_t frames() const { return frames_; }
+  int64_t off_beat_frames() const { return off_beat_; }
 
  private:
   static void fill(ArvBuffer* buffer, void* self, guint32 exposure_us, guint32 gain, ArvPixelFormat format);
-  uint32_t tick_of(ArvBuffer* buffer) const;
+  FrameStamp stamp_of(ArvBuffer* buffer);
 
   const StereoScene& scene_;
   const RigCamera camera_;
   ArvFakeCamera* fake_;
   std::atomic<int64_t> frames_{0};
+  std::atomic<int64_t> off_beat_{0};
   std::atomic<bool> warned_format_{false};
 };
 
@@ -56,6 +59,7 @@ class FakeGigeCamera {
   FakeGigeCamera& operator=(const FakeGigeCamera&) = delete;
 
   int64_t frames() const { return filler_ ? filler_->frames() : 0; }
+  int64_t off_beat_frames() const { return filler_ ? filler_->off_beat_frames() : 0; }
 
  private:
   ArvGvFakeCamera* gv_ = nullptr;

@@ -13,6 +13,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "ivoa/sim_hardware/frame_stamp.hpp"
+
 namespace ivoa::sim_hardware {
 
 enum class RigCamera { kLeft, kRight };
@@ -34,9 +36,9 @@ class StereoScene {
   StereoScene(const std::vector<std::string>& left_files, const std::vector<std::string>& right_files,
               bool stamp = true);
 
-  // The 8-bit BGR image a camera sees at `tick`, with the tick stamped in
-  // (frame_stamp.hpp) unless stamping is off. Thread-safe.
-  cv::Mat render(RigCamera camera, uint32_t tick, cv::Size size) const;
+  // The 8-bit BGR image a camera sees at `stamp.tick`, with the stamp
+  // written in (frame_stamp.hpp) unless stamping is off. Thread-safe.
+  cv::Mat render(RigCamera camera, const FrameStamp& stamp, cv::Size size) const;
 
   // Pixels whose colour does not depend on demosaicing: at least 2 pixels
   // from every square's edge and below the stamp (8-bit mask, 255 = use).
