@@ -5,9 +5,11 @@
 #include <functional>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include "ivoa/core/camera_model.hpp"
 #include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/rectification.hpp"
 #include "ivoa/stereo/detector.hpp"
 #include "ivoa/stereo/jppc_detector.hpp"
 #include "synthetic_scene.hpp"
@@ -176,6 +178,30 @@ TEST(Detectors, EvaluateRejectsAGridOfAnotherSize) {
   other.spacing = 0.5;
   obstacle_grid_t msg = make_obstacle_grid(QueryGrid(other, CameraModel(rig.left, rig.left_to_robot)), "jppc", 0);
   EXPECT_THROW(make_detector("jppc", rig, {})->evaluate(grid, msg), std::invalid_argument);
+}
+
+TEST(Detectors, JppcRectifiesAsCoreDoes) {
+  // JPP-C remaps regions itself with tables derived from core's
+  // rectification, and (as JPP) remaps colour before converting to gray.
+  const RigCalibration rig = test::make_test_rig(15.0, true);
+  const StereoRectification core_rect(rig, 0.5);
+  cv::Mat left, right, left_gray, right_gray, core_left, core_right;
+  test::render_pair(room(), test::make_test_rig(15.0), left, right, 1);
+  cv::cvtColor(left, left_gray, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(right, right_gray, cv::COLOR_BGR2GRAY);
+  core_rect.rectify(left_gray, right_gray, core_left, core_right);
+  JppcDetector detector(rig, JppConfig{});
+  detector.set_frame(left, right);
+  detector.prepare_whole_image();
+  cv::Mat diff;
+  cv::absdiff(detector.left_rectified(), core_left, diff);
+  EXPECT_LE(cv::norm(diff, cv::NORM_INF), 2.0);  // rounding of the two conversion orders
+  EXPECT_LT(cv::mean(diff)[0], 0.5);
+  cv::absdiff(detector.right_rectified(), core_right, diff);
+  EXPECT_LE(cv::norm(diff, cv::NORM_INF), 2.0);
+  detector.set_frame(left_gray, right_gray);  // gray input: the same remap exactly
+  detector.prepare_whole_image();
+  EXPECT_EQ(cv::norm(detector.left_rectified(), core_left, cv::NORM_INF), 0.0);
 }
 
 TEST(Detectors, JppcHalfBoxHasFifteenSamplesAndIsCachedPerPair) {

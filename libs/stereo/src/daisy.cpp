@@ -13,26 +13,15 @@ namespace {
 // and the gradient layers are smoothed to a total sigma of 1.6.
 constexpr double kImageSigma = 0.5;
 constexpr double kLayerSigma = 1.6;
+// Filters run on a region only; ISOLATED makes them replicate its edge
+// instead of reading (not computed) pixels outside it.
+constexpr int kBorder = cv::BORDER_REPLICATE | cv::BORDER_ISOLATED;
 
-cv::Mat blur(const cv::Mat& in, double sigma) {
-  const int half = static_cast<int>(std::ceil(3.0 * sigma));
-  cv::Mat out;
-  cv::GaussianBlur(in, out, cv::Size(2 * half + 1, 2 * half + 1), sigma, sigma, cv::BORDER_REPLICATE);
-  return out;
-}
+int half_support(double sigma) { return static_cast<int>(std::ceil(3.0 * sigma)); }
 
-// Bilinear read of a CV_32F layer; 0 where the sample's neighbourhood leaves
-// the image (DAISY leaves out-of-image samples empty).
-float sample(const cv::Mat& layer, double x, double y) {
-  if (x < 0 || y < 0 || x > layer.cols - 1 || y > layer.rows - 1) return 0.f;
-  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
-  const double fx = x - x0, fy = y - y0;
-  const int x1 = fx > 0 ? x0 + 1 : x0, y1 = fy > 0 ? y0 + 1 : y0;
-  const float* r0 = layer.ptr<float>(y0);
-  const float* r1 = layer.ptr<float>(y1);
-  const double top = (1 - fx) * r0[x0] + fx * r0[x1];
-  const double bottom = (1 - fx) * r1[x0] + fx * r1[x1];
-  return static_cast<float>((1 - fy) * top + fy * bottom);
+void blur_into(const cv::Mat& in, cv::Mat out, double sigma) {
+  const int k = 2 * half_support(sigma) + 1;
+  cv::GaussianBlur(in, out, cv::Size(k, k), sigma, sigma, kBorder);
 }
 
 }  // namespace
@@ -47,69 +36,165 @@ DaisyDescriptors::DaisyDescriptors(const DaisyParams& params) : params_(params) 
   // and cube 0 for the centre (an index offset in its code: the centre and
   // ring 1 both read the base layer). We reproduce that quirk, since the
   // thresholds were tuned on it; the last cube is then never read.
-  samples_.push_back({0, 0.0, 0.0});
+  auto add_tap = [&](int cube, double dx, double dy) {
+    const double fx0 = std::floor(dx), fy0 = std::floor(dy);
+    const auto fx = static_cast<float>(dx - fx0), fy = static_cast<float>(dy - fy0);
+    taps_.push_back({cube, static_cast<int>(fx0), static_cast<int>(fy0), (1 - fx) * (1 - fy), fx * (1 - fy),
+                     (1 - fx) * fy, fx * fy});
+    reach_.left = std::max(reach_.left, static_cast<int>(std::ceil(-dx - 1e-9)));
+    reach_.right = std::max(reach_.right, static_cast<int>(std::ceil(dx - 1e-9)));
+    reach_.up = std::max(reach_.up, static_cast<int>(std::ceil(-dy - 1e-9)));
+    reach_.down = std::max(reach_.down, static_cast<int>(std::ceil(dy - 1e-9)));
+  };
+  add_tap(0, 0.0, 0.0);
   for (int r = 1; r <= params.Q; ++r) {
     const double radius = r * params.R / params.Q;
     for (int t = 0; t < params.T; ++t) {
       const double angle = 2.0 * M_PI * t / params.T;
-      samples_.push_back({r - 1, radius * std::cos(angle), radius * std::sin(angle)});
+      add_tap(r - 1, radius * std::cos(angle), radius * std::sin(angle));
     }
   }
-  for (const Sample& s : samples_) {
-    reach_.left = std::max(reach_.left, static_cast<int>(std::ceil(-s.dx - 1e-9)));
-    reach_.right = std::max(reach_.right, static_cast<int>(std::ceil(s.dx - 1e-9)));
-    reach_.up = std::max(reach_.up, static_cast<int>(std::ceil(-s.dy - 1e-9)));
-    reach_.down = std::max(reach_.down, static_cast<int>(std::ceil(s.dy - 1e-9)));
-  }
+  row_taps_ = params.H == 1 && taps_.size() <= kMaxRowTaps;
+  for (const Tap& tap : taps_) row_taps_ = row_taps_ && tap.dy == 0 && tap.w01 == 0 && tap.w11 == 0;
   // Cube i >= 1 adds ring sigma i*R/(2Q) to the base layer, incrementally.
+  const double base_sigma = std::sqrt(kLayerSigma * kLayerSigma - kImageSigma * kImageSigma);
+  filter_margin_ = half_support(kImageSigma) + 1 + half_support(base_sigma);
   for (int i = 1; i < params.Q; ++i) {
     const double now = i * params.R / (2.0 * params.Q), before = (i - 1) * params.R / (2.0 * params.Q);
     cube_increments_.push_back(std::sqrt(now * now - before * before));
+    filter_margin_ += half_support(cube_increments_.back());
   }
 }
 
-void DaisyDescriptors::set_image(const cv::Mat& gray) {
+cv::Rect DaisyDescriptors::region_with_margin(cv::Rect region, cv::Size size) const {
+  const cv::Rect grown(region.x - reach_.left - filter_margin_, region.y - reach_.up - filter_margin_,
+                       region.width + reach_.left + reach_.right + 2 * filter_margin_,
+                       region.height + reach_.up + reach_.down + 2 * filter_margin_);
+  return grown & cv::Rect(cv::Point(0, 0), size);
+}
+
+void DaisyDescriptors::set_image(const cv::Mat& gray, cv::Rect region) {
   if (gray.type() != CV_8UC1 || gray.empty()) throw std::invalid_argument("DAISY needs a non-empty 8-bit gray image");
-  image_size_ = gray.size();
+  const cv::Rect full(cv::Point(0, 0), gray.size());
+  region_ = region.area() > 0 ? region & full : full;
+  const cv::Rect work = region_with_margin(region_, gray.size());
+  if (image_size_ != gray.size() || cubes_.empty()) {
+    image_size_ = gray.size();
+    cubes_.assign(static_cast<size_t>(params_.Q), std::vector<cv::Mat>(static_cast<size_t>(params_.H)));
+    for (auto& cube : cubes_)
+      for (cv::Mat& layer : cube) layer = cv::Mat::zeros(image_size_, CV_32F);
+    // compute() writes every used float; the padding stays zero from here on.
+    cache_.assign(static_cast<size_t>(image_size_.area()) * static_cast<size_t>(stride_), 0.f);
+  }
   cv::Mat image;
-  gray.convertTo(image, CV_32F, 1.0 / 255.0);
-  cv::GaussianBlur(image, image, cv::Size(5, 5), kImageSigma, kImageSigma, cv::BORDER_REPLICATE);
+  gray(work).convertTo(image, CV_32F, 1.0 / 255.0);
+  cv::GaussianBlur(image, image, cv::Size(5, 5), kImageSigma, kImageSigma, kBorder);
   // Central differences, as DAISY's gradient.
   const cv::Mat kx = (cv::Mat_<float>(1, 3) << -0.5f, 0.f, 0.5f);
   cv::Mat dx, dy;
-  cv::filter2D(image, dx, CV_32F, kx, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
-  if (params_.H > 1) cv::filter2D(image, dy, CV_32F, kx.t(), cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
-
+  cv::filter2D(image, dx, CV_32F, kx, cv::Point(-1, -1), 0, kBorder);
+  if (params_.H > 1) cv::filter2D(image, dy, CV_32F, kx.t(), cv::Point(-1, -1), 0, kBorder);
   const double base_sigma = std::sqrt(kLayerSigma * kLayerSigma - kImageSigma * kImageSigma);
-  cubes_.assign(static_cast<size_t>(params_.Q), {});
   for (int h = 0; h < params_.H; ++h) {
     // Orientation bin h: the positive part of the gradient along angle 2*pi*h/H.
     const double angle = 2.0 * M_PI * h / params_.H;
-    cv::Mat layer = h == 0 ? dx.clone() : std::cos(angle) * dx + std::sin(angle) * dy;
+    cv::Mat layer = h == 0 ? dx : std::cos(angle) * dx + std::sin(angle) * dy;
     layer = cv::max(layer, 0.0);
-    cubes_[0].push_back(blur(layer, base_sigma));
-    for (int i = 1; i < params_.Q; ++i)
-      cubes_[static_cast<size_t>(i)].push_back(blur(cubes_[static_cast<size_t>(i - 1)].back(),
-                                                    cube_increments_[static_cast<size_t>(i - 1)]));
+    const auto bin = static_cast<size_t>(h);
+    blur_into(layer, cubes_[0][bin](work), base_sigma);
+    for (size_t i = 1; i < cubes_.size(); ++i)
+      blur_into(cubes_[i - 1][bin](work), cubes_[i][bin](work), cube_increments_[i - 1]);
   }
-  // compute() writes every used float; the padding stays zero from allocation.
-  const size_t pixels = static_cast<size_t>(image_size_.area());
-  if (cache_.size() != pixels * static_cast<size_t>(stride_)) cache_.assign(pixels * static_cast<size_t>(stride_), 0.f);
-  computed_.assign(pixels, 0);
+  chunks_per_row_ = (image_size_.width + kChunk - 1) / kChunk;
+  computed_.assign(static_cast<size_t>(chunks_per_row_) * static_cast<size_t>(image_size_.height), 0);
   computed_count_ = 0;
+}
+
+float DaisyDescriptors::sample(const Tap& tap, int h, int x, int y) const {
+  const cv::Mat& layer = cubes_[static_cast<size_t>(tap.cube)][static_cast<size_t>(h)];
+  const int xs = x + tap.dx, ys = y + tap.dy;
+  if (xs >= 0 && ys >= 0 && xs + 1 < layer.cols && ys + 1 < layer.rows) {
+    const float* r0 = layer.ptr<float>(ys);
+    const float* r1 = layer.ptr<float>(ys + 1);
+    return tap.w00 * r0[xs] + tap.w10 * r0[xs + 1] + tap.w01 * r1[xs] + tap.w11 * r1[xs + 1];
+  }
+  // At the border: a sample needing a pixel outside the image is empty (as
+  // in DAISY); weights of zero need no pixel.
+  float sum = 0;
+  const float weights[4] = {tap.w00, tap.w10, tap.w01, tap.w11};
+  for (int k = 0; k < 4; ++k) {
+    if (weights[k] == 0) continue;
+    const int px = xs + (k & 1), py = ys + (k >> 1);
+    if (px < 0 || py < 0 || px >= layer.cols || py >= layer.rows) return 0.f;
+    sum += weights[k] * layer.at<float>(py, px);
+  }
+  return sum;
+}
+
+void DaisyDescriptors::compute_run(int y, int x0, int x1) {
+  const size_t first = static_cast<size_t>(y) * static_cast<size_t>(image_size_.width);
+  int fast_lo = x1 + 1, fast_hi = x1;  // the sub-run whose samples stay inside the image
+  if (row_taps_) {
+    fast_lo = std::max(x0, reach_.left);
+    fast_hi = std::min(x1, image_size_.width - 2 - reach_.right);
+    if (fast_lo <= fast_hi) compute_row_taps(y, fast_lo, fast_hi);
+  }
+  for (int x = x0; x <= x1; ++x) {
+    if (x >= fast_lo && x <= fast_hi) continue;
+    compute(x, y, &cache_[(first + static_cast<size_t>(x)) * static_cast<size_t>(stride_)]);
+  }
+  computed_count_ += x1 - x0 + 1;
+}
+
+void DaisyDescriptors::compute_row_taps(int y, int x0, int x1) {
+  // Per-tap row pointers and weights in locals: the loop then only streams
+  // through two layer rows and the cache row.
+  const size_t n = taps_.size();
+  const float* rows[kMaxRowTaps];
+  float w0[kMaxRowTaps], w1[kMaxRowTaps];
+  for (size_t k = 0; k < n; ++k) {
+    rows[k] = cubes_[static_cast<size_t>(taps_[k].cube)][0].ptr<float>(y) + taps_[k].dx;
+    w0[k] = taps_[k].w00;
+    w1[k] = taps_[k].w10;
+  }
+  float* out = &cache_[(static_cast<size_t>(y) * static_cast<size_t>(image_size_.width) + static_cast<size_t>(x0)) *
+                       static_cast<size_t>(stride_)];
+  const auto stride = static_cast<size_t>(stride_);
+  if (n == 3) {  // JPP's descriptor, in scalars (a local array here stalls on store forwarding)
+    for (int x = x0; x <= x1; ++x, out += stride) {
+      const float a = w0[0] * rows[0][x] + w1[0] * rows[0][x + 1];
+      const float b = w0[1] * rows[1][x] + w1[1] * rows[1][x + 1];
+      const float c = w0[2] * rows[2][x] + w1[2] * rows[2][x + 1];
+      const float norm = a * a + b * b + c * c;
+      const float inv = norm > 0 ? 1.0f / std::sqrt(norm) : 0.0f;
+      out[0] = a * inv;
+      out[1] = b * inv;
+      out[2] = c * inv;
+    }
+    return;
+  }
+  for (int x = x0; x <= x1; ++x, out += stride) {
+    float v[kMaxRowTaps];
+    float norm = 0;
+    for (size_t k = 0; k < n; ++k) {
+      v[k] = w0[k] * rows[k][x] + w1[k] * rows[k][x + 1];
+      norm += v[k] * v[k];
+    }
+    // DAISY "full" normalisation; an all-zero (texture-less) vector stays zero.
+    const float inv = norm > 0 ? 1.0f / std::sqrt(norm) : 0.0f;
+    for (size_t k = 0; k < n; ++k) out[k] = v[k] * inv;
+  }
 }
 
 void DaisyDescriptors::compute(int x, int y, float* out) const {
   int k = 0;
-  for (const Sample& s : samples_) {
-    const auto& cube = cubes_[static_cast<size_t>(s.cube)];
-    for (int h = 0; h < params_.H; ++h) out[k++] = sample(cube[static_cast<size_t>(h)], x + s.dx, y + s.dy);
-  }
-  double norm = 0;
-  for (int i = 0; i < size_; ++i) norm += static_cast<double>(out[i]) * out[i];
+  for (const Tap& tap : taps_)
+    for (int h = 0; h < params_.H; ++h) out[k++] = sample(tap, h, x, y);
+  float norm = 0;
+  for (int i = 0; i < size_; ++i) norm += out[i] * out[i];
   // DAISY "full" normalisation; an all-zero (texture-less) vector stays zero.
   if (norm > 0) {
-    const float inv = static_cast<float>(1.0 / std::sqrt(norm));
+    const float inv = 1.0f / std::sqrt(norm);
     for (int i = 0; i < size_; ++i) out[i] *= inv;
   }
 }

@@ -14,11 +14,15 @@ std::string describe(const cv::Mat& m) {
   return std::to_string(m.cols) + "x" + std::to_string(m.rows) + " " + cv::typeToString(m.type());
 }
 
-void to_gray(const cv::Mat& in, cv::Mat& out, const CameraIntrinsics& camera, const std::string& side) {
+void check_image(const cv::Mat& in, const CameraIntrinsics& camera, const std::string& side) {
   const bool ok_type = in.depth() == CV_8U && (in.channels() == 1 || in.channels() == 3);
   if (in.empty() || !ok_type || in.cols != camera.width || in.rows != camera.height)
     throw FrameError(side + " image is " + describe(in) + "; the calibration expects 8-bit gray or BGR " +
                      std::to_string(camera.width) + "x" + std::to_string(camera.height));
+}
+
+void to_gray(const cv::Mat& in, cv::Mat& out, const CameraIntrinsics& camera, const std::string& side) {
+  check_image(in, camera, side);
   if (in.channels() == 3)
     cv::cvtColor(in, out, cv::COLOR_BGR2GRAY);
   else
@@ -63,6 +67,11 @@ const char* to_string(Verdict verdict) {
     case Verdict::kUnknown: break;
   }
   return "unknown";
+}
+
+void check_frame(const cv::Mat& left_raw, const cv::Mat& right_raw, const RigCalibration& rig) {
+  check_image(left_raw, rig.left, "left");
+  check_image(right_raw, rig.right, "right");
 }
 
 void to_gray_checked(const cv::Mat& left_raw, const cv::Mat& right_raw, const RigCalibration& rig, cv::Mat& left_gray,

@@ -10,12 +10,13 @@ namespace {
 
 DaisyParams daisy_params(const JppConfig& c) { return {c.daisy_R, c.daisy_Q, c.daisy_T, c.daisy_H}; }
 
-float l1(const float* a, const float* b, int stride) {
-  if (stride == 4)  // JPP's 3-float descriptor, padded: the common case, unrolled.
-    return std::abs(a[0] - b[0]) + std::abs(a[1] - b[1]) + std::abs(a[2] - b[2]) + std::abs(a[3] - b[3]);
-  float sum = 0;
-  for (int i = 0; i < stride; ++i) sum += std::abs(a[i] - b[i]);
-  return sum;
+// Sum of |a - b| over n floats, n a multiple of 4, in four independent
+// lanes so the compiler can keep it in one SIMD register.
+float l1(const float* a, const float* b, int n) {
+  float lane[4] = {0, 0, 0, 0};
+  for (int i = 0; i < n; i += 4)
+    for (int j = 0; j < 4; ++j) lane[j] += std::abs(a[i + j] - b[i + j]);
+  return (lane[0] + lane[1]) + (lane[2] + lane[3]);
 }
 
 uint64_t pair_key(cv::Point l, cv::Point r) {
@@ -30,36 +31,55 @@ JppMatcher::JppMatcher(const JppConfig& config)
   validate(config_);
 }
 
-void JppMatcher::set_images(const cv::Mat& left_gray, const cv::Mat& right_gray) {
+void JppMatcher::set_images(const cv::Mat& left_gray, const cv::Mat& right_gray, cv::Rect left_region,
+                            cv::Rect right_region) {
   if (left_gray.size() != right_gray.size())
     throw std::invalid_argument("JPP matcher: left and right rectified images differ in size");
   if (left_gray.cols > 65535 || left_gray.rows > 65535)
     throw std::invalid_argument("JPP matcher: images larger than 65535 pixels are not supported");
-  left_.set_image(left_gray);
-  right_.set_image(right_gray);
+  left_.set_image(left_gray, left_region);
+  right_.set_image(right_gray, right_region);
   cp_cache_.clear();
   cp_tests_ = cp_cache_hits_ = 0;
 }
 
-std::optional<double> JppMatcher::cost(cv::Point l, cv::Point r) {
-  if (!inside(l) || !inside(r)) return std::nullopt;
-  const int w = config_.SAD_window_size;
-  const int stride = left_.stride();
+JppMatcher::Window JppMatcher::window(cv::Point l, cv::Point r) const {
   // Window pixels whose descriptors are complete (every sample point inside
   // the image) on both sides. DAISY reads zeros beyond the border, so JPP's
   // descriptors near the right edge (samples reach 5 px ahead) never matched.
+  const int w = config_.SAD_window_size;
   const DaisyDescriptors::Reach reach = left_.reach();
   const int x_min = reach.left, x_max = size().width - 1 - reach.right;
   const int y_min = reach.up, y_max = size().height - 1 - reach.down;
-  const int dx_lo = std::max({-w, x_min - l.x, x_min - r.x}), dx_hi = std::min({w, x_max - l.x, x_max - r.x});
-  const int dy_lo = std::max({-w, y_min - l.y, y_min - r.y}), dy_hi = std::min({w, y_max - l.y, y_max - r.y});
-  const int compared = std::max(0, dx_hi - dx_lo + 1) * std::max(0, dy_hi - dy_lo + 1);
-  const int window = (2 * w + 1) * (2 * w + 1);
-  if (compared == 0 || compared < config_.min_window_fraction * window) return std::nullopt;
+  return {std::max({-w, x_min - l.x, x_min - r.x}), std::min({w, x_max - l.x, x_max - r.x}),
+          std::max({-w, y_min - l.y, y_min - r.y}), std::min({w, y_max - l.y, y_max - r.y})};
+}
+
+bool JppMatcher::covers(cv::Point l, cv::Point r) const {
+  if (!inside(l) || !inside(r)) return true;
+  const Window win = window(l, r);
+  if (win.compared() == 0) return true;
+  auto in = [&](const cv::Rect& region, cv::Point c) {
+    return region.contains(c + cv::Point(win.dx_lo, win.dy_lo)) && region.contains(c + cv::Point(win.dx_hi, win.dy_hi));
+  };
+  return in(left_.region(), l) && in(right_.region(), r);
+}
+
+std::optional<double> JppMatcher::cost(cv::Point l, cv::Point r) {
+  if (!inside(l) || !inside(r)) return std::nullopt;
+  const Window win = window(l, r);
+  const int w = config_.SAD_window_size;
+  const int compared = win.compared();
+  if (compared == 0 || compared < config_.min_window_fraction * (2 * w + 1) * (2 * w + 1)) return std::nullopt;
+  if (!covers(l, r)) throw std::logic_error("JPP matcher: window outside the region its images were prepared for");
+  const int stride = left_.stride();
+  const int n = (win.dx_hi - win.dx_lo + 1) * stride;
   float sum = 0;
-  for (int dy = dy_lo; dy <= dy_hi; ++dy) {
-    for (int dx = dx_lo; dx <= dx_hi; ++dx)
-      sum += l1(left_.at(l.x + dx, l.y + dy), right_.at(r.x + dx, r.y + dy), stride);
+  for (int dy = win.dy_lo; dy <= win.dy_hi; ++dy) {
+    const int xl = l.x + win.dx_lo, xr = r.x + win.dx_lo;
+    const float* a = left_.row(l.y + dy, xl, l.x + win.dx_hi) + static_cast<ptrdiff_t>(xl) * stride;
+    const float* b = right_.row(r.y + dy, xr, r.x + win.dx_hi) + static_cast<ptrdiff_t>(xr) * stride;
+    sum += l1(a, b, n);
   }
   return static_cast<double>(sum) / compared;
 }
@@ -95,7 +115,7 @@ bool JppMatcher::confident_negative(cv::Point l, cv::Point r) {
 double JppMatcher::texture(cv::Point l) const {
   const cv::Mat& layer = left_.base_layer(0);
   const int w = config_.SAD_window_size;
-  const cv::Rect window = cv::Rect(l.x - w, l.y - w, 2 * w + 1, 2 * w + 1) & cv::Rect(0, 0, layer.cols, layer.rows);
+  const cv::Rect window = cv::Rect(l.x - w, l.y - w, 2 * w + 1, 2 * w + 1) & left_.region();
   if (window.area() == 0) return 0.0;
   return cv::mean(layer(window))[0] * 255.0;
 }

@@ -1,6 +1,9 @@
 #include "ivoa/stereo/jppc_detector.hpp"
 
 #include <cmath>
+#include <tuple>
+
+#include <opencv2/imgproc.hpp>
 
 namespace ivoa::stereo {
 namespace {
@@ -12,42 +15,130 @@ cv::Point nearest_pixel(const Eigen::Vector2d& p) {
 // Samples in [0, extent] at `step`, counted with integers.
 int samples_up_to(double extent, double step) { return static_cast<int>(std::floor(extent / step + 1e-6)) + 1; }
 
+cv::Rect bounding(const cv::Rect& a, const cv::Rect& b) { return a.area() == 0 ? b : a | b; }
+
+cv::Mat pixel_coordinates(const CameraIntrinsics& camera, int axis) {
+  cv::Mat out(camera.height, camera.width, CV_32F);
+  for (int v = 0; v < out.rows; ++v) {
+    float* row = out.ptr<float>(v);
+    for (int u = 0; u < out.cols; ++u) row[u] = static_cast<float>(axis == 0 ? u : v);
+  }
+  return out;
+}
+
 }  // namespace
 
 JppcDetector::JppcDetector(const RigCalibration& rig, const JppConfig& config)
-    : rig_(rig), config_(config), rect_(rig, config.rect_scale), matcher_(config) {}
+    : rig_(rig), config_(config), rect_(rig, config.rect_scale), matcher_(config) {
+  // Remapping a region needs the remap tables, which core keeps to itself:
+  // rectifying images of the raw pixel coordinates yields them (bilinear
+  // interpolation of a linear function is exact, and remap quantises to
+  // 1/32 px either way). Where a table entry blends in pixels from outside
+  // the raw image (a ones image comes out < 1) the pixel is black, as in
+  // core's rectify().
+  cv::Mat lx, rx, ly, ry, left_in, right_in;
+  rect_.rectify(pixel_coordinates(rig.left, 0), pixel_coordinates(rig.right, 0), lx, rx);
+  rect_.rectify(pixel_coordinates(rig.left, 1), pixel_coordinates(rig.right, 1), ly, ry);
+  rect_.rectify(cv::Mat::ones(rig.left.height, rig.left.width, CV_32F),
+                cv::Mat::ones(rig.right.height, rig.right.width, CV_32F), left_in, right_in);
+  for (auto [x, y, in] : {std::tuple<cv::Mat&, cv::Mat&, cv::Mat&>{lx, ly, left_in}, {rx, ry, right_in}}) {
+    x.setTo(-10.f, in < 0.999f);
+    y.setTo(-10.f, in < 0.999f);
+  }
+  cv::convertMaps(lx, ly, map_left_xy_, map_left_frac_, CV_16SC2);
+  cv::convertMaps(rx, ry, map_right_xy_, map_right_frac_, CV_16SC2);
+  left_rect_ = cv::Mat::zeros(rect_.size(), CV_8UC1);
+  right_rect_ = cv::Mat::zeros(rect_.size(), CV_8UC1);
+}
 
 void JppcDetector::set_frame(const cv::Mat& left_raw, const cv::Mat& right_raw) {
-  has_frame_ = false;
-  to_gray_checked(left_raw, right_raw, rig_, left_gray_, right_gray_);
-  rect_.rectify(left_gray_, right_gray_, left_rect_, right_rect_);
-  matcher_.set_images(left_rect_, right_rect_);
+  has_frame_ = prepared_ = whole_image_ = false;
+  check_frame(left_raw, right_raw, rig_);
+  left_raw_ = left_raw;  // shared, not copied: rectified in evaluate()
+  right_raw_ = right_raw;
   has_frame_ = true;
 }
 
-PointCheck JppcDetector::confident_positive(const Eigen::Vector3d& p_robot) {
+void JppcDetector::rectify_region(const cv::Mat& raw, const cv::Mat& map_xy, const cv::Mat& map_frac,
+                                  cv::Rect region, cv::Mat& rect_gray, cv::Mat& scratch) const {
+  if (raw.channels() == 1) {
+    cv::remap(raw, rect_gray(region), map_xy(region), map_frac(region), cv::INTER_LINEAR);
+    return;
+  }
+  // JPP's order: remap the colour image, then convert to gray.
+  cv::remap(raw, scratch, map_xy(region), map_frac(region), cv::INTER_LINEAR);
+  cv::Mat out = rect_gray(region);
+  cv::cvtColor(scratch, out, cv::COLOR_BGR2GRAY);
+}
+
+void JppcDetector::prepare(cv::Rect left_region, cv::Rect right_region) {
+  const cv::Rect image(cv::Point(0, 0), rect_.size());
+  const cv::Rect left_area = left_region.area() > 0 ? matcher_.descriptor_margin(left_region, rect_.size()) : image;
+  const cv::Rect right_area = right_region.area() > 0 ? matcher_.descriptor_margin(right_region, rect_.size()) : image;
+  rectify_region(left_raw_, map_left_xy_, map_left_frac_, left_area, left_rect_, scratch_);
+  rectify_region(right_raw_, map_right_xy_, map_right_frac_, right_area, right_rect_, scratch_);
+  matcher_.set_images(left_rect_, right_rect_, left_region, right_region);
+  prepared_ = true;
+  whole_image_ = left_region.area() == 0 && right_region.area() == 0;
+}
+
+JppcDetector::Projection JppcDetector::project(const Eigen::Vector3d& p_robot) const {
   Eigen::Vector2d left, right;
-  if (!has_frame_ || !rect_.project(p_robot, left, right)) return PointCheck::kUnobserved;
-  return matcher_.confident_positive(nearest_pixel(left), nearest_pixel(right));
+  if (!rect_.project(p_robot, left, right)) return {false, {}, {}};
+  return {true, nearest_pixel(left), nearest_pixel(right)};
+}
+
+template <class Visit>
+void JppcDetector::for_each_sample(double x, double y, double radius, Visit visit) const {
+  // JPP's is_bot_clear with col_check = false: the half box ahead of (x, y).
+  const double step = config_.grid_size;
+  const int n_forward = samples_up_to(radius, step), n_lateral = samples_up_to(2.0 * radius, step);
+  for (int i = 0; i < n_forward; ++i)
+    for (int j = 0; j < n_lateral; ++j)
+      if (!visit(Eigen::Vector3d(x + i * step, y - radius + j * step, 0.0))) return;
+}
+
+PointCheck JppcDetector::confident_positive(const Eigen::Vector3d& p_robot) {
+  const Projection p = project(p_robot);
+  if (!has_frame_ || !p.valid) return PointCheck::kUnobserved;
+  if (!prepared_ || !matcher_.covers(p.left, p.right)) prepare({}, {});
+  return matcher_.confident_positive(p.left, p.right);
 }
 
 Verdict JppcDetector::check(double x, double y, double radius) {
-  // JPP's is_bot_clear with col_check = false: the half box ahead of (x, y).
-  const double step = config_.grid_size;
-  const int n_forward = samples_up_to(radius, step);
-  const int n_lateral = samples_up_to(2.0 * radius, step);
-  bool unobserved = false;
-  for (int i = 0; i < n_forward; ++i) {
-    for (int j = 0; j < n_lateral; ++j) {
-      const Eigen::Vector3d q(x + i * step, y - radius + j * step, 0.0);
-      switch (confident_positive(q)) {
-        case PointCheck::kNoMatch: return Verdict::kObstacle;
-        case PointCheck::kUnobserved: unobserved = true; break;
-        case PointCheck::kMatch: break;
-      }
+  bool obstacle = false, unobserved = false;
+  for_each_sample(x, y, radius, [&](const Eigen::Vector3d& q) {
+    switch (confident_positive(q)) {
+      case PointCheck::kNoMatch: obstacle = true; return false;  // one failing sample decides
+      case PointCheck::kUnobserved: unobserved = true; break;
+      case PointCheck::kMatch: break;
     }
-  }
+    return true;
+  });
+  if (obstacle) return Verdict::kObstacle;
   return unobserved ? Verdict::kUnknown : Verdict::kFree;
+}
+
+void JppcDetector::evaluate(const QueryGrid& grid, obstacle_grid_t& out) {
+  if (has_frame_ && !whole_image_) {
+    // Prepare only where the grid's windows fall.
+    const cv::Rect image(cv::Point(0, 0), rect_.size());
+    const int w = config_.SAD_window_size;
+    cv::Rect left_region, right_region;
+    for (const QueryCell& cell : grid.cells()) {
+      if (!cell.projects) continue;
+      for_each_sample(cell.x, cell.y, grid.config().safety_radius, [&](const Eigen::Vector3d& q) {
+        const Projection p = project(q);
+        if (p.valid && image.contains(p.left) && image.contains(p.right)) {
+          left_region = bounding(left_region, cv::Rect(p.left.x - w, p.left.y - w, 2 * w + 1, 2 * w + 1) & image);
+          right_region = bounding(right_region, cv::Rect(p.right.x - w, p.right.y - w, 2 * w + 1, 2 * w + 1) & image);
+        }
+        return true;
+      });
+    }
+    if (left_region.area() > 0) prepare(left_region, right_region);
+  }
+  ObstacleDetector::evaluate(grid, out);
 }
 
 }  // namespace ivoa::stereo

@@ -55,8 +55,10 @@ std::vector<std::string> detector_names();
 int8_t to_state(Verdict verdict);  // obstacle_grid_t::STATE_*
 const char* to_string(Verdict verdict);
 
-// Shared by the detectors: checks the pair against the calibration and
+// Shared by the detectors: checks the pair against the calibration (8-bit
+// gray or BGR of the calibrated sizes), throwing FrameError; the second also
 // returns both images as 8-bit gray.
+void check_frame(const cv::Mat& left_raw, const cv::Mat& right_raw, const RigCalibration& rig);
 void to_gray_checked(const cv::Mat& left_raw, const cv::Mat& right_raw, const RigCalibration& rig, cv::Mat& left_gray,
                      cv::Mat& right_gray);
 

@@ -5,6 +5,7 @@
 // counterpart, thresholded into "confident positive" (a surface is there)
 // and "confident negative" (confidently nothing there). Works in pixel
 // space, so the stereo evaluation tool uses it directly on any rectified pair.
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <unordered_map>
@@ -27,7 +28,15 @@ class JppMatcher {
   explicit JppMatcher(const JppConfig& config);
 
   // Rectified 8-bit gray pair of one size. Resets descriptors and caches.
-  void set_images(const cv::Mat& left_gray, const cv::Mat& right_gray);
+  // Windows may then be asked for inside the given regions only (empty: the
+  // whole image); each image must be valid within
+  // descriptor_margin(region) (see DaisyDescriptors).
+  void set_images(const cv::Mat& left_gray, const cv::Mat& right_gray, cv::Rect left_region = {},
+                  cv::Rect right_region = {});
+  cv::Rect descriptor_margin(cv::Rect region, cv::Size size) const { return left_.region_with_margin(region, size); }
+  // Whether the windows of this pair lie inside the regions given to
+  // set_images (always true for the whole image).
+  bool covers(cv::Point left, cv::Point right) const;
   cv::Size size() const { return left_.image_size(); }
 
   // Mean per-pixel L1 descriptor distance over the window pixels whose
@@ -59,6 +68,13 @@ class JppMatcher {
 
  private:
   bool inside(cv::Point p) const { return p.x >= 0 && p.y >= 0 && p.x < size().width && p.y < size().height; }
+  // The part of the window around (left, right) where both descriptors are
+  // complete, as offsets from the centres; empty (compared == 0) if none.
+  struct Window {
+    int dx_lo = 0, dx_hi = -1, dy_lo = 0, dy_hi = -1;
+    int compared() const { return std::max(0, dx_hi - dx_lo + 1) * std::max(0, dy_hi - dy_lo + 1); }
+  };
+  Window window(cv::Point left, cv::Point right) const;
 
   JppConfig config_;
   DaisyDescriptors left_, right_;

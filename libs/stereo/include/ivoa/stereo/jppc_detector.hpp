@@ -17,16 +17,21 @@
 //  - pixels are rounded to nearest (JPP truncates, which is wrong for
 //    negative coordinates and biases by half a pixel);
 //  - the CP cache is keyed on the (left, right) pixel pair (JPP: left only);
-//  - the window cost divides by the pixels compared and windows mostly
-//    outside give no verdict (JPP divides by 121: border bias to "match");
+//  - the window cost divides by the pixels compared, compares only complete
+//    descriptors, and windows mostly outside give no verdict (JPP divides by
+//    121 and zero-pads descriptors at the border: biased costs there);
 //  - a sample outside either image, or unobserved, makes the footprint
 //    UNKNOWN rather than "not free" (JPP): the detector did not see it.
 //    Any sample that fails to match still makes it OBSTACLE;
-//  - the raw images are converted to gray before remapping (JPP remaps BGR,
-//    then converts; both are linear, the result differs only by rounding);
 //  - XR/XT are the raw left camera's pose (the project's calibration
 //    convention); the rectification rotation is applied here (JPP assumed
 //    them relative to the rectified camera).
+//
+// Work per frame is lazy, in JPP's spirit: set_frame only keeps the images;
+// evaluate() rectifies (remap, then BGR -> gray, as JPP) and builds
+// descriptor layers only where the grid's windows fall (about half the image
+// for the default grid); a check() outside that region prepares the whole
+// image. Descriptors are computed on first use.
 #include <memory>
 
 #include "ivoa/core/rectification.hpp"
@@ -42,22 +47,42 @@ class JppcDetector : public ObstacleDetector {
   std::string name() const override { return "jppc"; }
   void set_frame(const cv::Mat& left_raw, const cv::Mat& right_raw) override;
   Verdict check(double x, double y, double radius) override;
+  void evaluate(const QueryGrid& grid, obstacle_grid_t& out) override;
 
-  // Confident positive for one robot-frame point (JPP's isFreeSpace/CP).
+  // Confident positive for one robot-frame point (JPP's CP).
   PointCheck confident_positive(const Eigen::Vector3d& p_robot);
 
   const StereoRectification& rectification() const { return rect_; }
+  // Rectified images, valid inside the prepared regions (all of it after
+  // prepare_whole_image()).
   const cv::Mat& left_rectified() const { return left_rect_; }
   const cv::Mat& right_rectified() const { return right_rect_; }
+  void prepare_whole_image() { prepare({}, {}); }
   JppMatcher::Stats stats() const { return matcher_.stats(); }
 
  private:
+  struct Projection {
+    bool valid;
+    cv::Point left, right;
+  };
+  Projection project(const Eigen::Vector3d& p_robot) const;
+  // The ground samples of JPP's half box around (x, y).
+  template <class Visit>
+  void for_each_sample(double x, double y, double radius, Visit visit) const;
+  // Rectifies and builds descriptor layers for windows inside the regions
+  // (empty: whole image).
+  void prepare(cv::Rect left_region, cv::Rect right_region);
+  void rectify_region(const cv::Mat& raw, const cv::Mat& map_xy, const cv::Mat& map_frac, cv::Rect region,
+                      cv::Mat& rect_gray, cv::Mat& scratch) const;
+
   RigCalibration rig_;
   JppConfig config_;
   StereoRectification rect_;
   JppMatcher matcher_;
-  cv::Mat left_gray_, right_gray_, left_rect_, right_rect_;
-  bool has_frame_ = false;
+  // Fixed-point remap tables of rect_ (left, right), for remapping regions.
+  cv::Mat map_left_xy_, map_left_frac_, map_right_xy_, map_right_frac_;
+  cv::Mat left_raw_, right_raw_, left_rect_, right_rect_, scratch_;
+  bool has_frame_ = false, prepared_ = false, whole_image_ = false;
 };
 
 }  // namespace ivoa::stereo
