@@ -87,6 +87,8 @@ TEST_F(StereoDetectorNodeTest, PublishesAGridPerFrameOnceCalibrated) {
   }
   EXPECT_GT(free, 60);  // an empty room
   EXPECT_EQ(obstacle, 0);
+  // The worker counts a grid just after publishing it.
+  ASSERT_TRUE(handle_until([&] { return heartbeat_.snapshot().messages_out == 1; }));
   const process_status_t status = heartbeat_.snapshot();
   EXPECT_EQ(status.state, "running");
   EXPECT_EQ(status.messages_in, 2);
