@@ -2,8 +2,10 @@
 
 #include <atomic>
 #include <cstdio>
+#include <list>
 #include <mutex>
 #include <regex>
+#include <thread>
 
 #include <spdlog/spdlog.h>
 
@@ -216,24 +218,66 @@ struct AravisCamera::Impl {
 
   static void on_control_lost(ArvDevice*, gpointer self_ptr) { static_cast<Impl*>(self_ptr)->control_lost = true; }
 
-  void close() {
-    if (camera != nullptr && !control_lost) {
-      GError* ignored = nullptr;
-      arv_camera_stop_acquisition(camera, &ignored);
-      take_error(ignored);
-    }
+  // The Aravis objects of one connection, with our callbacks detached.
+  struct Handles {
+    ArvCamera* camera = nullptr;
+    ArvStream* stream = nullptr;
+    bool stop_acquisition = false;
+  };
+
+  Handles detach() {
+    Handles h{camera, stream, camera != nullptr && !control_lost};
     if (stream != nullptr) {
       arv_stream_set_emit_signals(stream, FALSE);
       g_signal_handler_disconnect(stream, new_buffer_handler);
-      g_object_unref(stream);  // joins the stream thread: no callback runs after this
-      stream = nullptr;
     }
-    if (camera != nullptr) {
-      g_signal_handler_disconnect(arv_camera_get_device(camera), control_lost_handler);
-      g_object_unref(camera);
-      camera = nullptr;
+    if (camera != nullptr) g_signal_handler_disconnect(arv_camera_get_device(camera), control_lost_handler);
+    camera = nullptr;
+    stream = nullptr;
+    return h;
+  }
+
+  static void release(const Handles& h) {
+    if (h.stop_acquisition) {
+      GError* ignored = nullptr;
+      arv_camera_stop_acquisition(h.camera, &ignored);
+      take_error(ignored);
     }
+    if (h.stream != nullptr) g_object_unref(h.stream);  // joins the stream thread
+    if (h.camera != nullptr) g_object_unref(h.camera);
+  }
+
+  void close() {
+    release(detach());
     on_frame = nullptr;
+  }
+
+  // Connections being released in the background, joined when done.
+  struct Reaper {
+    std::thread thread;
+    std::shared_ptr<std::atomic<bool>> done = std::make_shared<std::atomic<bool>>(false);
+  };
+  std::list<Reaper> reapers;
+
+  void reap(Handles h) {
+    for (auto it = reapers.begin(); it != reapers.end();) {
+      if (*it->done) {
+        it->thread.join();
+        it = reapers.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    Reaper& r = reapers.emplace_back();
+    r.thread = std::thread([h, done = r.done] {
+      release(h);
+      *done = true;
+    });
+  }
+
+  void join_reapers() {
+    for (Reaper& r : reapers) r.thread.join();
+    reapers.clear();
   }
 };
 
@@ -242,7 +286,10 @@ AravisCamera::AravisCamera(Side side, AravisCameraConfig config) : impl_(std::ma
   impl_->config = std::move(config);
 }
 
-AravisCamera::~AravisCamera() { stop(); }
+AravisCamera::~AravisCamera() {
+  stop();
+  impl_->join_reapers();
+}
 
 void AravisCamera::start(FrameCallback on_frame) {
   stop();
@@ -262,6 +309,11 @@ void AravisCamera::start(FrameCallback on_frame) {
 }
 
 void AravisCamera::stop() { impl_->close(); }
+
+void AravisCamera::abandon() {
+  impl_->reap(impl_->detach());
+  impl_->on_frame = nullptr;
+}
 
 void AravisCamera::software_trigger() {
   if (impl_->camera == nullptr) throw CameraError(impl_->name() + ": not open");

@@ -104,7 +104,7 @@ void CameraWorker::close_camera(const std::string& reason) {
   connected_ = false;
   ++reconnects_;
   lost_at_ms_ = monotonic_ms();
-  source_->stop();
+  source_->abandon();
 }
 
 void CameraWorker::run() {

@@ -192,7 +192,8 @@ int StereoDriver::run() {
       break;
     }
     const double now = monotonic_ms();
-    if (s.options.software_trigger && now >= next_trigger_ms) {
+    // Trigger only when both cameras listen, or their frame counts diverge.
+    if (s.options.software_trigger && now >= next_trigger_ms && s.connected[0] && s.connected[1]) {
       s.left.trigger();
       s.right.trigger();
       next_trigger_ms = std::max(next_trigger_ms + trigger_period_ms, now);

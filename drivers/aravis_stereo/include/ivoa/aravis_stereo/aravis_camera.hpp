@@ -32,6 +32,9 @@ class AravisCamera : public CameraSource {
 
   void start(FrameCallback on_frame) override;
   void stop() override;
+  // Releases the camera in a background thread (Aravis waits seconds for
+  // each command to an unreachable camera); the destructor joins it.
+  void abandon() override;
   void software_trigger() override;
   bool control_lost() const override;
   std::string describe() const override;

@@ -42,6 +42,10 @@ class CameraSource {
   virtual void start(FrameCallback on_frame) = 0;
   // Stops streaming and closes the camera; safe to call when not started.
   virtual void stop() = 0;
+  // Lets go of a camera that stopped answering without waiting for it (a
+  // dead camera makes every command wait for its timeout): start() may be
+  // called again at once.
+  virtual void abandon() { stop(); }
   // Fires one frame in software-trigger mode. Throws CameraError.
   virtual void software_trigger() = 0;
   // True once the connection is known to be gone (e.g. heartbeat failed).
