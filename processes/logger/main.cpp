@@ -5,10 +5,12 @@
 // error leaves a readable file and exits with code 4.
 #include <unistd.h>
 
+#include <chrono>
 #include <csignal>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -32,6 +34,8 @@ using ivoa::logger::RecorderStatus;
 // within this bound (traffic may go on arriving).
 constexpr int kFinalHandleLimit = 2000;
 constexpr double kFinalHandleMs = 500;
+constexpr double kStatusPeriodMs = 100;  // recorder totals -> heartbeat counters
+constexpr double kDrainReportMs = 2000;
 
 std::string expand_time_pattern(const std::string& pattern) {
   const std::time_t now = std::time(nullptr);
@@ -113,6 +117,57 @@ int report_end(const Recorder& recorder, double seconds) {
   return ivoa::kExitOk;
 }
 
+// Handles LCM until a stop, the end of a file:// input or a write error.
+int receive(ivoa::Bus& bus, Recorder& recorder, StatusReporter& reporter, ivoa::Heartbeat& heartbeat) {
+  const bool reading_a_log = bus.url().rfind("file://", 0) == 0;
+  double next_status_ms = 0;
+  while (!ivoa::stop_requested() && !recorder.failed()) {
+    if (bus.handle(50) < 0) {
+      // A stop signal can interrupt LCM's wait; a file:// input ends.
+      if (ivoa::stop_requested() || reading_a_log) break;
+      spdlog::error("LCM handle failed on '{}'", bus.url());
+      return ivoa::kExitFailure;
+    }
+    if (ivoa::monotonic_ms() >= next_status_ms) {
+      reporter.update(recorder.status(), recorder.check_health());
+      next_status_ms = ivoa::monotonic_ms() + kStatusPeriodMs;
+    }
+    heartbeat.tick();
+  }
+  return ivoa::kExitOk;
+}
+
+// Waits while the writer empties the queue, keeping heartbeat and log informed.
+void drain(const Recorder& recorder, StatusReporter& reporter, ivoa::Heartbeat& heartbeat) {
+  RecorderStatus s = recorder.status();
+  spdlog::info("stopping: writing the {} queued messages ({:.1f} MB) to disk", s.queue_depth, mb(s.queue_bytes));
+  double next_report_ms = ivoa::monotonic_ms() + kDrainReportMs;
+  while (s.queue_depth > 0 && !s.failed) {
+    reporter.update(s, "draining");
+    heartbeat.tick();
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    s = recorder.status();
+    if (ivoa::monotonic_ms() < next_report_ms) continue;
+    spdlog::info("draining: {} messages ({:.1f} MB) left", s.queue_depth, mb(s.queue_bytes));
+    next_report_ms += kDrainReportMs;
+  }
+}
+
+std::unique_ptr<Recorder> start_recorder(RecorderOptions options, int& exit_code) {
+  try {
+    const auto parent = std::filesystem::path(options.log.path).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent);
+    return std::make_unique<Recorder>(std::move(options));
+  } catch (const std::invalid_argument& e) {
+    spdlog::error("{}", e.what());
+    exit_code = ivoa::kExitUsage;
+  } catch (const std::exception& e) {  // LogWriteError, filesystem_error
+    spdlog::error("{}", e.what());
+    exit_code = ivoa::kExitIoError;
+  }
+  return nullptr;
+}
+
 int record(const ivoa::CommonOptions& common, RecorderOptions options, const std::string& ready_file,
            double socket_buffer_mb) {
   std::unique_ptr<ivoa::Bus> bus;
@@ -122,20 +177,10 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
     spdlog::error("{}", e.what());
     return ivoa::kExitFailure;
   }
-  const bool reading_a_log = bus->url().rfind("file://", 0) == 0;
   options.log.identity.lcm_url = bus->url();
-  std::unique_ptr<Recorder> recorder;
-  try {
-    const auto parent = std::filesystem::path(options.log.path).parent_path();
-    if (!parent.empty()) std::filesystem::create_directories(parent);
-    recorder = std::make_unique<Recorder>(std::move(options));
-  } catch (const std::invalid_argument& e) {
-    spdlog::error("{}", e.what());
-    return ivoa::kExitUsage;
-  } catch (const std::exception& e) {  // LogWriteError, filesystem_error
-    spdlog::error("{}", e.what());
-    return ivoa::kExitIoError;
-  }
+  int code = ivoa::kExitOk;
+  const std::unique_ptr<Recorder> recorder = start_recorder(std::move(options), code);
+  if (!recorder) return code;
   ivoa::Heartbeat heartbeat(*bus, "logger");
   StatusReporter reporter(heartbeat);
   bus->subscribe_raw(".*", [&](const void* data, size_t size, const ivoa::ReceiveInfo& info) {
@@ -146,29 +191,15 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
   if (!ready_file.empty()) std::ofstream(ready_file) << "ready\n";
 
   const double start_ms = ivoa::monotonic_ms();
-  int code = ivoa::kExitOk;
-  while (!ivoa::stop_requested() && !recorder->failed()) {
-    if (bus->handle(50) < 0) {
-      if (ivoa::stop_requested()) break;  // the signal interrupted LCM's wait
-      if (!reading_a_log) {
-        spdlog::error("LCM handle failed on '{}'", bus->url());
-        code = ivoa::kExitFailure;
-      }
-      break;  // a file:// input has ended
-    }
-    reporter.update(recorder->status(), recorder->check_health());
-    heartbeat.tick();
-  }
+  code = receive(*bus, *recorder, reporter, heartbeat);
   if (!recorder->failed()) {
     if (ivoa::stop_requested()) handle_what_lcm_already_has(*bus);
-    const RecorderStatus s = recorder->status();
-    spdlog::info("stopping: writing the {} queued messages ({:.1f} MB) to disk", s.queue_depth, mb(s.queue_bytes));
-    reporter.update(s, "draining");
-    heartbeat.publish_now();
+    drain(*recorder, reporter, heartbeat);
   }
   recorder->finish();
   const int end_code = report_end(*recorder, (ivoa::monotonic_ms() - start_ms) / 1000.0);
-  reporter.update(recorder->status(), end_code == ivoa::kExitOk ? "stopped" : "error: " + recorder->status().error);
+  const RecorderStatus s = recorder->status();
+  reporter.update(s, end_code == ivoa::kExitOk ? "stopped" : "error: " + s.error);
   heartbeat.publish_now();
   return code != ivoa::kExitOk ? code : end_code;
 }
