@@ -16,7 +16,6 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/bus.hpp"
-#include "ivoa/core/channels.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
@@ -78,14 +77,14 @@ class StatusReporter {
   RecorderStatus last_;
 };
 
-void enlarge_receive_buffer(const std::string& url, double mb) {
+void enlarge_receive_buffer(const std::string& url, double buffer_mb) {
   const int port = ivoa::logger::udpm_port(url);
-  if (port == 0 || mb <= 0) return;
-  const auto r = ivoa::logger::force_receive_buffer(port, static_cast<int>(mb * 1e6));
+  if (port == 0 || buffer_mb <= 0) return;
+  const auto r = ivoa::logger::force_receive_buffer(port, static_cast<int>(buffer_mb * 1e6));
   if (r.sockets == 0) spdlog::warn("found no UDP socket on port {} to enlarge its receive buffer", port);
   else if (r.permitted)
-    spdlog::info("kernel receive buffer of LCM's socket raised to {:.0f} MB ({:.0f} MB as the kernel counts it)", mb,
-                 r.bytes / 1e6);
+    spdlog::info("kernel receive buffer of LCM's socket raised to {:.0f} MB ({:.0f} MB as the kernel counts it)",
+                 buffer_mb, r.bytes / 1e6);
   else
     spdlog::warn("kernel receive buffer stays at {:.0f} MB (raising it needs CAP_NET_ADMIN, or sysctl "
                  "net.core.rmem_max); a logger kept off the CPU for long can lose images in the kernel",

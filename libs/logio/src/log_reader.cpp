@@ -29,7 +29,9 @@ std::string hex32(uint32_t v) {
 
 std::string LogProblem::describe() const {
   std::string s = "byte " + std::to_string(offset) + ": " + what;
-  if (skipped_bytes > 0) s += " (" + std::to_string(skipped_bytes) + " bytes skipped)";
+  if (skipped_bytes > 0)
+    s += " (" + std::to_string(skipped_bytes) +
+         (to_end ? " bytes to the end of the file not read)" : " bytes skipped to the next good event)");
   return s;
 }
 
@@ -103,9 +105,9 @@ bool LogReader::next(LogEvent& event) {
 // Records the problem; with resync, moves to the next plausible event.
 bool LogReader::recover(uint64_t offset, std::string what) {
   const uint64_t next_event = options_.resync ? find_next_event(offset + 1) : size_;
-  problems_.push_back({offset, std::move(what), next_event - offset});
-  position_ = next_event;
   stopped_ = next_event >= size_;
+  problems_.push_back({offset, std::move(what), next_event - offset, stopped_});
+  position_ = next_event;
   return !stopped_;
 }
 

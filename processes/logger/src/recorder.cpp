@@ -99,18 +99,22 @@ std::string Recorder::check_health() {
     dropped_reported_ = s.dropped;
     last_drop_warning_ms_ = now;
   }
-  const bool queue_high = static_cast<uint64_t>(s.queue_bytes) > queue_.max_bytes() / 2;
-  if (queue_high && !queue_warned_)
+  // Warn when the queue passes half full; again only after it has fallen below a quarter.
+  const auto queued = static_cast<uint64_t>(s.queue_bytes);
+  if (queued > queue_.max_bytes() / 2 && !queue_warned_) {
     spdlog::warn("write queue above half full ({:.0f} of {:.0f} MB): the disk is slower than the traffic",
                  mb(s.queue_bytes), mb(static_cast<int64_t>(queue_.max_bytes())));
-  queue_warned_ = queue_high;
+    queue_warned_ = true;
+  } else if (queued < queue_.max_bytes() / 4) {
+    queue_warned_ = false;
+  }
   if (!s.calibration_seen && !options_.log.calibration_channel.empty() && !calibration_warned_ &&
       now - start_ms_ > options_.calibration_warning_s * 1000.0) {
     spdlog::warn("no {} message after {:.0f} s: this log will not be self-contained until one arrives",
                  options_.log.calibration_channel, options_.calibration_warning_s);
     calibration_warned_ = true;
   }
-  if (s.dropped > 0) return "recording, dropping (disk too slow)";
+  if (s.dropped > 0) return "recording, messages dropped (disk too slow)";
   if (!s.calibration_seen && calibration_warned_) return "recording, no " + options_.log.calibration_channel;
   return "recording";
 }

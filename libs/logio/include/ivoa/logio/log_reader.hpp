@@ -23,8 +23,9 @@ struct LogEvent {
 struct LogProblem {
   uint64_t offset = 0;  // where the bad event (or the garbage) starts
   std::string what;
-  uint64_t skipped_bytes = 0;  // bytes skipped to the next good event; to the end if reading stopped
-  std::string describe() const;  // "byte 123: what (skipped N bytes)"
+  uint64_t skipped_bytes = 0;  // bytes skipped to the next good event, or to the end of the file
+  bool to_end = false;         // no good event follows: reading stopped here
+  std::string describe() const;  // "byte 123: what (N bytes skipped ...)"
 };
 
 // The file cannot be opened or read at all (missing, permissions, I/O error).
