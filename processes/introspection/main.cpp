@@ -13,6 +13,7 @@
 #endif
 
 int main(int argc, char** argv) {
+  ivoa::introspection::prefer_passive_openmp_wait(argv);
   CLI::App app{"Introspection: heatmaps of predicted stereo failures (TP/TN/FP/FN) with MC-dropout uncertainty"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);

@@ -14,6 +14,7 @@
 using namespace ivoa;
 
 int main(int argc, char** argv) {
+  ivoa::introspection::prefer_passive_openmp_wait(argv);
   CLI::App app{"Train an introspection model on a dataset, validating on held-out sessions"};
   CommonOptions common;
   add_common_options(app, common);

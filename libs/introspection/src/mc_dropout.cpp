@@ -3,6 +3,9 @@
 namespace ivoa::introspection {
 namespace {
 
+// Above this many elements (T * F * H1) FC1's masked weights are not materialised.
+constexpr int64_t kMaxMaskedWeights = 16 * 1024 * 1024;
+
 // [T, in] keep-masks scaled by 1/(1-p), as inverted dropout does in training.
 torch::Tensor sample_masks(int passes, int64_t width, double p, torch::Generator& generator,
                            const torch::TensorOptions& options) {
@@ -21,15 +24,24 @@ McStats mc_dropout_head(IntrospectionNetImpl& net, const torch::Tensor& features
   const int64_t n = features.size(0), f = features.size(1);
   const auto w1 = net.fc1->weight.t();  // [F, H1]
   const int64_t h1 = w1.size(1);
-  // FC1 with input dropout for all passes in one product:
-  // x (m_t * W1) for t = 1..T  ==  x [m_1 W1 | ... | m_T W1].
-  const auto m1 = sample_masks(passes, f, p, generator, options);                 // [T, F]
-  const auto w1_all = (m1.unsqueeze(2) * w1.unsqueeze(0)).permute({1, 0, 2}).reshape({f, passes * h1});
-  auto h = torch::mm(features, w1_all).view({n, passes, h1}).permute({1, 0, 2});  // [T, N, H1]
+  const auto m1 = sample_masks(passes, f, p, generator, options);  // [T, F]
+  torch::Tensor h;                                                  // [T, N, H1]
+  if (passes * f * h1 <= kMaxMaskedWeights) {
+    // FC1 with input dropout for all passes in one product:
+    // x (m_t * W1) for t = 1..T  ==  x [m_1 W1 | ... | m_T W1].
+    const auto w1_all = (m1.unsqueeze(2) * w1.unsqueeze(0)).permute({1, 0, 2}).reshape({f, passes * h1});
+    h = torch::mm(features, w1_all).view({n, passes, h1}).permute({1, 0, 2});
+  } else {
+    // A wide head (AlexNet's 9216 x 2048): T masked weight copies would not
+    // fit in memory, so mask the inputs pass by pass.
+    std::vector<torch::Tensor> per_pass;
+    for (int t = 0; t < passes; ++t) per_pass.push_back(torch::mm(features * m1[t], w1));
+    h = torch::stack(per_pass);
+  }
   h = torch::relu(h + net.fc1->bias);
   const auto w2 = net.fc2->weight.t();  // [H1, 256]
   const auto m2 = sample_masks(passes, h1, p, generator, options);
-  h = torch::relu(torch::bmm(h, m2.unsqueeze(2) * w2.unsqueeze(0)) + net.fc2->bias);  // [T, N, 256]
+  h = torch::relu(torch::matmul(h * m2.unsqueeze(1), w2) + net.fc2->bias);  // [T, N, 256]
   const auto probs = torch::softmax(torch::matmul(h, net.fc3->weight.t()) + net.fc3->bias, -1);  // [T, N, 4]
   return {probs.mean(0), probs.var(0, /*unbiased=*/true), probs, m1, m2};
 }

@@ -1,5 +1,8 @@
 #include "ivoa/introspection/model.hpp"
 
+#include <unistd.h>
+
+#include <cstdlib>
 #include <filesystem>
 
 #include <ATen/CPUGeneratorImpl.h>
@@ -237,6 +240,12 @@ std::unique_ptr<IntrospectionModel> load_scripted(const std::string& path, const
 }
 
 }  // namespace
+
+void prefer_passive_openmp_wait(char** argv) {
+  if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
+  setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
+  execv("/proc/self/exe", argv);  // only returns on failure: then run with the default policy
+}
 
 std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& path, const InferenceConfig& config) {
   if (config.mc_passes < 1) throw ModelError("mc_passes must be >= 1");

@@ -86,6 +86,14 @@ struct PatchOutputs {
   std::vector<std::vector<float>> embeddings;  // FC2 (256-d, post-ReLU, no dropout), if asked
 };
 
+// LibTorch's OpenMP threads spin while they wait for work. On a robot
+// computer shared with other processes that is ruinous (measured 5x slower
+// under load); a passive wait costs next to nothing when the CPU is free.
+// libgomp reads OMP_WAIT_POLICY when it is loaded, so this re-executes the
+// program once with OMP_WAIT_POLICY=PASSIVE unless the user set a policy.
+// Call it first thing in main().
+void prefer_passive_openmp_wait(char** argv);
+
 class IntrospectionModel {
  public:
   // Loads a model file written by ivoa-train (or an externally scripted
