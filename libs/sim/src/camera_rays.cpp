@@ -33,6 +33,7 @@ CameraRays::CameraRays(const CameraModel& camera, double bin_pixels)
       r.slope = static_cast<float>(slope);
       r.inv_slope = static_cast<float>(1.0 / slope);
       r.len = static_cast<float>(1.0 / h);
+      r.inv_len = static_cast<float>(h);
       r.planar = static_cast<float>(d.dot(z_axis) / h);
       if (slope < 0 && origin_.z() > 0) {
         const double s = -origin_.z() / slope;

@@ -44,6 +44,7 @@ class BlobField {
   std::vector<float> v_;
 };
 
+// 0 at a, 1 at b (a > b allowed).
 float smoothstep(float a, float b, float x) {
   const float t = std::clamp((x - a) / (b - a), 0.0f, 1.0f);
   return t * t * (3 - 2 * t);
@@ -57,18 +58,22 @@ cv::Mat depth_image(const std::vector<Ranged>& ranged, int width, int height, do
   std::vector<float> z(n);
   for (size_t i = 0; i < n; ++i) z[i] = ranged[i].depth;
   std::vector<uint8_t> invalid(n, 0);
-  // Depth edges: structured light cannot resolve a pixel that straddles a jump.
-  for (int y = 0; y < height; ++y)
+  // Depth edges: structured light cannot resolve a pixel that straddles a
+  // jump. Invalid where a 4-neighbour differs by more than edge_ratio * z
+  // (infinite depths compare as jumps: the comparison is false for them).
+  const float ratio = static_cast<float>(c.edge_ratio);
+  auto near = [ratio](float a, float b) { return std::abs(a - b) <= ratio * a; };
+  for (int y = 0; y < height; ++y) {
+    const float* row = z.data() + static_cast<size_t>(y) * width;
+    const float* up = y > 0 ? row - width : row;
+    const float* down = y + 1 < height ? row + width : row;
+    uint8_t* inv = invalid.data() + static_cast<size_t>(y) * width;
     for (int x = 0; x < width; ++x) {
-      const size_t i = static_cast<size_t>(y) * width + x;
-      const float zi = z[i];
-      if (!std::isfinite(zi)) continue;
-      const float tol = static_cast<float>(c.edge_ratio) * zi;
-      auto jump = [&](size_t j) { return !std::isfinite(z[j]) || std::abs(z[j] - zi) > tol; };
-      if ((x > 0 && jump(i - 1)) || (x + 1 < width && jump(i + 1)) || (y > 0 && jump(i - width)) ||
-          (y + 1 < height && jump(i + width)))
-        invalid[i] = 1;
+      const float zi = row[x];
+      const float left = row[x > 0 ? x - 1 : x], right = row[x + 1 < width ? x + 1 : x];
+      inv[x] = !(near(zi, left) && near(zi, right) && near(zi, up[x]) && near(zi, down[x]));
     }
+  }
   // Projector shadows: the projector sits to the right of the IR camera, so a
   // point is unlit when something to its right in the image maps at or left
   // of it in the projector (scan right to left keeping the minimum).
@@ -87,6 +92,12 @@ cv::Mat depth_image(const std::vector<Ranged>& ranged, int width, int height, do
   const BlobField& blobs = BlobField::instance();
   const uint64_t h = hash_combine(frame, 0xdeb7u);
   const int bx = static_cast<int>(h & 0xff), by = static_cast<int>((h >> 8) & 0xff);
+  const float dark = static_cast<float>(c.dark_return), spec_scale = static_cast<float>(c.specular_dropout);
+  const float sun_scale = static_cast<float>(c.sunlight_dropout / 16.0);  // reaches the full rate at 4 m
+  const float random_dropout = static_cast<float>(c.random_dropout), noise = static_cast<float>(c.noise_coefficient);
+  const float* uniforms = table.uniforms();
+  const float* normals = table.normals();
+  const float lo = static_cast<float>(min_range), hi = static_cast<float>(max_range);
   cv::Mat out(height, width, CV_16UC1);
   for (int y = 0; y < height; ++y) {
     uint16_t* dst = out.ptr<uint16_t>(y);
@@ -95,18 +106,20 @@ cv::Mat depth_image(const std::vector<Ranged>& ranged, int width, int height, do
       const size_t i = static_cast<size_t>(y) * width + x;
       dst[x] = 0;
       const float zi = z[i];
-      if (invalid[i] || !std::isfinite(zi) || zi < min_range || zi > max_range) continue;
+      if (invalid[i] || !(zi >= lo && zi <= hi)) continue;
       const Ranged& r = ranged[i];
+      // Dropout chance: weak IR return (dark or grazing), mirror-like
+      // surfaces, and sunlight washing out the pattern (worse far away).
       const float ret = r.ir_return * 4.0f / std::max(0.25f, zi * zi);
-      const float p_dark = smoothstep(static_cast<float>(c.dark_return), static_cast<float>(c.dark_return) * 0.3f, ret);
-      const float p_spec = std::min(0.9f, static_cast<float>(c.specular_dropout) * r.specular);
-      const float p_sun = std::min(0.95f, static_cast<float>(c.sunlight_dropout) * r.sunlit * (zi / 4.0f) * (zi / 4.0f));
+      const float p_dark = smoothstep(dark, dark * 0.3f, ret);
+      const float p_spec = std::min(0.9f, spec_scale * r.specular);
+      const float p_sun = std::min(0.95f, sun_scale * r.sunlit * zi * zi);
       const float keep = (1 - p_dark) * (1 - p_spec) * (1 - p_sun);
       if (blobs.at(x + bx, y + by) < 1.0f - keep) continue;
-      if (table.uniforms()[(offset + static_cast<uint32_t>(x)) & NoiseTable::kMask] < c.random_dropout) continue;
-      const float sigma = static_cast<float>(c.noise_coefficient) * zi * zi;
-      const float noisy = zi + sigma * table.normals()[(offset + 7919u * static_cast<uint32_t>(x)) & NoiseTable::kMask];
-      dst[x] = static_cast<uint16_t>(std::clamp(std::lround(noisy * 1000.0f), 0L, 65535L));
+      if (uniforms[(offset + static_cast<uint32_t>(x)) & NoiseTable::kMask] < random_dropout) continue;
+      const float noisy = zi + noise * zi * zi * normals[(offset + 7919u * static_cast<uint32_t>(x)) & NoiseTable::kMask];
+      const float mm = noisy * 1000.0f + 0.5f;
+      dst[x] = static_cast<uint16_t>(mm <= 0 ? 0 : (mm >= 65535.0f ? 65535 : static_cast<int>(mm)));
     }
   }
   return out;

@@ -54,6 +54,7 @@ void build_plan_grid(SceneData& s) {
   box.extend(box.min() - Eigen::Vector2d(1, 1));
   box.extend(box.max() + Eigen::Vector2d(1, 1));
   g.cell = static_cast<float>(std::max(0.5, std::max(box.sizes().x(), box.sizes().y()) / 256.0));
+  g.inv_cell = 1.0f / g.cell;
   g.x0 = static_cast<float>(box.min().x());
   g.y0 = static_cast<float>(box.min().y());
   g.nx = static_cast<int>(std::ceil(box.sizes().x() / g.cell));

@@ -85,7 +85,7 @@ struct SkyData {
 // Uniform grid over the floor plan listing the floor features (in paint
 // order) and prisms overlapping each cell.
 struct PlanGrid {
-  float x0 = 0, y0 = 0, cell = 1;
+  float x0 = 0, y0 = 0, cell = 1, inv_cell = 1;
   int nx = 0, ny = 0;
   std::vector<uint32_t> feature_start, prism_start;
   std::vector<uint16_t> features;
@@ -94,7 +94,7 @@ struct PlanGrid {
     return x >= x0 && y >= y0 && x < x0 + cell * nx && y < y0 + cell * ny;
   }
   int index(float x, float y) const {
-    return static_cast<int>((y - y0) / cell) * nx + static_cast<int>((x - x0) / cell);
+    return static_cast<int>((y - y0) * inv_cell) * nx + static_cast<int>((x - x0) * inv_cell);
   }
 };
 

@@ -81,15 +81,17 @@ SimFrame Simulator::render(const RenderRequest& req) const {
   std::vector<float> specular(n);
   {
     const Tracer tracer(data, s.left, req.stereo_pose, accel);
+    std::vector<Shaded> row(static_cast<size_t>(w));
     for (int y = 0; y < h; ++y) {
+      tracer.shade_row(y, row.data());
       float* depth = f.truth_depth.ptr<float>(y);
       uint8_t* surface = f.truth_surface.ptr<uint8_t>(y);
       uint8_t* phenomena = f.truth_phenomena.ptr<uint8_t>(y);
       for (int x = 0; x < w; ++x) {
-        const int i = y * w + x;
-        const Shaded sh = tracer.shade(i);
-        left_radiance[static_cast<size_t>(i)] = sh.radiance;
-        specular[static_cast<size_t>(i)] = sh.specular;
+        const Shaded& sh = row[static_cast<size_t>(x)];
+        const size_t i = static_cast<size_t>(y) * w + x;
+        left_radiance[i] = sh.radiance;
+        specular[i] = sh.specular;
         depth[x] = sh.depth;
         surface[x] = sh.surface;
         phenomena[x] = sh.phenomena;
@@ -98,7 +100,12 @@ SimFrame Simulator::render(const RenderRequest& req) const {
   }
   {
     const Tracer tracer(data, s.right, req.stereo_pose, accel);
-    for (size_t i = 0; i < right_radiance.size(); ++i) right_radiance[i] = tracer.shade(static_cast<int>(i)).radiance;
+    const int rw = s.right.width();
+    std::vector<Shaded> row(static_cast<size_t>(rw));
+    for (int y = 0; y < s.right.height(); ++y) {
+      tracer.shade_row(y, row.data());
+      for (int x = 0; x < rw; ++x) right_radiance[static_cast<size_t>(y) * rw + x] = row[static_cast<size_t>(x)].radiance;
+    }
   }
 
   const detail::Exposure exposure = detail::auto_exposure(left_radiance, cam, data.max_exposure_scale);

@@ -31,6 +31,7 @@ Texture::Texture(int size, double texel_m, const std::vector<Rgbf>& linear)
   while (n >= 1) {
     offsets_.push_back(data_.size());
     for (const Rgbf& c : level) data_.push_back(encode_texel(c));
+    level_scale_[levels_] = inv_texel_ / static_cast<float>(1 << levels_);
     ++levels_;
     if (n == 1) break;
     const int m = n / 2;

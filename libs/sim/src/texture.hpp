@@ -38,7 +38,7 @@ class Texture {
     level = level < 0 ? 0 : (level >= levels_ ? levels_ - 1 : level);
     const int n = size_ >> level;
     const uint32_t* texels = data_.data() + offsets_[static_cast<size_t>(level)];
-    const float scale = inv_texel_ / static_cast<float>(1 << level);
+    const float scale = level_scale_[level];
     const float x = u * scale - 0.5f, y = v * scale - 0.5f;
     const int x0 = floor_to_int(x), y0 = floor_to_int(y);
     const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
@@ -75,6 +75,7 @@ class Texture {
  private:
   int size_ = 0, levels_ = 0;
   float inv_texel_ = 1;
+  float level_scale_[32] = {};  // texels per metre at each level
   Rgbf mean_;
   std::vector<uint32_t> data_;  // all levels; texel = sqrt(linear) * 255 per channel (gamma 2)
   std::vector<size_t> offsets_;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "ivoa/sim_ground_truth_t.hpp"
 
@@ -19,6 +20,17 @@ float wrap_angle(float a) {
 float pow5(float x) {
   const float x2 = x * x;
   return x2 * x2 * x;
+}
+
+// 1/sqrt(x) to ~0.2% (bit trick and one Newton step; pure IEEE arithmetic,
+// so deterministic): only used to pick a mip level.
+float approx_rsqrt(float x) {
+  uint32_t i;
+  std::memcpy(&i, &x, sizeof i);
+  i = 0x5f3759dfu - (i >> 1);
+  float y;
+  std::memcpy(&y, &i, sizeof y);
+  return y * (1.5f - 0.5f * x * y * y);
 }
 
 // atan2 to ~1e-4 rad: only used for texture coordinates around cylinders.
@@ -161,13 +173,14 @@ Tracer::Ray Tracer::make_ray(const PixelRay& r) const {
   ray.slope = r.slope;
   ray.inv_slope = r.inv_slope;
   ray.len = r.len;
+  ray.inv_len = r.inv_len;
   ray.bin = r.bin;
   return ray;
 }
 
-Tracer::Hit Tracer::nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored) const {
-  Hit best;
+void Tracer::nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored, Hit& best) const {
   best.s = s_hi;
+  best.candidate = -1;
   const size_t begin = brute_force_ ? 0 : bin_start_[static_cast<size_t>(ray.bin)];
   const size_t end = brute_force_ ? candidates_.size() : bin_start_[static_cast<size_t>(ray.bin) + 1];
   for (size_t k = begin; k < end; ++k) {
@@ -196,7 +209,6 @@ Tracer::Hit Tracer::nearest(const Ray& ray, float s_lo, float s_hi, bool mirrore
       best.face = face;
     }
   }
-  return best;
 }
 
 namespace {
@@ -249,17 +261,17 @@ SolidPoint solid_point(const Prism& p, float lx, float ly, float z, Face face) {
 
 }  // namespace
 
-Shaded Tracer::shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float extra_blur) const {
+void Tracer::shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float extra_blur, Shaded& out) const {
   const Candidate& c = candidates_[static_cast<size_t>(hit.candidate)];
   const Prism& p = scene_.prisms[c.prism];
   const float s = hit.s;
   const float dx = c.c * ray.ux - c.s * ray.uy, dy = c.s * ray.ux + c.c * ray.uy;
   const float zr = oz_ + ray.slope * s;
-  const SolidPoint sp = solid_point(p, c.lox + s * dx, c.loy + s * dy, mirrored ? -zr : zr, hit.face);
+  const SolidPoint sp = solid_point(p, c.lox + s * dx, c.loy + s * dy, mirrored ? -zr : zr, static_cast<Face>(hit.face));
   const MaterialData& m = scene_.materials[sp.material];
   const float dz = mirrored ? -ray.slope : ray.slope;
-  const float cos_i = std::abs(sp.nx * ray.wx + sp.ny * ray.wy + sp.nz * dz) / ray.len;
-  const float footprint = s * ray.len * rays_.pixel_angle() / std::sqrt(std::max(cos_i, 0.05f)) + extra_blur;
+  const float cos_i = std::abs(sp.nx * ray.wx + sp.ny * ray.wy + sp.nz * dz) * ray.inv_len;
+  const float footprint = s * ray.len * rays_.pixel_angle() * approx_rsqrt(std::max(cos_i, 0.05f)) + extra_blur;
   const Rgbf albedo = m.texture->sample(sp.u, sp.v, footprint) * p.tint * m.diffuse_scale;
   Rgbf e = p.ambient + p.directional * std::max(0.0f, sp.nx * p.light_dir.x() + sp.ny * p.light_dir.y() + sp.nz * p.light_dir.z());
   if (scene_.sky.has_sun) {
@@ -270,13 +282,11 @@ Shaded Tracer::shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float 
     const float t = sp.z * (1.0f / 0.3f);
     e = e * (0.7f + 0.3f * t * (2.0f - t));
   }
-  Shaded out;
   out.radiance = albedo * e + m.emission;
   out.depth = s;
   out.surface = sp.base ? GT::SURFACE_BASEBOARD : p.surface;
   out.phenomena = m.phenomena & (GT::PHENOMENON_TEXTURELESS | GT::PHENOMENON_REPETITIVE);
   if (sp.base) out.phenomena |= m.phenomena & GT::PHENOMENON_DARK_STRIPE;
-  return out;
 }
 
 const FloorFeature* Tracer::floor_feature(float x, float y, uint16_t& material) const {
@@ -324,7 +334,7 @@ Rgbf Tracer::sky(float dx, float dy, float dz, float blur) const {
 Rgbf Tracer::light_lobes(const Ray& ray, float x, float y, float roughness) const {
   Rgbf sum(0.0f);
   const float w = std::max(roughness, 0.01f);
-  const float rx = ray.wx / ray.len, ry = ray.wy / ray.len, rz = -ray.slope / ray.len;  // mirrored view ray
+  const float rx = ray.wx * ray.inv_len, ry = ray.wy * ray.inv_len, rz = -ray.slope * ray.inv_len;  // mirrored view ray
   for (uint32_t i : glare_lights_) {
     const PointLight& l = scene_.lights[i];
     const float vx = l.position.x() - x, vy = l.position.y() - y, vz = l.position.z();
@@ -341,13 +351,15 @@ Rgbf Tracer::light_lobes(const Ray& ray, float x, float y, float roughness) cons
 Rgbf Tracer::reflection(const Ray& ray, float s_floor, float roughness, bool& emitter) const {
   // Mirror world: the ray goes on below the floor; the ceiling mirrors to z = -H.
   const float s_hi = scene_.has_ceiling ? (-scene_.ceiling_height - oz_) * ray.inv_slope : kInf;
-  const Hit hit = nearest(ray, s_floor, s_hi, true);
+  Hit hit;
+  nearest(ray, s_floor, s_hi, true, hit);
   const float pa = rays_.pixel_angle();
   const float s = hit.candidate >= 0 ? hit.s : s_hi;
   const float blur = 2.0f * roughness * (s - s_floor) * ray.len;
   emitter = false;
   if (hit.candidate >= 0) {
-    const Shaded sh = shade_solid(ray, hit, true, blur);
+    Shaded sh;
+    shade_solid(ray, hit, true, blur, sh);
     emitter = scene_.materials[scene_.prisms[candidates_[static_cast<size_t>(hit.candidate)].prism].material].emission.r > 0;
     return sh.radiance;
   }
@@ -355,10 +367,10 @@ Rgbf Tracer::reflection(const Ray& ray, float s_floor, float roughness, bool& em
     const float x = ox_ + s_hi * ray.wx, y = oy_ + s_hi * ray.wy;
     return scene_.ceiling_radiance.sample(x, y, s_hi * ray.len * pa + blur);
   }
-  return sky(ray.wx / ray.len, ray.wy / ray.len, -ray.slope / ray.len, roughness + pa);
+  return sky(ray.wx * ray.inv_len, ray.wy * ray.inv_len, -ray.slope * ray.inv_len, roughness + pa);
 }
 
-Shaded Tracer::shade_pit(const Ray& ray, const FloorFeature& pit, float s_floor) const {
+void Tracer::shade_pit(const Ray& ray, const FloorFeature& pit, float s_floor, Shaded& out) const {
   float lox, loy, dx, dy;
   to_local(pit, ox_, oy_, lox, loy);
   dir_to_local(pit, ray.wx, ray.wy, dx, dy);
@@ -390,64 +402,112 @@ Shaded Tracer::shade_pit(const Ray& ray, const FloorFeature& pit, float s_floor)
   const float footprint = s * ray.len * rays_.pixel_angle() * 2.0f;
   const Rgbf albedo = m.texture->sample(u, v, footprint);
   const float shade = 0.25f + 0.75f * std::exp(z / 0.25f);  // darker deeper down
-  Shaded out;
   out.radiance = albedo * (scene_.pit_irradiance * shade);
   out.depth = s;
+  out.specular = 0;
   out.surface = GT::SURFACE_PIT;
-  return out;
+  out.phenomena = 0;
 }
 
-Shaded Tracer::shade_floor(const Ray& ray, const PixelRay& pr) const {
+void Tracer::shade_floor(const Ray& ray, const PixelRay& pr, Shaded& out, float& fresnel, float& roughness) const {
   const float x = static_cast<float>(pose_.x) + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
   const float y = static_cast<float>(pose_.y) + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+  fresnel = 0;
   uint16_t mid;
-  if (const FloorFeature* pit = floor_feature(x, y, mid)) return shade_pit(ray, *pit, pr.s_floor);
+  if (const FloorFeature* pit = floor_feature(x, y, mid)) return shade_pit(ray, *pit, pr.s_floor, out);
   const MaterialData& m = scene_.materials[mid];
   const Rgbf albedo = m.texture->sample(x, y, pr.floor_footprint) * m.diffuse_scale;
   const Rgbf e = scene_.floor_irradiance.empty() ? scene_.floor_irradiance_outside : scene_.floor_irradiance.sample(x, y);
-  Shaded out;
   out.radiance = albedo * e;
   out.depth = pr.s_floor;
+  out.specular = 0;
   out.surface = GT::SURFACE_FLOOR;
   out.phenomena = m.phenomena & (GT::PHENOMENON_TEXTURELESS | GT::PHENOMENON_REPETITIVE);
   if (m.f0 > 0) {
-    const float cos_i = -ray.slope / ray.len;
-    const float fresnel = m.f0 + (1.0f - m.f0) * pow5(1.0f - cos_i);
-    bool emitter;
-    const Rgbf mirrored = reflection(ray, pr.s_floor, m.roughness, emitter);
-    const Rgbf specular = (mirrored + light_lobes(ray, x, y, m.roughness)) * fresnel;
-    out.radiance = out.radiance * (1.0f - fresnel) + specular;
-    out.specular = specular.luminance();
-    if (out.specular > 0.35f * out.radiance.luminance()) out.phenomena |= GT::PHENOMENON_REFLECTION;
+    const float cos_i = -ray.slope * ray.inv_len;
+    fresnel = m.f0 + (1.0f - m.f0) * pow5(1.0f - cos_i);
+    roughness = m.roughness;
   }
-  return out;
 }
 
-Shaded Tracer::shade(int pixel) const {
+Rgbf Tracer::floor_reflection(int pixel, float roughness) const {
+  const PixelRay& pr = rays_.ray(pixel);
+  const Ray ray = make_ray(pr);
+  const float x = static_cast<float>(pose_.x) + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
+  const float y = static_cast<float>(pose_.y) + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+  bool emitter;
+  Rgbf r = reflection(ray, pr.s_floor, roughness, emitter);
+  if (!glare_lights_.empty()) r += light_lobes(ray, x, y, roughness);
+  return r;
+}
+
+void Tracer::add_reflection(Shaded& out, float fresnel, const Rgbf& reflected) {
+  const Rgbf specular = reflected * fresnel;
+  out.radiance = out.radiance * (1.0f - fresnel) + specular;
+  out.specular = specular.luminance();
+  if (out.specular > 0.35f * out.radiance.luminance()) out.phenomena |= GT::PHENOMENON_REFLECTION;
+}
+
+void Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, float& roughness) const {
   const PixelRay& pr = rays_.ray(pixel);
   const Ray ray = make_ray(pr);
   float s_hi = pr.s_floor;
   const bool up = pr.slope > 0;
   if (up && scene_.has_ceiling) s_hi = s_ceiling_up_ * ray.inv_slope;
-  const Hit hit = nearest(ray, 0.0f, s_hi, false);
-  Shaded out;
+  Hit hit;
+  nearest(ray, 0.0f, s_hi, false, hit);
+  fresnel = 0;
   if (hit.candidate >= 0) {
-    out = shade_solid(ray, hit, false, 0.0f);
+    shade_solid(ray, hit, false, 0.0f, out);
+    out.specular = 0;
   } else if (!up) {
-    out = shade_floor(ray, pr);
+    shade_floor(ray, pr, out, fresnel, roughness);
   } else if (scene_.has_ceiling) {
     const float x = ox_ + s_hi * ray.wx, y = oy_ + s_hi * ray.wy;
     out.radiance = scene_.ceiling_radiance.sample(x, y, s_hi * ray.len * rays_.pixel_angle());
     out.depth = s_hi;
+    out.specular = 0;
     out.surface = GT::SURFACE_CEILING;
+    out.phenomena = 0;
   } else {
-    out.radiance = sky(ray.wx / ray.len, ray.wy / ray.len, ray.slope / ray.len, rays_.pixel_angle());
+    out.radiance = sky(ray.wx * ray.inv_len, ray.wy * ray.inv_len, ray.slope * ray.inv_len, rays_.pixel_angle());
     out.depth = kInf;
+    out.specular = 0;
     out.surface = GT::SURFACE_SKY;
-    return out;
+    out.phenomena = 0;
+    return;
   }
   out.depth *= pr.planar;
-  return out;
+}
+
+void Tracer::shade(int pixel, Shaded& out) const {
+  float fresnel, roughness = 0;
+  shade_primary(pixel, out, fresnel, roughness);
+  if (fresnel > 0) add_reflection(out, fresnel, floor_reflection(pixel, roughness));
+}
+
+void Tracer::shade_row(int row, Shaded* out) const {
+  // A glossy reflection blurred over more than ~3 pixels can be sampled every other column.
+  constexpr float kGlossy = 0.006f;  // radians of roughness
+  const int width = rays_.width(), base = row * width;
+  thread_local std::vector<float> fresnel, roughness;
+  thread_local std::vector<Rgbf> reflected;
+  fresnel.assign(static_cast<size_t>(width), 0.0f);
+  roughness.assign(static_cast<size_t>(width), 0.0f);
+  reflected.resize(static_cast<size_t>(width));
+  for (int x = 0; x < width; ++x) shade_primary(base + x, out[x], fresnel[static_cast<size_t>(x)], roughness[static_cast<size_t>(x)]);
+  auto glossy = [&](int x) { return fresnel[static_cast<size_t>(x)] > 0 && roughness[static_cast<size_t>(x)] >= kGlossy; };
+  auto interpolated = [&](int x) { return (x & 1) && x + 1 < width && glossy(x) && glossy(x - 1) && glossy(x + 1); };
+  for (int x = 0; x < width; ++x)
+    if (fresnel[static_cast<size_t>(x)] > 0 && !interpolated(x))
+      reflected[static_cast<size_t>(x)] = floor_reflection(base + x, roughness[static_cast<size_t>(x)]);
+  for (int x = 0; x < width; ++x) {
+    const size_t i = static_cast<size_t>(x);
+    if (fresnel[i] <= 0) continue;
+    if (interpolated(x)) reflected[i] = (reflected[i - 1] + reflected[i + 1]) * 0.5f;
+  }
+  for (int x = 0; x < width; ++x)
+    if (fresnel[static_cast<size_t>(x)] > 0) add_reflection(out[x], fresnel[static_cast<size_t>(x)], reflected[static_cast<size_t>(x)]);
 }
 
 Ranged Tracer::range(int pixel) const {
@@ -456,7 +516,8 @@ Ranged Tracer::range(int pixel) const {
   float s_hi = pr.s_floor;
   const bool up = pr.slope > 0;
   if (up && scene_.has_ceiling) s_hi = s_ceiling_up_ * ray.inv_slope;
-  const Hit hit = nearest(ray, 0.0f, s_hi, false);
+  Hit hit;
+  nearest(ray, 0.0f, s_hi, false, hit);
   const SkyData& sky = scene_.sky;
   const float sun_strength = sky.has_sun ? sky.sun_irradiance.luminance() / 300.0f : 0.0f;
   Ranged out;
@@ -464,9 +525,9 @@ Ranged Tracer::range(int pixel) const {
     const Candidate& c = candidates_[static_cast<size_t>(hit.candidate)];
     const Prism& p = scene_.prisms[c.prism];
     const float dx = c.c * ray.ux - c.s * ray.uy, dy = c.s * ray.ux + c.c * ray.uy;
-    const SolidPoint sp = solid_point(p, c.lox + hit.s * dx, c.loy + hit.s * dy, oz_ + ray.slope * hit.s, hit.face);
+    const SolidPoint sp = solid_point(p, c.lox + hit.s * dx, c.loy + hit.s * dy, oz_ + ray.slope * hit.s, static_cast<Face>(hit.face));
     const MaterialData& m = scene_.materials[sp.material];
-    const float cos_i = std::abs(sp.nx * ray.wx + sp.ny * ray.wy + sp.nz * ray.slope) / ray.len;
+    const float cos_i = std::abs(sp.nx * ray.wx + sp.ny * ray.wy + sp.nz * ray.slope) * ray.inv_len;
     out.depth = hit.s * pr.planar;
     out.ir_return = m.ir_albedo * cos_i;
     if (sky.has_sun)
@@ -479,13 +540,14 @@ Ranged Tracer::range(int pixel) const {
     const float y = static_cast<float>(pose_.y) + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
     uint16_t mid;
     if (const FloorFeature* pit = floor_feature(x, y, mid)) {
-      const Shaded sh = shade_pit(ray, *pit, pr.s_floor);
+      Shaded sh;
+      shade_pit(ray, *pit, pr.s_floor, sh);
       out.depth = sh.depth * pr.planar;
       out.ir_return = scene_.materials[pit->material].ir_albedo * 0.7f;
       return out;
     }
     const MaterialData& m = scene_.materials[mid];
-    const float cos_i = -ray.slope / ray.len;
+    const float cos_i = -ray.slope * ray.inv_len;
     out.depth = pr.s_floor * pr.planar;
     out.ir_return = m.ir_albedo * cos_i;
     out.specular = m.f0 * std::max(0.0f, 1.0f - m.roughness / 0.1f);
@@ -494,7 +556,7 @@ Ranged Tracer::range(int pixel) const {
   }
   if (scene_.has_ceiling) {
     out.depth = s_hi * pr.planar;
-    out.ir_return = 0.6f * ray.slope / ray.len;
+    out.ir_return = 0.6f * ray.slope * ray.inv_len;
     return out;
   }
   out.depth = kInf;

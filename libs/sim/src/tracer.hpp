@@ -24,6 +24,7 @@ struct Shaded {
   float specular = 0;    // luminance of the mirror / highlight part of the radiance
   uint8_t surface = 0;   // SURFACE_*
   uint8_t phenomena = 0; // PHENOMENON_* known from the geometry and materials
+  uint16_t padding = 0;  // keeps the struct 24 bytes: copies without overlapping stores
 };
 
 // What a depth-sensor pixel sees.
@@ -38,7 +39,11 @@ class Tracer {
  public:
   Tracer(const SceneData& scene, const CameraRays& rays, const Pose2D& pose, bool accelerate);
 
-  Shaded shade(int pixel) const;
+  // Shades one image row (width pixels into out). Glossy reflections are
+  // traced on every other column and interpolated between, where the
+  // surface blurs them over several pixels anyway; mirror-like ones on every column.
+  void shade_row(int row, Shaded* out) const;
+  void shade(int pixel, Shaded& out) const;  // one pixel, everything traced
   Ranged range(int pixel) const;
   size_t num_candidates() const { return candidates_.size(); }
 
@@ -54,22 +59,27 @@ class Tracer {
   struct Hit {
     float s = kInf;       // horizontal distance along the ray
     int candidate = -1;
-    Face face = kFaceRound;
+    int face = kFaceRound;  // a Face; int-sized so the struct is copied without partial stores
   };
   struct Ray {            // one pixel's ray in this frame
     float ux, uy;         // robot frame horizontal direction
     float wx, wy;         // world frame
-    float slope, inv_slope, len;
+    float slope, inv_slope, len, inv_len;
     int bin;
   };
 
   void build_candidates(bool accelerate);
   Ray make_ray(const PixelRay& r) const;
   // Nearest solid along the ray with s in [s_lo, s_hi); mirrored: below the floor.
-  Hit nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored) const;
-  Shaded shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float extra_blur) const;
-  Shaded shade_floor(const Ray& ray, const PixelRay& pr) const;
-  Shaded shade_pit(const Ray& ray, const FloorFeature& pit, float s_floor) const;
+  void nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored, Hit& best) const;
+  void shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float extra_blur, Shaded& out) const;
+  // The floor's own (diffuse) radiance; `fresnel` > 0 when a reflection must be added.
+  void shade_floor(const Ray& ray, const PixelRay& pr, Shaded& out, float& fresnel, float& roughness) const;
+  void shade_primary(int pixel, Shaded& out, float& fresnel, float& roughness) const;
+  // Mirror image plus highlight lobes seen in the floor at a pixel.
+  Rgbf floor_reflection(int pixel, float roughness) const;
+  static void add_reflection(Shaded& out, float fresnel, const Rgbf& reflected);
+  void shade_pit(const Ray& ray, const FloorFeature& pit, float s_floor, Shaded& out) const;
   Rgbf reflection(const Ray& ray, float s_floor, float roughness, bool& emitter) const;
   Rgbf sky(float dx, float dy, float dz, float blur) const;
   Rgbf light_lobes(const Ray& ray, float x, float y, float roughness) const;

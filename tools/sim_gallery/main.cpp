@@ -1,0 +1,107 @@
+// ivoa-sim-gallery: renders sample frames from several scenes along their
+// trajectories and writes one picture: per scene a row of left, right,
+// depth and ground truth (surfaces, with the stereo-failure phenomena as
+// coloured stripes).
+#include <algorithm>
+#include <cstdio>
+
+#include <CLI/CLI.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/process.hpp"
+#include "ivoa/sim/simulator.hpp"
+#include "ivoa/sim/trajectory.hpp"
+#include "truth_colors.hpp"
+
+namespace {
+
+using namespace ivoa::sim;
+
+// A moment worth showing: something 0.8-2.5 m straight ahead.
+double interesting_time(Trajectory& trajectory, const Scene& scene, double from) {
+  for (double t = from; t < from + 90; t += 0.5) {
+    const Pose2D p = trajectory.pose_at(t);
+    const double ahead = scene.free_distance({p.x, p.y}, p.yaw, 0.3, 5.0);
+    if (ahead > 0.8 && ahead < 2.5) return t;
+  }
+  return from;
+}
+
+cv::Mat label(cv::Mat tile, const std::string& text) {
+  cv::rectangle(tile, cv::Rect(0, 0, tile.cols, 20), cv::Scalar(0, 0, 0), cv::FILLED);
+  cv::putText(tile, text, {6, 14}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  return tile;
+}
+
+cv::Mat fit(const cv::Mat& image, int width, int height) {
+  cv::Mat out;
+  cv::resize(image, out, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Writes a gallery picture of simulated frames (left, right, depth, ground truth) from several scenes"};
+  ivoa::CommonOptions common;
+  ivoa::add_common_options(app, common);
+  std::vector<std::string> scenes;
+  std::string output = "docs/sim/gallery.png";
+  uint64_t seed = 1;
+  int tile_width = 400;
+  double start_time = 5.0;
+  app.add_option("--scene", scenes, "scene files (default: every shipped scene)");
+  app.add_option("--seed", seed, "scene and trajectory seed")->capture_default_str();
+  app.add_option("--output", output, "PNG to write")->capture_default_str();
+  app.add_option("--tile-width", tile_width, "width of each picture in pixels")->capture_default_str();
+  app.add_option("--time", start_time, "seconds into the drive to start looking for a frame")->capture_default_str();
+  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  ivoa::init_logging("sim-gallery", common.log_level);
+  if (scenes.empty())
+    for (const char* name : {"indoor_office", "corridor", "polished_lobby", "warehouse", "outdoor_campus",
+                             "wet_parking_lot", "night_plaza"})
+      scenes.push_back(std::string(IVOA_SIM_SCENES_DIR) + "/" + name + ".yaml");
+
+  const int tile_height = tile_width * 600 / 960;
+  std::vector<cv::Mat> rows;
+  try {
+    for (const auto& file : scenes) {
+      const Scene scene = generate_scene(load_scene_spec(file), seed);
+      const Simulator simulator(scene);
+      Trajectory trajectory(scene, seed);
+      const double t = interesting_time(trajectory, scene, start_time);
+      const Pose2D pose = trajectory.pose_at(t);
+      RenderRequest request;
+      request.stereo_pose = request.depth_pose = pose;
+      request.frame_index = static_cast<uint64_t>(t * 30);
+      request.motion = trajectory.twist_at(t);
+      const SimFrame f = simulator.render(request);
+      char info[160];
+      std::snprintf(info, sizeof info, "%s seed %llu t=%.1fs  exp %.2f ms gain %.1f", scene.name().c_str(),
+                    static_cast<unsigned long long>(seed), t, f.exposure_ms, f.gain);
+      const cv::Mat tiles[] = {label(fit(f.left, tile_width, tile_height), std::string(info)),
+                               label(fit(f.right, tile_width, tile_height), "right"),
+                               label(fit(colorize_depth(f.depth_mm), tile_width, tile_height), "depth sensor (mm)"),
+                               label(fit(colorize_truth(f.truth_surface, f.truth_phenomena), tile_width, tile_height),
+                                     "ground truth: surfaces + phenomena")};
+      cv::Mat row;
+      cv::hconcat(tiles, 4, row);
+      rows.push_back(row);
+      spdlog::info("{}", info);
+    }
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitBadInput;
+  }
+  rows.push_back(truth_legend(rows.front().cols));
+  cv::Mat gallery;
+  cv::vconcat(rows, gallery);
+  if (!cv::imwrite(output, gallery)) {
+    spdlog::error("cannot write {}", output);
+    return ivoa::kExitIoError;
+  }
+  spdlog::info("wrote {} ({}x{})", output, gallery.cols, gallery.rows);
+  return ivoa::kExitOk;
+}
