@@ -133,12 +133,17 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr DepthMonitor::Impl::cloud_near(const cv::Mat
 
 void DepthMonitor::Impl::count_points(const PointBins& bins, const QueryCell& cell, double r,
                                       CellEvidence& e) const {
-  const double r2 = r * r;
   bins.for_each_near(cell.x, cell.y, [&](const pcl::PointXYZ& p) {
-    const double dx = p.x - cell.x, dy = p.y - cell.y;
-    if (dx * dx + dy * dy > r2) return;
-    if (p.z > config.obstacle_min_height) ++e.obstacle_points;
-    else if (p.z < -config.hole_min_depth) ++e.hole_points;
+    const bool high = p.z > config.obstacle_min_height, low = p.z < -config.hole_min_depth;
+    if (!high && !low) return;
+    const double distance = std::hypot(p.x - cell.x, p.y - cell.y);
+    const double range = (Eigen::Vector3f(p.x, p.y, p.z) - origin).norm();
+    const double band = 0.5 * config.voxel_size + 3.0 * config.depth_noise_coefficient * range * range;
+    if (distance <= r - band) {
+      (high ? e.obstacle_points : e.hole_points)++;
+    } else if (distance <= r + band) {
+      (high ? e.edge_obstacle_points : e.edge_hole_points)++;
+    }
   });
 }
 
@@ -173,6 +178,9 @@ int8_t DepthMonitor::Impl::verdict(const CellEvidence& e) const {
   if (e.obstacle_points >= config.min_obstacle_points || e.hole_points >= config.min_hole_points ||
       e.samples_holes >= config.min_hole_samples)
     return obstacle_grid_t::STATE_OBSTACLE;
+  if (e.obstacle_points + e.edge_obstacle_points >= config.min_obstacle_points ||
+      e.hole_points + e.edge_hole_points >= config.min_hole_points)
+    return obstacle_grid_t::STATE_UNKNOWN;  // an obstacle right at the footprint's edge
   if (e.samples_hidden == 0 && e.samples_seen >= config.min_seen_fraction * e.samples_total)
     return obstacle_grid_t::STATE_FREE;
   return obstacle_grid_t::STATE_UNKNOWN;

@@ -13,12 +13,18 @@
 //    spot of ground is seen (a hit at ground height, at the spot itself),
 //    hidden (a hit short of it: possibly the foot of an object standing on
 //    it), or missing (the ray went below the ground: a pit).
+// Near the disc's edge a point's horizontal position is only known to about
+// voxel_size / 2 + 3 sigma of the sensor noise at its range, so points in
+// that band around r are "edge" evidence: they can neither make an
+// OBSTACLE nor allow a FREE.
 // Verdict:
-//   OBSTACLE  >= min_obstacle_points points stand higher than
+//   OBSTACLE  >= min_obstacle_points points inside the band stand higher than
 //             obstacle_min_height (below obstacle_max_height), or
 //             >= min_hole_points points lie deeper than hole_min_depth
 //             below the ground, or >= min_hole_samples sample rays passed
 //             through where the ground should be;
+//   UNKNOWN   if that many obstacle or hole points exist only when the edge
+//             band is counted too (an obstacle right at r: too close to call);
 //   FREE      no such evidence, and the ground is seen at >= min_seen_fraction
 //             of the samples and hidden at none (a hidden spot could hold an
 //             obstacle whose visible faces lie outside the disc);
@@ -51,8 +57,10 @@ struct DepthMonitorConfig {
 
 // Evidence behind one cell's verdict (for diagnostics and the viewer).
 struct CellEvidence {
-  int obstacle_points = 0;  // voxels within r above the ground
-  int hole_points = 0;      // voxels within r below the ground
+  int obstacle_points = 0;  // voxels within r (inside the edge band) above the ground
+  int hole_points = 0;      // ... below the ground
+  int edge_obstacle_points = 0;  // voxels in the edge band around r above the ground
+  int edge_hole_points = 0;      // ... below the ground
   int samples_seen = 0;     // ground samples whose ray hit ground height
   int samples_hidden = 0;   // ... hit something tall first
   int samples_holes = 0;    // ... went below the ground
