@@ -1,0 +1,151 @@
+// Building a dataset from a short simulated session: patches are the pixels
+// of the frames they came from, labels equal an independent recomputation
+// (detector + monitor + Algorithm 1 per frame, without the pairing
+// pipeline), and recorded labels are taken as they are.
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include <gtest/gtest.h>
+
+#include "ivoa/core/bus.hpp"
+#include "ivoa/core/camera_model.hpp"
+#include "ivoa/core/channels.hpp"
+#include "ivoa/core/grid_messages.hpp"
+#include "ivoa/dataset/builder.hpp"
+#include "ivoa/dataset/patch.hpp"
+#include "ivoa/monitor/depth_monitor.hpp"
+#include "ivoa/monitor/labeler.hpp"
+#include "ivoa/stereo/detector.hpp"
+#include "sim_log.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa::dataset {
+namespace {
+
+const std::string kScene = std::string(IVOA_SCENES_DIR) + "/indoor_office.yaml";
+
+// Labels of one frame computed directly, cell by cell.
+introspection_labels_t recompute_labels(const RigCalibration& rig, const sim::SimFrame& frame, int64_t utime,
+                                        int64_t depth_utime) {
+  const QueryGrid grid(QueryGridConfig{}, RigGeometry(rig).left);
+  const stereo::DetectorConfig config;
+  auto detector = stereo::make_detector("jppc", rig, config);
+  detector->set_frame(frame.left, frame.right);
+  obstacle_grid_t stereo = make_obstacle_grid(grid, "jppc", utime);
+  detector->evaluate(grid, stereo);
+  obstacle_grid_t depth = make_obstacle_grid(grid, "depth_monitor", utime);
+  depth.depth_utime = depth_utime;
+  monitor::DepthMonitor(rig).evaluate(frame.depth_mm, grid, depth);
+  return monitor::label_frame(stereo, depth);
+}
+
+struct Expected {
+  std::map<std::pair<int64_t, int>, int> labels;  // (utime, cell) -> label, patch inside the image
+  std::map<int64_t, cv::Mat> left;
+};
+
+TEST(DatasetBuilder, RerunLabelsMatchAnIndependentRecomputationAndPatchesTheFrames) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("office_s3.lcmlog");
+  Expected expected;
+  test::write_sim_log(log_path, kScene, 3, 8, [&](Bus&, const test::SimLogFrame& f, const sim::SimFrame& frame) {
+    expected.left[f.utime] = frame.left.clone();
+    const auto labels = recompute_labels(sim::make_sim_rig(), frame, f.utime, f.depth_utime);
+    for (size_t i = 0; i < labels.label.size(); ++i)
+      if (labels.label[i] != introspection_labels_t::LABEL_NONE &&
+          !extract_patch(frame.left, labels.u[i], labels.v[i], 100).empty())
+        expected.labels[{f.utime, static_cast<int>(i)}] = labels.label[i];
+  });
+  ASSERT_GT(expected.labels.size(), 50u);
+
+  BuildOptions options;
+  options.labels = "jppc";
+  SessionBuilder builder(dir.file("data"), "office_s3", options);
+  builder.add_log(log_path);
+  const BuildReport report = builder.finish();
+  EXPECT_TRUE(report.problems.empty());
+  EXPECT_EQ(report.stereo_frames, 8);
+  EXPECT_EQ(report.frames_unmatched, 0);
+
+  const SessionReader session(dir.file("data") + "/office_s3");
+  EXPECT_EQ(session.info().detector, "jppc");
+  EXPECT_EQ(session.info().labels_from, "rerun");
+  EXPECT_EQ(session.info().scene, "indoor_office");
+  EXPECT_EQ(session.info().seed, 3);
+  EXPECT_EQ(session.info().environment, "indoor");
+  ASSERT_EQ(session.size(), expected.labels.size());
+  for (size_t k = 0; k < session.size(); ++k) {
+    const SampleRecord& s = session.samples()[k];
+    const auto it = expected.labels.find({s.utime, s.cell});
+    ASSERT_NE(it, expected.labels.end()) << "unexpected sample " << s.utime << " cell " << s.cell;
+    EXPECT_EQ(s.label, it->second) << "cell " << s.cell;
+    EXPECT_EQ(s.depth_utime, s.utime + 4000);
+    const cv::Mat crop = extract_patch(expected.left.at(s.utime), s.u, s.v, 100);
+    EXPECT_EQ(cv::norm(session.patch(k), crop, cv::NORM_INF), 0) << "patch " << k;
+  }
+}
+
+TEST(DatasetBuilder, RecordedLabelsAreUsedAsRecorded) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("rec.lcmlog");
+  std::map<std::pair<int64_t, int>, int> recorded;
+  test::write_sim_log(log_path, kScene, 5, 4, [&](Bus& bus, const test::SimLogFrame& f, const sim::SimFrame& frame) {
+    const QueryGrid grid(QueryGridConfig{}, RigGeometry(sim::make_sim_rig()).left);
+    introspection_labels_t labels = recompute_labels(sim::make_sim_rig(), frame, f.utime, f.depth_utime);
+    // Overwrite with a recognisable pattern: the builder must not relabel.
+    for (size_t i = 0; i < labels.label.size(); ++i) {
+      labels.label[i] = static_cast<int8_t>(grid.cell(static_cast<int>(i)).in_image ? i % 4 : -1);
+      if (labels.label[i] >= 0) recorded[{f.utime, static_cast<int>(i)}] = labels.label[i];
+    }
+    bus.publish(channels::kIntrospectionLabels, labels);
+  });
+  const BuildOptions recorded_options;  // labels: recorded
+  SessionBuilder builder(dir.file("data"), "rec", recorded_options);
+  builder.add_log(log_path);
+  builder.finish();
+  const SessionReader session(dir.file("data") + "/rec");
+  EXPECT_EQ(session.info().labels_from, "recorded");
+  ASSERT_EQ(session.size(), recorded.size());
+  for (const auto& s : session.samples()) EXPECT_EQ(s.label, (recorded.at({s.utime, s.cell})));
+}
+
+TEST(DatasetBuilder, TruncatedLogKeepsWhatCameBeforeAndSaysWhere) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("cut.lcmlog");
+  test::write_sim_log(log_path, kScene, 4, 6);
+  const auto size = std::filesystem::file_size(log_path);
+  std::filesystem::resize_file(log_path, size - size / 4);  // lose the last quarter mid-event
+  BuildOptions options;
+  options.labels = "jppc";
+  SessionBuilder builder(dir.file("data"), "cut", options);
+  builder.add_log(log_path);
+  const BuildReport report = builder.finish();
+  ASSERT_FALSE(report.problems.empty());
+  EXPECT_NE(report.problems[0].find("byte "), std::string::npos) << report.problems[0];
+  EXPECT_GE(report.stereo_frames, 3);
+  EXPECT_GT(report.samples, 0);
+}
+
+TEST(DatasetBuilder, LogWithoutCalibrationIsRefused) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("nocal.lcmlog");
+  {
+    Bus bus("file://" + log_path + "?mode=w");
+    stereo_image_t s;
+    bus.publish(channels::kStereoImages, s);
+    process_status_t unknown_channel;
+    bus.publish("SOMETHING_ELSE", unknown_channel);
+  }
+  const BuildOptions options;
+  SessionBuilder builder(dir.file("data"), "nocal", options);
+  try {
+    builder.add_log(log_path);
+    FAIL();
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("no RIG_CALIBRATION"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ivoa::dataset
