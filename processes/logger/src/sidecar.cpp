@@ -58,15 +58,17 @@ std::string sidecar_json(const SidecarContent& c) {
     if (start == 0 || ch.first_timestamp < start) start = ch.first_timestamp;
     end = std::max(end, ch.last_timestamp);
   }
+  const auto flag = [](bool b) { return b ? "true" : "false"; };
   std::ostringstream out;
   out << "{\n  \"log\": " << json_quote(base_name(c.log_path)) << ",\n  \"part\": " << c.part
-      << ",\n  \"complete\": " << (c.complete ? "true" : "false") << ",\n  \"error\": " << json_quote(c.error)
-      << ",\n  \"logger\": {\"program\": " << json_quote(id.program) << ", \"version\": " << json_quote(id.version)
-      << ", \"git\": " << json_quote(id.git) << ", \"host\": " << json_quote(id.host) << "},\n  \"lcm_url\": "
-      << json_quote(id.lcm_url) << ",\n  \"channels_regex\": " << json_quote(id.channels_regex)
-      << ",\n  \"exclude_regex\": " << json_quote(id.exclude_regex) << ",\n  \"start_utime\": " << start
-      << ",\n  \"end_utime\": " << end << ",\n  \"events\": " << s.events() << ",\n  \"payload_bytes\": " << s.bytes() << ",\n  \"file_bytes\": " << c.file_bytes
-      << ",\n  \"starts_with_calibration\": " << (c.starts_with_calibration ? "true" : "false") << ",\n";
+      << ",\n  \"complete\": " << flag(c.complete) << ",\n  \"error\": " << json_quote(c.error) << ",\n";
+  out << "  \"logger\": {\"program\": " << json_quote(id.program) << ", \"version\": " << json_quote(id.version)
+      << ", \"git\": " << json_quote(id.git) << ", \"host\": " << json_quote(id.host) << "},\n";
+  out << "  \"lcm_url\": " << json_quote(id.lcm_url) << ",\n  \"channels_regex\": " << json_quote(id.channels_regex)
+      << ",\n  \"exclude_regex\": " << json_quote(id.exclude_regex) << ",\n";
+  out << "  \"start_utime\": " << start << ",\n  \"end_utime\": " << end << ",\n  \"events\": " << s.events()
+      << ",\n  \"payload_bytes\": " << s.bytes() << ",\n  \"file_bytes\": " << c.file_bytes
+      << ",\n  \"starts_with_calibration\": " << flag(c.starts_with_calibration) << ",\n";
   write_channels(out, s);
   write_session(out, *c.counters);
   write_message_types(out);

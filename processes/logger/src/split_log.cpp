@@ -22,8 +22,6 @@ std::string SplitLog::part_path(int part) const {
   return options_.path + suffix;
 }
 
-int64_t SplitLog::current_events() const { return writer_ ? writer_->events() : 0; }
-
 void SplitLog::open_part(int part, int64_t timestamp) {
   logio::LogWriterOptions writer_options;
   writer_options.overwrite = options_.overwrite;

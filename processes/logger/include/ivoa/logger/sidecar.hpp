@@ -1,7 +1,7 @@
 #pragma once
 // A small JSON file next to each log (<log>.json) that says what is in it
 // without reading it: who wrote it (program, version, git hash, host), the
-// time span, every channel with its type, fingerprint and count, the
+// time span (receive times of its first and last event), every channel with its type, fingerprint and count, the
 // session's totals, and the fingerprints of every ivoa type, so a log
 // whose types later change can still be matched to the code that wrote it.
 // Written when the file is opened (complete: false) and again when it is

@@ -42,9 +42,6 @@ class SplitLog {
   void close(const std::string& error = "");
 
   const std::vector<std::string>& files() const { return files_; }
-  const std::string& current_path() const { return files_.back(); }
-  int64_t current_events() const;
-  bool has_calibration() const { return calibration_.has_value(); }
 
  private:
   std::string part_path(int part) const;
