@@ -82,13 +82,14 @@ void enlarge_receive_buffer(const std::string& url, double buffer_mb) {
   if (port == 0 || buffer_mb <= 0) return;
   const auto r = ivoa::logger::force_receive_buffer(port, static_cast<int>(buffer_mb * 1e6));
   if (r.sockets == 0) spdlog::warn("found no UDP socket on port {} to enlarge its receive buffer", port);
-  else if (r.permitted)
-    spdlog::info("kernel receive buffer of LCM's socket raised to {:.0f} MB ({:.0f} MB as the kernel counts it)",
-                 buffer_mb, r.bytes / 1e6);
-  else
-    spdlog::warn("kernel receive buffer stays at {:.0f} MB (raising it needs CAP_NET_ADMIN, or sysctl "
-                 "net.core.rmem_max); a logger kept off the CPU for long can lose images in the kernel",
+  else if (r.as_asked)
+    spdlog::info("kernel receive buffer of LCM's socket: {:.0f} MB ({:.0f} MB as the kernel books it)", buffer_mb,
                  r.bytes / 1e6);
+  else
+    spdlog::warn("kernel receive buffer of LCM's socket is {:.0f} MB as the kernel books it, less than the {:.0f} MB "
+                 "asked: raise net.core.rmem_max, or give the logger CAP_NET_ADMIN; a logger kept off the CPU for "
+                 "long can lose images in the kernel",
+                 r.bytes / 1e6, buffer_mb);
 }
 
 void handle_what_lcm_already_has(ivoa::Bus& bus) {

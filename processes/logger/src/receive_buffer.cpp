@@ -24,6 +24,13 @@ bool is_udp_socket_on_port(int fd, int port) {
   return ntohs(address.sin_port) == port;
 }
 
+int receive_buffer(int fd) {
+  int bytes = 0;
+  socklen_t len = sizeof(bytes);
+  getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bytes, &len);
+  return bytes;
+}
+
 }  // namespace
 
 int udpm_port(const std::string& url) {
@@ -42,9 +49,12 @@ ReceiveBufferResult force_receive_buffer(int port, int bytes) {
     const int fd = std::stoi(name);
     if (!is_udp_socket_on_port(fd, port)) continue;
     ++result.sockets;
-    result.permitted = setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof(bytes)) == 0;
-    socklen_t len = sizeof(result.bytes);
-    getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &result.bytes, &len);
+    // The kernel books twice the size set, so compare against 2 * bytes.
+    if (receive_buffer(fd) < 2 * static_cast<int64_t>(bytes) &&
+        setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof(bytes)) != 0)
+      setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &bytes, sizeof(bytes));  // capped at net.core.rmem_max
+    result.bytes = receive_buffer(fd);
+    result.as_asked = result.bytes >= 2 * static_cast<int64_t>(bytes);
   }
   return result;
 }

@@ -4,17 +4,18 @@
 // caps at net.core.rmem_max (4 MB on a stock host, 8 MB effective): at
 // 120 MB/s of images that is ~65 ms of traffic, and a logger kept off the
 // CPU longer than that (a busy 2-core robot) loses whole images in the
-// kernel before LCM sees them. With CAP_NET_ADMIN, SO_RCVBUFFORCE passes
-// the cap; this finds LCM's socket among the process's descriptors (the
-// UDP socket bound to the URL's port) and enlarges it.
+// kernel before LCM sees them. This finds LCM's socket among the process's
+// descriptors (the UDP socket bound to the URL's port) and enlarges it:
+// past rmem_max with SO_RCVBUFFORCE where that is permitted
+// (CAP_NET_ADMIN), else up to rmem_max. It never shrinks the buffer.
 #include <string>
 
 namespace ivoa::logger {
 
 struct ReceiveBufferResult {
-  int sockets = 0;         // UDP sockets found on the port
-  int bytes = 0;           // the kernel's buffer size afterwards (it reports double what was asked)
-  bool permitted = false;  // false: no CAP_NET_ADMIN, the size was left as LCM set it
+  int sockets = 0;      // UDP sockets found on the port
+  int bytes = 0;        // the kernel's buffer size afterwards (it books double what was asked)
+  bool as_asked = false;  // the buffer is at least the size asked for
 };
 
 // The port of a udpm:// URL (LCM's default 7667 if it names none); 0 for other URLs.
