@@ -522,6 +522,7 @@ SceneSpec make_bare_spec(Environment environment, const std::string& floor_mater
   s.lighting.sky_irradiance = Range(60);
   s.lighting.overcast_probability = 0;
   s.layout.ceiling_height = Range(2.8);
+  s.start = Pose2D{0, 0, 0};
   return s;
 }
 

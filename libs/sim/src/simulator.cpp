@@ -38,8 +38,9 @@ struct Simulator::Impl {
 
 namespace {
 
-// Signal-to-noise below which a pixel counts as noise-dominated.
-constexpr double kLowLightSnr = 4.0;
+// Signal-to-noise below which a pixel counts as noise-dominated: texture of
+// ~10 % contrast drowns in the noise.
+constexpr double kLowLightSnr = 10.0;
 // Specular part brighter than this fraction of full scale counts as glare.
 constexpr double kGlareLevel = 0.5;
 

@@ -1,0 +1,127 @@
+// Scene files: every shipped scene loads and generates; bad input names the
+// file and the key.
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "ivoa/sim/scene.hpp"
+#include "ivoa/sim/scene_spec.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa::sim {
+namespace {
+
+std::vector<std::string> shipped_scenes() {
+  std::vector<std::string> files;
+  for (const auto& entry : std::filesystem::directory_iterator(IVOA_SIM_SCENES_DIR))
+    if (entry.path().extension() == ".yaml") files.push_back(entry.path().string());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::string error_of(const std::string& yaml) {
+  try {
+    parse_scene_spec(yaml, "test.yaml");
+  } catch (const SceneSpecError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SimSceneSpec, ShippedScenesLoadAndGenerate) {
+  const auto files = shipped_scenes();
+  ASSERT_GE(files.size(), 6u);
+  bool indoor = false, outdoor = false;
+  for (const auto& file : files) {
+    SCOPED_TRACE(file);
+    const SceneSpec spec = load_scene_spec(file);
+    const Scene scene = generate_scene(spec, 7);
+    EXPECT_GT(scene.num_solids(), 4);
+    EXPECT_GT(scene.clearance({scene.start_pose().x, scene.start_pose().y}), 0.5) << "start pose is not clear";
+    EXPECT_TRUE(scene.bounds().contains(Eigen::Vector2d(scene.start_pose().x, scene.start_pose().y)));
+    (spec.environment == Environment::kIndoor ? indoor : outdoor) = true;
+  }
+  EXPECT_TRUE(indoor && outdoor);
+}
+
+TEST(SimSceneSpec, SameSeedSameSceneOtherSeedOtherScene) {
+  const SceneSpec spec = load_scene_spec(std::string(IVOA_SIM_SCENES_DIR) + "/indoor_office.yaml");
+  const Scene a = generate_scene(spec, 3), b = generate_scene(spec, 3), c = generate_scene(spec, 4);
+  EXPECT_EQ(a.num_solids(), b.num_solids());
+  EXPECT_EQ(a.start_pose().x, b.start_pose().x);
+  EXPECT_EQ(a.bounds().max(), b.bounds().max());
+  EXPECT_TRUE(a.num_solids() != c.num_solids() || a.start_pose().x != c.start_pose().x);
+}
+
+TEST(SimSceneSpec, ParsesExplicitElements) {
+  const SceneSpec spec = parse_scene_spec(R"(
+name: exact
+environment: indoor
+floor: {materials: [carpet_grey]}
+materials:
+  - {name: my_paint, base: paint_white, color: [0.2, 0.6, 0.3]}
+elements:
+  - {type: wall, from: [1.2, -3], to: [1.2, 3], height: 2.4, material: my_paint, baseboard: {height: 0.1}}
+  - {type: box, position: [1.5, 0.5], size: [0.4, 0.3, 0.5], yaw_deg: 30, material: printed_box}
+  - {type: puddle, position: [1.0, 0], size: [0.8, 0.6]}
+  - {type: pit, position: [2, 1], size: [0.5, 0.5], depth: 0.4, shape: ellipse}
+  - {type: lamp_post, position: [2, -1], height: 4, intensity: 100}
+start: [0, 0, 90]
+)",
+                                          "inline");
+  EXPECT_EQ(spec.name, "exact");
+  ASSERT_EQ(spec.elements.size(), 5u);
+  EXPECT_EQ(spec.elements[0].type, ElementSpec::Type::kWall);
+  EXPECT_DOUBLE_EQ(spec.elements[0].size.z(), 2.4);
+  EXPECT_DOUBLE_EQ(spec.elements[0].baseboard_height, 0.1);
+  EXPECT_NEAR(spec.elements[1].yaw, M_PI / 6, 1e-12);
+  EXPECT_EQ(spec.elements[3].shape, "ellipse");
+  EXPECT_DOUBLE_EQ(spec.elements[3].depth, 0.4);
+  ASSERT_TRUE(spec.start.has_value());
+  EXPECT_NEAR(spec.start->yaw, M_PI / 2, 1e-12);
+  ASSERT_EQ(spec.materials.size(), 1u);
+  EXPECT_DOUBLE_EQ(spec.materials[0].color[1], 0.6);
+  EXPECT_TRUE(spec.materials[0].textureless());
+  const Scene scene = generate_scene(spec, 1);
+  EXPECT_EQ(scene.num_pits(), 1);
+}
+
+TEST(SimSceneSpec, ErrorsNameFileAndKey) {
+  EXPECT_NE(error_of("name: x\nobstacles: {cuont: 3}\n").find("test.yaml:2: obstacles.cuont: unknown key"),
+            std::string::npos);
+  EXPECT_NE(error_of("walls: {materials: [paint_white, chocolate]}\n").find("walls.materials: unknown material 'chocolate'"),
+            std::string::npos);
+  EXPECT_NE(error_of("elements:\n  - {type: box, position: [1, 0], material: unobtainium}\n")
+                .find("elements[0].material: unknown material 'unobtainium'"),
+            std::string::npos);
+  EXPECT_NE(error_of("elements:\n  - {type: spaceship, position: [1, 0]}\n").find("elements[0].type: unknown element type"),
+            std::string::npos);
+  EXPECT_NE(error_of("layout: {width: [5, 2]}\n").find("layout.width: range [min, max] has min > max"), std::string::npos);
+  EXPECT_NE(error_of("phenomena: {glare: 1.5}\n").find("phenomena.glare: must be a probability"), std::string::npos);
+  EXPECT_NE(error_of("environment: underwater\n").find("environment: expected indoor or outdoor"), std::string::npos);
+  EXPECT_NE(error_of("layout: [1, 2\n").find("test.yaml:"), std::string::npos);
+  EXPECT_NE(error_of("elements:\n  - {type: wall, from: [0, 0]}\n").find("wall needs from and to"), std::string::npos);
+}
+
+TEST(SimSceneSpec, MissingFileIsNamed) {
+  try {
+    load_scene_spec("/nonexistent/scene.yaml");
+    FAIL() << "no exception";
+  } catch (const SceneSpecError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.yaml"), std::string::npos);
+  }
+  ivoa::test::TempDir dir;
+  std::ofstream(dir.file("bad.yaml")) << "floor: {materials: [marshmallow]}\n";
+  try {
+    load_scene_spec(dir.file("bad.yaml"));
+    FAIL() << "no exception";
+  } catch (const SceneSpecError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir.file("bad.yaml") + ": floor.materials: unknown material 'marshmallow'"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ivoa::sim
