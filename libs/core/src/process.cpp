@@ -43,7 +43,8 @@ int run_until_stopped(Bus& bus, Heartbeat* heartbeat, const std::function<void()
   while (!stop_requested()) {
     const int r = bus.handle(poll_ms);
     if (r < 0) {
-      if (stop_at_end_of_log) break;
+      // A stop signal interrupts LCM's wait (EINTR): that is a stop, not a failure.
+      if (stop_requested() || stop_at_end_of_log) break;
       spdlog::error("LCM handle failed on '{}'", bus.url());
       return kExitFailure;
     }
