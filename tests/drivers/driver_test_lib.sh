@@ -10,10 +10,19 @@ PIDS=()
 
 # Stops what this test started, newest first (the driver before the
 # simulated cameras it talks to).
+# A process that ignores SIGTERM for 15 s is killed (and the test fails).
 cleanup() {
-  local i
+  local i j
   for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do
     kill -TERM "${PIDS[i]}" 2>/dev/null || true
+    for ((j = 0; j < 300; j++)); do
+      kill -0 "${PIDS[i]}" 2>/dev/null || break
+      sleep 0.05
+    done
+    if kill -0 "${PIDS[i]}" 2>/dev/null; then
+      echo "process ${PIDS[i]} ignored SIGTERM for 15 s; killing it" >&2
+      kill -KILL "${PIDS[i]}" 2>/dev/null || true
+    fi
     wait "${PIDS[i]}" 2>/dev/null || true
   done
   if [ "${KEEP_OUT:-0}" = 1 ]; then echo "outputs kept in $OUT" >&2; else rm -rf "$OUT"; fi

@@ -13,6 +13,7 @@ namespace {
 constexpr int kWidth = 640;
 constexpr int kHeight = 480;
 constexpr int kFps = 30;
+constexpr int kEndOfFileSilenceMs = 1000;  // a playing recording that delivers nothing for this long has ended
 
 const char* const kNoDeviceHelp =
     "Is the sensor plugged in and powered (a Kinect v1 needs its mains adapter)? Debian's OpenNI2 drives only "
@@ -25,9 +26,14 @@ bool is_recording_path(const std::string& device) {
   return path.extension() == ".oni" || std::filesystem::is_regular_file(path);
 }
 
+// OpenNI2's last error, on one line.
 std::string extended_error() {
-  const std::string text = openni::OpenNI::getExtendedError();
-  return text.empty() ? "no details from OpenNI2" : text;
+  std::string text = openni::OpenNI::getExtendedError();
+  for (char& c : text)
+    if (c == '\n' || c == '\t') c = ' ';
+  const auto first = text.find_first_not_of(' ');
+  if (first == std::string::npos) return "no details from OpenNI2";
+  return text.substr(first, text.find_last_not_of(' ') - first + 1);
 }
 
 // Prefers width x height in `format`, at the nominal rate if offered.
@@ -53,6 +59,7 @@ struct OpenNiCamera::Impl {
   bool registered = false;
   int frames_in_file = 0;
   int depth_frames_read = 0;
+  int idle_ms = 0;  // waited without a frame
   openni::Device device;
   openni::VideoStream depth;
   openni::VideoStream color;
@@ -64,7 +71,7 @@ struct OpenNiCamera::Impl {
     if (file && !std::filesystem::is_regular_file(options.device))
       throw DeviceError(options.device + ": recording not found", kExitBadInput);
     if (openni::OpenNI::initialize() != openni::STATUS_OK)
-      throw DeviceError("OpenNI2 does not initialise: " + extended_error(), kExitFailure);
+      throw DeviceError("OpenNI2 does not initialise (are its drivers installed?): " + extended_error(), kExitFailure);
     initialized = true;
     const bool any = options.device.empty() || options.device == "ANY_DEVICE";
     if (any) {
@@ -133,19 +140,17 @@ struct OpenNiCamera::Impl {
     spdlog::info("recording to {}", options.record_path);
   }
 
+  // Streams stop before the recorder: OpenNI2 deadlocks if a frame is
+  // delivered while a recorder is stopped.
   void close() {
+    if (depth.isValid()) depth.stop();
+    if (color.isValid()) color.stop();
     if (recorder.isValid()) {
       recorder.stop();
       recorder.destroy();
     }
-    if (depth.isValid()) {
-      depth.stop();
-      depth.destroy();
-    }
-    if (color.isValid()) {
-      color.stop();
-      color.destroy();
-    }
+    if (depth.isValid()) depth.destroy();
+    if (color.isValid()) color.destroy();
     if (device.isValid()) device.close();
     if (initialized) openni::OpenNI::shutdown();
     initialized = false;
@@ -178,8 +183,16 @@ OpenNiCamera::Ready OpenNiCamera::wait(int timeout_ms) {
   openni::VideoStream* streams[2] = {&m.depth, &m.color};
   const int count = m.color.isValid() ? 2 : 1;
   int ready = -1;
-  if (openni::OpenNI::waitForAnyStream(streams, count, &ready, timeout_ms) != openni::STATUS_OK) return Ready::kTimeout;
-  return ready == 0 ? Ready::kDepth : Ready::kColor;
+  if (openni::OpenNI::waitForAnyStream(streams, count, &ready, timeout_ms) == openni::STATUS_OK) {
+    m.idle_ms = 0;
+    return ready == 0 ? Ready::kDepth : Ready::kColor;
+  }
+  // A frame the host was too slow to read is replaced by the next, so fewer
+  // than the file's frames may be read: silence after playing also ends it.
+  m.idle_ms += timeout_ms;
+  if (m.file && !m.options.loop && m.depth_frames_read > 0 && m.idle_ms >= kEndOfFileSilenceMs)
+    return Ready::kEndOfRecording;
+  return Ready::kTimeout;
 }
 
 DepthFrame OpenNiCamera::read_depth() {
