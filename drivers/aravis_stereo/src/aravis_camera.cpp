@@ -124,6 +124,10 @@ struct AravisCamera::Impl {
     }
     if (config.packet_delay_ns > 0)
       optional_setting("packet delay", [&](GError** e) { arv_camera_gv_set_packet_delay(camera, config.packet_delay_ns, e); });
+    if (config.throughput_limit > 0)
+      optional_setting("DeviceLinkThroughputLimit", [&](GError** e) {
+        arv_camera_set_integer(camera, "DeviceLinkThroughputLimit", config.throughput_limit, e);
+      });
   }
 
   void configure_image() {

@@ -55,6 +55,9 @@ void add_options(CLI::App& app, Flags& f) {
   app.add_option("--packet-delay-ns", c.packet_delay_ns, "GigE inter-packet delay, ns (0 = keep the camera's)")
       ->capture_default_str();
   app.add_flag("--no-packet-resend", f.no_packet_resend, "never ask a GigE camera to resend lost packets");
+  app.add_option("--throughput-limit", c.throughput_limit,
+                 "DeviceLinkThroughputLimit, bytes/s, when both cameras share one link (0 = keep the camera's)")
+      ->capture_default_str();
   app.add_option("--trigger", c.trigger, "none (free-running), software, or a hardware line such as Line0")
       ->capture_default_str();
   app.add_option("--buffers", c.buffers, "stream buffers per camera")->capture_default_str()->check(CLI::Range(2, 64));

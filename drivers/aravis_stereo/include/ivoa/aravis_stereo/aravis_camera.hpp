@@ -21,6 +21,7 @@ struct AravisCameraConfig {
   int packet_size = 0;                    // GigE Vision packet size, bytes (9000 with jumbo frames); 0 = negotiate
   int64_t packet_delay_ns = 0;            // GigE Vision inter-packet delay; 0 = keep the camera's
   bool packet_resend = true;              // ask a GigE camera to resend lost packets
+  int64_t throughput_limit = 0;           // DeviceLinkThroughputLimit, bytes/s, for cameras sharing a link; 0 = keep
   std::string trigger = "none";           // none | software | a hardware input line, e.g. Line0
   int buffers = 8;                        // stream buffers in flight
 };
