@@ -1,7 +1,6 @@
 #include "ivoa/aravis_stereo/aravis_camera.hpp"
 
 #include <atomic>
-#include <cstdio>
 #include <list>
 #include <mutex>
 #include <regex>

@@ -1,7 +1,6 @@
 #include "ivoa/aravis_stereo/stereo_driver.hpp"
 
 #include <algorithm>
-#include <cmath>
 
 #include <spdlog/spdlog.h>
 
@@ -56,8 +55,6 @@ struct StereoDriver::State {
         right(Side::kRight, std::move(rt), o.worker, events),
         pairer(pairing_options(o)) {}
 
-  CameraWorker& worker(Side side) { return side == Side::kLeft ? left : right; }
-
   void check_size_against_rig(const CameraFrame& frame) {
     const int i = static_cast<int>(frame.side);
     if (size_checked[i]) return;
@@ -69,8 +66,9 @@ struct StereoDriver::State {
                    side_name(frame.side), frame.width, frame.height, options.rig_path, cam.width, cam.height);
   }
 
-  // Sets the time the frame is paired by and, unless pairing by raw device
-  // clocks (not epoch-based), the utime it is published with.
+  // Sets the time the frame is paired by. Mapped camera time is also the
+  // better capture time to publish; raw device clocks are not epoch-based,
+  // so host receive time is published with them (and with kHost).
   void apply_clock(CameraFrame& frame) {
     switch (options.clock) {
       case PairingClock::kHost: frame.pairing_time_us = frame.utime; break;

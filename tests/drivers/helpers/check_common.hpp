@@ -66,6 +66,9 @@ class StatusWatcher {
       ++count_;
     });
   }
+  // The process published its last heartbeat (it exits after it).
+  bool finished() const { return count_ > 0 && (latest_.state == "stopped" || latest_.state == "failed"); }
+
   JsonObject json() const {
     JsonObject o;
     o.set("heartbeats", count_);

@@ -33,6 +33,7 @@ struct Flags {
   double timeout_s = 20;
   bool registered = false;
   std::string status_name = "openni2_kinect";
+  bool until_stopped = false;
   std::string ready_file, json_path;
 };
 
@@ -157,6 +158,7 @@ int main(int argc, char** argv) {
   app.add_option("--timeout", f.timeout_s, "give up after this many seconds")->capture_default_str();
   app.add_flag("--registered", f.registered, "expect depth registered to the colour camera");
   app.add_option("--status-name", f.status_name)->capture_default_str();
+  app.add_flag("--until-stopped", f.until_stopped, "after the images, wait for the driver's last heartbeat");
   app.add_option("--ready-file", f.ready_file, "created once subscribed");
   app.add_option("--json", f.json_path, "write the summary here")->required();
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
@@ -181,6 +183,9 @@ int main(int argc, char** argv) {
   }
   const double linger = ivoa::monotonic_ms();
   while (!ivoa::stop_requested() && ivoa::monotonic_ms() - linger < 1100) bus.handle(50);
+  while (f.until_stopped && !status.finished() && !ivoa::stop_requested() &&
+         ivoa::monotonic_ms() - start < f.timeout_s * 1000)
+    bus.handle(50);
   ivoa::test::JsonObject summary = checker.json();
   summary.set("status", status.json());
   summary.write(f.json_path);

@@ -5,7 +5,6 @@
 // the tests that check the driver's output render the very same images.
 #include <cstdint>
 #include <map>
-#include <memory>
 #include <mutex>
 #include <string>
 #include <tuple>
