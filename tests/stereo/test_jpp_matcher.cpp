@@ -26,9 +26,9 @@ TEST(Daisy, RisingRampGivesEqualUnitComponents) {
   for (int u = 0; u < ramp.cols; ++u) ramp.col(u).setTo(u / 3);
   DaisyDescriptors daisy(DaisyParams{});
   daisy.set_image(ramp);
-  const float* d = daisy.at(200, 150);
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR(d[i], 1.0 / std::sqrt(3.0), 5e-3) << i;  // staircase ramp
-  EXPECT_EQ(d[3], 0.f);  // padding
+  const uint8_t* d = daisy.at(200, 150);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(DaisyDescriptors::value(d, i), 1.0 / std::sqrt(3.0), 6e-3) << i;
+  EXPECT_EQ(d[3], 0);  // padding
 }
 
 TEST(Daisy, OnlyThePositiveHorizontalGradientCounts) {
@@ -38,8 +38,8 @@ TEST(Daisy, OnlyThePositiveHorizontalGradientCounts) {
   for (const cv::Mat& image : {falling, vertical}) {
     DaisyDescriptors daisy(DaisyParams{});
     daisy.set_image(image);
-    const float* d = daisy.at(200, 150);
-    EXPECT_EQ(d[0] + d[1] + d[2], 0.f);
+    const uint8_t* d = daisy.at(200, 150);
+    EXPECT_EQ(d[0] + d[1] + d[2], 0);
   }
 }
 
@@ -50,15 +50,15 @@ TEST(Daisy, SamplesLieAheadOnTheSameRow) {
   step.colRange(100, kSize.width).setTo(200);
   DaisyDescriptors daisy(DaisyParams{});
   daisy.set_image(step);
-  const float* before = daisy.at(95, 150);
+  const uint8_t* before = daisy.at(95, 150);
   EXPECT_GT(before[2], before[1]);
   EXPECT_GT(before[1], before[0]);
-  EXPECT_LT(before[0], 0.05f);
-  const float* at = daisy.at(100, 150);
+  EXPECT_LT(DaisyDescriptors::value(before, 0), 0.05f);
+  const uint8_t* at = daisy.at(100, 150);
   EXPECT_GT(at[0], at[1]);
   EXPECT_GT(at[1], at[2]);
-  const float* after = daisy.at(110, 150);  // the edge is behind every sample
-  EXPECT_EQ(after[0] + after[1] + after[2], 0.f);
+  const uint8_t* after = daisy.at(110, 150);  // the edge is behind every sample
+  EXPECT_EQ(after[0] + after[1] + after[2], 0);
   // Lazily: only the chunks of the row that were asked for.
   EXPECT_EQ(daisy.computed_count(), 2 * DaisyDescriptors::kChunk);
 }

@@ -6,6 +6,10 @@
 
 #include <opencv2/imgproc.hpp>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace ivoa::stereo {
 namespace {
 
@@ -16,6 +20,12 @@ constexpr double kLayerSigma = 1.6;
 // Filters run on a region only; ISOLATED makes them replicate its edge
 // instead of reading (not computed) pixels outside it.
 constexpr int kBorder = cv::BORDER_REPLICATE | cv::BORDER_ISOLATED;
+
+constexpr bool kLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
+constexpr float kTinyNorm = 1e-30f;
+
+// A normalised component (already * kScale, so in [0, 255]) to 8 bits.
+inline uint8_t quantize(float scaled) { return static_cast<uint8_t>(scaled + 0.5f); }
 
 int half_support(double sigma) { return static_cast<int>(std::ceil(3.0 * sigma)); }
 
@@ -84,7 +94,8 @@ void DaisyDescriptors::set_image(const cv::Mat& gray, cv::Rect region) {
     for (auto& cube : cubes_)
       for (cv::Mat& layer : cube) layer = cv::Mat::zeros(image_size_, CV_32F);
     // compute() writes every used float; the padding stays zero from here on.
-    cache_.assign(static_cast<size_t>(image_size_.area()) * static_cast<size_t>(stride_), 0.f);
+    // + kReadPadding: the matcher reads whole 16-byte blocks at a row's end.
+    cache_.assign(static_cast<size_t>(image_size_.area()) * static_cast<size_t>(stride_) + kReadPadding, 0);
   }
   cv::Mat image;
   gray(work).convertTo(image, CV_32F, 1.0 / 255.0);
@@ -147,8 +158,6 @@ void DaisyDescriptors::compute_run(int y, int x0, int x1) {
 }
 
 void DaisyDescriptors::compute_row_taps(int y, int x0, int x1) {
-  // Per-tap row pointers and weights in locals: the loop then only streams
-  // through two layer rows and the cache row.
   const size_t n = taps_.size();
   const float* rows[kMaxRowTaps];
   float w0[kMaxRowTaps], w1[kMaxRowTaps];
@@ -157,46 +166,56 @@ void DaisyDescriptors::compute_row_taps(int y, int x0, int x1) {
     w0[k] = taps_[k].w00;
     w1[k] = taps_[k].w10;
   }
-  float* out = &cache_[(static_cast<size_t>(y) * static_cast<size_t>(image_size_.width) + static_cast<size_t>(x0)) *
-                       static_cast<size_t>(stride_)];
   const auto stride = static_cast<size_t>(stride_);
-  if (n == 3) {  // JPP's descriptor, in scalars (a local array here stalls on store forwarding)
-    for (int x = x0; x <= x1; ++x, out += stride) {
-      const float a = w0[0] * rows[0][x] + w1[0] * rows[0][x + 1];
-      const float b = w0[1] * rows[1][x] + w1[1] * rows[1][x + 1];
-      const float c = w0[2] * rows[2][x] + w1[2] * rows[2][x + 1];
-      const float norm = a * a + b * b + c * c;
-      const float inv = norm > 0 ? 1.0f / std::sqrt(norm) : 0.0f;
-      out[0] = a * inv;
-      out[1] = b * inv;
-      out[2] = c * inv;
+  uint8_t* out = &cache_[(static_cast<size_t>(y) * static_cast<size_t>(image_size_.width) + static_cast<size_t>(x0)) *
+                         stride];
+  int x = x0;
+#if defined(__SSE2__)
+  if (n == 3 && stride == 4 && kLittleEndian) {
+    // JPP's descriptor, four pixels at a time: three samples, full
+    // normalisation, and the three bytes (plus the zero pad) of each pixel
+    // packed into one 32-bit word. Same arithmetic as the scalar loop below.
+    const __m128 scale = _mm_set1_ps(kScale), half = _mm_set1_ps(0.5f), tiny = _mm_set1_ps(kTinyNorm);
+    auto component = [&](size_t k, int at) {
+      return _mm_add_ps(_mm_mul_ps(_mm_set1_ps(w0[k]), _mm_loadu_ps(rows[k] + at)),
+                        _mm_mul_ps(_mm_set1_ps(w1[k]), _mm_loadu_ps(rows[k] + at + 1)));
+    };
+    for (; x + 3 <= x1; x += 4, out += 4 * stride) {
+      const __m128 a = component(0, x), b = component(1, x), c = component(2, x);
+      const __m128 norm = _mm_add_ps(_mm_add_ps(_mm_mul_ps(a, a), _mm_mul_ps(b, b)), _mm_mul_ps(c, c));
+      const __m128 inv = _mm_div_ps(scale, _mm_sqrt_ps(_mm_add_ps(norm, tiny)));
+      const __m128i qa = _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(a, inv), half));
+      const __m128i qb = _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(b, inv), half));
+      const __m128i qc = _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(c, inv), half));
+      const __m128i words = _mm_or_si128(qa, _mm_or_si128(_mm_slli_epi32(qb, 8), _mm_slli_epi32(qc, 16)));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out), words);
     }
-    return;
   }
-  for (int x = x0; x <= x1; ++x, out += stride) {
+#endif
+  for (; x <= x1; ++x, out += stride) {
     float v[kMaxRowTaps];
     float norm = 0;
     for (size_t k = 0; k < n; ++k) {
       v[k] = w0[k] * rows[k][x] + w1[k] * rows[k][x + 1];
       norm += v[k] * v[k];
     }
-    // DAISY "full" normalisation; an all-zero (texture-less) vector stays zero.
-    const float inv = norm > 0 ? 1.0f / std::sqrt(norm) : 0.0f;
-    for (size_t k = 0; k < n; ++k) out[k] = v[k] * inv;
+    // DAISY "full" normalisation. The tiny bias keeps an all-zero
+    // (texture-less) vector zero without a branch; real norms are > 1e-10.
+    const float inv = kScale / std::sqrt(norm + kTinyNorm);
+    for (size_t k = 0; k < n; ++k) out[k] = quantize(v[k] * inv);
   }
 }
 
-void DaisyDescriptors::compute(int x, int y, float* out) const {
-  int k = 0;
+void DaisyDescriptors::compute(int x, int y, uint8_t* out) const {
+  std::vector<float> v(static_cast<size_t>(size_));
+  size_t k = 0;
   for (const Tap& tap : taps_)
-    for (int h = 0; h < params_.H; ++h) out[k++] = sample(tap, h, x, y);
+    for (int h = 0; h < params_.H; ++h) v[k++] = sample(tap, h, x, y);
   float norm = 0;
-  for (int i = 0; i < size_; ++i) norm += out[i] * out[i];
+  for (float c : v) norm += c * c;
   // DAISY "full" normalisation; an all-zero (texture-less) vector stays zero.
-  if (norm > 0) {
-    const float inv = 1.0f / std::sqrt(norm);
-    for (int i = 0; i < size_; ++i) out[i] *= inv;
-  }
+  const float inv = norm > 0 ? kScale / std::sqrt(norm) : 0.0f;
+  for (size_t i = 0; i < v.size(); ++i) out[i] = quantize(v[i] * inv);
 }
 
 }  // namespace ivoa::stereo

@@ -1,15 +1,14 @@
 #include "ivoa/stereo/jppc_detector.hpp"
 
 #include <cmath>
-#include <tuple>
 
-#include <opencv2/imgproc.hpp>
+#include "region_remap.hpp"
 
 namespace ivoa::stereo {
 namespace {
 
 cv::Point nearest_pixel(const Eigen::Vector2d& p) {
-  return {static_cast<int>(std::lround(p.x())), static_cast<int>(std::lround(p.y()))};
+  return {static_cast<int>(std::floor(p.x() + 0.5)), static_cast<int>(std::floor(p.y() + 0.5))};
 }
 
 // Samples in [0, extent] at `step`, counted with integers.
@@ -17,66 +16,33 @@ int samples_up_to(double extent, double step) { return static_cast<int>(std::flo
 
 cv::Rect bounding(const cv::Rect& a, const cv::Rect& b) { return a.area() == 0 ? b : a | b; }
 
-cv::Mat pixel_coordinates(const CameraIntrinsics& camera, int axis) {
-  cv::Mat out(camera.height, camera.width, CV_32F);
-  for (int v = 0; v < out.rows; ++v) {
-    float* row = out.ptr<float>(v);
-    for (int u = 0; u < out.cols; ++u) row[u] = static_cast<float>(axis == 0 ? u : v);
-  }
-  return out;
-}
-
 }  // namespace
 
 JppcDetector::JppcDetector(const RigCalibration& rig, const JppConfig& config)
     : rig_(rig), config_(config), rect_(rig, config.rect_scale), matcher_(config) {
-  // Remapping a region needs the remap tables, which core keeps to itself:
-  // rectifying images of the raw pixel coordinates yields them (bilinear
-  // interpolation of a linear function is exact, and remap quantises to
-  // 1/32 px either way). Where a table entry blends in pixels from outside
-  // the raw image (a ones image comes out < 1) the pixel is black, as in
-  // core's rectify().
-  cv::Mat lx, rx, ly, ry, left_in, right_in;
-  rect_.rectify(pixel_coordinates(rig.left, 0), pixel_coordinates(rig.right, 0), lx, rx);
-  rect_.rectify(pixel_coordinates(rig.left, 1), pixel_coordinates(rig.right, 1), ly, ry);
-  rect_.rectify(cv::Mat::ones(rig.left.height, rig.left.width, CV_32F),
-                cv::Mat::ones(rig.right.height, rig.right.width, CV_32F), left_in, right_in);
-  for (auto [x, y, in] : {std::tuple<cv::Mat&, cv::Mat&, cv::Mat&>{lx, ly, left_in}, {rx, ry, right_in}}) {
-    x.setTo(-10.f, in < 0.999f);
-    y.setTo(-10.f, in < 0.999f);
-  }
-  cv::convertMaps(lx, ly, map_left_xy_, map_left_frac_, CV_16SC2);
-  cv::convertMaps(rx, ry, map_right_xy_, map_right_frac_, CV_16SC2);
+  auto [left, right] = RegionRemap::for_pair(rect_, rig);
+  remap_left_ = std::make_unique<RegionRemap>(std::move(left));
+  remap_right_ = std::make_unique<RegionRemap>(std::move(right));
   left_rect_ = cv::Mat::zeros(rect_.size(), CV_8UC1);
   right_rect_ = cv::Mat::zeros(rect_.size(), CV_8UC1);
 }
 
+JppcDetector::~JppcDetector() = default;
+
 void JppcDetector::set_frame(const cv::Mat& left_raw, const cv::Mat& right_raw) {
   has_frame_ = prepared_ = whole_image_ = false;
   check_frame(left_raw, right_raw, rig_);
-  left_raw_ = left_raw;  // shared, not copied: rectified in evaluate()
-  right_raw_ = right_raw;
+  left_raw_ = left_raw.isContinuous() ? left_raw : left_raw.clone();  // shared, rectified in evaluate()
+  right_raw_ = right_raw.isContinuous() ? right_raw : right_raw.clone();
   has_frame_ = true;
-}
-
-void JppcDetector::rectify_region(const cv::Mat& raw, const cv::Mat& map_xy, const cv::Mat& map_frac,
-                                  cv::Rect region, cv::Mat& rect_gray, cv::Mat& scratch) const {
-  if (raw.channels() == 1) {
-    cv::remap(raw, rect_gray(region), map_xy(region), map_frac(region), cv::INTER_LINEAR);
-    return;
-  }
-  // JPP's order: remap the colour image, then convert to gray.
-  cv::remap(raw, scratch, map_xy(region), map_frac(region), cv::INTER_LINEAR);
-  cv::Mat out = rect_gray(region);
-  cv::cvtColor(scratch, out, cv::COLOR_BGR2GRAY);
 }
 
 void JppcDetector::prepare(cv::Rect left_region, cv::Rect right_region) {
   const cv::Rect image(cv::Point(0, 0), rect_.size());
   const cv::Rect left_area = left_region.area() > 0 ? matcher_.descriptor_margin(left_region, rect_.size()) : image;
   const cv::Rect right_area = right_region.area() > 0 ? matcher_.descriptor_margin(right_region, rect_.size()) : image;
-  rectify_region(left_raw_, map_left_xy_, map_left_frac_, left_area, left_rect_, scratch_);
-  rectify_region(right_raw_, map_right_xy_, map_right_frac_, right_area, right_rect_, scratch_);
+  remap_left_->apply(left_raw_, left_area, left_rect_);
+  remap_right_->apply(right_raw_, right_area, right_rect_);
   matcher_.set_images(left_rect_, right_rect_, left_region, right_region);
   prepared_ = true;
   whole_image_ = left_region.area() == 0 && right_region.area() == 0;

@@ -8,8 +8,10 @@
 //
 // Layers are computed per frame with separable filters, over the whole image
 // or only a region that will be asked for; descriptors are computed lazily
-// per pixel on first use and cached, as in DAISY's "single descriptor mode"
-// that JPP runs.
+// on first use and cached, as in DAISY's "single descriptor mode" that JPP
+// runs. Cached components are stored as 8-bit fixed point (value * 255; JPP
+// keeps floats): a window cost then sums byte differences, which is 4x less
+// memory to stream, and moves a per-pixel L1 distance by at most 3/510.
 #include <algorithm>
 #include <cstdint>
 #include <vector>
@@ -34,7 +36,7 @@ class DaisyDescriptors {
   // the whole image); the image must be valid within region_with_margin().
   void set_image(const cv::Mat& gray, cv::Rect region = {});
 
-  // Floats per descriptor ((Q*T+1)*H) and the stride between cached
+  // Components per descriptor ((Q*T+1)*H) and the stride between cached
   // descriptors (padded to a multiple of 4, the padding is zero).
   int size() const { return size_; }
   int stride() const { return stride_; }
@@ -47,8 +49,11 @@ class DaisyDescriptors {
 
   // Descriptors of row y, columns x0..x1 (inside region()), computed where
   // not cached yet. Returns row y of the cache: descriptor of column x at
-  // [x * stride(), x * stride() + size()).
-  const float* row(int y, int x0, int x1) {
+  // [x * stride(), x * stride() + size()), each component * kScale.
+  static constexpr float kScale = 255.f;
+  // The cache may be read up to this many bytes past a descriptor's end.
+  static constexpr size_t kReadPadding = 16;
+  const uint8_t* row(int y, int x0, int x1) {
     uint8_t* done = &computed_[static_cast<size_t>(y) * static_cast<size_t>(chunks_per_row_)];
     for (int c = x0 / kChunk; c <= x1 / kChunk; ++c) {
       if (done[c]) continue;
@@ -57,7 +62,9 @@ class DaisyDescriptors {
     }
     return &cache_[static_cast<size_t>(y) * static_cast<size_t>(image_size_.width) * static_cast<size_t>(stride_)];
   }
-  const float* at(int x, int y) { return row(y, x, x) + static_cast<size_t>(x) * static_cast<size_t>(stride_); }
+  const uint8_t* at(int x, int y) { return row(y, x, x) + static_cast<size_t>(x) * static_cast<size_t>(stride_); }
+  // Component i of a descriptor as a value in [0, 1].
+  static float value(const uint8_t* descriptor, int i) { return descriptor[i] / kScale; }
 
   // The base layer of orientation bin h (bin 0: positive horizontal
   // gradient of the [0, 1] image, smoothed to sigma 1.6), valid in region().
@@ -86,7 +93,7 @@ class DaisyDescriptors {
     float w00, w10, w01, w11;
   };
   void compute_run(int y, int x0, int x1);
-  void compute(int x, int y, float* out) const;
+  void compute(int x, int y, uint8_t* out) const;
   // JPP's case (H = 1, every sample on the pixel's row), on a run of pixels
   // whose samples are all inside the image.
   void compute_row_taps(int y, int x0, int x1);
@@ -102,7 +109,7 @@ class DaisyDescriptors {
   std::vector<std::vector<cv::Mat>> cubes_;  // [cube][bin], CV_32F, full image size
   cv::Size image_size_;
   cv::Rect region_;
-  std::vector<float> cache_;
+  std::vector<uint8_t> cache_;
   int chunks_per_row_ = 0;
   std::vector<uint8_t> computed_;  // per chunk
   int64_t computed_count_ = 0;

@@ -23,13 +23,15 @@
 //  - a sample outside either image, or unobserved, makes the footprint
 //    UNKNOWN rather than "not free" (JPP): the detector did not see it.
 //    Any sample that fails to match still makes it OBSTACLE;
+//  - the raw images are converted to gray before remapping (JPP remaps BGR,
+//    then converts; both are linear, the results differ by rounding only);
 //  - XR/XT are the raw left camera's pose (the project's calibration
 //    convention); the rectification rotation is applied here (JPP assumed
 //    them relative to the rectified camera).
 //
 // Work per frame is lazy, in JPP's spirit: set_frame only keeps the images;
-// evaluate() rectifies (remap, then BGR -> gray, as JPP) and builds
-// descriptor layers only where the grid's windows fall (about half the image
+// evaluate() rectifies and builds descriptor layers only where the grid's
+// windows fall (about half the image
 // for the default grid); a check() outside that region prepares the whole
 // image. Descriptors are computed on first use.
 #include <memory>
@@ -39,10 +41,12 @@
 #include "ivoa/stereo/jpp_matcher.hpp"
 
 namespace ivoa::stereo {
+class RegionRemap;
 
 class JppcDetector : public ObstacleDetector {
  public:
   JppcDetector(const RigCalibration& rig, const JppConfig& config);
+  ~JppcDetector() override;
 
   std::string name() const override { return "jppc"; }
   void set_frame(const cv::Mat& left_raw, const cv::Mat& right_raw) override;
@@ -72,16 +76,14 @@ class JppcDetector : public ObstacleDetector {
   // Rectifies and builds descriptor layers for windows inside the regions
   // (empty: whole image).
   void prepare(cv::Rect left_region, cv::Rect right_region);
-  void rectify_region(const cv::Mat& raw, const cv::Mat& map_xy, const cv::Mat& map_frac, cv::Rect region,
-                      cv::Mat& rect_gray, cv::Mat& scratch) const;
+
 
   RigCalibration rig_;
   JppConfig config_;
   StereoRectification rect_;
   JppMatcher matcher_;
-  // Fixed-point remap tables of rect_ (left, right), for remapping regions.
-  cv::Mat map_left_xy_, map_left_frac_, map_right_xy_, map_right_frac_;
-  cv::Mat left_raw_, right_raw_, left_rect_, right_rect_, scratch_;
+  std::unique_ptr<RegionRemap> remap_left_, remap_right_;  // rect_ for regions
+  cv::Mat left_raw_, right_raw_, left_rect_, right_rect_;
   bool has_frame_ = false, prepared_ = false, whole_image_ = false;
 };
 
