@@ -68,7 +68,10 @@ Heatmaps make_heatmaps(const McStats& stats, int rows, int cols, const ModelInfo
 
 Prediction prediction_of(const float* mean, const float* var, double threshold) {
   Prediction p;
-  for (int k = 0; k < kNumClasses; ++k) p.probability[static_cast<size_t>(k)] = mean[k];
+  for (int k = 0; k < kNumClasses; ++k) {
+    p.probability[static_cast<size_t>(k)] = mean[k];
+    p.class_variance[static_cast<size_t>(k)] = var[k];
+  }
   p.predicted = static_cast<int>(std::max_element(mean, mean + kNumClasses) - mean);
   p.variance = var[p.predicted];
   p.uncertainty = (var[0] + var[1] + var[2] + var[3]) / 4.0f;

@@ -75,6 +75,7 @@ struct Heatmaps {
 struct Prediction {
   int predicted = 0;                          // class index
   std::array<float, kNumClasses> probability{};
+  std::array<float, kNumClasses> class_variance{};  // per class, over passes
   float variance = 0;      // of the predicted class (the gate)
   float uncertainty = 0;   // mean over classes
   bool announced = false;  // variance <= threshold

@@ -1,0 +1,176 @@
+// ivoa-eval: a model's MC-dropout predictions and FC2 embeddings on dataset
+// sessions, and per-frame overlay figures from logs (see README.md).
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include <CLI/CLI.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/image_convert.hpp"
+#include "ivoa/core/process.hpp"
+#include "ivoa/core/progress.hpp"
+#include "ivoa/dataset/dataset_format.hpp"
+#include "ivoa/introspection/model.hpp"
+#include "ivoa/logio/log_reader.hpp"
+#include "ivoa/stereo_image_t.hpp"
+#include "overlay.hpp"
+
+namespace fs = std::filesystem;
+using namespace ivoa;
+
+namespace {
+
+struct Options {
+  std::string model, dataset, split_file, out;
+  std::vector<std::string> splits{"test"};
+  std::vector<std::string> logs;
+  int overlay_every = 10;
+  int max_overlays = 12;
+  double overlay_scale = 0.6;
+  introspection::InferenceConfig inference;
+};
+
+constexpr const char* kHeader =
+    "session,environment,split,sample,utime,cell,x,y,u,v,label,predicted,p_tp,p_tn,p_fp,p_fn,var_predicted,"
+    "uncertainty,var_tp,var_tn,var_fp,var_fn,phenomena,phenomenon,surface";
+
+void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& session, const std::string& split,
+                introspection::IntrospectionModel& model, Progress& progress, double& done) {
+  constexpr size_t kBatch = 256;
+  const auto& info = session.info();
+  for (size_t begin = 0; begin < session.size(); begin += kBatch) {
+    const size_t end = std::min(session.size(), begin + kBatch);
+    std::vector<cv::Mat> patches;
+    for (size_t i = begin; i < end; ++i) patches.push_back(session.patch(i));
+    const introspection::PatchOutputs out = model.run_patches(patches, true);
+    for (size_t i = begin; i < end; ++i) {
+      const auto& s = session.samples()[i];
+      const auto& p = out.predictions[i - begin];
+      std::fprintf(csv, "%s,%s,%s,%zu,%lld,%d,%.3f,%.3f,%.1f,%.1f,%d,%d,%.5f,%.5f,%.5f,%.5f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d\n",
+                   info.session.c_str(), info.environment.c_str(), split.c_str(), i, static_cast<long long>(s.utime),
+                   s.cell, s.x, s.y, s.u, s.v, s.label, p.predicted, p.probability[0], p.probability[1],
+                   p.probability[2], p.probability[3], p.variance, p.uncertainty, p.class_variance[0],
+                   p.class_variance[1], p.class_variance[2], p.class_variance[3], s.phenomena, s.phenomenon, s.surface);
+      const auto& e = out.embeddings[i - begin];
+      std::fwrite(e.data(), sizeof(float), e.size(), emb);
+    }
+    done += static_cast<double>(end - begin);
+    progress.update(done);
+  }
+}
+
+std::string session_of_log(const std::string& path) {
+  std::string name = fs::path(path).filename().string();
+  for (const std::string ext : {".lcmlog", ".lcm", ".log"})
+    if (name.size() > ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0)
+      return name.substr(0, name.size() - ext.size());
+  return name;
+}
+
+int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
+  fs::create_directories(o.out + "/overlays");
+  int written = 0;
+  for (const auto& log : o.logs) {
+    const std::string session = session_of_log(log);
+    const std::string dir = o.dataset + "/" + session;
+    if (!fs::exists(dir + "/session.json")) {
+      spdlog::warn("{}: no session '{}' in {}: no labels for its overlays, skipped", log, session, o.dataset);
+      continue;
+    }
+    const dataset::SessionReader reader(dir);
+    std::map<int64_t, std::vector<tools::LabelledCell>> frames;
+    for (const auto& s : reader.samples()) frames[s.utime].push_back({s.u, s.v, s.label, -1, true});
+    logio::LogReader in(log);
+    logio::LogEvent e;
+    int64_t index = 0;
+    while (in.next(e) && written < o.max_overlays) {
+      stereo_image_t msg;
+      if (e.channel != "STEREO_IMAGES" || msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) < 0) continue;
+      const auto it = frames.find(msg.utime);
+      if (it == frames.end() || index++ % o.overlay_every != 0) continue;
+      const cv::Mat left = decode_image(msg.left);
+      const introspection::Heatmaps h = model.run(left);
+      for (auto& cell : it->second) {
+        const auto p = model.predict_at(h, cell.u, cell.v);
+        cell.predicted = p.predicted;
+        cell.announced = p.announced;
+      }
+      cv::Mat figure = tools::compose_frame_figure(left, h, it->second);
+      cv::resize(figure, figure, cv::Size(), o.overlay_scale, o.overlay_scale, cv::INTER_AREA);
+      cv::imwrite(o.out + "/overlays/" + session + "_" + std::to_string(msg.utime) + ".png", figure);
+      ++written;
+    }
+  }
+  spdlog::info("wrote {} overlay figures to {}/overlays", written, o.out);
+  return written;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  introspection::prefer_passive_openmp_wait(argv);
+  CLI::App app{"Run a model on dataset sessions: predictions, uncertainties, embeddings, overlay figures"};
+  CommonOptions common;
+  add_common_options(app, common);
+  Options o;
+  o.inference.seed = 1;
+  app.add_option("--model", o.model, "model file")->required()->check(CLI::ExistingFile);
+  app.add_option("--dataset", o.dataset, "dataset folder")->required()->check(CLI::ExistingDirectory);
+  app.add_option("--split", o.split_file, "split file")->required()->check(CLI::ExistingFile);
+  app.add_option("--splits", o.splits, "splits to evaluate")->delimiter(',')->capture_default_str();
+  app.add_option("--out", o.out, "output folder")->required();
+  app.add_option("--logs", o.logs, "logs of evaluated sessions, for overlay figures")->check(CLI::ExistingFile);
+  app.add_option("--overlay-every", o.overlay_every, "one overlay per this many labelled frames")->capture_default_str();
+  app.add_option("--max-overlays", o.max_overlays)->capture_default_str();
+  app.add_option("--mc-passes", o.inference.mc_passes, "T")->capture_default_str();
+  app.add_option("--threads", o.inference.threads)->capture_default_str();
+  app.add_option("--seed", o.inference.seed, "dropout masks")->capture_default_str();
+  if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
+  init_logging("eval", common.log_level);
+  try {
+    auto model = introspection::IntrospectionModel::load(o.model, o.inference);
+    const auto splits = dataset::load_split(o.split_file);
+    fs::create_directories(o.out);
+    std::vector<std::pair<std::string, std::string>> sessions;  // (split, session)
+    double total = 0;
+    for (const auto& split : o.splits) {
+      const auto it = splits.find(split);
+      if (it == splits.end()) throw dataset::DatasetError(o.split_file + ": no split '" + split + "'");
+      for (const auto& s : it->second) {
+        sessions.push_back({split, s});
+        total += static_cast<double>(dataset::SessionReader(o.dataset + "/" + s).size());
+      }
+    }
+    std::FILE* csv = std::fopen((o.out + "/predictions.csv").c_str(), "w");
+    std::FILE* emb = std::fopen((o.out + "/embeddings.f32").c_str(), "wb");
+    if (!csv || !emb) throw dataset::DatasetError(o.out + ": cannot write outputs");
+    std::fprintf(csv, "%s\n", kHeader);
+    Progress progress("evaluating (T = " + std::to_string(o.inference.mc_passes) + ")", total, "samples");
+    double done = 0;
+    for (const auto& [split, name] : sessions) {
+      const dataset::SessionReader session(o.dataset + "/" + name);
+      write_rows(csv, emb, session, split, *model, progress, done);
+    }
+    progress.finish();
+    std::fclose(csv);
+    std::fclose(emb);
+    std::ofstream(o.out + "/eval.json") << "{\"model\": \"" << model->info().id << "\", \"mc_passes\": "
+                                        << o.inference.mc_passes << ", \"uncertainty_threshold\": " << model->threshold()
+                                        << ", \"samples\": " << done << ", \"metadata\": " << "{\"detector\": \""
+                                        << model->info().detector << "\", \"architecture\": \""
+                                        << model->info().architecture << "\", \"training\": "
+                                        << (model->info().training_summary.empty() ? "{}" : model->info().training_summary)
+                                        << "}}\n";
+    if (!o.logs.empty()) write_overlays(o, *model);
+    std::printf("predictions: %s/predictions.csv (%.0f samples), embeddings: %s/embeddings.f32\n", o.out.c_str(), done,
+                o.out.c_str());
+    return kExitOk;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return kExitBadInput;
+  }
+}
