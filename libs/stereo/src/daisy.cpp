@@ -41,6 +41,7 @@ DaisyDescriptors::DaisyDescriptors(const DaisyParams& params) : params_(params) 
     throw std::invalid_argument("DAISY parameters need R > 0 and Q, T, H >= 1");
   size_ = (params.Q * params.T + 1) * params.H;
   stride_ = (size_ + 3) / 4 * 4;
+  scratch_.resize(static_cast<size_t>(size_));
   // Samples: the centre, then ring by ring, angle by angle (DAISY's order).
   // Ring r (1..Q) has radius r*R/Q. JPP's DAISY reads cube r-1 for ring r
   // and cube 0 for the centre (an index offset in its code: the centre and
@@ -143,16 +144,20 @@ float DaisyDescriptors::sample(const Tap& tap, int h, int x, int y) const {
 }
 
 void DaisyDescriptors::compute_run(int y, int x0, int x1) {
-  const size_t first = static_cast<size_t>(y) * static_cast<size_t>(image_size_.width);
-  int fast_lo = x1 + 1, fast_hi = x1;  // the sub-run whose samples stay inside the image
-  if (row_taps_) {
-    fast_lo = std::max(x0, reach_.left);
-    fast_hi = std::min(x1, image_size_.width - 2 - reach_.right);
-    if (fast_lo <= fast_hi) compute_row_taps(y, fast_lo, fast_hi);
-  }
-  for (int x = x0; x <= x1; ++x) {
-    if (x >= fast_lo && x <= fast_hi) continue;
-    compute(x, y, &cache_[(first + static_cast<size_t>(x)) * static_cast<size_t>(stride_)]);
+  uint8_t* row = &cache_[static_cast<size_t>(y) * static_cast<size_t>(image_size_.width) * static_cast<size_t>(stride_)];
+  auto compute_each = [&](int from, int to) {
+    for (int x = from; x <= to; ++x) compute(x, y, row + static_cast<size_t>(x) * static_cast<size_t>(stride_));
+  };
+  // The fast path needs every sample inside the image; the few pixels at
+  // the borders (and other configurations) take the general one.
+  const int fast_lo = row_taps_ ? std::max(x0, reach_.left) : x1 + 1;
+  const int fast_hi = row_taps_ ? std::min(x1, image_size_.width - 2 - reach_.right) : x1;
+  if (fast_lo <= fast_hi) {
+    compute_each(x0, fast_lo - 1);
+    compute_row_taps(y, fast_lo, fast_hi);
+    compute_each(fast_hi + 1, x1);
+  } else {
+    compute_each(x0, x1);
   }
   computed_count_ += x1 - x0 + 1;
 }
@@ -206,16 +211,15 @@ void DaisyDescriptors::compute_row_taps(int y, int x0, int x1) {
   }
 }
 
-void DaisyDescriptors::compute(int x, int y, uint8_t* out) const {
-  std::vector<float> v(static_cast<size_t>(size_));
+void DaisyDescriptors::compute(int x, int y, uint8_t* out) {
   size_t k = 0;
   for (const Tap& tap : taps_)
-    for (int h = 0; h < params_.H; ++h) v[k++] = sample(tap, h, x, y);
+    for (int h = 0; h < params_.H; ++h) scratch_[k++] = sample(tap, h, x, y);
   float norm = 0;
-  for (float c : v) norm += c * c;
-  // DAISY "full" normalisation; an all-zero (texture-less) vector stays zero.
-  const float inv = norm > 0 ? kScale / std::sqrt(norm) : 0.0f;
-  for (size_t i = 0; i < v.size(); ++i) out[i] = quantize(v[i] * inv);
+  for (float c : scratch_) norm += c * c;
+  // DAISY "full" normalisation, as in compute_row_taps.
+  const float inv = kScale / std::sqrt(norm + kTinyNorm);
+  for (size_t i = 0; i < scratch_.size(); ++i) out[i] = quantize(scratch_[i] * inv);
 }
 
 }  // namespace ivoa::stereo

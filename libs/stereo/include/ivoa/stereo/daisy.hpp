@@ -47,12 +47,18 @@ class DaisyDescriptors {
   // filter support), clipped to an image of `size`.
   cv::Rect region_with_margin(cv::Rect region, cv::Size size) const;
 
-  // Descriptors of row y, columns x0..x1 (inside region()), computed where
-  // not cached yet. Returns row y of the cache: descriptor of column x at
-  // [x * stride(), x * stride() + size()), each component * kScale.
+  // Cached components are value * kScale, rounded, in one byte each.
   static constexpr float kScale = 255.f;
   // The cache may be read up to this many bytes past a descriptor's end.
   static constexpr size_t kReadPadding = 16;
+  // Descriptors are computed on first use in aligned chunks of this many
+  // pixels of a row (JPP: one pixel at a time). Streaming a short run costs
+  // about what one scattered pixel does, and windows overlap heavily.
+  static constexpr int kChunk = 16;
+
+  // Descriptors of row y, columns x0..x1 (inside region()), computed where
+  // not cached yet. Returns row y of the cache: the descriptor of column x
+  // is at [x * stride(), x * stride() + size()).
   const uint8_t* row(int y, int x0, int x1) {
     uint8_t* done = &computed_[static_cast<size_t>(y) * static_cast<size_t>(chunks_per_row_)];
     for (int c = x0 / kChunk; c <= x1 / kChunk; ++c) {
@@ -77,11 +83,6 @@ class DaisyDescriptors {
   };
   Reach reach() const { return reach_; }
 
-  // Descriptors are computed on first use in aligned chunks of this many
-  // pixels of a row (JPP: one pixel at a time). Streaming a short run costs
-  // about what one scattered pixel does, and windows overlap heavily.
-  static constexpr int kChunk = 16;
-
   // Descriptors computed since the last set_image (for benchmarks).
   int64_t computed_count() const { return computed_count_; }
 
@@ -93,7 +94,7 @@ class DaisyDescriptors {
     float w00, w10, w01, w11;
   };
   void compute_run(int y, int x0, int x1);
-  void compute(int x, int y, uint8_t* out) const;
+  void compute(int x, int y, uint8_t* out);
   // JPP's case (H = 1, every sample on the pixel's row), on a run of pixels
   // whose samples are all inside the image.
   void compute_row_taps(int y, int x0, int x1);
@@ -109,6 +110,7 @@ class DaisyDescriptors {
   std::vector<std::vector<cv::Mat>> cubes_;  // [cube][bin], CV_32F, full image size
   cv::Size image_size_;
   cv::Rect region_;
+  std::vector<float> scratch_;  // one descriptor's values, for compute()
   std::vector<uint8_t> cache_;
   int chunks_per_row_ = 0;
   std::vector<uint8_t> computed_;  // per chunk

@@ -1,0 +1,85 @@
+// Detector parameters from flags and from a --config file, by JPP's names.
+#include <fstream>
+
+#include <CLI/CLI.hpp>
+#include <gtest/gtest.h>
+
+#include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/process.hpp"
+#include "ivoa/stereo/config.hpp"
+#include "ivoa/stereo/options.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa::stereo {
+namespace {
+
+struct Parsed {
+  int code;
+  DetectorConfig detector;
+  QueryGridConfig grid;
+};
+
+Parsed parse(std::vector<std::string> args) {
+  CLI::App app;
+  CommonOptions common;
+  Parsed out{};
+  add_common_options(app, common);
+  add_detector_options(app, out.detector);
+  add_query_grid_options(app, out.grid);
+  std::vector<char*> argv{const_cast<char*>("test")};
+  for (auto& a : args) argv.push_back(a.data());
+  out.code = parse_command_line(app, static_cast<int>(argv.size()), argv.data());
+  return out;
+}
+
+TEST(StereoOptions, FlagsUseJppNames) {
+  const Parsed p = parse({"--conf_pos_thresh", "0.5", "--SAD_window_size", "3", "--daisy_R", "7.5", "--grid_size",
+                          "0.025", "--sgbm_num_disparities", "128", "--dense_min_ground_points", "20"});
+  ASSERT_EQ(p.code, -1);
+  EXPECT_EQ(p.detector.jpp.conf_pos_thresh, 0.5);
+  EXPECT_EQ(p.detector.jpp.SAD_window_size, 3);
+  EXPECT_EQ(p.detector.jpp.daisy_R, 7.5);
+  EXPECT_EQ(p.detector.jpp.grid_size, 0.025);
+  EXPECT_EQ(p.detector.dense.sgbm.num_disparities, 128);
+  EXPECT_EQ(p.detector.dense.min_ground_points, 20);
+  EXPECT_EQ(parse({"--sgbm_mode", "fast"}).code, kExitUsage);
+}
+
+TEST(StereoOptions, ConfigFileSetsThemByName) {
+  test::TempDir dir;
+  std::ofstream(dir.file("jpp.ini")) << "conf_pos_thresh = 0.6\ndaisy_Q = 3\nsgbm_mode = sgbm\ngrid-x-max = 2.0\n";
+  const Parsed p = parse({"--config", dir.file("jpp.ini")});
+  ASSERT_EQ(p.code, -1);
+  EXPECT_EQ(p.detector.jpp.conf_pos_thresh, 0.6);
+  EXPECT_EQ(p.detector.jpp.daisy_Q, 3);
+  EXPECT_EQ(p.detector.dense.sgbm.mode, "sgbm");
+  EXPECT_EQ(p.grid.x_max, 2.0);
+}
+
+TEST(StereoOptions, ShippedExampleConfigHoldsTheDefaults) {
+  // processes/stereo_detector/stereo_detector.ini documents every default.
+  CLI::App app;
+  CommonOptions common;
+  DetectorConfig detector;
+  QueryGridConfig grid;
+  std::string model;
+  add_common_options(app, common);
+  app.add_option("--model", model);
+  add_detector_options(app, detector);
+  add_query_grid_options(app, grid);
+  std::string config = IVOA_STEREO_EXAMPLE_CONFIG;
+  std::vector<char*> argv{const_cast<char*>("test"), const_cast<char*>("--config"), config.data()};
+  ASSERT_EQ(parse_command_line(app, 3, argv.data()), -1);
+  const JppConfig jpp_defaults;
+  const DenseConfig dense_defaults;
+  EXPECT_EQ(model, "jppc");
+  EXPECT_EQ(detector.jpp.conf_pos_thresh, jpp_defaults.conf_pos_thresh);
+  EXPECT_EQ(detector.jpp.grid_size, jpp_defaults.grid_size);
+  EXPECT_EQ(detector.jpp.texture_gate, 0.0);
+  EXPECT_EQ(detector.dense.sgbm.num_disparities, dense_defaults.sgbm.num_disparities);
+  EXPECT_EQ(detector.dense.min_obstacle_fraction, dense_defaults.min_obstacle_fraction);
+  EXPECT_EQ(grid.spacing, QueryGridConfig{}.spacing);
+}
+
+}  // namespace
+}  // namespace ivoa::stereo
