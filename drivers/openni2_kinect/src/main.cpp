@@ -22,9 +22,8 @@ namespace {
 
 using namespace ivoa::openni2_kinect;
 
-// The depth sensor's colour camera. Not (yet) in channels.hpp: only this
-// driver publishes it.
-constexpr const char* kDefaultColorChannel = "DEPTH_COLOR";
+// The depth sensor's colour camera (optional).
+const std::string kDefaultColorChannel{ivoa::channels::kDepthColor};
 
 struct Flags {
   ivoa::CommonOptions common;

@@ -7,6 +7,7 @@ namespace ivoa::channels {
 
 inline constexpr std::string_view kStereoImages = "STEREO_IMAGES";              // ivoa.stereo_image_t
 inline constexpr std::string_view kDepthImage = "DEPTH_IMAGE";                  // ivoa.depth_image_t
+inline constexpr std::string_view kDepthColor = "DEPTH_COLOR";                  // ivoa.image_t (depth sensor's colour camera, optional)
 inline constexpr std::string_view kRigCalibration = "RIG_CALIBRATION";          // ivoa.rig_calibration_t
 inline constexpr std::string_view kObstaclesStereo = "OBSTACLES_STEREO";        // ivoa.obstacle_grid_t
 inline constexpr std::string_view kObstaclesDepth = "OBSTACLES_DEPTH";          // ivoa.obstacle_grid_t
@@ -26,7 +27,7 @@ constexpr bool valid_channel_name(std::string_view name) {
   }
   return true;
 }
-static_assert(valid_channel_name(kStereoImages) && valid_channel_name(kDepthImage) &&
+static_assert(valid_channel_name(kStereoImages) && valid_channel_name(kDepthImage) && valid_channel_name(kDepthColor) &&
               valid_channel_name(kRigCalibration) && valid_channel_name(kObstaclesStereo) &&
               valid_channel_name(kObstaclesDepth) && valid_channel_name(kIntrospectionLabels) &&
               valid_channel_name(kIntrospection) && valid_channel_name(kProcessStatus) &&
