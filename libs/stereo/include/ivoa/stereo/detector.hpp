@@ -3,7 +3,8 @@
 // robot's footprint of radius r around the ground point (x, y, 0) free?".
 // "jppc" is JPP-C (sparse checks, convex world), "dense" is SGBM disparity
 // classified by height. The stereo detector process and the offline dataset
-// tool both use make_detector() + set_frame() + evaluate().
+// tool both use make_detector() + set_frame() + evaluate(). A detector is
+// not thread-safe; make one per thread.
 #include <memory>
 #include <stdexcept>
 #include <string>
