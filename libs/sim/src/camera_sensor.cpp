@@ -75,13 +75,14 @@ Exposure auto_exposure(const std::vector<Rgbf>& radiance, const CameraSensorConf
 }
 
 CameraImage expose(const std::vector<Rgbf>& radiance_in, int width, int height, const Exposure& exposure,
-                   double sensitivity, const CameraSensorConfig& c, uint64_t frame, uint32_t stream, double smear_px) {
+                   double sensitivity, const CameraSensorConfig& c, uint64_t frame, uint32_t stream, double smear_px,
+                   bool with_saturation) {
   const int smear = c.motion_blur ? static_cast<int>(std::lround(smear_px)) : 0;
   std::vector<Rgbf> smeared;
   if (smear >= 2) smeared = smear_rows(radiance_in, width, height, smear);
   const std::vector<Rgbf>& radiance = smear >= 2 ? smeared : radiance_in;
   const float* rad = &radiance[0].r;
-  const std::vector<uint8_t>& lut = gamma_lut(c.gamma);
+  const uint8_t* lut = gamma_lut(c.gamma).data();
   const NoiseTable& table = NoiseTable::instance();
   const float* normals = table.normals();
   const float electrons = static_cast<float>(exposure.electrons_per_unit * sensitivity);
@@ -93,8 +94,8 @@ CameraImage expose(const std::vector<Rgbf>& radiance_in, int width, int height, 
   auto digitise = [&](float value, uint32_t idx) {
     const float s = value * electrons;
     const float noisy = s + normals[idx & NoiseTable::kMask] * std::sqrt(std::max(s, 0.0f) + read2);
-    const float unit = std::clamp(noisy * to_unit, 0.0f, 1.0f);
-    return lut[static_cast<size_t>(unit * 4095.0f + 0.5f)];
+    const float unit = std::min(std::max(noisy * to_unit, 0.0f), 1.0f);
+    return lut[static_cast<int>(unit * 4095.0f + 0.5f)];
   };
   CameraImage out;
   const int W = width;
@@ -106,15 +107,20 @@ CameraImage expose(const std::vector<Rgbf>& radiance_in, int width, int height, 
       const float* r2 = rad + static_cast<size_t>(std::min(y + 1, height - 1)) * W * 3;
       uint8_t* dst = raw.ptr<uint8_t>(y);
       const uint32_t offset = NoiseTable::offset(frame, stream, static_cast<uint32_t>(y));
-      for (int x = 0; x < width; ++x) {
-        // RGGB: R at (even, even), B at (odd, odd), G elsewhere.
+      // RGGB: R at (even, even), B at (odd, odd), G elsewhere. Optics: 3x3
+      // binomial point spread (sigma ~0.7 px), on the colour the photosite sees.
+      auto photosite = [&](int x, int xl, int xr) {
         const int ch = (y & 1) ? ((x & 1) ? 2 : 1) : ((x & 1) ? 1 : 0);
-        const int xl = std::max(x - 1, 0) * 3 + ch, xc = x * 3 + ch, xr = std::min(x + 1, W - 1) * 3 + ch;
-        // Optics: 3x3 binomial point spread (sigma ~0.7 px).
+        xl = xl * 3 + ch;
+        xr = xr * 3 + ch;
+        const int xc = x * 3 + ch;
         const float v = 0.0625f * (r0[xl] + r0[xr] + r2[xl] + r2[xr]) + 0.125f * (r0[xc] + r2[xc] + r1[xl] + r1[xr]) +
                         0.25f * r1[xc];
         dst[x] = digitise(v, offset + static_cast<uint32_t>(direction * x));
-      }
+      };
+      photosite(0, 0, 1);
+      for (int x = 1; x + 1 < width; ++x) photosite(x, x - 1, x + 1);
+      photosite(width - 1, width - 2, width - 1);
     }
     cv::cvtColor(raw, out.bgr, bayer_to_bgr_code(image_t::PIXEL_FORMAT_BAYER_RGGB));
   } else {
@@ -134,6 +140,7 @@ CameraImage expose(const std::vector<Rgbf>& radiance_in, int width, int height, 
         }
     }
   }
+  if (!with_saturation) return out;
   out.saturated.create(height, width, CV_8UC1);
   for (int y = 0; y < height; ++y) {
     const uint8_t* p = out.bgr.ptr<uint8_t>(y);

@@ -27,8 +27,9 @@ struct CameraImage {
 };
 
 // stream: distinguishes the cameras' noise; smear_px: horizontal motion blur length.
+// with_saturation: also fill CameraImage::saturated.
 CameraImage expose(const std::vector<Rgbf>& radiance, int width, int height, const Exposure& exposure,
                    double sensitivity, const CameraSensorConfig& config, uint64_t frame, uint32_t stream,
-                   double smear_px);
+                   double smear_px, bool with_saturation);
 
 }  // namespace ivoa::sim::detail

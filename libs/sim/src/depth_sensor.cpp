@@ -55,8 +55,11 @@ float smoothstep(float a, float b, float x) {
 cv::Mat depth_image(const std::vector<Ranged>& ranged, int width, int height, double focal, double min_range,
                     double max_range, const DepthSensorConfig& c, uint64_t frame) {
   const size_t n = static_cast<size_t>(width) * height;
-  std::vector<float> z(n);
-  for (size_t i = 0; i < n; ++i) z[i] = ranged[i].depth;
+  std::vector<float> z(n), inv_z(n);
+  for (size_t i = 0; i < n; ++i) {
+    z[i] = ranged[i].depth;
+    inv_z[i] = 1.0f / z[i];  // 0 where nothing was hit (z = inf)
+  }
   std::vector<uint8_t> invalid(n, 0);
   // Depth edges: structured light cannot resolve a pixel that straddles a
   // jump. Invalid where a 4-neighbour differs by more than edge_ratio * z
@@ -82,8 +85,8 @@ cv::Mat depth_image(const std::vector<Ranged>& ranged, int width, int height, do
     float min_proj = 1e30f;
     for (int x = width - 1; x >= 0; --x) {
       const size_t i = static_cast<size_t>(y) * width + x;
-      if (!std::isfinite(z[i])) continue;
-      const float proj = static_cast<float>(x) - fb / z[i];
+      if (inv_z[i] == 0) continue;
+      const float proj = static_cast<float>(x) - fb * inv_z[i];
       if (proj >= min_proj - 0.5f) invalid[i] = 1;
       else min_proj = std::min(min_proj, proj);
     }
@@ -110,14 +113,14 @@ cv::Mat depth_image(const std::vector<Ranged>& ranged, int width, int height, do
       const Ranged& r = ranged[i];
       // Dropout chance: weak IR return (dark or grazing), mirror-like
       // surfaces, and sunlight washing out the pattern (worse far away).
-      const float ret = r.ir_return * 4.0f / std::max(0.25f, zi * zi);
-      const float p_dark = smoothstep(dark, dark * 0.3f, ret);
+      const float ret = r.ir_return * 4.0f * std::min(4.0f, inv_z[i] * inv_z[i]);
+      const float p_dark = ret >= dark ? 0.0f : smoothstep(dark, dark * 0.3f, ret);
       const float p_spec = std::min(0.9f, spec_scale * r.specular);
       const float p_sun = std::min(0.95f, sun_scale * r.sunlit * zi * zi);
       const float keep = (1 - p_dark) * (1 - p_spec) * (1 - p_sun);
       if (blobs.at(x + bx, y + by) < 1.0f - keep) continue;
       if (uniforms[(offset + static_cast<uint32_t>(x)) & NoiseTable::kMask] < random_dropout) continue;
-      const float noisy = zi + noise * zi * zi * normals[(offset + 7919u * static_cast<uint32_t>(x)) & NoiseTable::kMask];
+      const float noisy = zi + noise * zi * zi * normals[(offset + static_cast<uint32_t>(x)) & NoiseTable::kMask];
       const float mm = noisy * 1000.0f + 0.5f;
       dst[x] = static_cast<uint16_t>(mm <= 0 ? 0 : (mm >= 65535.0f ? 65535 : static_cast<int>(mm)));
     }

@@ -1,6 +1,8 @@
 #include "ivoa/sim/simulator.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <limits>
 
 #include "camera_rays.hpp"
@@ -38,6 +40,12 @@ struct Simulator::Impl {
 
 namespace {
 
+double thread_cpu_ms() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
 // Signal-to-noise below which a pixel counts as noise-dominated: texture of
 // ~10 % contrast drowns in the noise.
 constexpr double kLowLightSnr = 10.0;
@@ -74,23 +82,35 @@ SimFrame Simulator::render(const RenderRequest& req) const {
   const int w = s.left.width(), h = s.left.height();
   const size_t n = static_cast<size_t>(w) * h;
   SimFrame f;
+  double clock = thread_cpu_ms();
+  const double start = clock;
+  auto lap = [&clock](double& into) {
+    const double now = thread_cpu_ms();
+    into = now - clock;
+    clock = now;
+  };
   f.truth_depth.create(h, w, CV_32FC1);
   f.truth_surface.create(h, w, CV_8UC1);
   f.truth_phenomena.create(h, w, CV_8UC1);
 
-  std::vector<Rgbf> left_radiance(n), right_radiance(static_cast<size_t>(s.right.width()) * s.right.height());
-  std::vector<float> specular(n);
+  // Scratch reused across frames on this thread (every entry is written before it is read).
+  thread_local std::vector<Rgbf> left_radiance, right_radiance;
+  thread_local std::vector<float> specular;
+  thread_local std::vector<Shaded> shaded;
+  left_radiance.resize(n);
+  right_radiance.resize(static_cast<size_t>(s.right.width()) * s.right.height());
+  specular.resize(n);
+  shaded.resize(std::max(n, right_radiance.size()));
   {
     const Tracer tracer(data, s.left, req.stereo_pose, accel);
-    std::vector<Shaded> row(static_cast<size_t>(w));
+    tracer.shade_image(shaded.data());
     for (int y = 0; y < h; ++y) {
-      tracer.shade_row(y, row.data());
       float* depth = f.truth_depth.ptr<float>(y);
       uint8_t* surface = f.truth_surface.ptr<uint8_t>(y);
       uint8_t* phenomena = f.truth_phenomena.ptr<uint8_t>(y);
       for (int x = 0; x < w; ++x) {
-        const Shaded& sh = row[static_cast<size_t>(x)];
         const size_t i = static_cast<size_t>(y) * w + x;
+        const Shaded& sh = shaded[i];
         left_radiance[i] = sh.radiance;
         specular[i] = sh.specular;
         depth[x] = sh.depth;
@@ -99,43 +119,44 @@ SimFrame Simulator::render(const RenderRequest& req) const {
       }
     }
   }
+  lap(f.timings.left_ms);
   {
     const Tracer tracer(data, s.right, req.stereo_pose, accel);
-    const int rw = s.right.width();
-    std::vector<Shaded> row(static_cast<size_t>(rw));
-    for (int y = 0; y < s.right.height(); ++y) {
-      tracer.shade_row(y, row.data());
-      for (int x = 0; x < rw; ++x) right_radiance[static_cast<size_t>(y) * rw + x] = row[static_cast<size_t>(x)].radiance;
-    }
+    tracer.shade_image(shaded.data());
+    for (size_t i = 0; i < right_radiance.size(); ++i) right_radiance[i] = shaded[i].radiance;
   }
+  lap(f.timings.right_ms);
 
   const detail::Exposure exposure = detail::auto_exposure(left_radiance, cam, data.max_exposure_scale);
   f.exposure_ms = exposure.time_ms;
   f.gain = exposure.gain;
   // Turning smears the image along rows by yaw rate x exposure x focal length.
   const double smear = std::abs(req.motion.omega) * exposure.time_ms * 1e-3 * s.config.rig.left.K(0, 0);
-  const auto left_image = detail::expose(left_radiance, w, h, exposure, 1.0, cam, req.frame_index, 0, smear);
+  const auto left_image = detail::expose(left_radiance, w, h, exposure, 1.0, cam, req.frame_index, 0, smear, true);
   const auto right_image = detail::expose(right_radiance, s.right.width(), s.right.height(), exposure,
-                                          cam.right_sensitivity, cam, req.frame_index, 1, smear);
+                                          cam.right_sensitivity, cam, req.frame_index, 1, smear, false);
   f.left = left_image.bgr;
   f.right = right_image.bgr;
 
   // Phenomena that depend on the exposure: clipping, noise-dominated pixels, glare.
-  const double e_per_unit = exposure.electrons_per_unit;
-  const double read2 = cam.read_noise * cam.read_noise;
-  const double full_scale = cam.full_well / exposure.gain;
+  // SNR = S / sqrt(S + read^2) < k  <=>  S^2 < k^2 (S + read^2) for S >= 0.
+  const float e_per_unit = static_cast<float>(exposure.electrons_per_unit);
+  const float read2 = static_cast<float>(cam.read_noise * cam.read_noise);
+  const float k2 = static_cast<float>(kLowLightSnr * kLowLightSnr);
+  const float glare_radiance = static_cast<float>(kGlareLevel * cam.full_well / exposure.gain) / e_per_unit;
   for (int y = 0; y < h; ++y) {
     uint8_t* phenomena = f.truth_phenomena.ptr<uint8_t>(y);
     const uint8_t* saturated = left_image.saturated.ptr<uint8_t>(y);
     for (int x = 0; x < w; ++x) {
       const size_t i = static_cast<size_t>(y) * w + x;
-      const double signal = left_radiance[i].luminance() * e_per_unit;
+      const float signal = left_radiance[i].luminance() * e_per_unit;
       if (saturated[x]) phenomena[x] |= GT::PHENOMENON_SATURATED;
-      else if (signal / std::sqrt(signal + read2) < kLowLightSnr) phenomena[x] |= GT::PHENOMENON_LOW_LIGHT;
-      if (specular[i] * e_per_unit > kGlareLevel * full_scale) phenomena[x] |= GT::PHENOMENON_GLARE;
+      else if (signal * signal < k2 * (signal + read2)) phenomena[x] |= GT::PHENOMENON_LOW_LIGHT;
+      if (specular[i] > glare_radiance) phenomena[x] |= GT::PHENOMENON_GLARE;
     }
   }
 
+  lap(f.timings.sensor_ms);
   if (s.config.render_depth) {
     const Tracer tracer(data, s.depth, req.depth_pose, accel);
     std::vector<Ranged> ranged(static_cast<size_t>(s.depth.width()) * s.depth.height());
@@ -146,6 +167,8 @@ SimFrame Simulator::render(const RenderRequest& req) const {
   } else {
     f.depth_mm = cv::Mat::zeros(s.depth.height(), s.depth.width(), CV_16UC1);
   }
+  lap(f.timings.depth_ms);
+  f.timings.total_ms = clock - start;
   return f;
 }
 

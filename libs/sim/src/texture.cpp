@@ -1,7 +1,11 @@
 #include "texture.hpp"
 
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <new>
 
 namespace ivoa::sim {
 namespace {
@@ -16,6 +20,16 @@ uint32_t encode_texel(const Rgbf& c) {
 
 }  // namespace
 
+HugeBuffer::HugeBuffer(size_t n) : size_(n) {
+  constexpr size_t kHuge = 2u << 20;
+  const size_t bytes = (n * sizeof(uint32_t) + kHuge - 1) / kHuge * kHuge;
+  data_ = static_cast<uint32_t*>(std::aligned_alloc(kHuge, bytes));
+  if (!data_) throw std::bad_alloc();
+  madvise(data_, bytes, MADV_HUGEPAGE);  // a hint; fine if refused
+}
+
+HugeBuffer::~HugeBuffer() { std::free(data_); }
+
 Texture::Texture(int size, double texel_m, const std::vector<Rgbf>& linear)
     : size_(size), inv_texel_(static_cast<float>(1.0 / texel_m)) {
   std::vector<Rgbf> level = linear;
@@ -28,9 +42,15 @@ Texture::Texture(int size, double texel_m, const std::vector<Rgbf>& linear)
   }
   const double count = static_cast<double>(linear.size());
   mean_ = Rgbf(static_cast<float>(sum_r / count), static_cast<float>(sum_g / count), static_cast<float>(sum_b / count));
+  size_t total = 0;
+  for (int m = size; m >= 1; m /= 2) total += static_cast<size_t>(m) * m;
+  data_ = HugeBuffer(total);
+  size_t base = 0;
   while (n >= 1) {
-    offsets_.push_back(data_.size());
-    for (const Rgbf& c : level) data_.push_back(encode_texel(c));
+    offsets_.push_back(base);
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) data_[base + tiled(x, y, n)] = encode_texel(level[static_cast<size_t>(y) * n + x]);
+    base += static_cast<size_t>(n) * n;
     level_scale_[levels_] = inv_texel_ / static_cast<float>(1 << levels_);
     ++levels_;
     if (n == 1) break;

@@ -5,6 +5,7 @@
 // their texture instead of aliasing.
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #if defined(__SSE2__)
@@ -27,6 +28,31 @@ inline int floor_log2(float x) {
   return static_cast<int>((bits >> 23) & 0xff) - 127;
 }
 
+// A uint32 array in 2 MB pages where the kernel allows it: textures are
+// read in scattered patterns and 4 KB pages thrash the TLB.
+class HugeBuffer {
+ public:
+  HugeBuffer() = default;
+  explicit HugeBuffer(size_t n);
+  HugeBuffer(const HugeBuffer&) = delete;
+  HugeBuffer& operator=(const HugeBuffer&) = delete;
+  HugeBuffer(HugeBuffer&& o) noexcept : data_(o.data_), size_(o.size_) { o.data_ = nullptr, o.size_ = 0; }
+  HugeBuffer& operator=(HugeBuffer&& o) noexcept {
+    std::swap(data_, o.data_);
+    std::swap(size_, o.size_);
+    return *this;
+  }
+  ~HugeBuffer();
+  uint32_t* data() { return data_; }
+  const uint32_t* data() const { return data_; }
+  size_t size() const { return size_; }
+  uint32_t& operator[](size_t i) { return data_[i]; }
+
+ private:
+  uint32_t* data_ = nullptr;
+  size_t size_ = 0;
+};
+
 class Texture {
  public:
   // `linear` is size x size linear RGB (row-major, v rows, u columns); size a power of two.
@@ -43,11 +69,11 @@ class Texture {
     const int x0 = floor_to_int(x), y0 = floor_to_int(y);
     const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
     const int mask = n - 1;
-    const int xa = x0 & mask, xb = (x0 + 1) & mask, ya = (y0 & mask) * n, yb = ((y0 + 1) & mask) * n;
+    const int xa = x0 & mask, xb = (x0 + 1) & mask, ya = y0 & mask, yb = (y0 + 1) & mask;
     const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
 #if defined(__SSE2__)
-    const __m128i t = _mm_set_epi32(static_cast<int>(texels[yb + xb]), static_cast<int>(texels[yb + xa]),
-                                    static_cast<int>(texels[ya + xb]), static_cast<int>(texels[ya + xa]));
+    const __m128i t = _mm_set_epi32(static_cast<int>(texels[tiled(xb, yb, n)]), static_cast<int>(texels[tiled(xa, yb, n)]),
+                                    static_cast<int>(texels[tiled(xb, ya, n)]), static_cast<int>(texels[tiled(xa, ya, n)]));
     const __m128i zero = _mm_setzero_si128();
     const __m128i lo = _mm_unpacklo_epi8(t, zero), hi = _mm_unpackhi_epi8(t, zero);
     __m128 c = _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(lo, zero)), _mm_set1_ps(w00));
@@ -59,7 +85,8 @@ class Texture {
     _mm_store_ps(out, c);
     return {out[0], out[1], out[2]};
 #else
-    const uint32_t t00 = texels[ya + xa], t10 = texels[ya + xb], t01 = texels[yb + xa], t11 = texels[yb + xb];
+    const uint32_t t00 = texels[tiled(xa, ya, n)], t10 = texels[tiled(xb, ya, n)], t01 = texels[tiled(xa, yb, n)],
+                   t11 = texels[tiled(xb, yb, n)];
     auto channel = [&](int shift) {
       const float c = w00 * static_cast<float>((t00 >> shift) & 0xff) + w10 * static_cast<float>((t10 >> shift) & 0xff) +
                       w01 * static_cast<float>((t01 >> shift) & 0xff) + w11 * static_cast<float>((t11 >> shift) & 0xff);
@@ -70,6 +97,14 @@ class Texture {
   }
 
   double period() const { return size_ / inv_texel_; }  // metres before the map repeats
+
+  // Texels are stored in 4 x 4 tiles (64 bytes, one cache line): a bilinear
+  // lookup and its neighbours mostly stay in one line, whatever the direction
+  // in which the image walks over the surface.
+  static size_t tiled(int x, int y, int n) {
+    if (n < 4) return static_cast<size_t>(y) * n + x;
+    return (static_cast<size_t>((y >> 2) * (n >> 2) + (x >> 2)) << 4) | static_cast<size_t>(((y & 3) << 2) | (x & 3));
+  }
   Rgbf mean() const { return mean_; }
 
  private:
@@ -77,7 +112,7 @@ class Texture {
   float inv_texel_ = 1;
   float level_scale_[32] = {};  // texels per metre at each level
   Rgbf mean_;
-  std::vector<uint32_t> data_;  // all levels; texel = sqrt(linear) * 255 per channel (gamma 2)
+  HugeBuffer data_;  // all levels; texel = sqrt(linear) * 255 per channel (gamma 2)
   std::vector<size_t> offsets_;
 };
 

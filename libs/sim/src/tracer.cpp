@@ -58,6 +58,8 @@ struct SolidPoint {
 
 Tracer::Tracer(const SceneData& scene, const CameraRays& rays, const Pose2D& pose, bool accelerate)
     : scene_(scene), rays_(rays), pose_(pose) {
+  px_ = static_cast<float>(pose.x);
+  py_ = static_cast<float>(pose.y);
   cos_yaw_ = static_cast<float>(std::cos(pose.yaw));
   sin_yaw_ = static_cast<float>(std::sin(pose.yaw));
   const Eigen::Vector2d o = robot_to_world(pose, rays.origin().x(), rays.origin().y());
@@ -289,12 +291,13 @@ void Tracer::shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float ex
   if (sp.base) out.phenomena |= m.phenomena & GT::PHENOMENON_DARK_STRIPE;
 }
 
-const FloorFeature* Tracer::floor_feature(float x, float y, uint16_t& material) const {
+inline const FloorFeature* Tracer::floor_feature(float x, float y, uint16_t& material) const {
   material = scene_.floor_material;
   const PlanGrid& g = scene_.grid;
   if (!g.inside(x, y)) return nullptr;
   const int cell = g.index(x, y);
   const uint32_t begin = g.feature_start[static_cast<size_t>(cell)], end = g.feature_start[static_cast<size_t>(cell) + 1];
+  if (begin == end) return nullptr;
   for (uint32_t k = end; k > begin; --k) {
     const FloorFeature& f = scene_.floor_features[g.features[k - 1]];
     if (!feature_contains(f, x, y)) continue;
@@ -409,22 +412,19 @@ void Tracer::shade_pit(const Ray& ray, const FloorFeature& pit, float s_floor, S
   out.phenomena = 0;
 }
 
-void Tracer::shade_floor(const Ray& ray, const PixelRay& pr, Shaded& out, float& fresnel, float& roughness) const {
-  const float x = static_cast<float>(pose_.x) + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
-  const float y = static_cast<float>(pose_.y) + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
-  fresnel = 0;
-  uint16_t mid;
-  if (const FloorFeature* pit = floor_feature(x, y, mid)) return shade_pit(ray, *pit, pr.s_floor, out);
-  const MaterialData& m = scene_.materials[mid];
-  const Rgbf albedo = m.texture->sample(x, y, pr.floor_footprint) * m.diffuse_scale;
-  const Rgbf e = scene_.floor_irradiance.empty() ? scene_.floor_irradiance_outside : scene_.floor_irradiance.sample(x, y);
+void Tracer::finish_floor(const FloorSample& f, Shaded& out, float& fresnel, float& roughness) const {
+  const PixelRay& pr = rays_.ray(f.pixel);
+  const MaterialData& m = scene_.materials[f.material];
+  const Rgbf albedo = m.texture->sample(f.x, f.y, pr.floor_footprint) * m.diffuse_scale;
+  const Rgbf e = scene_.floor_irradiance.empty() ? scene_.floor_irradiance_outside : scene_.floor_irradiance.sample(f.x, f.y);
   out.radiance = albedo * e;
-  out.depth = pr.s_floor;
+  out.depth = pr.s_floor * pr.planar;
   out.specular = 0;
   out.surface = GT::SURFACE_FLOOR;
   out.phenomena = m.phenomena & (GT::PHENOMENON_TEXTURELESS | GT::PHENOMENON_REPETITIVE);
+  fresnel = 0;
   if (m.f0 > 0) {
-    const float cos_i = -ray.slope * ray.inv_len;
+    const float cos_i = -pr.slope * pr.inv_len;
     fresnel = m.f0 + (1.0f - m.f0) * pow5(1.0f - cos_i);
     roughness = m.roughness;
   }
@@ -433,8 +433,8 @@ void Tracer::shade_floor(const Ray& ray, const PixelRay& pr, Shaded& out, float&
 Rgbf Tracer::floor_reflection(int pixel, float roughness) const {
   const PixelRay& pr = rays_.ray(pixel);
   const Ray ray = make_ray(pr);
-  const float x = static_cast<float>(pose_.x) + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
-  const float y = static_cast<float>(pose_.y) + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+  const float x = px_ + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
+  const float y = py_ + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
   bool emitter;
   Rgbf r = reflection(ray, pr.s_floor, roughness, emitter);
   if (!glare_lights_.empty()) r += light_lobes(ray, x, y, roughness);
@@ -448,20 +448,34 @@ void Tracer::add_reflection(Shaded& out, float fresnel, const Rgbf& reflected) {
   if (out.specular > 0.35f * out.radiance.luminance()) out.phenomena |= GT::PHENOMENON_REFLECTION;
 }
 
-void Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, float& roughness) const {
+bool Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, float& roughness, FloorSample* floor) const {
   const PixelRay& pr = rays_.ray(pixel);
   const Ray ray = make_ray(pr);
   float s_hi = pr.s_floor;
   const bool up = pr.slope > 0;
   if (up && scene_.has_ceiling) s_hi = s_ceiling_up_ * ray.inv_slope;
   Hit hit;
-  nearest(ray, 0.0f, s_hi, false, hit);
+  const size_t first = brute_force_ ? 0 : bin_start_[static_cast<size_t>(ray.bin)];
+  const size_t last = brute_force_ ? candidates_.size() : bin_start_[static_cast<size_t>(ray.bin) + 1];
+  if (first < last && (brute_force_ || candidates_[first].s_min <= s_hi)) nearest(ray, 0.0f, s_hi, false, hit);
   fresnel = 0;
   if (hit.candidate >= 0) {
     shade_solid(ray, hit, false, 0.0f, out);
     out.specular = 0;
   } else if (!up) {
-    shade_floor(ray, pr, out, fresnel, roughness);
+    FloorSample f;
+    f.pixel = pixel;
+    f.x = px_ + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
+    f.y = py_ + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+    if (const FloorFeature* pit = floor_feature(f.x, f.y, f.material)) {
+      shade_pit(ray, *pit, pr.s_floor, out);
+    } else if (floor) {
+      *floor = f;
+      return true;
+    } else {
+      finish_floor(f, out, fresnel, roughness);
+      return false;
+    }
   } else if (scene_.has_ceiling) {
     const float x = ox_ + s_hi * ray.wx, y = oy_ + s_hi * ray.wy;
     out.radiance = scene_.ceiling_radiance.sample(x, y, s_hi * ray.len * rays_.pixel_angle());
@@ -475,39 +489,82 @@ void Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, float& roughn
     out.specular = 0;
     out.surface = GT::SURFACE_SKY;
     out.phenomena = 0;
-    return;
+    return false;
   }
   out.depth *= pr.planar;
+  return false;
 }
 
 void Tracer::shade(int pixel, Shaded& out) const {
   float fresnel, roughness = 0;
-  shade_primary(pixel, out, fresnel, roughness);
+  shade_primary(pixel, out, fresnel, roughness, nullptr);
   if (fresnel > 0) add_reflection(out, fresnel, floor_reflection(pixel, roughness));
 }
 
-void Tracer::shade_row(int row, Shaded* out) const {
-  // A glossy reflection blurred over more than ~3 pixels can be sampled every other column.
-  constexpr float kGlossy = 0.006f;  // radians of roughness
-  const int width = rays_.width(), base = row * width;
+namespace {
+
+// Spacing of the lattice on which a floor pixel's reflection is traced: a
+// rough surface blurs its mirror image over roughness x focal length pixels
+// (times the fraction of the path beyond the floor), so it can be sampled
+// sparsely and interpolated; a still water surface is traced at every pixel.
+int reflection_step(float fresnel, float roughness) {
+  if (fresnel <= 0) return 0;
+  if (roughness >= 0.03f) return 4;
+  if (roughness >= 0.006f) return 2;
+  return 1;
+}
+
+}  // namespace
+
+void Tracer::shade_image(Shaded* out) const {
+  const int width = rays_.width(), height = rays_.height();
+  const size_t n = static_cast<size_t>(width) * height;
+  // Scratch reused across frames (no page faults, no clearing): every entry
+  // read below is written first in this call.
   thread_local std::vector<float> fresnel, roughness;
   thread_local std::vector<Rgbf> reflected;
-  fresnel.assign(static_cast<size_t>(width), 0.0f);
-  roughness.assign(static_cast<size_t>(width), 0.0f);
-  reflected.resize(static_cast<size_t>(width));
-  for (int x = 0; x < width; ++x) shade_primary(base + x, out[x], fresnel[static_cast<size_t>(x)], roughness[static_cast<size_t>(x)]);
-  auto glossy = [&](int x) { return fresnel[static_cast<size_t>(x)] > 0 && roughness[static_cast<size_t>(x)] >= kGlossy; };
-  auto interpolated = [&](int x) { return (x & 1) && x + 1 < width && glossy(x) && glossy(x - 1) && glossy(x + 1); };
-  for (int x = 0; x < width; ++x)
-    if (fresnel[static_cast<size_t>(x)] > 0 && !interpolated(x))
-      reflected[static_cast<size_t>(x)] = floor_reflection(base + x, roughness[static_cast<size_t>(x)]);
-  for (int x = 0; x < width; ++x) {
-    const size_t i = static_cast<size_t>(x);
-    if (fresnel[i] <= 0) continue;
-    if (interpolated(x)) reflected[i] = (reflected[i - 1] + reflected[i + 1]) * 0.5f;
+  thread_local std::vector<uint8_t> step;
+  thread_local std::vector<FloorSample> floor;
+  fresnel.resize(n);
+  roughness.resize(n);
+  reflected.resize(n);
+  step.resize(n);
+  floor.resize(n);
+  size_t floor_count = 0;
+  for (size_t i = 0; i < n; ++i)
+    floor_count += shade_primary(static_cast<int>(i), out[i], fresnel[i], roughness[i], &floor[floor_count]);
+  for (size_t k = 0; k < floor_count; ++k) {
+    const size_t i = static_cast<size_t>(floor[k].pixel);
+    finish_floor(floor[k], out[i], fresnel[i], roughness[i]);
   }
-  for (int x = 0; x < width; ++x)
-    if (fresnel[static_cast<size_t>(x)] > 0) add_reflection(out[x], fresnel[static_cast<size_t>(x)], reflected[static_cast<size_t>(x)]);
+  for (size_t i = 0; i < n; ++i) step[i] = static_cast<uint8_t>(reflection_step(fresnel[i], roughness[i]));
+  // A pixel off its lattice, inside a lattice cell whose four corners share
+  // its spacing, takes its reflection from those corners.
+  auto interpolated = [&](int x, int y) {
+    const int s = step[static_cast<size_t>(y) * width + x], m = s - 1;  // s is 1, 2 or 4
+    if (s < 2 || ((x | y) & m) == 0) return false;
+    const int x0 = x & ~m, y0 = y & ~m, x1 = x0 + s, y1 = y0 + s;
+    if (x1 >= width || y1 >= height) return false;
+    auto same = [&](int xx, int yy) { return step[static_cast<size_t>(yy) * width + xx] == s; };
+    return same(x0, y0) && same(x1, y0) && same(x0, y1) && same(x1, y1);
+  };
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(y) * width + x;
+      if (step[i] && !interpolated(x, y)) reflected[i] = floor_reflection(static_cast<int>(i), roughness[i]);
+    }
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(y) * width + x;
+      if (!step[i]) continue;
+      if (interpolated(x, y)) {
+        const int s = step[i], x0 = x & ~(s - 1), y0 = y & ~(s - 1);
+        const float fx = static_cast<float>(x - x0) / static_cast<float>(s), fy = static_cast<float>(y - y0) / static_cast<float>(s);
+        const size_t a = static_cast<size_t>(y0) * width + x0, b = a + static_cast<size_t>(s) * width;
+        reflected[i] = lerp(lerp(reflected[a], reflected[a + s], fx), lerp(reflected[b], reflected[b + s], fx), fy);
+      }
+      add_reflection(out[i], fresnel[i], reflected[i]);
+    }
 }
 
 Ranged Tracer::range(int pixel) const {
@@ -536,8 +593,8 @@ Ranged Tracer::range(int pixel) const {
     return out;
   }
   if (!up) {
-    const float x = static_cast<float>(pose_.x) + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
-    const float y = static_cast<float>(pose_.y) + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+    const float x = px_ + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
+    const float y = py_ + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
     uint16_t mid;
     if (const FloorFeature* pit = floor_feature(x, y, mid)) {
       Shaded sh;

@@ -39,10 +39,11 @@ class Tracer {
  public:
   Tracer(const SceneData& scene, const CameraRays& rays, const Pose2D& pose, bool accelerate);
 
-  // Shades one image row (width pixels into out). Glossy reflections are
-  // traced on every other column and interpolated between, where the
-  // surface blurs them over several pixels anyway; mirror-like ones on every column.
-  void shade_row(int row, Shaded* out) const;
+  // Shades the whole image (width x height into out, row-major). Glossy
+  // reflections are traced on a sparse lattice (every 2nd or 4th pixel by
+  // roughness) and interpolated between: the surface blurs them over more
+  // pixels anyway. Mirror-like ones (water) are traced at every pixel.
+  void shade_image(Shaded* out) const;
   void shade(int pixel, Shaded& out) const;  // one pixel, everything traced
   Ranged range(int pixel) const;
   size_t num_candidates() const { return candidates_.size(); }
@@ -73,9 +74,19 @@ class Tracer {
   // Nearest solid along the ray with s in [s_lo, s_hi); mirrored: below the floor.
   void nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored, Hit& best) const;
   void shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float extra_blur, Shaded& out) const;
+  // An ordinary floor pixel, located by shade_primary and shaded by
+  // finish_floor: done in a second tight loop, where consecutive texture
+  // lookups overlap in the processor instead of waiting on each other.
+  struct FloorSample {
+    int pixel;
+    float x, y;  // world
+    uint16_t material;
+  };
+  // What the pixel sees. Returns true for an ordinary floor pixel, which it
+  // leaves in *floor for finish_floor (shades it at once if floor is null).
+  bool shade_primary(int pixel, Shaded& out, float& fresnel, float& roughness, FloorSample* floor) const;
   // The floor's own (diffuse) radiance; `fresnel` > 0 when a reflection must be added.
-  void shade_floor(const Ray& ray, const PixelRay& pr, Shaded& out, float& fresnel, float& roughness) const;
-  void shade_primary(int pixel, Shaded& out, float& fresnel, float& roughness) const;
+  void finish_floor(const FloorSample& f, Shaded& out, float& fresnel, float& roughness) const;
   // Mirror image plus highlight lobes seen in the floor at a pixel.
   Rgbf floor_reflection(int pixel, float roughness) const;
   static void add_reflection(Shaded& out, float fresnel, const Rgbf& reflected);
@@ -88,6 +99,7 @@ class Tracer {
   const SceneData& scene_;
   const CameraRays& rays_;
   float ox_, oy_, oz_;    // camera origin, world
+  float px_, py_;         // robot position, world
   float cos_yaw_, sin_yaw_;
   Pose2D pose_;
   float s_ceiling_up_ = kInf;  // (ceiling - oz): divide by slope

@@ -25,6 +25,13 @@ struct SimFrame {
   cv::Mat truth_phenomena;   // CV_8UC1 OR of sim_ground_truth_t::PHENOMENON_*
   double exposure_ms = 0;    // the cameras' exposure time for this frame
   double gain = 1;           // and analog gain
+  // Where render() spent its time (milliseconds of this thread's CPU time).
+  struct Timings {
+    double left_ms = 0, right_ms = 0;  // ray casting and shading per camera
+    double sensor_ms = 0;              // exposure, blur, noise, demosaic, truth flags
+    double depth_ms = 0;               // depth sensor: ray casting and its model
+    double total_ms = 0;
+  } timings;
 };
 
 struct SimulatorConfig {
