@@ -55,12 +55,15 @@ float smoothstep(float a, float b, float x) {
 cv::Mat depth_image(const std::vector<Ranged>& ranged, int width, int height, double focal, double min_range,
                     double max_range, const DepthSensorConfig& c, uint64_t frame) {
   const size_t n = static_cast<size_t>(width) * height;
-  std::vector<float> z(n), inv_z(n);
+  thread_local std::vector<float> z, inv_z;  // scratch reused across frames, fully written below
+  thread_local std::vector<uint8_t> invalid;
+  z.resize(n);
+  inv_z.resize(n);
+  invalid.resize(n);
   for (size_t i = 0; i < n; ++i) {
     z[i] = ranged[i].depth;
     inv_z[i] = 1.0f / z[i];  // 0 where nothing was hit (z = inf)
   }
-  std::vector<uint8_t> invalid(n, 0);
   // Depth edges: structured light cannot resolve a pixel that straddles a
   // jump. Invalid where a 4-neighbour differs by more than edge_ratio * z
   // (infinite depths compare as jumps: the comparison is false for them).

@@ -159,7 +159,8 @@ SimFrame Simulator::render(const RenderRequest& req) const {
   lap(f.timings.sensor_ms);
   if (s.config.render_depth) {
     const Tracer tracer(data, s.depth, req.depth_pose, accel);
-    std::vector<Ranged> ranged(static_cast<size_t>(s.depth.width()) * s.depth.height());
+    thread_local std::vector<Ranged> ranged;
+    ranged.resize(static_cast<size_t>(s.depth.width()) * s.depth.height());
     for (size_t i = 0; i < ranged.size(); ++i) ranged[i] = tracer.range(static_cast<int>(i));
     const auto& rig = s.config.rig;
     f.depth_mm = detail::depth_image(ranged, s.depth.width(), s.depth.height(), rig.depth.K(0, 0), rig.depth_min_range,
