@@ -1,0 +1,315 @@
+#!/usr/bin/env python3
+"""ivoa_report: turn ivoa-eval outputs into the IVOA paper's metrics, figures,
+failure clustering and one Markdown report.
+
+    python3 tools/report/ivoa_report.py --eval EVAL_DIR [--eval EVAL_DIR2 ...] \\
+        --dataset DATASET_DIR [--dataset DATASET_DIR2 ...] --out REPORT_DIR [--title ...]
+
+Each EVAL_DIR is one ``ivoa-eval --out`` folder (one introspection model, e.g.
+trained for JPP-C, another for the dense SGBM detector). ``--dataset`` is the
+dataset the evals ran on: give it once for all, or once per ``--eval`` in the
+same order (models of different detectors have different datasets). The report
+folder gets ``report.md``, ``metrics.json`` (every number in the report) and the
+PNG figures, one subfolder per model plus ``comparison/``.
+
+Exit codes: 0 done, 2 bad command line, 3 bad input (the message names the file
+and the problem), 1 anything else (a bug: please report it with the traceback).
+See tools/report/README.md for what the report holds.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_BAD_INPUT = 0, 1, 2, 3
+
+
+def _ensure_scientific_python() -> None:
+    """Debian's /usr/bin/python3 has numpy, matplotlib and scikit-learn (the
+    project's setup installs them); a pyenv or virtualenv python3 that comes
+    first on PATH may not. Re-run under /usr/bin/python3 rather than fail with an
+    ImportError deep inside a module."""
+    try:
+        import matplotlib  # noqa: F401
+        import numpy  # noqa: F401
+        import sklearn  # noqa: F401
+        return
+    except ImportError as e:
+        missing = e.name
+    alt = "/usr/bin/python3"
+    if (os.path.exists(alt) and os.path.realpath(sys.executable) != os.path.realpath(alt)
+            and not os.environ.get("IVOA_REPORT_REEXEC")):
+        os.environ["IVOA_REPORT_REEXEC"] = "1"
+        print(f"note: {sys.executable} has no module '{missing}'; re-running with {alt}", file=sys.stderr)
+        sys.stderr.flush()
+        os.execv(alt, [alt, os.path.abspath(__file__)] + sys.argv[1:])
+    print(f"error: Python module '{missing}' is missing; install Debian's python3-numpy python3-matplotlib "
+          "python3-sklearn (tools/setup/debian-packages.txt)", file=sys.stderr)
+    sys.exit(EXIT_ERROR)
+
+
+if __name__ == "__main__":
+    _ensure_scientific_python()
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import argparse  # noqa: E402
+import datetime  # noqa: E402
+import json  # noqa: E402
+import shlex  # noqa: E402
+import shutil  # noqa: E402
+from typing import Dict, List, Optional  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import report_figures as figures  # noqa: E402
+import report_markdown as md  # noqa: E402
+import report_metrics as metrics  # noqa: E402
+from report_clustering import ClusterOptions, cluster_failures  # noqa: E402
+from report_inputs import Dataset, EvalRun, InputError, attach_dataset, load_eval, make_names  # noqa: E402
+
+
+def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
+    """Command line; usage errors exit with argparse's code 2."""
+    p = argparse.ArgumentParser(
+        prog="ivoa_report.py",
+        description="IVOA analysis report: metrics, failure detection, uncertainty sweep, failure clustering, "
+                    "model comparison, as PNG figures and report.md.")
+    p.add_argument("--eval", action="append", required=True, metavar="EVAL_DIR",
+                   help="an ivoa-eval output folder (repeat for several models)")
+    p.add_argument("--dataset", action="append", required=True, metavar="DATASET_DIR",
+                   help="the dataset the eval ran on: once for all evals, or once per --eval in the same order")
+    p.add_argument("--out", required=True, metavar="REPORT_DIR", help="report folder (created)")
+    p.add_argument("--title", default="IVOA introspection report")
+    p.add_argument("--clusters", type=int, default=2, metavar="K", help="k-means clusters (paper: 2)")
+    p.add_argument("--select", choices=("confidence", "variance"), default="confidence",
+                   help="failures to cluster: top 50%% by confidence (paper) or var_predicted <= 0.03 (reference)")
+    p.add_argument("--embedding-norm", choices=("l2", "softmax", "none"), default="l2",
+                   help="FC2 embedding normalisation before clustering (reference code: softmax)")
+    p.add_argument("--cluster-space", choices=("embedding", "pca"), default="embedding",
+                   help="where k-means runs: normalised 256-d embeddings (paper) or their PCA scores")
+    p.add_argument("--tsne-max", type=int, default=3000, help="subsample t-SNE input to this many points")
+    p.add_argument("--tsne-iterations", type=int, default=1000)
+    p.add_argument("--perplexity", type=float, default=40.0)
+    p.add_argument("--seed", type=int, default=0, help="k-means, t-SNE, subsampling and mosaic seed")
+    p.add_argument("--max-overlays", type=int, default=0,
+                   help="copy at most this many overlay figures per model into the report (0 = all)")
+    a = p.parse_args(argv)
+    if a.clusters < 2:
+        p.error("--clusters must be at least 2")
+    if len(a.dataset) not in (1, len(a.eval)):
+        p.error(f"give --dataset once, or once per --eval ({len(a.eval)}); got {len(a.dataset)}")
+    if a.tsne_max < 5:
+        p.error("--tsne-max must be at least 5")
+    return a
+
+
+def load_inputs(args: argparse.Namespace):
+    """Reads every eval folder and its dataset, checking they agree. Raises
+    InputError on bad input; returns the runs and warnings for the report."""
+    runs = [load_eval(p) for p in args.eval]
+    make_names(runs)
+    datasets: Dict[str, Dataset] = {}
+    warnings: List[str] = []
+    for i, run in enumerate(runs):
+        path = args.dataset[i if len(args.dataset) > 1 else 0]
+        key = os.path.realpath(path)
+        if key not in datasets:
+            datasets[key] = Dataset(path)
+        warnings += attach_dataset(run, datasets[key])
+    return runs, warnings
+
+
+def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out_dir: str):
+    """All numbers and figures for one model. Returns (numbers for metrics.json,
+    figure paths relative to the report, clustering result, overlay paths)."""
+    d = os.path.join(out_dir, run.slug)
+    os.makedirs(d, exist_ok=True)
+
+    def rel(name):
+        return os.path.relpath(os.path.join(d, name), out_dir)
+
+    rm = {
+        "name": run.name, "eval_dir": run.path, "dataset": run.dataset.path if run.dataset else None,
+        "detector": run.detector, "model": run.meta.get("model"), "mc_passes": run.meta.get("mc_passes"),
+        "overall": metrics.class_metrics(run.label, run.predicted),
+        "environments": metrics.grouped_metrics(run, run.environment),
+        "sessions": metrics.grouped_metrics(run, run.session, describe_sessions=True),
+        "failure": metrics.failure_detection(run.label, run.predicted, run.probs),
+        "sweep": metrics.uncertainty_sweep(run),
+        "per_phenomenon": metrics.per_phenomenon(run),
+    }
+    figs = {
+        "confusion": figures.plot_confusion(rm["overall"], run.name, os.path.join(d, "confusion.png")),
+        "sessions": figures.plot_group_bars(rm["sessions"], f"{run.name}: accuracy per session", "session",
+                                            os.path.join(d, "accuracy_per_session.png")),
+        "accuracy_vs_threshold": figures.plot_accuracy_vs_threshold(
+            rm["sweep"], run.name, os.path.join(d, "accuracy_vs_threshold.png")),
+        "retained_vs_threshold": figures.plot_retained_vs_threshold(
+            rm["sweep"], run.name, os.path.join(d, "retained_vs_threshold.png")),
+        "accuracy_vs_retained": figures.plot_accuracy_vs_retained(
+            [(run.name, rm["sweep"])], run.name, os.path.join(d, "accuracy_vs_retained.png")),
+    }
+    if rm["failure"]["roc"]:
+        figs["roc"] = figures.plot_roc([(run.name, rm["failure"])], run.name, os.path.join(d, "failure_roc.png"))
+
+    res = cluster_failures(run, opt)
+    if res.ok:
+        figs["scatter"] = figures.plot_cluster_scatter(run, res, run.name, os.path.join(d, "clusters_tsne.png"))
+        for c in sorted(res.mosaic_rows):
+            figs[f"mosaic_{c}"] = figures.plot_mosaic(run, res, c, f"{run.name}: cluster {c}",
+                                                     os.path.join(d, f"cluster_{c}_mosaic.png"))
+    rm["clustering"] = {
+        "ok": res.ok, "message": res.message, "selection": opt.select, "embedding_norm": opt.embedding_norm,
+        "space": opt.space, "k": opt.k, "n_predicted_fp": res.n_predicted_fp, "n_predicted_fn": res.n_predicted_fn,
+        "n_selected": res.n_selected, "confidence_cut": res.confidence_cut,
+        "n_reference_rule": res.n_reference_rule, "pca_components": res.pca_components,
+        "pca_explained": res.pca_explained, "tsne_points": int(len(res.tsne_index)), "clusters": res.clusters,
+        "purity": res.purity if res.has_truth else None, "nmi": res.nmi, "ari": res.ari,
+        "has_ground_truth": res.has_truth,
+    }
+
+    overlays = run.overlays[: args.max_overlays] if args.max_overlays > 0 else run.overlays
+    copied = []
+    if overlays:
+        od = os.path.join(d, "overlays")
+        os.makedirs(od, exist_ok=True)
+        for src in overlays:
+            dst = os.path.join(od, os.path.basename(src))
+            shutil.copyfile(src, dst)
+            copied.append(os.path.relpath(dst, out_dir))
+    rel_figs = {k: os.path.relpath(v, out_dir) for k, v in figs.items()}
+    return rm, rel_figs, res, copied
+
+
+def compare(runs: List[EvalRun], numbers: Dict[str, dict], out_dir: str) -> str:
+    """The comparison section (two or more models): figures and Markdown."""
+    d = os.path.join(out_dir, "comparison")
+    names = [r.name for r in runs]
+    figs = {
+        "phenomena": figures.plot_phenomenon_comparison(
+            names, [numbers[r.slug]["per_phenomenon"] for r in runs], os.path.join(d, "phenomena_fn_fp.png"),
+            "all models"),
+        "roc": figures.plot_roc([(r.name, numbers[r.slug]["failure"]) for r in runs], "all models",
+                                os.path.join(d, "failure_roc.png")),
+        "accuracy_vs_retained": figures.plot_accuracy_vs_retained(
+            [(r.name, numbers[r.slug]["sweep"]) for r in runs], "all models",
+            os.path.join(d, "accuracy_vs_retained.png")),
+    }
+    rel = {k: os.path.relpath(v, out_dir) for k, v in figs.items()}
+    sentences = md.comparison_sentences(runs, numbers)
+    numbers["_comparison"] = {"sentences": sentences}
+    return md.comparison_section(runs, numbers, rel, sentences)
+
+
+def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
+    """Headline numbers, one row per model, at the top of the report."""
+    rows = []
+    for r in runs:
+        h = metrics.headline(numbers[r.slug])
+        c = numbers[r.slug]["clustering"]
+        rows.append([r.name, r.detector, h["samples"], md.fmt(h["mean_per_class_accuracy"]),
+                     md.fmt(h["overall_accuracy"]), md.fmt(h["failure_auroc"]),
+                     f"{md.pct(h['retained_at_70'])} → {md.fmt(h['mpca_at_70'])}",
+                     md.pct(c["purity"]) if c["ok"] and c["purity"] is not None else "n/a"])
+    return md.table(["model", "detector", "samples", "mean per-class acc.", "overall acc.", "failure AUROC",
+                     "≥70 % retained → mean per-class acc.", "cluster purity"], rows)
+
+
+def inputs_section(runs: List[EvalRun]) -> str:
+    """Where each model's numbers come from."""
+    rows = []
+    for r in runs:
+        tr = (r.meta.get("metadata") or {}).get("training") or {}
+        sessions = ", ".join(f"{s} ({sp})" for s, sp in sorted({(a, b) for a, b in zip(r.session, r.split)}))
+        rows.append([r.name, r.meta.get("model", "n/a"), (r.meta.get("metadata") or {}).get("architecture", "n/a"),
+                     r.meta.get("mc_passes", "n/a"), r.path, r.dataset.path if r.dataset else "n/a", sessions,
+                     tr.get("steps", "n/a")])
+    return md.table(["model", "model file", "architecture", "T (MC passes)", "eval folder", "dataset",
+                     "sessions (split)", "training steps"], rows)
+
+
+def _json_default(o):
+    """numpy scalars/arrays in metrics.json."""
+    if isinstance(o, np.integer):
+        return int(o)
+    if isinstance(o, np.floating):
+        return float(o)
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(type(o).__name__)
+
+
+def run_report(args: argparse.Namespace, argv: List[str]) -> int:
+    """Loads, analyses, writes report.md + metrics.json, prints the summary."""
+    runs, warnings = load_inputs(args)
+    out_dir = args.out
+    try:
+        os.makedirs(out_dir, exist_ok=True)
+    except OSError as e:
+        raise InputError(f"{out_dir}: cannot create the report folder ({e.strerror})") from None
+    opt = ClusterOptions(k=args.clusters, select=args.select, embedding_norm=args.embedding_norm,
+                         space=args.cluster_space, tsne_max=args.tsne_max, perplexity=args.perplexity,
+                         tsne_iterations=args.tsne_iterations, seed=args.seed)
+    numbers: Dict[str, dict] = {}
+    sections = []
+    for run in runs:
+        rm, figs, res, overlays = analyse_run(run, args, opt, out_dir)
+        numbers[run.slug] = rm
+        sections.append("\n".join([
+            f"## Model: {run.name}\n",
+            f"Eval folder `{run.path}`, dataset `{rm['dataset']}`, detector **{run.detector}**, "
+            f"model `{rm['model']}`, T = {rm['mc_passes']} MC-dropout passes.\n",
+            md.metrics_section(run, rm, figs), md.failure_section(rm, figs), md.uncertainty_section(rm, figs),
+            md.clustering_section(run, res, opt, figs), md.overlays_section(overlays)]))
+    comparison = compare(runs, numbers, out_dir) if len(runs) > 1 else ""
+
+    cmd = "python3 tools/report/ivoa_report.py " + " ".join(shlex.quote(a) for a in argv)
+    parts = [f"# {args.title}\n",
+             f"Generated {datetime.datetime.now().strftime('%Y-%m-%d %H:%M')} by `{cmd}`. All numbers are also in "
+             f"[metrics.json](metrics.json).\n",
+             "## Summary\n", summary_section(runs, numbers), "\n## Inputs\n", inputs_section(runs)]
+    if warnings:
+        parts.append("\n**Warnings**\n\n" + "\n".join(f"- {w}" for w in sorted(set(warnings))) + "\n")
+    parts += sections
+    if comparison:
+        parts.append(comparison)
+    parts.append(md.METHOD_NOTES)
+    report_path = os.path.join(out_dir, "report.md")
+    with open(report_path, "w", encoding="utf-8") as f:
+        f.write("\n".join(parts))
+    with open(os.path.join(out_dir, "metrics.json"), "w", encoding="utf-8") as f:
+        json.dump({"title": args.title, "models": numbers, "warnings": sorted(set(warnings))}, f, indent=1,
+                  default=_json_default)
+
+    for w in sorted(set(warnings)):
+        print(f"warning: {w}", file=sys.stderr)
+    for run in runs:
+        h = metrics.headline(numbers[run.slug])
+        c = numbers[run.slug]["clustering"]
+        print(f"{run.name}: {h['samples']} samples, mean per-class accuracy {md.fmt(h['mean_per_class_accuracy'])}, "
+              f"overall {md.fmt(h['overall_accuracy'])}, failure AUROC {md.fmt(h['failure_auroc'])}, "
+              f"at {md.pct(h['retained_at_70'])} retained {md.fmt(h['mpca_at_70'])}, "
+              + (f"cluster purity {md.pct(c['purity'])}" if c["ok"] and c["purity"] is not None
+                 else "clustering: " + (c["message"] or "no phenomenon ground truth")))
+    print(f"report: {report_path}")
+    return EXIT_OK
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    """Entry point; returns the exit code (bad input -> 3 with one message)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        args = parse_args(argv)
+    except SystemExit as e:  # argparse: --help (0) or usage error (2)
+        return int(e.code or 0)
+    try:
+        return run_report(args, argv)
+    except InputError as e:
+        print(f"ivoa_report: bad input: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,225 @@
+"""Clustering of predicted failures, to discover *sources* of stereo error (paper §V).
+
+Pipeline, with the paper's choices and where the reference code differed:
+
+1. **Selection**: samples the model *predicts* FP or FN, keeping the top 50 % by
+   confidence (predicted-class mean probability, median split) — the paper's
+   rule. The reference script kept var_predicted <= 0.03 instead (0.005 at HEAD);
+   ``--select variance`` reproduces that, and the report counts both.
+2. **Embedding**: the 256-d post-ReLU FC2 activation (embeddings.f32). The
+   reference softmax-normalised it over the 256 dims; we L2-normalise by default
+   (``--embedding-norm``): the direction of the activation pattern is what
+   separates failure sources, and unit length makes the mosaic weight
+   1/(0.1 + distance) meaningful (raw activations have distances of tens, which
+   flattens the weights). softmax and none are available for comparison.
+3. **PCA** to a tenth of the dimension (256 -> 26) as the paper says; the reference
+   used 20 (paper era) or 50 (HEAD).
+4. **k-means** (k = 2 by default, random_state 0, 10 restarts) in the normalised
+   256-d embedding space, as the paper and the paper-era script do; PCA and t-SNE
+   are only for viewing. ``--cluster-space pca`` clusters the 26-d PCA scores
+   instead (less noise, nearly the same Euclidean geometry).
+5. **t-SNE** to 2-D (perplexity 40, 1000 iterations instead of the reference's
+   300, random_state 0) on the PCA scores, on at most ``tsne_max`` points drawn
+   with a fixed seed, to keep it fast on a 2-core machine.
+6. **Mosaics**: per cluster, up to 50 patches sampled without replacement with
+   weight 1/(0.1 + distance to the cluster centre), as in the reference.
+"""
+
+from __future__ import annotations
+
+import inspect
+import warnings
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional
+
+import numpy as np
+from sklearn.cluster import KMeans
+from sklearn.decomposition import PCA
+from sklearn.manifold import TSNE
+from sklearn.metrics import adjusted_rand_score, normalized_mutual_info_score
+
+from report_inputs import FN, FP, EvalRun
+
+REFERENCE_VAR_CUT = 0.03      # paper-era reference script's selection
+MOSAIC_ROWS, MOSAIC_COLS = 5, 10
+
+
+@dataclass
+class ClusterOptions:
+    """Knobs of the clustering step (command-line options)."""
+    k: int = 2
+    select: str = "confidence"          # "confidence" (paper, median split) or "variance" (reference, var <= 0.03)
+    embedding_norm: str = "l2"          # "l2", "softmax" (reference), "none"
+    space: str = "embedding"            # where k-means runs: "embedding" (paper) or "pca"
+    tsne_max: int = 3000
+    perplexity: float = 40.0
+    tsne_iterations: int = 1000
+    seed: int = 0
+
+
+@dataclass
+class ClusterResult:
+    """What the clustering found, or why it could not run (``message``)."""
+    ok: bool
+    message: str = ""
+    n_predicted_fp: int = 0
+    n_predicted_fn: int = 0
+    n_selected: int = 0
+    confidence_cut: Optional[float] = None
+    n_reference_rule: int = 0
+    rows: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))   # selected rows of predictions.csv
+    pca_components: int = 0
+    pca_explained: float = 0.0
+    cluster: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # cluster id per selected row
+    distance: np.ndarray = field(default_factory=lambda: np.zeros(0))           # to its cluster centre
+    tsne_index: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # into rows
+    tsne_xy: Optional[np.ndarray] = None
+    tsne_note: str = ""
+    clusters: List[dict] = field(default_factory=list)
+    purity: Optional[float] = None
+    nmi: Optional[float] = None
+    ari: Optional[float] = None
+    mosaic_rows: Dict[int, np.ndarray] = field(default_factory=dict)
+    has_truth: bool = False
+
+
+def normalise_embeddings(x: np.ndarray, how: str) -> np.ndarray:
+    """Row-normalises FC2 activations (see module doc for why L2 by default)."""
+    x = np.asarray(x, dtype=np.float64)
+    if how == "l2":
+        return x / np.maximum(np.linalg.norm(x, axis=1, keepdims=True), 1e-12)
+    if how == "softmax":
+        z = np.exp(x - x.max(axis=1, keepdims=True))
+        return z / z.sum(axis=1, keepdims=True)
+    if how == "none":
+        return x
+    raise ValueError(f"unknown embedding normalisation '{how}'")
+
+
+def select_failures(run: EvalRun, select: str):
+    """Rows predicted FP or FN that pass the selection rule, plus the cut used.
+
+    confidence: the predicted-class probability at or above the median of the
+    predicted failures (ranked, so exactly ceil(n/2) rows even with ties);
+    variance: var_predicted <= 0.03 (reference script)."""
+    failures = np.flatnonzero((run.predicted == FP) | (run.predicted == FN))
+    if select == "variance":
+        keep = failures[run.var_predicted[failures] <= REFERENCE_VAR_CUT]
+        return keep, REFERENCE_VAR_CUT
+    conf = run.probs[failures, run.predicted[failures]]
+    order = np.argsort(-conf, kind="mergesort")
+    n_keep = int(np.ceil(len(failures) / 2))
+    keep = np.sort(failures[order[:n_keep]])
+    cut = float(conf[order[n_keep - 1]]) if n_keep else None
+    return keep, cut
+
+
+def _tsne(x: np.ndarray, perplexity: float, iterations: int, seed: int) -> np.ndarray:
+    """t-SNE 2-D; the iteration argument is n_iter before scikit-learn 1.5 and
+    max_iter after, so pass whichever this version has."""
+    params = inspect.signature(TSNE).parameters
+    kw = {"max_iter": iterations} if "max_iter" in params else {"n_iter": iterations}
+    tsne = TSNE(n_components=2, perplexity=perplexity, init="pca", learning_rate="auto",
+                random_state=seed, **kw)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FutureWarning)
+        return tsne.fit_transform(x)
+
+
+def _composition(values: np.ndarray) -> Dict[int, int]:
+    """Counts per code, most common first."""
+    return dict(Counter(values.tolist()).most_common())
+
+
+def cluster_failures(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
+    """Runs selection -> normalisation -> PCA -> k-means -> t-SNE -> mosaics.
+
+    Degenerate inputs (no predicted failures, fewer selected samples than
+    clusters) return ok=False with a message for the report instead of raising."""
+    res = ClusterResult(ok=False)
+    res.n_predicted_fp = int(np.sum(run.predicted == FP))
+    res.n_predicted_fn = int(np.sum(run.predicted == FN))
+    failures = (run.predicted == FP) | (run.predicted == FN)
+    res.n_reference_rule = int(np.sum(failures & (run.var_predicted <= REFERENCE_VAR_CUT)))
+    rows, cut = select_failures(run, opt.select)
+    res.rows, res.confidence_cut, res.n_selected = rows, cut, len(rows)
+    res.has_truth = run.has_ground_truth_phenomena
+    n_fail = res.n_predicted_fp + res.n_predicted_fn
+    if n_fail == 0:
+        res.message = "No sample is predicted FP or FN: there are no predicted failures to cluster."
+        return res
+    if len(rows) < max(opt.k, 2):
+        res.message = (f"Only {len(rows)} selected predicted failure(s) (of {n_fail} predicted FP/FN) for "
+                       f"k = {opt.k} clusters: clustering skipped.")
+        return res
+
+    x = normalise_embeddings(np.asarray(run.embeddings[rows]), opt.embedding_norm)
+    if np.allclose(x, x[0]):
+        res.message = (f"All {len(rows)} selected embeddings are identical: clustering skipped "
+                       "(is embeddings.f32 all zeros?).")
+        return res
+    n_comp = min(max(2, int(round(x.shape[1] / 10))), len(rows), x.shape[1])
+    pca = PCA(n_components=n_comp, random_state=opt.seed)
+    z = pca.fit_transform(x)
+    res.pca_components = n_comp
+    res.pca_explained = float(np.sum(pca.explained_variance_ratio_))
+
+    space = z if opt.space == "pca" else x
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # "fewer distinct clusters than k" is reported below instead
+        km = KMeans(n_clusters=opt.k, n_init=10, random_state=opt.seed).fit(space)
+    res.cluster = km.labels_.astype(np.int64)
+    res.distance = np.linalg.norm(space - km.cluster_centers_[res.cluster], axis=1)
+
+    # t-SNE on the PCA scores, subsampled with a fixed seed.
+    rng = np.random.default_rng(opt.seed)
+    idx = np.arange(len(rows))
+    if len(idx) > opt.tsne_max:
+        idx = np.sort(rng.choice(idx, size=opt.tsne_max, replace=False))
+        res.tsne_note = f"t-SNE on a random subsample of {opt.tsne_max} of {len(rows)} points (seed {opt.seed})."
+    if len(idx) >= 5:
+        perplexity = min(opt.perplexity, (len(idx) - 1) / 3.0)
+        res.tsne_xy = _tsne(z[idx], perplexity, opt.tsne_iterations, opt.seed)
+        if perplexity < opt.perplexity:
+            res.tsne_note = (res.tsne_note + " " if res.tsne_note else "") + \
+                f"Perplexity lowered to {perplexity:.1f} for {len(idx)} points."
+    else:
+        res.tsne_xy = z[idx, :2]
+        res.tsne_note = "Too few points for t-SNE: the picture shows the first two PCA components."
+    res.tsne_index = idx
+
+    # Composition, purity and mosaic samples per cluster.
+    phen = run.phenomenon[rows]
+    dominant_total = 0
+    for c in range(opt.k):
+        m = res.cluster == c
+        members = np.flatnonzero(m)
+        entry = {
+            "cluster": c, "n": int(m.sum()),
+            "predicted_fp": int(np.sum(run.predicted[rows][m] == FP)),
+            "predicted_fn": int(np.sum(run.predicted[rows][m] == FN)),
+            "true_labels": _composition(run.label[rows][m]),
+            "phenomena": _composition(phen[m]),
+            "surfaces": _composition(run.surface[rows][m]),
+            "mean_confidence": float(run.probs[rows[m], run.predicted[rows[m]]].mean()) if m.any() else None,
+            "dominant_phenomenon": None, "purity": None,
+        }
+        if m.any():
+            dom, cnt = next(iter(entry["phenomena"].items()))
+            entry["dominant_phenomenon"], entry["purity"] = int(dom), cnt / int(m.sum())
+            dominant_total += cnt
+            w = 1.0 / (0.1 + res.distance[members])
+            take = min(MOSAIC_ROWS * MOSAIC_COLS, len(members))
+            chosen = rng.choice(members, size=take, replace=False, p=w / w.sum())
+            res.mosaic_rows[c] = rows[chosen[np.argsort(res.distance[chosen])]]  # nearest the centre first
+        res.clusters.append(entry)
+    res.purity = dominant_total / len(rows)
+    if len(set(phen.tolist())) > 1:
+        res.nmi = float(normalized_mutual_info_score(phen, res.cluster))
+        res.ari = float(adjusted_rand_score(phen, res.cluster))
+    empty = [e["cluster"] for e in res.clusters if e["n"] == 0]
+    if empty:
+        res.message = f"k-means left cluster(s) {empty} empty (fewer distinct embeddings than clusters)."
+    res.ok = True
+    return res

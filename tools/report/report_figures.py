@@ -1,0 +1,289 @@
+"""The report's figures (PNG, matplotlib's Agg backend: no display needed).
+
+Every figure has a title naming the model, labelled axes with units, and a
+legend where more than one thing is drawn; class colours are the same
+everywhere (TP green, TN blue, FP orange, FN red) so figures read together.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+
+from report_inputs import FN, FP, LABEL_NAMES, EvalRun, phenomenon_name  # noqa: E402
+
+CLASS_COLOURS = ("#2ca02c", "#1f77b4", "#ff7f0e", "#d62728")   # TP, TN, FP, FN
+DPI = 110
+
+
+def _save(fig, path: str) -> str:
+    """Writes the figure and frees it (long reports make many figures)."""
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    fig.savefig(path, dpi=DPI, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def plot_confusion(metrics: dict, title: str, path: str) -> str:
+    """Row-normalised confusion matrix: each cell = fraction of the true class,
+    with its count; the diagonal is the per-class accuracy."""
+    norm = np.array([[np.nan if v is None else v for v in row] for row in metrics["confusion_normalised"]])
+    counts = np.array(metrics["confusion"])
+    fig, ax = plt.subplots(figsize=(5.6, 4.8))
+    im = ax.imshow(np.nan_to_num(norm, nan=0.0), vmin=0, vmax=1, cmap="Blues")
+    for r in range(4):
+        for c in range(4):
+            if np.isnan(norm[r, c]):
+                text, colour = "no\nsamples", "grey"
+            else:
+                text = f"{norm[r, c]:.2f}\n({counts[r, c]})"
+                colour = "white" if norm[r, c] > 0.55 else "black"
+            ax.text(c, r, text, ha="center", va="center", color=colour, fontsize=9)
+    ax.set_xticks(range(4), LABEL_NAMES)
+    ax.set_yticks(range(4), [f"{n}\n(n={s})" for n, s in zip(LABEL_NAMES, metrics["support"])])
+    ax.set_xlabel("predicted class")
+    ax.set_ylabel("true class (label from the depth sensor)")
+    mpca = metrics["mean_per_class_accuracy"]
+    ax.set_title(f"{title}\nconfusion matrix, rows normalised "
+                 f"(mean per-class acc. {mpca:.3f})" if mpca is not None else f"{title}\nconfusion matrix")
+    fig.colorbar(im, ax=ax, label="fraction of the true class")
+    return _save(fig, path)
+
+
+def plot_roc(curves: Sequence[Tuple[str, dict]], title: str, path: str) -> str:
+    """ROC of failure detection (true FP/FN vs TP/TN) scored by P(FP)+P(FN),
+    one curve per model."""
+    fig, ax = plt.subplots(figsize=(5.2, 5.0))
+    for name, f in curves:
+        if f.get("roc"):
+            ax.plot(f["roc"]["fpr"], f["roc"]["tpr"], lw=1.8, label=f"{name}: AUROC {f['auroc']:.3f}")
+    ax.plot([0, 1], [0, 1], "k--", lw=0.8, label="chance")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1.01)
+    ax.set_xlabel("false-alarm rate: TP/TN samples flagged as failures")
+    ax.set_ylabel("detection rate: true FP/FN samples flagged")
+    ax.set_title(f"{title}\nfailure detection ROC, score P(FP)+P(FN)")
+    ax.legend(loc="lower right", fontsize=8)
+    ax.grid(alpha=0.3)
+    return _save(fig, path)
+
+
+def _threshold_axis(ax, sweep: dict) -> None:
+    """Log threshold axis with the 70 %-retained and model thresholds marked."""
+    ax.set_xscale("log")
+    ax.set_xlabel("uncertainty threshold τ on var_predicted (variance of P(predicted class), keep if ≤ τ)")
+    t70 = sweep["at_70"]["threshold"]
+    ax.axvline(t70, color="k", ls=":", lw=1, label=f"≥70 % retained: τ = {t70:.3g}")
+    if sweep.get("model_threshold"):
+        ax.axvline(sweep["model_threshold"], color="purple", ls="-.", lw=1,
+                   label=f"model's run-time τ = {sweep['model_threshold']:.3g}")
+
+
+def _positive(curve: List[dict], key: str):
+    """(threshold, value) pairs of a sweep curve where the value exists and τ > 0
+    (log axis)."""
+    pts = [(p["threshold"], p[key]) for p in curve if p[key] is not None and p["threshold"] > 0]
+    return np.array(pts).T if pts else (np.array([]), np.array([]))
+
+
+def plot_accuracy_vs_threshold(sweep: dict, title: str, path: str) -> str:
+    """Mean per-class and overall accuracy of the retained predictions vs τ."""
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    for key, label, style in (("mean_per_class_accuracy", "mean per-class accuracy (paper's metric)", "-"),
+                              ("overall_accuracy", "overall accuracy (reference code's metric)", "--")):
+        t, v = _positive(sweep["curve"], key)
+        ax.plot(t, v, style, lw=1.8, label=label)
+    _threshold_axis(ax, sweep)
+    ax.set_ylabel("accuracy of retained predictions")
+    ax.set_ylim(0, 1.02)
+    ax.grid(alpha=0.3, which="both")
+    ax.set_title(f"{title}\naccuracy vs uncertainty threshold (lower τ = stricter filter)")
+    ax.legend(fontsize=8, loc="lower left")
+    return _save(fig, path)
+
+
+def plot_retained_vs_threshold(sweep: dict, title: str, path: str) -> str:
+    """Fraction of samples kept by the gate vs τ, overall and per true class."""
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    t, v = _positive(sweep["curve"], "retained")
+    ax.plot(t, 100 * v, "k-", lw=2.2, label="all samples")
+    for c in range(4):
+        pts = [(p["threshold"], p["retained_per_class"][c]) for p in sweep["curve"]
+               if p["retained_per_class"][c] is not None and p["threshold"] > 0]
+        if pts:
+            tc, vc = np.array(pts).T
+            ax.plot(tc, 100 * vc, lw=1.4, color=CLASS_COLOURS[c], label=f"true {LABEL_NAMES[c]}")
+    _threshold_axis(ax, sweep)
+    ax.set_ylabel("retained samples (%)")
+    ax.set_ylim(0, 102)
+    ax.grid(alpha=0.3, which="both")
+    ax.set_title(f"{title}\nretained data vs uncertainty threshold")
+    ax.legend(fontsize=8, loc="upper left")
+    return _save(fig, path)
+
+
+def plot_accuracy_vs_retained(sweeps: Sequence[Tuple[str, dict]], title: str, path: str) -> str:
+    """Mean per-class accuracy vs retained fraction (one line per model), with
+    the paper's claim (> 96 % at 70 % retained) marked."""
+    fig, ax = plt.subplots(figsize=(7.0, 4.6))
+    for i, (name, s) in enumerate(sweeps):
+        pts = sorted((p["retained"], p["mean_per_class_accuracy"], p["overall_accuracy"]) for p in s["curve"]
+                     if p["mean_per_class_accuracy"] is not None)
+        if not pts:
+            continue
+        r, mp, oa = np.array(pts).T
+        line, = ax.plot(100 * r, mp, lw=1.8, label=f"{name}: mean per-class accuracy")
+        ax.plot(100 * r, oa, "--", lw=1.2, color=line.get_color(), label=f"{name}: overall accuracy")
+        a70 = s["at_70"]
+        if a70["mean_per_class_accuracy"] is not None:
+            ax.plot(100 * a70["retained"], a70["mean_per_class_accuracy"], "o", color=line.get_color())
+    ax.axvline(70, color="k", ls=":", lw=1)
+    ax.plot([70], [0.96], "k*", ms=10, label="paper: > 96 % at 70 % retained")
+    ax.set_xlim(102, 0)  # stricter filtering to the right
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel("retained samples (%)  (← no filtering ... strict filtering →)")
+    ax.set_ylabel("accuracy of retained predictions")
+    ax.grid(alpha=0.3)
+    ax.set_title(f"{title}\naccuracy vs retained data")
+    ax.legend(fontsize=7, loc="lower left")
+    return _save(fig, path)
+
+
+def _category_colours(n: int):
+    """n distinguishable colours (tab10, then tab20)."""
+    cmap = plt.get_cmap("tab10" if n <= 10 else "tab20")
+    return [cmap(i % cmap.N) for i in range(n)]
+
+
+def plot_cluster_scatter(run: EvalRun, res, title: str, path: str) -> str:
+    """t-SNE of the selected predicted failures coloured by k-means cluster, by
+    true phenomenon (simulated data) and by true label: the three panels show
+    whether the clusters follow physical sources of error."""
+    xy = res.tsne_xy
+    rows = res.rows[res.tsne_index]
+    cl = res.cluster[res.tsne_index]
+    panels = [("k-means cluster", [f"cluster {c}" for c in cl])]
+    if res.has_truth:
+        panels.append(("true phenomenon under the patch centre",
+                       [phenomenon_name(p) for p in run.phenomenon[rows]]))
+    panels.append(("true label (did the detector fail?)", [LABEL_NAMES[l] for l in run.label[rows]]))
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.9), squeeze=False)
+    for ax, (what, cats) in zip(axes[0], panels):
+        cats = np.array(cats)
+        names = [c for c, _ in sorted(((c, -np.sum(cats == c)) for c in set(cats.tolist())), key=lambda t: t[1])]
+        if what.startswith("true label"):
+            colours = [CLASS_COLOURS[LABEL_NAMES.index(n)] for n in names]
+        else:
+            colours = _category_colours(len(names))
+        for name, colour in zip(names, colours):
+            m = cats == name
+            ax.scatter(xy[m, 0], xy[m, 1], s=8, color=colour, alpha=0.75, label=f"{name} ({m.sum()})",
+                       edgecolors="none")
+        ax.set_title(f"coloured by {what}", fontsize=10)
+        ax.set_xlabel("t-SNE 1 (arbitrary units)")
+        ax.set_ylabel("t-SNE 2 (arbitrary units)")
+        ax.legend(fontsize=7, markerscale=2, loc="best")
+    fig.suptitle(f"{title}: {len(rows)} confident predicted failures (FP/FN), t-SNE of FC2 embeddings")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def make_mosaic(run: EvalRun, rows: np.ndarray, rows_n: int = 5, cols_n: int = 10, border: int = 3) -> np.ndarray:
+    """RGB mosaic of the given samples' patches (read from the dataset's
+    patches.bin through its memmap; BGR -> RGB), each framed in its true-label
+    colour. Missing tiles stay white."""
+    ds = run.dataset
+    p = ds.session(run.session[rows[0]]).patch_size if len(rows) else ds.patch_size
+    tile = p + 2 * border
+    out = np.full((rows_n * tile, cols_n * tile, 3), 255, np.uint8)
+    for i, r in enumerate(rows[: rows_n * cols_n]):
+        s = ds.session(str(run.session[r]))
+        patch = np.asarray(s.patches()[run.sample[r]])[:, :, ::-1]  # BGR -> RGB
+        if patch.shape[0] != p:
+            continue
+        y, x = (i // cols_n) * tile, (i % cols_n) * tile
+        colour = (np.array(matplotlib.colors.to_rgb(CLASS_COLOURS[run.label[r]])) * 255).astype(np.uint8)
+        out[y:y + tile, x:x + tile] = colour
+        out[y + border:y + border + p, x + border:x + border + p] = patch
+    return out
+
+
+def plot_mosaic(run: EvalRun, res, cluster: int, title: str, path: str) -> str:
+    """Sample patches of one cluster (weighted towards its centre), with a
+    caption saying what the cluster holds."""
+    rows = res.mosaic_rows[cluster]
+    img = make_mosaic(run, rows)
+    e = res.clusters[cluster]
+    h, w = img.shape[:2]
+    fig, ax = plt.subplots(figsize=(w / 90 + 0.5, h / 90 + 1.2))
+    ax.imshow(img, interpolation="nearest")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    caption = f"cluster {cluster}: {e['n']} samples, predicted FP {e['predicted_fp']} / FN {e['predicted_fn']}"
+    if res.has_truth and e["dominant_phenomenon"] is not None:
+        caption += f"; dominant phenomenon {phenomenon_name(e['dominant_phenomenon'])} ({100 * e['purity']:.0f} %)"
+    ax.set_title(f"{title}\n{caption}\n{len(rows)} patches sampled with weight 1/(0.1 + distance to centre), "
+                 "nearest first", fontsize=9)
+    ax.legend(handles=[Patch(color=CLASS_COLOURS[c], label=f"true {LABEL_NAMES[c]}") for c in range(4)],
+              loc="upper center", bbox_to_anchor=(0.5, -0.01), ncol=4, fontsize=8, title="frame = true label",
+              title_fontsize=8)
+    return _save(fig, path)
+
+
+def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dict]], path: str,
+                               title: str) -> str:
+    """Grouped bars: for each phenomenon, the fraction of its samples each model
+    predicts FN (solid) and FP (hatched), with the detector's true FN/FP rate
+    as black ticks on the bars."""
+    codes = sorted({e["phenomenon"] for entries in per_phen for e in entries})
+    n_models = len(names)
+    width = 0.8 / (2 * n_models)
+    x = np.arange(len(codes))
+    fig, ax = plt.subplots(figsize=(max(7.0, 1.5 * len(codes) * n_models), 4.8))
+    colours = _category_colours(n_models)
+    for i, (name, entries) in enumerate(zip(names, per_phen)):
+        by = {e["phenomenon"]: e for e in entries}
+        for j, (key, truth, kind, hatch) in enumerate((("pred_fn", "true_fn", "FN", None),
+                                                        ("pred_fp", "true_fp", "FP", "//"))):
+            vals = [by[c][key] if c in by else np.nan for c in codes]
+            true = [by[c][truth] if c in by else np.nan for c in codes]
+            pos = x - 0.4 + width * (2 * i + j) + width / 2
+            ax.bar(pos, vals, width, color=colours[i], hatch=hatch, edgecolor="black", lw=0.5,
+                   alpha=0.9 if hatch is None else 0.55, label=f"{name}: predicted {kind}")
+            ax.scatter(pos, true, marker="_", s=180, color="black", zorder=3,
+                       label="true rate (label)" if i == 0 and j == 0 else None)
+    ax.set_xticks(x, [f"{phenomenon_name(c)}\n(n = {' / '.join(str(next((e['n'] for e in en if e['phenomenon'] == c), 0)) for en in per_phen)})"
+                      for c in codes], fontsize=8)
+    ax.set_ylabel("fraction of the phenomenon's samples")
+    ax.set_xlabel("phenomenon under the patch centre (sample counts per model)")
+    ax.set_ylim(0, 1.05)
+    ax.grid(axis="y", alpha=0.3)
+    ax.set_title(f"{title}\npredicted FN (solid) and FP (hatched) per phenomenon")
+    ax.legend(fontsize=7, ncol=2, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    return _save(fig, path)
+
+
+def plot_group_bars(groups: List[dict], title: str, xlabel: str, path: str) -> str:
+    """Mean per-class and overall accuracy per group (session or environment)."""
+    names = [g["group"] for g in groups]
+    mp = [g["mean_per_class_accuracy"] if g["mean_per_class_accuracy"] is not None else np.nan for g in groups]
+    oa = [g["overall_accuracy"] if g["overall_accuracy"] is not None else np.nan for g in groups]
+    x = np.arange(len(names))
+    fig, ax = plt.subplots(figsize=(max(5.0, 1.3 * len(names) + 2), 4.2))
+    ax.bar(x - 0.2, mp, 0.4, label="mean per-class accuracy")
+    ax.bar(x + 0.2, oa, 0.4, label="overall accuracy")
+    ax.set_xticks(x, [f"{n}\n(n = {g['n']})" for n, g in zip(names, groups)], fontsize=8)
+    ax.set_ylim(0, 1.05)
+    ax.set_ylabel("accuracy")
+    ax.set_xlabel(xlabel)
+    ax.grid(axis="y", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    return _save(fig, path)

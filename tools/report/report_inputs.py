@@ -1,0 +1,404 @@
+"""Reading and validating the report's inputs.
+
+Two kinds of input feed the report:
+
+* an **eval folder** written by the C++ tool ``ivoa-eval`` (``predictions.csv``,
+  ``embeddings.f32``, ``eval.json``, ``overlays/*.png``; see tools/eval/README.md);
+* the **dataset** the eval ran on (libs/dataset/README.md), needed only for the
+  image patches shown in the cluster mosaics.
+
+Everything is checked up front, so that a wrong path or a truncated file stops
+the tool with one message naming the file and the problem (``InputError``, exit
+code 3) instead of a traceback half-way through the figures.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import re
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional
+
+import numpy as np
+
+LABEL_NAMES = ("TP", "TN", "FP", "FN")
+TP, TN, FP, FN = 0, 1, 2, 3
+EMBEDDING_DIM = 256
+
+# predictions.csv columns the report uses (ivoa-eval writes more, in this order).
+REQUIRED_COLUMNS = (
+    "session", "environment", "split", "sample", "utime", "cell", "u", "v",
+    "label", "predicted", "p_tp", "p_tn", "p_fp", "p_fn", "var_predicted",
+    "uncertainty", "phenomena", "phenomenon", "surface",
+)
+
+# Fallback names when lcmtypes/sim_ground_truth_t.lcm cannot be found next to the
+# tool (e.g. the tool was copied elsewhere). The .lcm file is the source of truth.
+_FALLBACK_PHENOMENA = {
+    0: "none", 1: "reflection", 2: "textureless", 4: "glare", 8: "dark stripe",
+    16: "repetitive", 32: "low light", 64: "saturated",
+}
+_FALLBACK_SURFACES = {
+    0: "sky", 1: "floor", 2: "wall", 3: "baseboard", 4: "door", 5: "box",
+    6: "cylinder", 7: "chair", 8: "curb", 9: "pit", 10: "ceiling", 255: "unknown",
+}
+
+
+class InputError(Exception):
+    """Bad input (missing or malformed file, inconsistent sizes).
+
+    The message always names the offending file and says what is wrong; the
+    command line turns it into exit code 3 so that scripts can tell bad input
+    from a bug (exit code 1).
+    """
+
+
+def _lcm_constants(prefix: str) -> Dict[int, str]:
+    """Reads ``const int8_t <prefix>_<NAME> = <value>;`` from the simulator's
+    ground-truth message so that phenomenon/surface names never drift from the
+    codes the simulator writes. Returns {} when the file is not found."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    path = os.path.join(here, "..", "..", "lcmtypes", "sim_ground_truth_t.lcm")
+    try:
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+    except OSError:
+        return {}
+    out = {}
+    for name, value in re.findall(r"const\s+int\d+_t\s+" + prefix + r"_(\w+)\s*=\s*(-?\d+)\s*;", text):
+        out[int(value)] = name.lower().replace("_", " ")
+    return out
+
+
+def phenomenon_names() -> Dict[int, str]:
+    """Code -> readable name for the single-bit ``phenomenon`` column (0 = none)."""
+    names = _lcm_constants("PHENOMENON") or dict(_FALLBACK_PHENOMENA)
+    names[0] = "none"
+    return names
+
+
+def surface_names() -> Dict[int, str]:
+    """Code -> readable name for the ``surface`` column (255 = unknown)."""
+    names = _lcm_constants("SURFACE") or dict(_FALLBACK_SURFACES)
+    names[255] = "unknown"
+    return names
+
+
+def phenomenon_name(code: int, names: Optional[Dict[int, str]] = None) -> str:
+    """Readable name of one phenomenon code; unknown codes keep their number."""
+    names = names if names is not None else phenomenon_names()
+    return names.get(int(code), f"code {int(code)}")
+
+
+def surface_name(code: int, names: Optional[Dict[int, str]] = None) -> str:
+    """Readable name of one surface code; unknown codes keep their number."""
+    names = names if names is not None else surface_names()
+    return names.get(int(code), f"code {int(code)}")
+
+
+# --------------------------------------------------------------------------- dataset
+
+
+@dataclass
+class DatasetSession:
+    """One session folder of a dataset: its samples.csv key columns and a lazily
+    memory-mapped patches.bin (patches are read only for the few tiles shown)."""
+
+    name: str
+    path: str
+    patch_size: int
+    info: dict
+    utime: np.ndarray
+    cell: np.ndarray
+    label: np.ndarray
+    _patches: Optional[np.memmap] = None
+
+    @property
+    def size(self) -> int:
+        return len(self.utime)
+
+    def patches(self) -> np.memmap:
+        """(N, P, P, 3) uint8 BGR view of patches.bin, size-checked on first use."""
+        if self._patches is None:
+            p = os.path.join(self.path, "patches.bin")
+            if not os.path.isfile(p):
+                raise InputError(f"{p}: missing (the patches of session {self.name})")
+            per = self.patch_size * self.patch_size * 3
+            got = os.path.getsize(p)
+            if got != per * self.size:
+                raise InputError(
+                    f"{p}: {got} bytes, expected {self.size} patches x {per} bytes = {self.size * per} "
+                    f"(samples.csv has {self.size} rows, patch size {self.patch_size})")
+            if self.size == 0:
+                self._patches = np.zeros((0, self.patch_size, self.patch_size, 3), np.uint8)
+            else:
+                self._patches = np.memmap(p, dtype=np.uint8, mode="r",
+                                          shape=(self.size, self.patch_size, self.patch_size, 3))
+        return self._patches
+
+
+class Dataset:
+    """An IVOA dataset folder; sessions are loaded on demand and cached."""
+
+    def __init__(self, path: str):
+        self.path = path
+        if not os.path.isdir(path):
+            raise InputError(f"{path}: dataset folder not found")
+        meta_path = os.path.join(path, "dataset.json")
+        self.meta = _read_json(meta_path) if os.path.isfile(meta_path) else {}
+        self.patch_size = int(self.meta.get("patch_size", 100))
+        self._sessions: Dict[str, DatasetSession] = {}
+
+    def session(self, name: str) -> DatasetSession:
+        """The named session, read and checked once."""
+        if name not in self._sessions:
+            self._sessions[name] = self._load_session(name)
+        return self._sessions[name]
+
+    def _load_session(self, name: str) -> DatasetSession:
+        d = os.path.join(self.path, name)
+        if not os.path.isdir(d):
+            raise InputError(f"{d}: session folder not found in dataset {self.path}")
+        info_path = os.path.join(d, "session.json")
+        info = _read_json(info_path) if os.path.isfile(info_path) else {}
+        patch_size = int(info.get("patch_size", self.patch_size))
+        samples_path = os.path.join(d, "samples.csv")
+        cols = _read_csv_columns(samples_path, ("sample", "utime", "cell", "label"))
+        try:
+            sample = np.array([int(s) for s in cols["sample"]], dtype=np.int64)
+            utime = np.array([int(s) for s in cols["utime"]], dtype=np.int64)
+            cell = np.array([int(s) for s in cols["cell"]], dtype=np.int64)
+            label = np.array([int(s) for s in cols["label"]], dtype=np.int64)
+        except ValueError as e:
+            raise InputError(f"{samples_path}: a non-integer value in sample/utime/cell/label ({e})") from None
+        if len(sample) and not np.array_equal(sample, np.arange(len(sample))):
+            raise InputError(f"{samples_path}: column 'sample' must equal the row number (0, 1, 2, ...)")
+        return DatasetSession(name, d, patch_size, info, utime, cell, label)
+
+
+# --------------------------------------------------------------------------- eval runs
+
+
+@dataclass
+class EvalRun:
+    """One ivoa-eval output folder: per-sample predictions, embeddings, metadata.
+
+    Arrays all have one entry per row of predictions.csv, in file order, which is
+    also the order of embeddings.f32.
+    """
+
+    path: str
+    name: str                       # display name, unique among the report's models
+    slug: str                       # file-system-safe unique name for its figure folder
+    meta: dict                      # eval.json as read
+    detector: str
+    session: np.ndarray
+    environment: np.ndarray
+    split: np.ndarray
+    sample: np.ndarray
+    utime: np.ndarray
+    cell: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    label: np.ndarray
+    predicted: np.ndarray
+    probs: np.ndarray               # (N, 4) mean softmax over the MC passes
+    var_predicted: np.ndarray       # variance of the predicted class's probability (the gate)
+    uncertainty: np.ndarray         # mean per-class variance (the heatmap's)
+    phenomena: np.ndarray
+    phenomenon: np.ndarray
+    surface: np.ndarray
+    embeddings: np.ndarray          # (N, 256) float32, memory-mapped
+    overlays: List[str] = field(default_factory=list)
+    dataset: Optional[Dataset] = None
+
+    @property
+    def size(self) -> int:
+        return len(self.label)
+
+    @property
+    def model_threshold(self) -> Optional[float]:
+        """The model's own run-time uncertainty gate from eval.json, if any."""
+        t = self.meta.get("uncertainty_threshold")
+        try:
+            return float(t) if t is not None else None
+        except (TypeError, ValueError):
+            return None
+
+    @property
+    def has_ground_truth_phenomena(self) -> bool:
+        """True for simulated sessions, where phenomenon/surface come from the
+        simulator's per-pixel truth (a real robot's rows have surface 255)."""
+        return bool(np.any(self.surface != 255) or np.any(self.phenomenon != 0))
+
+
+def _read_json(path: str) -> dict:
+    """json.load with an InputError naming the file on failure."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            data = json.load(f)
+    except OSError as e:
+        raise InputError(f"{path}: cannot read ({e.strerror})") from None
+    except json.JSONDecodeError as e:
+        raise InputError(f"{path}: not valid JSON ({e})") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: expected a JSON object")
+    return data
+
+
+def _read_csv_columns(path: str, required) -> Dict[str, List[str]]:
+    """Reads a CSV with a header into {column: [strings]}, checking that the
+    required columns exist and every row has as many fields as the header."""
+    if not os.path.isfile(path):
+        raise InputError(f"{path}: missing")
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            reader = csv.reader(f)
+            header = next(reader, None)
+            if header is None:
+                raise InputError(f"{path}: empty file (no header)")
+            header = [h.strip() for h in header]
+            missing = [c for c in required if c not in header]
+            if missing:
+                raise InputError(f"{path}: missing column(s) {', '.join(missing)}")
+            cols: Dict[str, List[str]] = {h: [] for h in header}
+            for lineno, row in enumerate(reader, start=2):
+                if not row:
+                    continue
+                if len(row) != len(header):
+                    raise InputError(f"{path}: line {lineno} has {len(row)} fields, the header has {len(header)}")
+                for h, value in zip(header, row):
+                    cols[h].append(value)
+    except OSError as e:
+        raise InputError(f"{path}: cannot read ({e.strerror})") from None
+    return cols
+
+
+def _numeric(path: str, cols: Dict[str, List[str]], name: str, dtype):
+    """One column as a numpy array; a bad value is an InputError naming the row."""
+    values = cols[name]
+    try:
+        return np.array([dtype(x) for x in values], dtype=np.int64 if dtype is int else np.float64)
+    except ValueError:
+        for i, x in enumerate(values):
+            try:
+                dtype(x)
+            except ValueError:
+                raise InputError(f"{path}: row {i + 1}, column '{name}': '{x}' is not a number") from None
+        raise
+
+
+def load_eval(path: str) -> EvalRun:
+    """Reads and checks one ivoa-eval output folder (no dataset yet)."""
+    if not os.path.isdir(path):
+        raise InputError(f"{path}: eval folder not found")
+    meta = _read_json(os.path.join(path, "eval.json"))
+    pred_path = os.path.join(path, "predictions.csv")
+    cols = _read_csv_columns(pred_path, REQUIRED_COLUMNS)
+    n = len(cols["label"])
+    if n == 0:
+        raise InputError(f"{pred_path}: no predictions (header only); nothing to report")
+    label = _numeric(pred_path, cols, "label", int)
+    predicted = _numeric(pred_path, cols, "predicted", int)
+    for name, arr in (("label", label), ("predicted", predicted)):
+        bad = np.flatnonzero((arr < 0) | (arr > 3))
+        if len(bad):
+            raise InputError(f"{pred_path}: row {bad[0] + 1}, column '{name}' = {arr[bad[0]]}, expected 0..3 (TP, TN, FP, FN)")
+    probs = np.stack([_numeric(pred_path, cols, c, float) for c in ("p_tp", "p_tn", "p_fp", "p_fn")], axis=1)
+    var_predicted = _numeric(pred_path, cols, "var_predicted", float)
+    if not np.all(np.isfinite(probs)) or not np.all(np.isfinite(var_predicted)):
+        raise InputError(f"{pred_path}: non-finite probabilities or variances")
+    if np.any(var_predicted < 0):
+        raise InputError(f"{pred_path}: negative var_predicted in row {np.flatnonzero(var_predicted < 0)[0] + 1}")
+
+    emb_path = os.path.join(path, "embeddings.f32")
+    if not os.path.isfile(emb_path):
+        raise InputError(f"{emb_path}: missing (one float32 x {EMBEDDING_DIM} FC2 embedding per prediction)")
+    size = os.path.getsize(emb_path)
+    expected = n * EMBEDDING_DIM * 4
+    if size != expected:
+        raise InputError(
+            f"{emb_path}: {size} bytes, expected {n} rows x {EMBEDDING_DIM} float32 = {expected} bytes "
+            f"(predictions.csv has {n} rows)")
+    embeddings = np.memmap(emb_path, dtype=np.float32, mode="r", shape=(n, EMBEDDING_DIM))
+
+    overlay_dir = os.path.join(path, "overlays")
+    overlays = []
+    if os.path.isdir(overlay_dir):
+        overlays = sorted(os.path.join(overlay_dir, f) for f in os.listdir(overlay_dir) if f.lower().endswith(".png"))
+
+    md = meta.get("metadata") if isinstance(meta.get("metadata"), dict) else {}
+    detector = str(md.get("detector") or "unknown")
+    return EvalRun(
+        path=path, name="", slug="", meta=meta, detector=detector,
+        session=np.array(cols["session"]), environment=np.array(cols["environment"]),
+        split=np.array(cols["split"]),
+        sample=_numeric(pred_path, cols, "sample", int), utime=_numeric(pred_path, cols, "utime", int),
+        cell=_numeric(pred_path, cols, "cell", int),
+        u=_numeric(pred_path, cols, "u", float), v=_numeric(pred_path, cols, "v", float),
+        label=label, predicted=predicted, probs=probs, var_predicted=var_predicted,
+        uncertainty=_numeric(pred_path, cols, "uncertainty", float),
+        phenomena=_numeric(pred_path, cols, "phenomena", int),
+        phenomenon=_numeric(pred_path, cols, "phenomenon", int),
+        surface=_numeric(pred_path, cols, "surface", int),
+        embeddings=embeddings, overlays=overlays,
+    )
+
+
+def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
+    """Links an eval to the dataset it ran on and checks that they agree.
+
+    Every prediction row must point at an existing sample whose utime, cell and
+    label are the ones in predictions.csv: otherwise the mosaics would show the
+    wrong patches, so a mismatch is an InputError. Returns warnings (e.g. the
+    dataset's labels are about another detector than the model's)."""
+    warnings = []
+    pred_path = os.path.join(run.path, "predictions.csv")
+    for name in sorted(set(run.session.tolist())):
+        s = dataset.session(name)
+        rows = np.flatnonzero(run.session == name)
+        idx = run.sample[rows]
+        bad = np.flatnonzero((idx < 0) | (idx >= s.size))
+        if len(bad):
+            r = rows[bad[0]]
+            raise InputError(
+                f"{pred_path}: row {r + 1} refers to sample {run.sample[r]} of session {name}, "
+                f"but {os.path.join(s.path, 'samples.csv')} has {s.size} samples "
+                f"(is --dataset the dataset this eval ran on?)")
+        mismatch = np.flatnonzero((s.utime[idx] != run.utime[rows]) | (s.cell[idx] != run.cell[rows])
+                                  | (s.label[idx] != run.label[rows]))
+        if len(mismatch):
+            r = rows[mismatch[0]]
+            raise InputError(
+                f"{pred_path}: row {r + 1} (session {name}, sample {run.sample[r]}) does not match "
+                f"{os.path.join(s.path, 'samples.csv')} (utime/cell/label differ in {len(mismatch)} of "
+                f"{len(rows)} rows): is --dataset the dataset this eval ran on?")
+        s.patches()  # size check now, not in the middle of the figures
+        det = s.info.get("detector")
+        if det and run.detector != "unknown" and det != run.detector:
+            warnings.append(
+                f"{run.name}: the model was trained for detector '{run.detector}' but the labels of session "
+                f"{name} in {dataset.path} are about '{det}'")
+    run.dataset = dataset
+    return warnings
+
+
+def make_names(runs: List[EvalRun]) -> None:
+    """Gives each run a display name "<detector> (<folder>)" and a unique slug,
+    so that two evals of the same detector stay apart in tables and file names."""
+    used = set()
+    for run in runs:
+        folder = os.path.basename(os.path.normpath(run.path)) or "eval"
+        base = f"{run.detector} ({folder})"
+        name, i = base, 2
+        while name in used:
+            name, i = f"{base} #{i}", i + 1
+        used.add(name)
+        run.name = name
+        slug = re.sub(r"[^A-Za-z0-9_.-]+", "_", f"{run.detector}_{folder}").strip("_") or "model"
+        s, i = slug, 2
+        while s in {r.slug for r in runs if r is not run}:
+            s, i = f"{slug}_{i}", i + 1
+        run.slug = s

@@ -1,0 +1,334 @@
+"""report.md: the numbers as Markdown tables, with the figures linked relatively
+so that the report folder can be moved or zipped as a whole."""
+
+from __future__ import annotations
+
+import os
+from typing import Dict, List, Optional, Sequence
+
+from report_clustering import REFERENCE_VAR_CUT, ClusterOptions
+from report_inputs import LABEL_NAMES, EvalRun, phenomenon_name, surface_name
+from report_metrics import PAPER_MPCA_AT_70, RETAIN_TARGET
+
+PURITY_TARGET = 0.80
+
+
+def fmt(x, digits: int = 3) -> str:
+    """A number for a table; None/NaN become 'n/a' so absent classes are visible."""
+    if x is None:
+        return "n/a"
+    if isinstance(x, str):
+        return x
+    if isinstance(x, float) and x != x:
+        return "n/a"
+    if isinstance(x, int):
+        return str(x)
+    return f"{x:.{digits}f}"
+
+
+def pct(x, digits: int = 1) -> str:
+    """A fraction as a percentage for prose and tables."""
+    return "n/a" if x is None else f"{100 * x:.{digits}f} %"
+
+
+def table(headers: Sequence[str], rows: Sequence[Sequence]) -> str:
+    """A GitHub-flavoured Markdown table (| escaped in cells)."""
+    def cell(v):
+        return str(v).replace("|", "\\|").replace("\n", " ")
+    lines = ["| " + " | ".join(cell(h) for h in headers) + " |",
+             "|" + "|".join("---" for _ in headers) + "|"]
+    lines += ["| " + " | ".join(cell(v) for v in r) + " |" for r in rows]
+    return "\n".join(lines) + "\n"
+
+
+def image(rel: str, alt: str) -> str:
+    """A Markdown image link (relative path, forward slashes)."""
+    return f"![{alt}]({rel.replace(os.sep, '/')})\n"
+
+
+def _class_cells(m: dict) -> List[str]:
+    """Per-class accuracy cells with their sample counts, e.g. '0.912 (n=34)'."""
+    return [f"{fmt(a)} (n={s})" for a, s in zip(m["per_class_accuracy"], m["support"])]
+
+
+def metrics_section(run: EvalRun, rm: dict, figs: Dict[str, str]) -> str:
+    """§1: per-class / mean per-class / overall accuracy, confusion, per
+    environment and per session."""
+    m = rm["overall"]
+    out = ["### 1. Classification metrics\n"]
+    out.append(f"Mean per-class accuracy (the paper's headline metric, the mean of the confusion diagonal over the "
+               f"classes present): **{fmt(m['mean_per_class_accuracy'])}**; overall accuracy (the reference code's "
+               f"metric): **{fmt(m['overall_accuracy'])}**, on {m['n']} samples.\n")
+    if m["absent"]:
+        out.append(f"> Class(es) absent from the truth: {', '.join(m['absent'])}. Their accuracy is undefined "
+                   f"(n/a) and they are left out of the mean per-class accuracy.\n")
+    out.append(table(["true class", "samples", "predicted as this class", "accuracy (recall)"],
+                     [[LABEL_NAMES[c], m["support"][c], m["predicted_counts"][c], fmt(m["per_class_accuracy"][c])]
+                      for c in range(4)]))
+    out.append("\nRow-normalised confusion matrix (rows: true class, columns: predicted; each row sums to 1):\n")
+    out.append(table(["true \\ predicted"] + list(LABEL_NAMES),
+                     [[f"{LABEL_NAMES[r]} (n={m['support'][r]})"] + [fmt(v) for v in m["confusion_normalised"][r]]
+                      for r in range(4)]))
+    out.append("\n" + image(figs["confusion"], "confusion matrix"))
+    headers = ["n"] + [f"{n} acc." for n in LABEL_NAMES] + ["mean per-class", "overall"]
+    out.append("\n**Per environment**\n\n")
+    out.append(table(["environment"] + headers,
+                     [[g["group"], g["n"]] + _class_cells(g) + [fmt(g["mean_per_class_accuracy"]),
+                                                               fmt(g["overall_accuracy"])]
+                      for g in rm["environments"]]))
+    out.append("\n**Per session**\n\n")
+    out.append(table(["session", "split", "environment"] + headers,
+                     [[g["group"], g["split"], g["environment"], g["n"]] + _class_cells(g)
+                      + [fmt(g["mean_per_class_accuracy"]), fmt(g["overall_accuracy"])] for g in rm["sessions"]]))
+    out.append("\n" + image(figs["sessions"], "accuracy per session"))
+    return "\n".join(out)
+
+
+def failure_section(rm: dict, figs: Dict[str, str]) -> str:
+    """§2: failure detection as a binary problem."""
+    f = rm["failure"]
+    out = ["### 2. Failure detection (FP ∪ FN vs TP ∪ TN)\n",
+           "A sample is a *failure* when the stereo detector was wrong (true FP or FN); the model *flags* it when "
+           "it predicts FP or FN. AUROC ranks samples by P(FP) + P(FN) (the paper's failure heatmap).\n"]
+    out.append(table(["true failures", "non-failures", "flagged", "precision", "recall", "F1",
+                      "AUROC (FP∪FN)", "AUROC FP vs rest", "AUROC FN vs rest"],
+                     [[f["failures"], f["non_failures"], f["flagged"], fmt(f["precision"]), fmt(f["recall"]),
+                       fmt(f["f1"]), fmt(f["auroc"]), fmt(f["auroc_fp"]), fmt(f["auroc_fn"])]]))
+    if f["message"]:
+        out.append(f"\n> {f['message']}.\n")
+    if "roc" in figs:
+        out.append("\n" + image(figs["roc"], "failure detection ROC"))
+    return "\n".join(out)
+
+
+def _point_row(name: str, p: Optional[dict]) -> List[str]:
+    """One operating point of the uncertainty sweep as table cells."""
+    if p is None:
+        return [name] + ["n/a"] * 9
+    return ([name, f"{p['threshold']:.4g}", pct(p["retained"]), p["retained_count"],
+             fmt(p["mean_per_class_accuracy"]), fmt(p["overall_accuracy"])]
+            + [pct(r, 0) for r in p["retained_per_class"]])
+
+
+def uncertainty_section(rm: dict, figs: Dict[str, str]) -> str:
+    """§3: accuracy and retained data vs the uncertainty threshold."""
+    s = rm["sweep"]
+    out = ["### 3. Uncertainty: accuracy vs threshold\n",
+           "Gate: keep a prediction iff `var_predicted` (the variance over the MC-dropout passes of the predicted "
+           "class's probability) ≤ τ. τ sweeps from high to low over 101 quantiles of var_predicted and the "
+           "reference code's linspace(2e-5, 0.12, 100). Mean per-class accuracy is over the classes that still "
+           "have retained samples.\n"]
+    headers = ["operating point", "τ", "retained", "retained n", "mean per-class acc.", "overall acc."] + \
+        [f"{n} kept" for n in LABEL_NAMES]
+    rows = [_point_row("no filtering", s["unfiltered"]),
+            _point_row(f"strictest τ keeping ≥ {int(100 * RETAIN_TARGET)} %", s["at_70"])]
+    if s["at_model_threshold"] is not None:
+        rows.append(_point_row("model's run-time τ (eval.json)", s["at_model_threshold"]))
+    out.append(table(headers, rows))
+    gain = s["gain_at_70"]
+    a70 = s["at_70"]["mean_per_class_accuracy"]
+    out.append(
+        f"\nAt ≥ {int(100 * RETAIN_TARGET)} % retained ({pct(s['at_70']['retained'])}), mean per-class accuracy is "
+        f"**{fmt(a70)}** vs {fmt(s['unfiltered']['mean_per_class_accuracy'])} unfiltered "
+        f"({'+' if gain is not None and gain >= 0 else ''}{fmt(None if gain is None else 100 * gain, 1)} points; "
+        f"the paper reports > {int(100 * PAPER_MPCA_AT_70)} % at 70 % retained, +6 points). "
+        f"Paper's claim met here: **{'yes' if a70 is not None and a70 > PAPER_MPCA_AT_70 else 'no'}**.\n")
+    rho = s["spearman_threshold_vs_mpca"]
+    out.append(
+        f"Does accuracy rise as the threshold falls? **{s['verdict']}** (Spearman rank correlation between τ and mean "
+        f"per-class accuracy over quantile thresholds keeping ≥ 10 %: {fmt(rho, 2)}; for overall accuracy: "
+        f"{fmt(s['spearman_threshold_vs_accuracy'], 2)}; negative = accuracy rises as τ falls).\n")
+    out.append(f"Mean var_predicted of correct predictions: **{fmt(s['mean_var_correct'], 5)}** (n = {s['n_correct']}) "
+               f"vs wrong predictions: **{fmt(s['mean_var_wrong'], 5)}** (n = {s['n_wrong']})"
+               + (" — wrong predictions are more uncertain, as they should be.\n"
+                  if s["mean_var_correct"] is not None and s["mean_var_wrong"] is not None
+                  and s["mean_var_wrong"] > s["mean_var_correct"] else ".\n"))
+    out.append("\nRetained fraction ladder:\n")
+    out.append(table(headers, [_point_row(f"≥ {pct(p['retained'], 0)}", p) for p in s["retained_table"]]))
+    out.append("\n" + image(figs["accuracy_vs_threshold"], "accuracy vs threshold"))
+    out.append(image(figs["retained_vs_threshold"], "retained data vs threshold"))
+    out.append(image(figs["accuracy_vs_retained"], "accuracy vs retained data"))
+    return "\n".join(out)
+
+
+def _counts_text(d: Dict[int, int], namer, total: int, top: int = 4) -> str:
+    """'reflection 120 (80 %), none 30 (20 %)' for a composition dict."""
+    items = list(d.items())
+    txt = ", ".join(f"{namer(k)} {v} ({100 * v / total:.0f} %)" for k, v in items[:top])
+    if len(items) > top:
+        txt += f", +{len(items) - top} more"
+    return txt
+
+
+def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, str]) -> str:
+    """§4: clustering of confident predicted failures, composition and purity."""
+    out = ["### 4. Failure clustering\n"]
+    rule = (f"the top 50 % by confidence (predicted-class probability ≥ {fmt(res.confidence_cut)}, median split; "
+            f"the paper's rule)" if opt.select == "confidence"
+            else f"var_predicted ≤ {REFERENCE_VAR_CUT} (the reference script's rule)")
+    out.append(f"Predicted failures: {res.n_predicted_fp} predicted FP, {res.n_predicted_fn} predicted FN. Selected "
+               f"**{res.n_selected}** by {rule}. (The reference script's rule, var_predicted ≤ {REFERENCE_VAR_CUT}, "
+               f"would keep {res.n_reference_rule}.)\n")
+    if not res.ok:
+        out.append(f"> **Clustering not possible:** {res.message}\n")
+        return "\n".join(out)
+    space = ("the L2-normalised 256-d FC2 embedding space" if opt.space == "embedding"
+             else f"the {res.pca_components}-d PCA space")
+    out.append(
+        f"Embeddings: {opt.embedding_norm}-normalised FC2 activations; PCA 256 → {res.pca_components} (a tenth, as "
+        f"in the paper; explains {pct(res.pca_explained)} of the variance); k-means with k = {opt.k} "
+        f"(10 restarts, random_state {opt.seed}) in {space}; t-SNE of the PCA scores for the picture only "
+        f"(perplexity {opt.perplexity:g}, {opt.tsne_iterations} iterations, random_state {opt.seed}). "
+        f"{res.tsne_note}\n")
+    if res.message:
+        out.append(f"> {res.message}\n")
+    out.append(image(figs["scatter"], "t-SNE of predicted failures"))
+    rows = []
+    for e in res.clusters:
+        n = max(e["n"], 1)
+        row = [e["cluster"], e["n"], f"{e['predicted_fp']} / {e['predicted_fn']}",
+               _counts_text(e["true_labels"], lambda c: LABEL_NAMES[c], n)]
+        if res.has_truth:
+            row += [phenomenon_name(e["dominant_phenomenon"]) if e["dominant_phenomenon"] is not None else "n/a",
+                    pct(e["purity"]), _counts_text(e["phenomena"], phenomenon_name, n),
+                    _counts_text(e["surfaces"], surface_name, n)]
+        rows.append(row)
+    headers = ["cluster", "samples", "predicted FP / FN", "true labels"]
+    if res.has_truth:
+        headers += ["dominant phenomenon", "purity", "phenomena", "surfaces"]
+    out.append(table(headers, rows))
+    if res.has_truth:
+        met = res.purity is not None and res.purity >= PURITY_TARGET
+        out.append(
+            f"\nOverall purity (samples in their cluster's dominant phenomenon / all clustered): "
+            f"**{pct(res.purity)}** (target ≥ {int(100 * PURITY_TARGET)} %: {'met' if met else 'not met'}); "
+            f"normalised mutual information with the phenomenon: {fmt(res.nmi)}, adjusted Rand index: "
+            f"{fmt(res.ari)}. 'none' counts as a phenomenon: failures with no simulated phenomenon under the "
+            f"patch centre (e.g. geometry, distance).\n")
+    else:
+        out.append("\nNo simulator ground truth in these sessions (surface = unknown everywhere): cluster composition by "
+                   "phenomenon and purity are not available; judge the clusters by their mosaics.\n")
+    out.append("\nSample patches per cluster (frame colour = true label):\n")
+    for c in sorted(res.mosaic_rows):
+        out.append(image(figs[f"mosaic_{c}"], f"cluster {c} mosaic"))
+    return "\n".join(out)
+
+
+def overlays_section(overlays: List[str]) -> str:
+    """§5: ivoa-eval's per-frame figures, copied next to the report."""
+    out = ["### 5. Per-frame overlays\n"]
+    if not overlays:
+        out.append("No overlay figures in this eval folder (run ivoa-eval with `--logs`).\n")
+        return "\n".join(out)
+    out.append("From ivoa-eval: left image with the ground grid (outer ring = label, inner dot = prediction), the "
+               "P(FP)+P(FN) heatmap and the uncertainty heatmap.\n")
+    for rel in overlays:
+        out.append(f"**{os.path.basename(rel)}**\n\n" + image(rel, os.path.basename(rel)))
+    return "\n".join(out)
+
+
+def comparison_section(runs: List[EvalRun], metrics: Dict[str, dict], figs: Dict[str, str],
+                       sentences: List[str]) -> str:
+    """Side-by-side metrics and per-phenomenon predicted FN/FP rates."""
+    names = [r.name for r in runs]
+    out = ["## Comparison of the perception models\n"]
+    rows = []
+
+    def row(label, getter, digits=3):
+        rows.append([label] + [fmt(getter(metrics[r.slug]), digits) for r in runs])
+
+    row("detector", lambda m: m["detector"])
+    row("samples", lambda m: m["overall"]["n"])
+    row("mean per-class accuracy", lambda m: m["overall"]["mean_per_class_accuracy"])
+    row("overall accuracy", lambda m: m["overall"]["overall_accuracy"])
+    for c in range(4):
+        row(f"{LABEL_NAMES[c]} accuracy (n)",
+            lambda m, c=c: f"{fmt(m['overall']['per_class_accuracy'][c])} ({m['overall']['support'][c]})")
+    row("failure precision", lambda m: m["failure"]["precision"])
+    row("failure recall", lambda m: m["failure"]["recall"])
+    row("failure AUROC", lambda m: m["failure"]["auroc"])
+    row("retained at the ≥70 % point", lambda m: pct(m["sweep"]["at_70"]["retained"]))
+    row("mean per-class acc. at ≥70 %", lambda m: m["sweep"]["at_70"]["mean_per_class_accuracy"])
+    row("accuracy rises as τ falls", lambda m: m["sweep"]["verdict"])
+    row("cluster purity", lambda m: pct(m["clustering"].get("purity")))
+    out.append(table(["metric"] + names, rows))
+    out.append("\nNote: each model is evaluated on its own detector's labels (its own dataset), so the sample sets "
+               "differ; accuracies compare how well each introspection model predicts its own detector's failures.\n")
+    out.append("\n**Per phenomenon** — fraction of the phenomenon's samples that each model predicts as FN / FP, "
+               "next to the detector's true FN / FP rate (from the labels):\n\n")
+    codes = sorted({e["phenomenon"] for r in runs for e in metrics[r.slug]["per_phenomenon"]})
+    headers = ["phenomenon"]
+    for n in names:
+        headers += [f"{n}: n", f"{n}: predicted FN (true)", f"{n}: predicted FP (true)"]
+    trows = []
+    for c in codes:
+        cells = [phenomenon_name(c)]
+        for r in runs:
+            e = next((e for e in metrics[r.slug]["per_phenomenon"] if e["phenomenon"] == c), None)
+            if e is None:
+                cells += [0, "n/a", "n/a"]
+            else:
+                cells += [e["n"], f"{pct(e['pred_fn'], 0)} ({pct(e['true_fn'], 0)})",
+                          f"{pct(e['pred_fp'], 0)} ({pct(e['true_fp'], 0)})"]
+        trows.append(cells)
+    out.append(table(headers, trows))
+    if sentences:
+        out.append("\nNotable differences:\n\n" + "\n".join(f"- {s}" for s in sentences) + "\n")
+    else:
+        out.append("\nNo phenomenon's predicted FN or FP rate differs by 20 points or more between the models.\n")
+    out.append("\n" + image(figs["phenomena"], "predicted FN/FP per phenomenon"))
+    out.append(image(figs["roc"], "ROC, all models"))
+    out.append(image(figs["accuracy_vs_retained"], "accuracy vs retained, all models"))
+    return "\n".join(out)
+
+
+def comparison_sentences(runs: List[EvalRun], metrics: Dict[str, dict], min_diff: float = 0.2,
+                         min_samples: int = 5) -> List[str]:
+    """Plain-language differences such as "textureless patches are predicted FN
+    by jppc (60 %) and rarely by dense (3 %)", for rates differing by >= 20
+    points on phenomena with enough samples in both models."""
+    out = []
+    codes = sorted({e["phenomenon"] for r in runs for e in metrics[r.slug]["per_phenomenon"]})
+    for c in codes:
+        for key, kind in (("pred_fn", "FN"), ("pred_fp", "FP")):
+            vals = []
+            for r in runs:
+                e = next((e for e in metrics[r.slug]["per_phenomenon"] if e["phenomenon"] == c), None)
+                if e is not None and e["n"] >= min_samples:
+                    vals.append((e[key], r.name, e))
+            if len(vals) < 2:
+                continue
+            hi, lo = max(vals, key=lambda t: t[0]), min(vals, key=lambda t: t[0])
+            if hi[0] - lo[0] >= min_diff:
+                truth = "true_fn" if kind == "FN" else "true_fp"
+                out.append(
+                    f"**{phenomenon_name(c)}** patches are a predicted {kind} for {hi[1]} ({pct(hi[0], 0)} of "
+                    f"{hi[2]['n']}; true {kind} rate {pct(hi[2][truth], 0)}) and "
+                    f"{'not' if lo[0] < 0.05 else 'less often'} for {lo[1]} ({pct(lo[0], 0)} of {lo[2]['n']}; "
+                    f"true {kind} rate {pct(lo[2][truth], 0)}).")
+    return out
+
+
+METHOD_NOTES = """## Method notes: paper vs reference code
+
+Where the paper (Rabiee & Biswas, IROS 2019) and the public reference code disagree, this report follows the
+paper (see `shared/reference/ivoa_jpp_spec.md` §4):
+
+- **Headline metric**: mean of per-class accuracies (paper) rather than the reference `analyze_results.py`'s
+  plain overall accuracy; both are reported.
+- **Uncertainty gate**: the variance of the predicted class's probability over the MC-dropout passes
+  (`var_predicted`, as in the reference analysis script); the heatmaps' mean-over-classes variance
+  (`uncertainty`) is not used for the sweep. The sweep uses quantiles of var_predicted plus the reference's
+  linspace(2e-5, 0.12, 100).
+- **Clustering selection**: top 50 % most confident predicted FP/FN (paper; median split of the predicted-class
+  probability) instead of the reference's var_predicted ≤ 0.03; the report counts what the reference rule keeps.
+- **Dimensionality**: PCA to a tenth of the dimension (256 → 26, paper) instead of the reference's 20 (paper era)
+  or 50 (HEAD); t-SNE runs 1000 iterations (reference: 300), perplexity 40, random_state 0, on at most 3000
+  points drawn with a fixed seed (2-core machine).
+- **k-means** runs in the embedding space (paper and paper-era script; HEAD clustered after PCA to 100), k = 2.
+- **Embedding normalisation**: L2 by default; the reference softmax-normalised the 256 activations
+  (`--embedding-norm softmax` reproduces it).
+- **Mosaics**: 5 × 10 patches per cluster sampled with weight 1/(0.1 + distance to the centre), as in the reference.
+- **Patch-level predictions** are at each sample's exact pixel (the reference's patch-level test), not the nearest
+  heatmap cell.
+"""

@@ -1,0 +1,255 @@
+"""The paper's numbers: per-class metrics, failure detection, uncertainty sweep,
+per-phenomenon comparison.
+
+Conventions (spec §4.3):
+
+* labels 0 TP, 1 TN, 2 FP, 3 FN;
+* per-class accuracy = recall of the true class = the diagonal of the
+  row-normalised confusion matrix;
+* **mean per-class accuracy** (the paper's headline, balanced accuracy) = the mean
+  of that diagonal over the classes present in the truth. The reference code's
+  ``analyze_results.py`` reported plain overall accuracy instead; we report both
+  and follow the paper for the headline;
+* the uncertainty gate is ``var_predicted``, the variance over MC passes of the
+  predicted class's probability (the reference's analysis script), not the
+  heatmap's mean-over-classes variance.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Dict, List, Optional
+
+import numpy as np
+from sklearn.metrics import roc_auc_score, roc_curve
+
+from report_inputs import FN, FP, LABEL_NAMES, EvalRun
+
+N_CLASSES = 4
+# The reference code's threshold sweep (analyze_results.py).
+REFERENCE_SWEEP = np.linspace(2e-5, 0.12, 100)
+RETAIN_TARGET = 0.70          # the paper's operating point: > 96 % mean per-class accuracy at 70 % retained
+PAPER_MPCA_AT_70 = 0.96
+
+
+def confusion_counts(label: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    """4x4 counts, rows = true class, columns = predicted class."""
+    return np.bincount(label * N_CLASSES + predicted, minlength=N_CLASSES * N_CLASSES).reshape(N_CLASSES, N_CLASSES)
+
+
+def class_metrics(label: np.ndarray, predicted: np.ndarray) -> dict:
+    """Per-class accuracy (recall), mean per-class accuracy, overall accuracy and
+    the row-normalised confusion matrix of one set of predictions.
+
+    A class absent from the truth has no accuracy (None): it is left out of the
+    mean and listed in ``absent`` so that the report can say so, rather than
+    counting it as 0 or 1."""
+    cm = confusion_counts(label, predicted)
+    support = cm.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        norm = cm / support[:, None]
+    per_class = [float(cm[c, c] / support[c]) if support[c] else None for c in range(N_CLASSES)]
+    present = [a for a in per_class if a is not None]
+    n = int(support.sum())
+    return {
+        "n": n,
+        "support": support.tolist(),
+        "per_class_accuracy": per_class,
+        "mean_per_class_accuracy": float(np.mean(present)) if present else None,
+        "overall_accuracy": float(np.trace(cm) / n) if n else None,
+        "confusion": cm.tolist(),
+        "confusion_normalised": [[None if not support[r] else float(norm[r, c]) for c in range(N_CLASSES)]
+                                 for r in range(N_CLASSES)],
+        "absent": [LABEL_NAMES[c] for c in range(N_CLASSES) if not support[c]],
+        "predicted_counts": cm.sum(axis=0).tolist(),
+    }
+
+
+def grouped_metrics(run: EvalRun, key: np.ndarray, describe_sessions: bool = False) -> List[dict]:
+    """class_metrics per value of a column (session, environment), sorted by
+    value; with describe_sessions, each entry also names its split and
+    environment so the per-session table says where a session was used."""
+    out = []
+    for value in sorted(set(key.tolist())):
+        m = key == value
+        entry = class_metrics(run.label[m], run.predicted[m])
+        entry["group"] = str(value)
+        if describe_sessions:
+            entry["split"] = ",".join(sorted(set(run.split[m].tolist())))
+            entry["environment"] = ",".join(sorted(set(run.environment[m].tolist())))
+        out.append(entry)
+    return out
+
+
+def failure_detection(label: np.ndarray, predicted: np.ndarray, probs: np.ndarray) -> dict:
+    """Failure detection as a binary problem: positive = the detector failed
+    (true FP or FN), predicted positive = the model predicts FP or FN.
+
+    AUROC uses the score P(FP) + P(FN) (the paper's failure heatmap). With only
+    one class in the truth AUROC is undefined and the entry says why."""
+    truth = (label == FP) | (label == FN)
+    flag = (predicted == FP) | (predicted == FN)
+    score = probs[:, FP] + probs[:, FN]
+    tp = int(np.sum(truth & flag))
+    fp = int(np.sum(~truth & flag))
+    fn = int(np.sum(truth & ~flag))
+    out = {
+        "n": int(len(label)), "failures": int(truth.sum()), "non_failures": int((~truth).sum()),
+        "flagged": int(flag.sum()),
+        "precision": tp / (tp + fp) if tp + fp else None,
+        "recall": tp / (tp + fn) if tp + fn else None,
+        "auroc": None, "roc": None, "auroc_fp": None, "auroc_fn": None, "message": None,
+    }
+    p, r = out["precision"], out["recall"]
+    out["f1"] = 2 * p * r / (p + r) if p is not None and r is not None and p + r > 0 else None
+    if truth.all() or not truth.any():
+        out["message"] = ("AUROC undefined: every sample is a failure" if truth.all()
+                          else "AUROC undefined: no true failure (FP/FN) among the samples")
+        return out
+    out["auroc"] = float(roc_auc_score(truth, score))
+    fpr, tpr, _ = roc_curve(truth, score)
+    out["roc"] = {"fpr": fpr.tolist(), "tpr": tpr.tolist()}
+    # One-vs-rest AUROC for each failure type, using its own probability.
+    for cls, key in ((FP, "auroc_fp"), (FN, "auroc_fn")):
+        t = label == cls
+        if t.any() and not t.all():
+            out[key] = float(roc_auc_score(t, probs[:, cls]))
+    return out
+
+
+def _spearman(a: np.ndarray, b: np.ndarray) -> Optional[float]:
+    """Spearman rank correlation with average ranks for ties (numpy only)."""
+    if len(a) < 3:
+        return None
+
+    def ranks(x):
+        order = np.argsort(x, kind="mergesort")
+        r = np.empty(len(x))
+        r[order] = np.arange(len(x))
+        # average ranks of tied values
+        _, inv, counts = np.unique(x, return_inverse=True, return_counts=True)
+        sums = np.bincount(inv, weights=r)
+        return sums[inv] / counts[inv]
+
+    ra, rb = ranks(a), ranks(b)
+    if ra.std() == 0 or rb.std() == 0:
+        return None
+    return float(np.corrcoef(ra, rb)[0, 1])
+
+
+def _point(label, predicted, var, tau) -> dict:
+    """Metrics of the predictions kept by the gate var_predicted <= tau."""
+    keep = var <= tau
+    m = class_metrics(label[keep], predicted[keep])
+    support_all = np.bincount(label, minlength=N_CLASSES)
+    kept = np.bincount(label[keep], minlength=N_CLASSES)
+    return {
+        "threshold": float(tau),
+        "retained": float(keep.mean()),
+        "retained_count": int(keep.sum()),
+        "retained_per_class": [float(kept[c] / support_all[c]) if support_all[c] else None for c in range(N_CLASSES)],
+        "mean_per_class_accuracy": m["mean_per_class_accuracy"],
+        "overall_accuracy": m["overall_accuracy"],
+        "per_class_accuracy": m["per_class_accuracy"],
+    }
+
+
+def threshold_for_retained(var: np.ndarray, fraction: float) -> float:
+    """The strictest threshold tau with count(var <= tau) >= fraction * N: the
+    operating point "as close to `fraction` retained as the data allow"."""
+    s = np.sort(var)
+    k = max(1, int(math.ceil(fraction * len(s) - 1e-9)))
+    return float(s[k - 1])
+
+
+def uncertainty_sweep(run: EvalRun, quantiles: int = 101) -> dict:
+    """Accuracy of the retained predictions as the uncertainty gate tightens.
+
+    Thresholds are the union of quantiles of var_predicted (so that retained
+    fractions are spread evenly from 100 % down) and the reference code's
+    linspace(2e-5, 0.12, 100). Reported: the curve, the numbers at no filtering,
+    at the strictest threshold keeping >= 70 % (the paper's operating point) and
+    at the model's own run-time threshold, whether accuracy rises as the
+    threshold falls, and the mean variance of correct vs wrong predictions."""
+    label, predicted, var = run.label, run.predicted, run.var_predicted
+    qs = np.quantile(var, np.linspace(0.0, 1.0, quantiles))
+    taus = np.unique(np.concatenate([qs, REFERENCE_SWEEP, [var.max()]]))[::-1]  # high -> low
+    curve = [_point(label, predicted, var, t) for t in taus]
+
+    unfiltered = _point(label, predicted, var, float(var.max()))
+    at70 = _point(label, predicted, var, threshold_for_retained(var, RETAIN_TARGET))
+    model_thr = run.model_threshold
+    at_model = _point(label, predicted, var, model_thr) if model_thr is not None else None
+    table = [_point(label, predicted, var, threshold_for_retained(var, f))
+             for f in (1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2)]
+
+    # Does accuracy rise as the threshold falls? Rank correlation between the
+    # threshold and mean per-class accuracy over quantile thresholds that keep
+    # at least 10 % of the data (below that a handful of samples decide).
+    pts = [_point(label, predicted, var, t) for t in np.unique(qs)]
+    pts = [p for p in pts if p["retained"] >= 0.10 and p["mean_per_class_accuracy"] is not None]
+    rho = _spearman(np.array([p["threshold"] for p in pts]), np.array([p["mean_per_class_accuracy"] for p in pts]))
+    rho_overall = _spearman(np.array([p["threshold"] for p in pts]), np.array([p["overall_accuracy"] for p in pts]))
+    gain = (at70["mean_per_class_accuracy"] - unfiltered["mean_per_class_accuracy"]
+            if at70["mean_per_class_accuracy"] is not None and unfiltered["mean_per_class_accuracy"] is not None
+            else None)
+    if rho is None:
+        verdict = "undetermined (too few distinct thresholds)"
+        rises = None
+    elif rho <= -0.5 and (gain is None or gain > 0):
+        verdict, rises = "yes", True
+    elif rho < 0:
+        verdict, rises = "weakly (noisy)", None
+    else:
+        verdict, rises = "no", False
+
+    correct = label == predicted
+    return {
+        "gate": "var_predicted",
+        "curve": curve,
+        "unfiltered": unfiltered,
+        "at_70": at70,
+        "at_model_threshold": at_model,
+        "model_threshold": model_thr,
+        "retained_table": table,
+        "spearman_threshold_vs_mpca": rho,
+        "spearman_threshold_vs_accuracy": rho_overall,
+        "gain_at_70": gain,
+        "accuracy_rises_as_threshold_falls": rises,
+        "verdict": verdict,
+        "mean_var_correct": float(var[correct].mean()) if correct.any() else None,
+        "mean_var_wrong": float(var[~correct].mean()) if (~correct).any() else None,
+        "n_correct": int(correct.sum()),
+        "n_wrong": int((~correct).sum()),
+    }
+
+
+def per_phenomenon(run: EvalRun) -> List[dict]:
+    """For each phenomenon under the patch centre: how many samples, how often the
+    detector truly failed (true FP / FN) and how often the model predicts a
+    failure (predicted FP / FN). This is what tells "a texture-less wall is a
+    predicted FN for JPP-C and not for the dense detector"."""
+    out = []
+    for code in sorted(set(run.phenomenon.tolist())):
+        m = run.phenomenon == code
+        n = int(m.sum())
+        out.append({
+            "phenomenon": int(code), "n": n,
+            "true_fp": float(np.mean(run.label[m] == FP)), "true_fn": float(np.mean(run.label[m] == FN)),
+            "pred_fp": float(np.mean(run.predicted[m] == FP)), "pred_fn": float(np.mean(run.predicted[m] == FN)),
+        })
+    return out
+
+
+def headline(run_metrics: dict) -> Dict[str, Optional[float]]:
+    """The few numbers quoted per model in the summary and comparison tables."""
+    m, f, s = run_metrics["overall"], run_metrics["failure"], run_metrics["sweep"]
+    return {
+        "samples": m["n"],
+        "mean_per_class_accuracy": m["mean_per_class_accuracy"],
+        "overall_accuracy": m["overall_accuracy"],
+        "failure_precision": f["precision"], "failure_recall": f["recall"], "failure_auroc": f["auroc"],
+        "retained_at_70": s["at_70"]["retained"],
+        "mpca_at_70": s["at_70"]["mean_per_class_accuracy"],
+        "accuracy_at_70": s["at_70"]["overall_accuracy"],
+    }
