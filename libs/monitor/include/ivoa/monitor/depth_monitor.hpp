@@ -42,7 +42,7 @@
 namespace ivoa::monitor {
 
 struct DepthMonitorConfig {
-  int pixel_step = 1;                 // use every n-th depth pixel in each direction
+  int pixel_step = 2;                 // use every n-th depth pixel in each direction
   double voxel_size = 0.02;           // m, voxel grid leaf size
   double obstacle_min_height = 0.05;  // m above the ground: higher points are obstacle points
   double obstacle_max_height = 1.0;   // m: higher points cannot hit the robot (overhangs ignored)
