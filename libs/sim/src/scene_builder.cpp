@@ -287,7 +287,9 @@ void SceneBuilder::add_lamp_post(const Eigen::Vector2d& p, double height, double
     PointLight light;
     light.position = Eigen::Vector3f(static_cast<float>(head.x()), static_cast<float>(head.y()),
                                      static_cast<float>(height - 0.16));
-    light.intensity = Rgbf(1.0f, 0.85f, 0.65f) * static_cast<float>(emission * 0.55 * 0.25 / M_PI);
+    // A street lamp lights the ground below it to ~10-30 lux: a faint pool
+    // next to its glaring head (which the camera and wet floors see directly).
+    light.intensity = Rgbf(1.0f, 0.85f, 0.65f) * static_cast<float>(emission * 0.012);
     light.downward = true;
     light.glare = static_cast<float>(emission * 0.55 * 0.25);
     data_->lights.push_back(light);

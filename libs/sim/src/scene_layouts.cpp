@@ -387,7 +387,7 @@ void place_lights(SceneBuilder& b) {
     SkyData& sky = d.sky;
     const float sky_e = static_cast<float>(draw(rng, l.sky_irradiance));
     if (l.night) {
-      d.ambient = Rgbf(0.03f, 0.03f, 0.045f);
+      d.ambient = Rgbf(0.008f, 0.008f, 0.012f);
       sky.zenith = Rgbf(0.004f, 0.005f, 0.01f);
       sky.horizon = Rgbf(0.02f, 0.018f, 0.02f);
       sky.has_sun = false;

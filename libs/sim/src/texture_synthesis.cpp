@@ -166,7 +166,7 @@ Painter make_painter(const Material& m, const Plan& plan, Rng& rng) {
       auto dots = lattice(cells(m.scale), cells(m.scale));
       auto fine = lattice(cells(0.0025), cells(0.0025));
       auto patchy = fbm(cells(0.4), 3, 0.5);
-      const double threshold = asphalt ? 0.35 : 0.55;
+      const double threshold = asphalt ? 0.45 : 0.55;
       return [=](double u, double v) {
         const double d = dots->at(u / P, v / P);
         const double speck = std::clamp((d - threshold) * 5.0, 0.0, 1.0);

@@ -335,18 +335,24 @@ Rgbf Tracer::sky(float dx, float dy, float dz, float blur) const {
 }
 
 Rgbf Tracer::light_lobes(const Ray& ray, float x, float y, float roughness) const {
+  // Microfacet highlight (Beckmann distribution of facet normals, slope rms m)
+  // of small bright lamps: L = D(h) I / (4 d^2 cos(view)). Near grazing view
+  // it stretches into the long streaks lamps make on wet ground.
   Rgbf sum(0.0f);
-  const float w = std::max(roughness, 0.01f);
-  const float rx = ray.wx * ray.inv_len, ry = ray.wy * ray.inv_len, rz = -ray.slope * ray.inv_len;  // mirrored view ray
+  const float m = std::max(roughness, 0.01f), inv_m2 = 1.0f / (m * m);
+  const float vx = -ray.wx * ray.inv_len, vy = -ray.wy * ray.inv_len, vz = -ray.slope * ray.inv_len;  // to the camera
   for (uint32_t i : glare_lights_) {
     const PointLight& l = scene_.lights[i];
-    const float vx = l.position.x() - x, vy = l.position.y() - y, vz = l.position.z();
-    const float d2 = vx * vx + vy * vy + vz * vz, inv_d = 1.0f / std::sqrt(d2);
-    const float cosang = (rx * vx + ry * vy + rz * vz) * inv_d;
-    const float lobe = std::exp((cosang - 1.0f) / (w * w));
-    if (lobe < 1e-4f) continue;
-    const float e = l.glare * (vz * inv_d) / d2;  // downward emitter
-    sum += Rgbf(1.0f, 0.85f, 0.65f) * (e * lobe / (2.0f * static_cast<float>(M_PI) * w * w));
+    const float lx = l.position.x() - x, ly = l.position.y() - y, lz = l.position.z();
+    const float d2 = lx * lx + ly * ly + lz * lz, inv_d = 1.0f / std::sqrt(d2);
+    const float hx = lx * inv_d + vx, hy = ly * inv_d + vy, hz = lz * inv_d + vz;
+    const float h2 = hx * hx + hy * hy + hz * hz;
+    const float cos2 = hz * hz / h2;  // cos^2 of the half vector to the floor normal
+    const float tan2 = (1.0f - cos2) / cos2;
+    if (tan2 * inv_m2 > 12.0f) continue;  // exp(-12): nothing to add
+    const float d = std::exp(-tan2 * inv_m2) * inv_m2 / (static_cast<float>(M_PI) * cos2 * cos2);
+    const float e = l.glare * (lz * inv_d);  // a downward emitter's intensity towards this point
+    sum += Rgbf(1.0f, 0.85f, 0.65f) * (d * e / (4.0f * d2 * std::max(vz, 0.02f)));
   }
   return sum;
 }
@@ -607,7 +613,7 @@ Ranged Tracer::range(int pixel) const {
     const float cos_i = -ray.slope * ray.inv_len;
     out.depth = pr.s_floor * pr.planar;
     out.ir_return = m.ir_albedo * cos_i;
-    out.specular = m.f0 * std::max(0.0f, 1.0f - m.roughness / 0.1f);
+    out.specular = m.f0 * std::max(0.0f, 1.0f - m.roughness / 0.03f);  // only smooth surfaces lose the pattern
     if (sky.has_sun) out.sunlit = sun_strength * sky.sun_dir.z() * scene_.floor_sunlit.sample(x, y, 1.0f);
     return out;
   }
