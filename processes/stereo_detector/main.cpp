@@ -58,12 +58,9 @@ int main(int argc, char** argv) {
     if (initial_rig) node.set_calibration(*initial_rig);
     node.start();
     spdlog::info("{} on {} -> {} ({})", options.model, options.stereo_channel, options.output_channel, bus.url());
-    int code = ivoa::run_until_stopped(bus, &heartbeat, [&] {
+    const int code = ivoa::run_until_stopped(bus, &heartbeat, [&] {
       if (node.finished()) ivoa::request_stop();
     });
-    // A signal can interrupt LCM's wait, which run_until_stopped reports as
-    // an LCM failure; after a stop request it is a clean stop.
-    if (code == ivoa::kExitFailure && ivoa::stop_requested()) code = ivoa::kExitOk;
     node.stop();
     heartbeat.publish_now();
     spdlog::info("published {} grids; {} bad inputs", node.published(), heartbeat.bad_input_count());

@@ -126,10 +126,9 @@ void StereoDetectorNode::process(const Frame& frame) {
   const double start_ms = monotonic_ms();
   obstacle_grid_t out = make_obstacle_grid(*grid_, detector_->name(), frame.msg.utime);
   try {
-    // Colour, as the offline dataset tool passes it: JPP-C rectifies colour
-    // and converts to gray afterwards (JPP's order), so a gray input would
-    // give slightly different costs and the live labels would not match
-    // the offline ones.
+    // Colour, as the offline dataset tool passes it. The detectors convert to
+    // gray first themselves, so gray input would give the same verdicts
+    // (test: Detectors.GrayAndColourInputGiveTheSameVerdicts).
     const cv::Mat left = decode_image(frame.msg.left);
     const cv::Mat right = decode_image(frame.msg.right);
     detector_->set_frame(left, right);

@@ -204,6 +204,27 @@ TEST(Detectors, JppcRectifiesAsCoreDoes) {
   EXPECT_LE(cv::norm(detector.left_rectified(), core_left, cv::NORM_INF), 1.0);
 }
 
+TEST(Detectors, GrayAndColourInputGiveTheSameVerdicts) {
+  // The process may hand either (it decodes colour); offline tools too.
+  SyntheticScene scene = room();
+  scene.boxes.push_back({{1.4, -0.3, 0.0}, {1.7, 0.3, 0.4}, true, 150, 3});
+  const RigCalibration rig = test::make_test_rig(15.0);
+  cv::Mat left, right, left_gray, right_gray;
+  test::render_pair(scene, rig, left, right, 1);
+  cv::cvtColor(left, left_gray, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(right, right_gray, cv::COLOR_BGR2GRAY);
+  const QueryGrid grid(QueryGridConfig{}, CameraModel(rig.left, rig.left_to_robot));
+  for (const char* name : {"jppc", "dense"}) {
+    auto detector = make_detector(name, rig, {});
+    obstacle_grid_t colour = make_obstacle_grid(grid, name, 0), gray = colour;
+    detector->set_frame(left, right);
+    detector->evaluate(grid, colour);
+    detector->set_frame(left_gray, right_gray);
+    detector->evaluate(grid, gray);
+    EXPECT_EQ(colour.state, gray.state) << name;
+  }
+}
+
 TEST(Detectors, JppcHalfBoxHasFifteenSamplesAndIsCachedPerPair) {
   // r = 0.10 m at JPP's 0.05 m step: dx in {0, .05, .10} x dy in 5 steps.
   const RigCalibration rig = test::make_test_rig();
