@@ -90,7 +90,7 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     p.add_argument("--cluster-space", choices=("embedding", "pca"), default="embedding",
                    help="where k-means runs: normalised 256-d embeddings (paper) or their PCA scores")
     p.add_argument("--tsne-max", type=int, default=3000, help="subsample t-SNE input to this many points")
-    p.add_argument("--tsne-iterations", type=int, default=1000)
+    p.add_argument("--tsne-iterations", type=int, default=500, help="t-SNE iterations (>= 250)")
     p.add_argument("--perplexity", type=float, default=40.0)
     p.add_argument("--seed", type=int, default=0, help="k-means, t-SNE, subsampling and mosaic seed")
     p.add_argument("--max-overlays", type=int, default=0,
@@ -102,6 +102,8 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
         p.error(f"give --dataset once, or once per --eval ({len(a.eval)}); got {len(a.dataset)}")
     if a.tsne_max < 5:
         p.error("--tsne-max must be at least 5")
+    if a.tsne_iterations < 250:
+        p.error("--tsne-iterations must be at least 250 (scikit-learn's minimum)")
     return a
 
 
@@ -275,7 +277,7 @@ def run_report(args: argparse.Namespace, argv: List[str]) -> int:
     parts += sections
     if comparison:
         parts.append(comparison)
-    parts.append(md.METHOD_NOTES)
+    parts.append(md.method_notes(opt))
     report_path = os.path.join(out_dir, "report.md")
     with open(report_path, "w", encoding="utf-8") as f:
         f.write("\n".join(parts))

@@ -18,9 +18,12 @@ Pipeline, with the paper's choices and where the reference code differed:
    256-d embedding space, as the paper and the paper-era script do; PCA and t-SNE
    are only for viewing. ``--cluster-space pca`` clusters the 26-d PCA scores
    instead (less noise, nearly the same Euclidean geometry).
-5. **t-SNE** to 2-D (perplexity 40, 1000 iterations instead of the reference's
+5. **t-SNE** to 2-D (perplexity 40, 500 iterations instead of the reference's
    300, random_state 0) on the PCA scores, on at most ``tsne_max`` points drawn
-   with a fixed seed, to keep it fast on a 2-core machine.
+   with a fixed seed, to keep it fast on a 2-core machine. On the probe data
+   (1367 points) the KL divergence is 0.85 after 300 iterations, 0.53 after
+   500 and 0.50 after 1000 (twice the time): 500 is converged enough for a
+   picture; the report prints the final KL divergence.
 6. **Mosaics**: per cluster, up to 50 patches sampled without replacement with
    weight 1/(0.1 + distance to the cluster centre), as in the reference.
 """
@@ -54,7 +57,7 @@ class ClusterOptions:
     space: str = "embedding"            # where k-means runs: "embedding" (paper) or "pca"
     tsne_max: int = 3000
     perplexity: float = 40.0
-    tsne_iterations: int = 1000
+    tsne_iterations: int = 500
     seed: int = 0
 
 
@@ -76,6 +79,7 @@ class ClusterResult:
     tsne_index: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))  # into rows
     tsne_xy: Optional[np.ndarray] = None
     tsne_note: str = ""
+    tsne_kl: Optional[float] = None
     clusters: List[dict] = field(default_factory=list)
     purity: Optional[float] = None
     nmi: Optional[float] = None
@@ -115,16 +119,18 @@ def select_failures(run: EvalRun, select: str):
     return keep, cut
 
 
-def _tsne(x: np.ndarray, perplexity: float, iterations: int, seed: int) -> np.ndarray:
-    """t-SNE 2-D; the iteration argument is n_iter before scikit-learn 1.5 and
-    max_iter after, so pass whichever this version has."""
+def _tsne(x: np.ndarray, perplexity: float, iterations: int, seed: int):
+    """t-SNE 2-D, returning (points, final KL divergence); the iteration
+    argument is n_iter before scikit-learn 1.5 and max_iter after, so pass
+    whichever this version has."""
     params = inspect.signature(TSNE).parameters
     kw = {"max_iter": iterations} if "max_iter" in params else {"n_iter": iterations}
     tsne = TSNE(n_components=2, perplexity=perplexity, init="pca", learning_rate="auto",
                 random_state=seed, **kw)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", FutureWarning)
-        return tsne.fit_transform(x)
+        xy = tsne.fit_transform(x)
+    return xy, float(tsne.kl_divergence_)
 
 
 def _composition(values: np.ndarray) -> Dict[int, int]:
@@ -180,7 +186,7 @@ def cluster_failures(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
         res.tsne_note = f"t-SNE on a random subsample of {opt.tsne_max} of {len(rows)} points (seed {opt.seed})."
     if len(idx) >= 5:
         perplexity = min(opt.perplexity, (len(idx) - 1) / 3.0)
-        res.tsne_xy = _tsne(z[idx], perplexity, opt.tsne_iterations, opt.seed)
+        res.tsne_xy, res.tsne_kl = _tsne(z[idx], perplexity, opt.tsne_iterations, opt.seed)
         if perplexity < opt.perplexity:
             res.tsne_note = (res.tsne_note + " " if res.tsne_note else "") + \
                 f"Perplexity lowered to {perplexity:.1f} for {len(idx)} points."

@@ -51,9 +51,9 @@ def plot_confusion(metrics: dict, title: str, path: str) -> str:
     ax.set_xlabel("predicted class")
     ax.set_ylabel("true class (label from the depth sensor)")
     mpca = metrics["mean_per_class_accuracy"]
-    ax.set_title(f"{title}\nconfusion matrix, rows normalised "
-                 f"(mean per-class acc. {mpca:.3f})" if mpca is not None else f"{title}\nconfusion matrix")
-    fig.colorbar(im, ax=ax, label="fraction of the true class")
+    ax.set_title(f"{title}\nrow-normalised confusion matrix"
+                 + (f"\nmean per-class accuracy {mpca:.3f}" if mpca is not None else ""), fontsize=10)
+    fig.colorbar(im, ax=ax, label="fraction of the true class", fraction=0.046, pad=0.04)
     return _save(fig, path)
 
 
@@ -76,8 +76,13 @@ def plot_roc(curves: Sequence[Tuple[str, dict]], title: str, path: str) -> str:
 
 
 def _threshold_axis(ax, sweep: dict) -> None:
-    """Log threshold axis with the 70 %-retained and model thresholds marked."""
+    """Log threshold axis with the 70 %-retained and model thresholds marked,
+    limited to where the retained fraction changes (the reference sweep starts
+    at 2e-5, far below any real variance)."""
     ax.set_xscale("log")
+    kept = [p["threshold"] for p in sweep["curve"] if p["retained_count"] > 0 and p["threshold"] > 0]
+    if kept:
+        ax.set_xlim(min(kept) / 1.5, max(p["threshold"] for p in sweep["curve"]) * 1.3)
     ax.set_xlabel("uncertainty threshold τ on var_predicted (variance of P(predicted class), keep if ≤ τ)")
     t70 = sweep["at_70"]["threshold"]
     ax.axvline(t70, color="k", ls=":", lw=1, label=f"≥70 % retained: τ = {t70:.3g}")
@@ -104,8 +109,15 @@ def plot_accuracy_vs_threshold(sweep: dict, title: str, path: str) -> str:
     ax.set_ylabel("accuracy of retained predictions")
     ax.set_ylim(0, 1.02)
     ax.grid(alpha=0.3, which="both")
+    ax2 = ax.twinx()  # how much data each accuracy is computed on
+    t, v = _positive(sweep["curve"], "retained")
+    ax2.plot(t, 100 * v, color="grey", lw=1, alpha=0.7, label="retained samples (%, right axis)")
+    ax2.set_ylim(0, 102)
+    ax2.set_ylabel("retained samples (%)", color="grey")
     ax.set_title(f"{title}\naccuracy vs uncertainty threshold (lower τ = stricter filter)")
-    ax.legend(fontsize=8, loc="lower left")
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = ax2.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="lower right")
     return _save(fig, path)
 
 
@@ -239,34 +251,35 @@ def plot_mosaic(run: EvalRun, res, cluster: int, title: str, path: str) -> str:
 
 def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dict]], path: str,
                                title: str) -> str:
-    """Grouped bars: for each phenomenon, the fraction of its samples each model
-    predicts FN (solid) and FP (hatched), with the detector's true FN/FP rate
-    as black ticks on the bars."""
+    """Two panels (predicted FN on top, predicted FP below): for each phenomenon,
+    the fraction of its samples each model predicts as that failure (bars, one
+    colour per model), with the detector's true rate from the labels as a black
+    tick on each bar, so "predicted" and "true" can be read together."""
     codes = sorted({e["phenomenon"] for entries in per_phen for e in entries})
     n_models = len(names)
-    width = 0.8 / (2 * n_models)
+    width = 0.8 / n_models
     x = np.arange(len(codes))
-    fig, ax = plt.subplots(figsize=(max(7.0, 1.5 * len(codes) * n_models), 4.8))
     colours = _category_colours(n_models)
-    for i, (name, entries) in enumerate(zip(names, per_phen)):
-        by = {e["phenomenon"]: e for e in entries}
-        for j, (key, truth, kind, hatch) in enumerate((("pred_fn", "true_fn", "FN", None),
-                                                        ("pred_fp", "true_fp", "FP", "//"))):
+    fig, axes = plt.subplots(2, 1, figsize=(max(6.5, 1.0 * len(codes) * max(n_models, 2) + 2.5), 7.0), sharex=True)
+    for ax, (key, truth, kind) in zip(axes, (("pred_fn", "true_fn", "FN"), ("pred_fp", "true_fp", "FP"))):
+        for i, (name, entries) in enumerate(zip(names, per_phen)):
+            by = {e["phenomenon"]: e for e in entries}
             vals = [by[c][key] if c in by else np.nan for c in codes]
             true = [by[c][truth] if c in by else np.nan for c in codes]
-            pos = x - 0.4 + width * (2 * i + j) + width / 2
-            ax.bar(pos, vals, width, color=colours[i], hatch=hatch, edgecolor="black", lw=0.5,
-                   alpha=0.9 if hatch is None else 0.55, label=f"{name}: predicted {kind}")
-            ax.scatter(pos, true, marker="_", s=180, color="black", zorder=3,
-                       label="true rate (label)" if i == 0 and j == 0 else None)
-    ax.set_xticks(x, [f"{phenomenon_name(c)}\n(n = {' / '.join(str(next((e['n'] for e in en if e['phenomenon'] == c), 0)) for en in per_phen)})"
-                      for c in codes], fontsize=8)
-    ax.set_ylabel("fraction of the phenomenon's samples")
-    ax.set_xlabel("phenomenon under the patch centre (sample counts per model)")
-    ax.set_ylim(0, 1.05)
-    ax.grid(axis="y", alpha=0.3)
-    ax.set_title(f"{title}\npredicted FN (solid) and FP (hatched) per phenomenon")
-    ax.legend(fontsize=7, ncol=2, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+            pos = x - 0.4 + width * (i + 0.5)
+            ax.bar(pos, vals, width * 0.92, color=colours[i], label=f"{name}: predicted {kind}")
+            ax.scatter(pos, true, marker="_", s=max(60, 400 * width), linewidths=2.2, color="black", zorder=3,
+                       label=f"true {kind} rate (labels)" if i == 0 else None)
+        ax.set_ylabel(f"fraction predicted {kind}")
+        ax.set_ylim(0, 1.05)
+        ax.grid(axis="y", alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        ax.set_title(f"predicted {kind} per phenomenon", fontsize=10)
+    counts = [" / ".join(str(next((e["n"] for e in en if e["phenomenon"] == c), 0)) for en in per_phen) for c in codes]
+    axes[1].set_xticks(x, [f"{phenomenon_name(c)}\n(n = {n})" for c, n in zip(codes, counts)], fontsize=8)
+    axes[1].set_xlabel("phenomenon under the patch centre (sample count per model, in legend order)")
+    fig.suptitle(f"{title}: which phenomena each model predicts as stereo failures")
+    fig.tight_layout()
     return _save(fig, path)
 
 
@@ -277,9 +290,10 @@ def plot_group_bars(groups: List[dict], title: str, xlabel: str, path: str) -> s
     oa = [g["overall_accuracy"] if g["overall_accuracy"] is not None else np.nan for g in groups]
     x = np.arange(len(names))
     fig, ax = plt.subplots(figsize=(max(5.0, 1.3 * len(names) + 2), 4.2))
-    ax.bar(x - 0.2, mp, 0.4, label="mean per-class accuracy")
-    ax.bar(x + 0.2, oa, 0.4, label="overall accuracy")
-    ax.set_xticks(x, [f"{n}\n(n = {g['n']})" for n, g in zip(names, groups)], fontsize=8)
+    ax.bar(x - 0.2, mp, 0.4, color="#444466", label="mean per-class accuracy")
+    ax.bar(x + 0.2, oa, 0.4, color="#aaaacc", label="overall accuracy")
+    ax.set_xticks(x, [f"{n}\n({g['split'] + ', ' if g.get('split') else ''}n = {g['n']})"
+                      for n, g in zip(names, groups)], fontsize=8)
     ax.set_ylim(0, 1.05)
     ax.set_ylabel("accuracy")
     ax.set_xlabel(xlabel)

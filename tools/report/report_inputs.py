@@ -355,6 +355,7 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
     wrong patches, so a mismatch is an InputError. Returns warnings (e.g. the
     dataset's labels are about another detector than the model's)."""
     warnings = []
+    other_detector = {}
     pred_path = os.path.join(run.path, "predictions.csv")
     for name in sorted(set(run.session.tolist())):
         s = dataset.session(name)
@@ -378,9 +379,11 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
         s.patches()  # size check now, not in the middle of the figures
         det = s.info.get("detector")
         if det and run.detector != "unknown" and det != run.detector:
-            warnings.append(
-                f"{run.name}: the model was trained for detector '{run.detector}' but the labels of session "
-                f"{name} in {dataset.path} are about '{det}'")
+            other_detector.setdefault(det, []).append(name)
+    for det, names in sorted(other_detector.items()):
+        warnings.append(
+            f"{run.name}: the model was trained for detector '{run.detector}' but the labels of session(s) "
+            f"{', '.join(names)} in {dataset.path} are about '{det}'")
     run.dataset = dataset
     return warnings
 
