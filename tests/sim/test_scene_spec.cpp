@@ -2,6 +2,7 @@
 // file and the key.
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include <gtest/gtest.h>
 
@@ -102,6 +103,21 @@ TEST(SimSceneSpec, ErrorsNameFileAndKey) {
   EXPECT_NE(error_of("environment: underwater\n").find("environment: expected indoor or outdoor"), std::string::npos);
   EXPECT_NE(error_of("layout: [1, 2\n").find("test.yaml:"), std::string::npos);
   EXPECT_NE(error_of("elements:\n  - {type: wall, from: [0, 0]}\n").find("wall needs from and to"), std::string::npos);
+}
+
+// The format example in the scenes README is a valid scene.
+TEST(SimSceneSpec, ReadmeExampleParses) {
+  std::ifstream in(std::string(IVOA_SIM_SCENES_DIR) + "/README.md");
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  const size_t start = text.find("```yaml\n");
+  ASSERT_NE(start, std::string::npos);
+  const size_t end = text.find("```", start + 8);
+  const SceneSpec spec = parse_scene_spec(text.substr(start + 8, end - start - 8), "README.md");
+  EXPECT_EQ(spec.elements.size(), 14u);
+  EXPECT_EQ(spec.materials.size(), 2u);
+  const Scene scene = generate_scene(spec, 1);
+  EXPECT_GT(scene.num_solids(), 20);
+  EXPECT_EQ(scene.num_pits(), 1);
 }
 
 TEST(SimSceneSpec, MissingFileIsNamed) {

@@ -60,8 +60,8 @@ int main(int argc, char** argv) {
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("sim-gallery", common.log_level);
   if (scenes.empty())
-    for (const char* name : {"indoor_office", "corridor", "polished_lobby", "warehouse", "outdoor_campus",
-                             "wet_parking_lot", "night_plaza"})
+    for (const char* name : {"indoor_office", "home", "corridor", "polished_lobby", "warehouse", "outdoor_campus",
+                             "sidewalk", "wet_parking_lot", "night_plaza"})
       scenes.push_back(std::string(IVOA_SIM_SCENES_DIR) + "/" + name + ".yaml");
 
   const int tile_height = tile_width * 600 / 960;

@@ -66,8 +66,8 @@ int main(int argc, char** argv) {
   CLI::App app{"Simulator frame time on one core, accelerated vs brute force, against the 150 ms budget"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
-  std::vector<std::string> scenes = {"indoor_office", "corridor", "polished_lobby", "warehouse", "outdoor_campus",
-                                     "wet_parking_lot", "night_plaza"};
+  std::vector<std::string> scenes = {"indoor_office", "home", "corridor", "polished_lobby", "warehouse",
+                                     "outdoor_campus", "sidewalk", "wet_parking_lot", "night_plaza"};
   int frames = 8, repeats = 2, baseline_frames = 1, cpu = 0;
   uint64_t seed = 1;
   double budget_ms = 150;
