@@ -153,14 +153,18 @@ int main(int argc, char** argv) {
   if (jppc_only) return ivoa::kExitOk;
   const Timing dense = run("dense", rig, config, grid, frames, repeats);
   print("dense", dense);
-  const double ratio = dense.median() / jppc.median();
-  std::printf("dense / jppc: %.1fx (median per frame)\n", ratio);
-  std::printf("budget: JPP-C <= 5 ms per frame on one core: median %.2f ms, best %.2f ms -> %s\n", jppc.median(),
-              Timing::quantile(jppc.wall, 0.0), jppc.median() <= 5.0 ? "within" : "OVER");
+  const double ratio = Timing::quantile(dense.cpu, 0.5) / Timing::quantile(jppc.cpu, 0.5);
+  std::printf("dense / jppc: %.1fx (CPU median per frame; wall medians: %.1fx)\n", ratio, dense.median() / jppc.median());
+  // On one core the thread's CPU time is the work per frame; wall time also
+  // counts the time other processes took the core (a busy build machine).
+  const double cpu_median = Timing::quantile(jppc.cpu, 0.5);
+  std::printf("budget: JPP-C <= 5 ms per frame on one core: CPU median %.2f ms (wall median %.2f, best %.2f) -> %s\n",
+              cpu_median, jppc.median(), Timing::quantile(jppc.wall, 0.0), cpu_median <= 5.0 ? "within" : "OVER");
   if (!json_path.empty()) {
     std::ofstream out(json_path);
     out << "{\"frames\": " << frames_count << ", \"repeats\": " << repeats << ", \"threads\": " << threads
         << ", \"load_average\": " << load[0] << ", \"jppc_median_ms\": " << jppc.median()
+        << ", \"jppc_cpu_median_ms\": " << Timing::quantile(jppc.cpu, 0.5)
         << ", \"jppc_best_ms\": " << Timing::quantile(jppc.wall, 0.0) << ", \"dense_median_ms\": " << dense.median()
         << ", \"ratio\": " << ratio << "}\n";
     if (!out) {
