@@ -1,0 +1,216 @@
+// ivoa-launch as a user runs it: --duration, --once, --until, --script,
+// --status-file, --list, exit codes, configuration errors, SIGTERM.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "test_rig.hpp"
+
+extern char** environ;
+
+namespace {
+
+struct Result {
+  int exit_code = -1;
+  std::string output;
+};
+
+// Runs ivoa-launch (bounded by timeout(1)) with stdout and stderr captured.
+Result launch(const std::string& args) {
+  const std::string command = "timeout 60 " IVOA_LAUNCH_EXE " --lcm-url none --log-level warn " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  Result r;
+  char buffer[4096];
+  size_t n;
+  while ((n = fread(buffer, 1, sizeof(buffer), pipe)) > 0) r.output.append(buffer, n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string write_file(const ivoa::test::TempDir& dir, const std::string& name, const std::string& text) {
+  const std::string path = dir.file(name);
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+TEST(LaunchCli, DurationStopsEverythingAndWritesTheStatus) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "d.pmd", R"(
+group "g" {
+  cmd "greeter" { exec = "echo hello ${WHO}; sleep 30"; }
+  cmd "sleeper" { exec = "sleep 30"; auto_respawn = "true"; stop_signal = 15; }
+}
+)");
+  const auto status = dir.file("status.json");
+  const auto start = std::chrono::steady_clock::now();
+  const Result r = launch(config + " --set WHO=world --duration 1 --status-file " + status);
+  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_LT(took, 20.0);
+  EXPECT_TRUE(contains(r.output, "[greeter] hello world")) << r.output;
+  const std::string json = read_file(status);
+  EXPECT_TRUE(contains(json, "\"end_reason\": \"--duration reached\"")) << json;
+  EXPECT_TRUE(contains(json, "\"name\": \"sleeper\", \"group\": \"g\", \"host\": \"localhost\", \"auto_respawn\": true"))
+      << json;
+  EXPECT_FALSE(contains(json, "\"state\": \"running\"")) << json;
+  EXPECT_TRUE(contains(json, "\"exit_signal\": 15")) << json;
+}
+
+TEST(LaunchCli, FailedCommandWithoutRespawnGivesExitOne) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "f.pmd", R"(
+cmd "broken" { exec = "exit 3"; }
+cmd "service" { exec = "sleep 30"; auto_respawn = "true"; }
+)");
+  const auto status = dir.file("status.json");
+  const Result r = launch(config + " --once --grace 0 --duration 30 --status-file " + status);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const std::string json = read_file(status);
+  EXPECT_TRUE(contains(json, "\"end_reason\": \"--once: done\"")) << json;
+  EXPECT_TRUE(contains(json, "\"exit_code\": 3, \"exit_signal\": 0, \"failed\": true")) << json;
+}
+
+TEST(LaunchCli, RespawningCommandsFailuresDoNotFailTheRun) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "r.pmd", "cmd \"flaky\" { exec = \"exit 2\"; auto_respawn = \"true\"; }\n");
+  const auto status = dir.file("status.txt");
+  const Result r = launch(config + " --duration 1 --respawn-delay 0.1 --status-file " + status);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const std::string table = read_file(status);
+  EXPECT_TRUE(contains(table, "NAME")) << "a .txt status file holds the table";
+  EXPECT_TRUE(contains(r.output, "[launcher] flaky: respawning in 0.2 s")) << r.output;
+}
+
+TEST(LaunchCli, UntilEndsWhenTheNamedCommandHasEnded) {
+  ivoa::test::TempDir dir;
+  const auto status = dir.file("s.json");
+  const auto once = write_file(dir, "o.pmd", R"(
+cmd "session" { exec = "sleep 0.3"; }
+cmd "logger" { exec = "sleep 30"; auto_respawn = "true"; }
+)");
+  const auto start = std::chrono::steady_clock::now();
+  const Result r = launch(once + " --until session --grace 0.2 --duration 30 --status-file " + status);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 20.0);
+  EXPECT_TRUE(contains(read_file(status), "\"end_reason\": \"--until: done\"")) << read_file(status);
+}
+
+TEST(LaunchCli, ScriptStartsOnlyWhatItNamesInOrder) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "s.pmd", R"(
+group "first" { cmd "a" { exec = "echo a"; } }
+group "second" { cmd "b" { exec = "echo b"; } }
+cmd "never" { exec = "echo never"; }
+script "go" {
+  start group "first" wait "running";
+  wait cmd "a" status "stopped";
+  wait ms 100;
+  start cmd "b" wait "stopped";
+}
+)");
+  const auto status = dir.file("s.json");
+  const Result r = launch(config + " --script go --duration 20 --status-file " + status);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const auto a = r.output.find("[a] a"), b = r.output.find("[b] b");
+  ASSERT_NE(a, std::string::npos) << r.output;
+  ASSERT_NE(b, std::string::npos) << r.output;
+  EXPECT_LT(a, b);
+  EXPECT_FALSE(contains(r.output, "[never]"));
+  const std::string json = read_file(status);
+  EXPECT_TRUE(contains(json, "\"name\": \"never\", \"group\": \"\", \"host\": \"localhost\", \"auto_respawn\": false, "
+                             "\"pid\": 0, \"state\": \"idle\""))
+      << json;
+  EXPECT_TRUE(contains(json, "\"end_reason\": \"every command has ended\"")) << json;
+}
+
+TEST(LaunchCli, ConfigurationErrorsNameFileAndLineAndExitTwo) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "bad.pmd", "cmd \"a\" {\n  exec = \"x\"\n}\n");
+  Result r = launch(config);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(contains(r.output, config + ":3: expected ';'")) << r.output;
+
+  const auto unset = write_file(dir, "unset.pmd", "\ncmd \"a\" { exec = \"run ${IVOA_TEST_SURELY_UNSET}\"; }\n");
+  r = launch(unset);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(contains(r.output, unset + ":2: cmd \"a\": variable ${IVOA_TEST_SURELY_UNSET} is not set")) << r.output;
+
+  r = launch(unset + " --group nope");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(contains(r.output, "no group \"nope\"")) << r.output;
+}
+
+TEST(LaunchCli, ListShowsTheCommandsForTheHostExpanded) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "l.pmd", R"(# @default RATE = 5
+group "robot" {
+  cmd "camera" { exec = "cam --rate ${RATE}"; host = "robot1"; auto_respawn = "true"; }
+  cmd "local" { exec = "loc"; }
+}
+)");
+  Result r = launch(config + " --list --host robot1 --set RATE=9");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_TRUE(contains(r.output, "camera [robot] auto_respawn stop_signal 2\n    cam --rate 9")) << r.output;
+  EXPECT_TRUE(contains(r.output, "(other host) local (localhost)")) << r.output;
+  r = launch(config + " --list");
+  EXPECT_TRUE(contains(r.output, "    loc\n")) << r.output;
+  EXPECT_FALSE(contains(r.output, "cam --rate")) << r.output;
+}
+
+TEST(LaunchCli, SigtermStopsEveryCommandAndExitsCleanly) {
+  ivoa::test::TempDir dir;
+  const std::string pid_file = dir.file("worker.pid");
+  const auto config = write_file(dir, "t.pmd", "cmd \"worker\" { exec = \"echo $$ > " + pid_file +
+                                                   "; exec sleep 30\"; auto_respawn = \"true\"; }\n");
+  const std::string out = dir.file("out.txt");
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  const char* argv[] = {IVOA_LAUNCH_EXE, config.c_str(), "--lcm-url", "none", "--duration", "60", nullptr};
+  pid_t launcher = 0;
+  ASSERT_EQ(posix_spawn(&launcher, IVOA_LAUNCH_EXE, &actions, nullptr, const_cast<char**>(argv), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+
+  int worker = 0;
+  for (int i = 0; i < 200 && worker == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    std::ifstream(pid_file) >> worker;
+  }
+  ASSERT_GT(worker, 0) << "the command never started";
+  kill(launcher, SIGTERM);
+  int status = 0;
+  pid_t done = 0;
+  for (int i = 0; i < 200 && done == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    done = waitpid(launcher, &status, WNOHANG);
+  }
+  if (done == 0) {
+    kill(launcher, SIGKILL);
+    waitpid(launcher, &status, 0);
+    FAIL() << "ivoa-launch did not exit within 10 s of SIGTERM";
+  }
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_NE(kill(worker, 0), 0) << "the command outlived the launcher";
+  EXPECT_TRUE(contains(read_file(out), "stopping (signal 15)")) << read_file(out);
+}
+
+}  // namespace

@@ -1,0 +1,34 @@
+#pragma once
+// ivoa-launch's run loop: supervises the selected commands (or runs a
+// script), follows their heartbeats, shows the status table, and decides
+// when to end (signal, --duration, --once/--until, or nothing left to run).
+#include <string>
+#include <vector>
+
+#include "ivoa/launcher/config.hpp"
+#include "ivoa/launcher/selection.hpp"
+#include "ivoa/launcher/supervisor.hpp"
+
+namespace ivoa::launcher {
+
+struct LauncherOptions {
+  std::string script;                // run this script instead of starting everything
+  double duration_s = 0;             // > 0: stop everything after this long
+  bool once = false;                 // stop everything once every non-respawn command has ended
+  std::vector<std::string> until;    // stop everything once these commands have ended
+  double grace_s = 1.0;              // after --once/--until holds, let the others finish this long
+  std::string status_file;           // written at exit: JSON if it ends in .json, else the table
+  double status_every_s = 5.0;       // table period when not redrawing a terminal (0: only at the end)
+  bool redraw = false;               // live table on a terminal (else lines + periodic table)
+  std::string output_dir;            // also append each command's output to DIR/NAME.log
+  std::string lcm_url;               // heartbeats; "none" to run without LCM
+  std::string status_channel = "PROCESS_STATUS";
+  SupervisorOptions supervisor;
+};
+
+// Runs until the end condition; returns the exit code: 0, or 1 if a
+// command without auto_respawn ended on its own with a failure.
+int run_launcher(const Config& config, std::vector<LaunchCommand> commands, const std::string& host,
+                 const LauncherOptions& options);
+
+}  // namespace ivoa::launcher

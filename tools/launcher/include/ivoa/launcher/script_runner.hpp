@@ -1,0 +1,38 @@
+#pragma once
+// Runs a procman script (flattened by flatten_script) against a Supervisor,
+// one step at a time, without blocking: advance() does what it can and
+// returns at the first wait that is not yet satisfied.
+// "running" means every target has been started; "stopped" means none of
+// them runs, stops or waits to respawn.
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "ivoa/launcher/config.hpp"
+#include "ivoa/launcher/supervisor.hpp"
+
+namespace ivoa::launcher {
+
+class ScriptRunner {
+ public:
+  ScriptRunner(std::vector<ScriptStep> steps, Supervisor& supervisor, EventHandler on_event);
+
+  void advance();
+  bool done() const { return next_ >= steps_.size(); }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  // The selected commands a step's target names (none if they run elsewhere).
+  std::vector<std::string> targets(const ScriptStep& step) const;
+  bool satisfied(const std::vector<std::string>& names, const std::string& status) const;
+  void apply(const ScriptStep& step, const std::vector<std::string>& names);
+
+  std::vector<ScriptStep> steps_;
+  Supervisor& supervisor_;
+  EventHandler on_event_;
+  size_t next_ = 0;
+  bool waiting_ = false;
+  Clock::time_point wait_until_;
+};
+
+}  // namespace ivoa::launcher

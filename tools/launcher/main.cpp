@@ -1,0 +1,141 @@
+// ivoa-launch: runs a procman configuration (procman_configs/*.pmd) on this
+// machine, without procman: the commands for --host, each in its own
+// process group, output prefixed "[name] ", auto_respawn with back-off, a
+// clean stop on Ctrl-C/SIGTERM, and a status table with each process's
+// PROCESS_STATUS heartbeat.
+#include <sys/prctl.h>
+#include <unistd.h>
+
+#include <climits>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/fmt/ranges.h>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/channels.hpp"
+#include "ivoa/core/process.hpp"
+#include "ivoa/core/stop_signal.hpp"
+#include "ivoa/launcher/config.hpp"
+#include "ivoa/launcher/launcher.hpp"
+#include "ivoa/launcher/selection.hpp"
+#include "ivoa/launcher/variables.hpp"
+
+namespace fs = std::filesystem;
+using namespace ivoa::launcher;
+
+namespace {
+
+struct CliOptions {
+  std::string config_path;
+  Selection selection;
+  std::vector<std::string> sets;
+  bool list = false;
+  bool plain = false;
+  LauncherOptions launcher;
+};
+
+void add_options(CLI::App& app, CliOptions& o) {
+  auto& l = o.launcher;
+  app.add_option("config", o.config_path, "procman configuration (.pmd)")->required()->check(CLI::ExistingFile);
+  app.add_option("--host", o.selection.host, "run the commands for this host (host/deputy); '*' = all")
+      ->capture_default_str();
+  app.add_option("--group,-g", o.selection.groups, "only the commands in these groups (\"a/b\" for nested)");
+  app.add_option("--skip", o.selection.skip, "leave out these commands or groups");
+  app.add_option("--set", o.sets, "NAME=VALUE for ${NAME} (before the environment and the file's defaults)");
+  app.add_option("--script", l.script, "run this script of the file instead of starting every command");
+  app.add_option("--duration", l.duration_s, "stop everything after this many seconds (0: no limit)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_flag("--once", l.once, "stop everything once every command without auto_respawn has ended");
+  app.add_option("--until", l.until, "stop everything once these commands have ended");
+  app.add_option("--grace", l.grace_s, "seconds the others keep running after --once/--until holds")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--status-file", l.status_file, "write the final status here (JSON if it ends in .json, else the table)");
+  app.add_option("--status-every", l.status_every_s, "print the table every S seconds when not on a terminal (0: at the end only)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_flag("--plain", o.plain, "on a terminal too: prefixed lines and a periodic table instead of a live table");
+  app.add_option("--output-dir", l.output_dir, "also append each command's output to DIR/NAME.log");
+  app.add_option("--status-channel", l.status_channel, "heartbeat channel")->capture_default_str();
+  app.add_flag("--list", o.list, "print the commands that would run, expanded, and exit");
+  const char* g = "Respawn";
+  auto& s = l.supervisor;
+  app.add_option("--respawn-delay", s.respawn_delay_s, "first back-off, s (doubles while it keeps failing)")
+      ->capture_default_str()->group(g)->check(CLI::NonNegativeNumber);
+  app.add_option("--respawn-max-delay", s.respawn_max_delay_s, "longest back-off, s")
+      ->capture_default_str()->group(g)->check(CLI::NonNegativeNumber);
+  app.add_option("--healthy-after", s.healthy_after_s, "a run this long resets the back-off, s")
+      ->capture_default_str()->group(g)->check(CLI::NonNegativeNumber);
+}
+
+// IVOA_BIN: where ivoa-launch itself is (build/bin: every executable);
+// IVOA_CONFIG_DIR: the configuration's folder.
+std::map<std::string, std::string> builtin_variables(const std::string& config_path) {
+  std::map<std::string, std::string> out;
+  char exe[PATH_MAX] = {0};
+  if (readlink("/proc/self/exe", exe, sizeof(exe) - 1) > 0) out["IVOA_BIN"] = fs::path(exe).parent_path().string();
+  out["IVOA_CONFIG_DIR"] = fs::absolute(config_path).parent_path().lexically_normal().string();
+  return out;
+}
+
+void print_commands(const SelectedCommands& selected) {
+  for (const auto& c : selected.commands)
+    std::printf("%s%s%s%s\n    %s\n", c.spec.name.c_str(), c.spec.group.empty() ? "" : (" [" + c.spec.group + "]").c_str(),
+                c.spec.auto_respawn ? " auto_respawn" : "",
+                (" stop_signal " + std::to_string(c.spec.stop_signal)).c_str(), c.shell_command.c_str());
+  for (const auto& o : selected.other_hosts) std::printf("(other host) %s\n", o.c_str());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Run a procman configuration (.pmd) on this machine: the commands for --host, respawned when they die, "
+               "stopped cleanly on Ctrl-C. Exit codes: 0 ok, 1 a command without auto_respawn failed, 2 bad flags or "
+               "configuration."};
+  ivoa::CommonOptions common;
+  CliOptions o;
+  ivoa::add_common_options(app, common);
+  add_options(app, o);
+  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  ivoa::init_logging("launcher", common.log_level);
+  o.launcher.lcm_url = common.lcm_url;
+
+  Config config;
+  SelectedCommands selected;
+  try {
+    config = load_config(o.config_path);
+    for (const auto& w : config.warnings) spdlog::warn("{}", w);
+    std::map<std::string, std::string> overrides;
+    for (const auto& s : o.sets) overrides.insert(parse_assignment(s));
+    const Variables variables(config, overrides, builtin_variables(o.config_path));
+    selected = select_commands(config, o.selection, variables);
+    o.launcher.supervisor.environment = variables.exported();
+    if (!o.launcher.script.empty()) flatten_script(config, o.launcher.script);
+    for (const auto& name : o.launcher.until)
+      if (!config.find_command(name)) throw ConfigError(config.path + ": no cmd \"" + name + "\" (--until)");
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitUsage;
+  }
+  if (o.list) {
+    print_commands(selected);
+    return ivoa::kExitOk;
+  }
+  if (!selected.other_hosts.empty())
+    spdlog::info("{} command(s) for other hosts not run here (--host {})", selected.other_hosts.size(), o.selection.host);
+  if (selected.commands.empty()) {
+    std::set<std::string> hosts;
+    for (const auto& c : config.commands) hosts.insert(host_of(c));
+    spdlog::error("{}: no command to run for host '{}' (its hosts: {}; pass --host NAME, or --host '*' for all)",
+                  config.path, o.selection.host, fmt::join(hosts, ", "));
+    return ivoa::kExitUsage;
+  }
+  o.launcher.redraw = !o.plain && isatty(STDOUT_FILENO);
+  // Orphans of the commands come to us, so a command's group can be seen to empty.
+  prctl(PR_SET_CHILD_SUBREAPER, 1);
+  o.launcher.supervisor.reap_orphans = true;
+  ivoa::install_stop_handlers();
+  return run_launcher(config, std::move(selected.commands), o.selection.host, o.launcher);
+}

@@ -1,0 +1,37 @@
+#include "heartbeat_monitor.hpp"
+
+#include <unistd.h>
+
+namespace ivoa::launcher {
+
+HeartbeatMonitor::HeartbeatMonitor(Bus& bus, const std::string& channel, const Supervisor& supervisor)
+    : bus_(bus), supervisor_(supervisor) {
+  char name[256] = {0};
+  gethostname(name, sizeof(name) - 1);
+  hostname_ = name;
+  bus_.subscribe<process_status_t>(channel, [this](const process_status_t& s, const ReceiveInfo&) { on_status(s); });
+}
+
+void HeartbeatMonitor::drain() {
+  while (bus_.handle(0) > 0) {
+  }
+}
+
+void HeartbeatMonitor::on_status(const process_status_t& status) {
+  std::optional<std::string> command;
+  if (status.host == hostname_) {
+    const pid_t group = getpgid(status.pid);
+    if (group > 0) command = supervisor_.command_with_group(group);
+  } else if (supervisor_.has(status.name)) {
+    command = status.name;
+  }
+  if (command) latest_[*command] = {status, std::chrono::steady_clock::now()};
+}
+
+std::optional<HeartbeatMonitor::Latest> HeartbeatMonitor::latest(const std::string& command) const {
+  const auto it = latest_.find(command);
+  if (it == latest_.end()) return std::nullopt;
+  return it->second;
+}
+
+}  // namespace ivoa::launcher

@@ -1,0 +1,264 @@
+#include "ivoa/launcher/launcher.hpp"
+
+#include <sys/ioctl.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+
+#include <spdlog/spdlog.h>
+
+#include "heartbeat_monitor.hpp"
+#include "ivoa/core/bus.hpp"
+#include "ivoa/core/heartbeat.hpp"
+#include "ivoa/core/stop_signal.hpp"
+#include "ivoa/launcher/script_runner.hpp"
+#include "ivoa/launcher/status_report.hpp"
+
+namespace ivoa::launcher {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Where command output goes: "[name] line" on stdout (or, while a live
+// table is drawn, the last lines under it), and optionally one file per command.
+class OutputPrinter {
+ public:
+  OutputPrinter(const LauncherOptions& options, const std::vector<std::string>& names) : redraw_(options.redraw) {
+    if (options.output_dir.empty()) return;
+    std::filesystem::create_directories(options.output_dir);
+    for (const auto& n : names) files_[n].open(options.output_dir + "/" + n + ".log", std::ios::app);
+  }
+
+  void line(const std::string& name, const std::string& text) {
+    std::string prefixed = "[" + name + "] " + text;
+    if (auto it = files_.find(name); it != files_.end()) it->second << text << '\n' << std::flush;
+    if (redraw_) {
+      tail_.push_back(std::move(prefixed));
+      if (tail_.size() > kTailLines) tail_.pop_front();
+    } else {
+      prefixed += '\n';
+      std::fwrite(prefixed.data(), 1, prefixed.size(), stdout);
+      std::fflush(stdout);
+    }
+  }
+
+  void event(const std::string& name, const std::string& text) {
+    if (auto it = files_.find(name); it != files_.end()) it->second << "[launcher] " << text << '\n' << std::flush;
+    line("launcher", name + ": " + text);
+  }
+
+  // The table on its own (periodic) or a full screen: header, table, newest lines.
+  void show(const std::string& header, const std::string& table) {
+    if (!redraw_) {
+      std::printf("%s\n%s", header.c_str(), table.c_str());
+      std::fflush(stdout);
+      return;
+    }
+    winsize ws{};
+    const int rows = ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_row > 0 ? ws.ws_row : 40;
+    const size_t cols = ws.ws_col > 0 ? ws.ws_col : 160;
+    std::string screen = "\x1b[H\x1b[J" + header + "\n" + table + std::string(std::min<size_t>(cols, 100), '-') + "\n";
+    const int used = 3 + static_cast<int>(std::count(table.begin(), table.end(), '\n'));
+    const size_t room = static_cast<size_t>(std::max(0, rows - used));
+    for (size_t i = tail_.size() > room ? tail_.size() - room : 0; i < tail_.size(); ++i)
+      screen += tail_[i].substr(0, cols) + "\n";
+    std::fwrite(screen.data(), 1, screen.size(), stdout);
+    std::fflush(stdout);
+  }
+
+  // After the live table: the screen is left as it is and lines print normally.
+  void end_redraw() { redraw_ = false; }
+
+ private:
+  static constexpr size_t kTailLines = 500;
+  bool redraw_;
+  std::deque<std::string> tail_;
+  std::map<std::string, std::ofstream> files_;
+};
+
+class Run {
+ public:
+  Run(const Config& config, std::vector<LaunchCommand> commands, const std::string& host, const LauncherOptions& options)
+      : config_(config),
+        host_(host),
+        options_(options),
+        printer_(options, names_of(commands)),
+        supervisor_(std::move(commands), options.supervisor,
+                    [this](const std::string& n, const std::string& l) { printer_.line(n, l); },
+                    [this](const std::string& n, const std::string& e) { printer_.event(n, e); }) {
+    connect_lcm();
+    if (!options_.script.empty())
+      script_ = std::make_unique<ScriptRunner>(flatten_script(config_, options_.script), supervisor_,
+                                               [this](const std::string& n, const std::string& e) { printer_.event(n, e); });
+  }
+
+  int run() {
+    started_ = Clock::now();
+    if (script_) script_->advance();
+    else supervisor_.start_all();
+    std::string reason;
+    while ((reason = end_reason()).empty()) {
+      const bool lcm_ready = supervisor_.step(100, monitor_ ? monitor_->fd() : -1);
+      if (lcm_ready) monitor_->drain();
+      if (script_) script_->advance();
+      publish_own_heartbeat();
+      show_periodically();
+    }
+    printer_.event("all", "stopping (" + reason + ")");
+    supervisor_.stop_all();
+    while (supervisor_.busy()) {
+      if (supervisor_.step(100, monitor_ ? monitor_->fd() : -1)) monitor_->drain();
+    }
+    printer_.end_redraw();
+    const int code = exit_code();
+    printer_.show(header(), format_status_table(rows()));
+    write_status_file(reason, code);
+    return code;
+  }
+
+ private:
+  static std::vector<std::string> names_of(const std::vector<LaunchCommand>& commands) {
+    std::vector<std::string> out;
+    for (const auto& c : commands) out.push_back(c.spec.name);
+    return out;
+  }
+
+  void connect_lcm() {
+    if (options_.lcm_url == "none") return;
+    try {
+      bus_ = std::make_unique<Bus>(options_.lcm_url);
+      monitor_ = std::make_unique<HeartbeatMonitor>(*bus_, options_.status_channel, supervisor_);
+      own_heartbeat_ = std::make_unique<Heartbeat>(*bus_, "launcher", options_.status_channel);
+      own_heartbeat_->set_state("running");
+    } catch (const BusError& e) {
+      spdlog::warn("no LCM ({}): running without heartbeats", e.what());
+      monitor_.reset();
+      own_heartbeat_.reset();
+      bus_.reset();
+    }
+  }
+
+  bool ended(const std::string& name) const { return supervisor_.status(name).state == RunState::kStopped; }
+
+  // The commands --once waits for: those without auto_respawn that were started.
+  bool once_condition() const {
+    bool any = false;
+    for (const auto& s : supervisor_.statuses()) {
+      if (s.auto_respawn || s.state == RunState::kIdle) continue;
+      any = true;
+      if (!ended(s.name)) return false;
+    }
+    return any && (!script_ || script_->done());
+  }
+
+  bool until_condition() const {
+    for (const auto& name : options_.until)
+      if (!ended(name)) return false;
+    return !options_.until.empty();
+  }
+
+  std::string end_reason() {
+    if (stop_requested()) return "signal " + std::to_string(stop_signal());
+    if (options_.duration_s > 0 && seconds_since(started_) >= options_.duration_s) return "--duration reached";
+    if (!supervisor_.busy() && (!script_ || script_->done())) return "every command has ended";
+    const bool condition = (options_.once && once_condition()) || until_condition();
+    if (!condition) {
+      condition_since_.reset();
+      return "";
+    }
+    if (!condition_since_) condition_since_ = Clock::now();
+    if (seconds_since(*condition_since_) >= options_.grace_s) return options_.once ? "--once: done" : "--until: done";
+    return "";
+  }
+
+  std::vector<StatusRow> rows() const {
+    std::vector<StatusRow> out;
+    for (const auto& s : supervisor_.statuses()) {
+      StatusRow row{s, std::nullopt, 0};
+      if (monitor_)
+        if (auto h = monitor_->latest(s.name)) {
+          row.heartbeat = h->status;
+          row.heartbeat_age_s = std::chrono::duration<double>(Clock::now() - h->received).count();
+        }
+      out.push_back(std::move(row));
+    }
+    return out;
+  }
+
+  std::string header() const {
+    char text[512];
+    std::snprintf(text, sizeof(text), "ivoa-launch %s  host %s  %.0f s%s", config_.path.c_str(), host_.c_str(),
+                  seconds_since(started_), options_.redraw ? "  (Ctrl-C stops everything)" : "");
+    return text;
+  }
+
+  void show_periodically() {
+    const double period = options_.redraw ? 1.0 : options_.status_every_s;
+    if (period <= 0 || seconds_since(last_shown_) < period) return;
+    last_shown_ = Clock::now();
+    printer_.show(header(), format_status_table(rows()));
+  }
+
+  void publish_own_heartbeat() {
+    if (!own_heartbeat_) return;
+    int running = 0;
+    const auto all = supervisor_.statuses();
+    for (const auto& s : all) {
+      running += s.state == RunState::kRunning;
+      own_heartbeat_->set_counter(s.name + ".restarts", s.restarts);
+    }
+    own_heartbeat_->set_counter("running", running);
+    own_heartbeat_->set_counter("commands", static_cast<int64_t>(all.size()));
+    own_heartbeat_->tick();
+  }
+
+  int exit_code() const {
+    int code = 0;
+    for (const auto& s : supervisor_.statuses())
+      if (!s.auto_respawn && s.failed) {
+        spdlog::error("{} failed ({})", s.name, s.exit_signal ? "signal " + std::to_string(s.exit_signal)
+                                                              : "exit code " + std::to_string(s.exit_code));
+        code = 1;
+      }
+    return code;
+  }
+
+  void write_status_file(const std::string& reason, int code) const {
+    if (options_.status_file.empty()) return;
+    const auto& path = options_.status_file;
+    const bool json = path.size() >= 5 && path.compare(path.size() - 5, 5, ".json") == 0;
+    RunSummary summary{config_.path, host_, seconds_since(started_), reason, code};
+    std::ofstream out(path);
+    out << (json ? format_status_json(rows(), summary) : header() + "\n" + format_status_table(rows()));
+    if (!out) spdlog::error("cannot write the status file {}", path);
+  }
+
+  const Config& config_;
+  std::string host_;
+  LauncherOptions options_;
+  OutputPrinter printer_;
+  Supervisor supervisor_;
+  std::unique_ptr<Bus> bus_;
+  std::unique_ptr<HeartbeatMonitor> monitor_;
+  std::unique_ptr<Heartbeat> own_heartbeat_;
+  std::unique_ptr<ScriptRunner> script_;
+  Clock::time_point started_, last_shown_ = Clock::now();
+  std::optional<Clock::time_point> condition_since_;
+};
+
+}  // namespace
+
+int run_launcher(const Config& config, std::vector<LaunchCommand> commands, const std::string& host,
+                 const LauncherOptions& options) {
+  Run run(config, std::move(commands), host, options);
+  return run.run();
+}
+
+}  // namespace ivoa::launcher

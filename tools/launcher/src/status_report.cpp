@@ -1,0 +1,115 @@
+#include "ivoa/launcher/status_report.hpp"
+
+#include <signal.h>
+
+#include <cstdio>
+#include <cstring>
+#include <sstream>
+
+namespace ivoa::launcher {
+namespace {
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+          out += buf;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.*f", decimals, v);
+  return buf;
+}
+
+std::string state_text(const CommandStatus& c) {
+  std::string s = to_string(c.state);
+  if (c.state == RunState::kRespawning) s += " " + fixed(c.respawn_in_s, 1) + "s";
+  return s;
+}
+
+std::string clip(const std::string& s, size_t width) {
+  return s.size() <= width ? s : s.substr(0, width - 1) + "~";
+}
+
+}  // namespace
+
+std::string describe_exit(const CommandStatus& c) {
+  if (c.exit_signal != 0) {
+    const char* abbrev = sigabbrev_np(c.exit_signal);
+    return abbrev ? std::string("SIG") + abbrev : "signal " + std::to_string(c.exit_signal);
+  }
+  return c.exit_code >= 0 ? std::to_string(c.exit_code) : "-";
+}
+
+std::string format_status_table(const std::vector<StatusRow>& rows) {
+  std::ostringstream out;
+  char line[256];
+  std::snprintf(line, sizeof(line), "%-20s %7s %-15s %4s %-8s %8s %8s %6s %5s %8s  %s\n", "NAME", "PID", "STATE",
+                "RST", "EXIT", "IN", "OUT", "DROP", "BAD", "LAT ms", "PROCESS STATE");
+  out << line;
+  for (const auto& r : rows) {
+    const auto& c = r.command;
+    const std::string pid = c.pid > 0 ? std::to_string(c.pid) : "-";
+    std::string in = "-", out_count = "-", dropped = "-", bad = "-", latency = "-", hb_state = "";
+    if (r.heartbeat) {
+      const auto& h = *r.heartbeat;
+      in = std::to_string(h.messages_in);
+      out_count = std::to_string(h.messages_out);
+      dropped = std::to_string(h.dropped);
+      bad = std::to_string(h.bad_input);
+      latency = fixed(h.latency_ms_mean, 1);
+      hb_state = h.state + " (" + fixed(r.heartbeat_age_s, 0) + "s ago)";
+    }
+    std::snprintf(line, sizeof(line), "%-20s %7s %-15s %4d %-8s %8s %8s %6s %5s %8s  %s\n", clip(c.name, 20).c_str(),
+                  pid.c_str(), state_text(c).c_str(), c.restarts, describe_exit(c).c_str(), in.c_str(),
+                  out_count.c_str(), dropped.c_str(), bad.c_str(), latency.c_str(), clip(hb_state, 40).c_str());
+    out << line;
+  }
+  return out.str();
+}
+
+std::string format_status_json(const std::vector<StatusRow>& rows, const RunSummary& summary) {
+  std::ostringstream out;
+  out << "{\"config\": " << json_string(summary.config_path) << ", \"host\": " << json_string(summary.host)
+      << ", \"elapsed_s\": " << fixed(summary.elapsed_s, 3) << ", \"end_reason\": " << json_string(summary.end_reason)
+      << ", \"exit_code\": " << summary.exit_code << ",\n \"commands\": [";
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const auto& c = rows[i].command;
+    out << (i ? ",\n  " : "\n  ") << "{\"name\": " << json_string(c.name) << ", \"group\": " << json_string(c.group)
+        << ", \"host\": " << json_string(c.host) << ", \"auto_respawn\": " << (c.auto_respawn ? "true" : "false")
+        << ", \"pid\": " << c.pid << ", \"state\": " << json_string(to_string(c.state))
+        << ", \"restarts\": " << c.restarts << ", \"exit_code\": " << c.exit_code
+        << ", \"exit_signal\": " << c.exit_signal << ", \"failed\": " << (c.failed ? "true" : "false")
+        << ", \"killed\": " << (c.killed ? "true" : "false") << ", \"heartbeat\": ";
+    if (!rows[i].heartbeat) {
+      out << "null}";
+      continue;
+    }
+    const auto& h = *rows[i].heartbeat;
+    out << "{\"name\": " << json_string(h.name) << ", \"pid\": " << h.pid << ", \"messages_in\": " << h.messages_in
+        << ", \"messages_out\": " << h.messages_out << ", \"dropped\": " << h.dropped
+        << ", \"bad_input\": " << h.bad_input << ", \"latency_ms_mean\": " << fixed(h.latency_ms_mean, 3)
+        << ", \"latency_ms_max\": " << fixed(h.latency_ms_max, 3) << ", \"state\": " << json_string(h.state)
+        << ", \"last_error\": " << json_string(h.last_error) << ", \"age_s\": " << fixed(rows[i].heartbeat_age_s, 3)
+        << "}}";
+  }
+  out << "\n]}\n";
+  return out.str();
+}
+
+}  // namespace ivoa::launcher
