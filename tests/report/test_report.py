@@ -1,0 +1,531 @@
+#!/usr/bin/env python3
+"""Tests of tools/report/ivoa_report.py on fabricated inputs whose answers are known.
+
+A small dataset (2 sessions, 16x16 patches) and three ivoa-eval folders are
+written to a temporary folder:
+
+* **perfect**: predicted = label, confident; FC2 embeddings of reflection patches
+  and of texture-less patches drawn from two well-separated Gaussians. Expect
+  mean per-class accuracy 1, AUROC 1, cluster purity 1 with one cluster per
+  phenomenon.
+* **known**: per-class accuracies 0.75 / 0.9 / 0.7 / 0.6 by construction, and a
+  variance that is high exactly on the wrong predictions. Expect mean per-class
+  accuracy 0.7375, overall 0.775, failure precision 53/71, recall 53/80,
+  AUROC 0.75625, 100 % accuracy at the 70 % operating point, "accuracy rises".
+* **degenerate**: a second dataset without FN samples and a model with a single
+  predicted failure: the report must say so instead of crashing.
+
+Plus bad inputs (exit code 3 naming the file) and unit checks of the metric
+functions against scikit-learn and a negative control for the uncertainty trend.
+
+Run: python3 tests/report/test_report.py [--tool tools/report/ivoa_report.py] [--workdir DIR]
+"""
+
+import argparse
+import contextlib
+import csv
+import io
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import types
+import unittest
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+TOOL = os.path.normpath(os.path.join(HERE, "..", "..", "tools", "report", "ivoa_report.py"))
+WORKDIR = None
+PATCH = 16
+DIM = 256
+TP, TN, FP, FN = 0, 1, 2, 3
+REFLECTION, TEXTURELESS = 1, 2
+FLOOR, WALL = 1, 2
+
+PRED_HEADER = ("session,environment,split,sample,utime,cell,x,y,u,v,label,predicted,p_tp,p_tn,p_fp,p_fn,"
+               "var_predicted,uncertainty,var_tp,var_tn,var_fp,var_fn,phenomena,phenomenon,surface")
+
+
+# ----------------------------------------------------------------------------- fabrication
+
+def session_rows(counts, phenomenon_of, surface_of):
+    """Sample rows of one session: `counts` samples per class, in class order."""
+    rows = []
+    for cls, n in enumerate(counts):
+        for _ in range(n):
+            rows.append({"label": cls, "phenomenon": phenomenon_of[cls], "surface": surface_of[cls]})
+    return rows
+
+
+def write_dataset(root, sessions, detector="jppc"):
+    """An IVOA dataset folder (libs/dataset/README.md) with deterministic patch
+    pixels: B = sample index, G = phenomenon * 40, R = 200 (so BGR->RGB can be checked)."""
+    os.makedirs(root, exist_ok=True)
+    with open(os.path.join(root, "dataset.json"), "w") as f:
+        json.dump({"format": "ivoa-dataset", "version": 1, "patch_size": PATCH,
+                   "label_names": ["TP", "TN", "FP", "FN"], "sessions": [s for s, _, _ in sessions]}, f)
+    for name, env, rows in sessions:
+        d = os.path.join(root, name)
+        os.makedirs(d, exist_ok=True)
+        counts = np.bincount([r["label"] for r in rows], minlength=4)
+        with open(os.path.join(d, "session.json"), "w") as f:
+            json.dump({"session": name, "detector": detector, "environment": env, "patch_size": PATCH,
+                       "samples": len(rows), "class_counts": dict(zip(["TP", "TN", "FP", "FN"], counts.tolist()))}, f)
+        patches = np.zeros((len(rows), PATCH, PATCH, 3), np.uint8)
+        with open(os.path.join(d, "samples.csv"), "w") as f:
+            f.write("sample,frame,utime,depth_utime,cell,label,stereo_state,depth_state,x,y,u,v,phenomena,"
+                    "phenomenon,surface\n")
+            for i, r in enumerate(rows):
+                r["utime"] = 1_000_000 + 100_000 * (i // 10)
+                r["cell"] = i % 10
+                f.write(f"{i},{i // 10},{r['utime']},{r['utime'] + 4000},{r['cell']},{r['label']},0,0,1.0,0.0,"
+                        f"480.0,400.0,{r['phenomenon']},{r['phenomenon']},{r['surface']}\n")
+                patches[i, :, :, 0] = i % 256
+                patches[i, :, :, 1] = 40 * r["phenomenon"]
+                patches[i, :, :, 2] = 200
+        patches.tofile(os.path.join(d, "patches.bin"))
+        with open(os.path.join(d, "frames.csv"), "w") as f:
+            f.write("frame,utime,depth_utime,cells_labelled,samples\n")
+
+
+def write_eval(out, sessions, predicted, probs, var, embeddings, detector="jppc", threshold=0.03,
+               overlay=False):
+    """An ivoa-eval output folder (tools/eval/README.md) for the given rows."""
+    os.makedirs(out, exist_ok=True)
+    k = 0
+    with open(os.path.join(out, "predictions.csv"), "w") as f:
+        f.write(PRED_HEADER + "\n")
+        for name, env, rows in sessions:
+            split = "train" if env == "indoor" else "val"
+            for i, r in enumerate(rows):
+                p = probs[k]
+                f.write(f"{name},{env},{split},{i},{r['utime']},{r['cell']},1.0,0.0,480.0,400.0,{r['label']},"
+                        f"{predicted[k]},{p[0]:.6f},{p[1]:.6f},{p[2]:.6f},{p[3]:.6f},{var[k]:.8f},{var[k] / 2:.8f},"
+                        f"0,0,0,0,{r['phenomenon']},{r['phenomenon']},{r['surface']}\n")
+                k += 1
+    np.asarray(embeddings, np.float32).tofile(os.path.join(out, "embeddings.f32"))
+    with open(os.path.join(out, "eval.json"), "w") as f:
+        json.dump({"model": f"{detector}.pt#0000", "mc_passes": 20, "uncertainty_threshold": threshold,
+                   "samples": k, "metadata": {"detector": detector, "architecture": "slidenet", "training": {}}}, f)
+    if overlay:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.image as mpimg
+        os.makedirs(os.path.join(out, "overlays"), exist_ok=True)
+        mpimg.imsave(os.path.join(out, "overlays", "office_s1_1000000.png"), np.zeros((8, 8, 3)))
+
+
+def one_hot_probs(predicted, p_top=0.8):
+    """Probabilities with p_top on the predicted class and the rest shared."""
+    probs = np.full((len(predicted), 4), (1 - p_top) / 3)
+    probs[np.arange(len(predicted)), predicted] = p_top
+    return probs
+
+
+# Per session: TP 20, TN 40, FP 25, FN 15 -> totals 40 / 80 / 50 / 30.
+COUNTS = (20, 40, 25, 15)
+# Wrong predictions per session and what they become: totals 10 / 8 / 15 / 12.
+WRONG = {TP: (5, FN), TN: (4, FP), FP: (8, TN), FN: (6, TP)}
+WRONG_TOTAL = {TP: (5 + 5), TN: (4 + 4), FP: (8 + 7), FN: (6 + 6)}
+
+
+def fabricate(root):
+    """Writes the datasets and evals; returns paths and the construction."""
+    rng = np.random.default_rng(123)
+    phen = {TP: 0, TN: 0, FP: REFLECTION, FN: TEXTURELESS}
+    surf = {TP: WALL, TN: FLOOR, FP: FLOOR, FN: WALL}
+    sessions = [("office_s1", "indoor", session_rows(COUNTS, phen, surf)),
+                ("campus_s2", "outdoor", session_rows(COUNTS, phen, surf))]
+    data = os.path.join(root, "data")
+    write_dataset(data, sessions)
+    rows = [r for _, _, rs in sessions for r in rs]
+    label = np.array([r["label"] for r in rows])
+    n = len(rows)
+
+    # perfect model; embeddings: two Gaussians by phenomenon (post-ReLU: non-negative).
+    mu_a = np.zeros(DIM)
+    mu_a[:128] = 1.0
+    mu_b = np.zeros(DIM)
+    mu_b[128:] = 1.0
+    emb = np.abs(rng.normal(0, 0.05, (n, DIM)))
+    for i, r in enumerate(rows):
+        if r["phenomenon"] == REFLECTION:
+            emb[i] += mu_a
+        elif r["phenomenon"] == TEXTURELESS:
+            emb[i] += mu_b
+    p_top = rng.uniform(0.6, 0.95, n)
+    perfect_probs = np.zeros((n, 4))
+    for i in range(n):
+        perfect_probs[i] = (1 - p_top[i]) / 3
+        perfect_probs[i, label[i]] = p_top[i]
+    perfect = os.path.join(root, "perfect")
+    write_eval(perfect, sessions, label, perfect_probs, rng.uniform(0.001, 0.01, n), emb, overlay=True)
+
+    # known model: the first WRONG[c][0] (session 1) / WRONG_TOTAL-that (session 2) samples of each class are wrong.
+    predicted = label.copy()
+    wrong = np.zeros(n, bool)
+    k = 0
+    for s, (_, _, rs) in enumerate(sessions):
+        start = k
+        for cls in range(4):
+            idx = [start + i for i, r in enumerate(rs) if r["label"] == cls]
+            n_wrong = WRONG[cls][0] if s == 0 else WRONG_TOTAL[cls] - WRONG[cls][0]
+            for i in idx[:n_wrong]:
+                predicted[i] = WRONG[cls][1]
+                wrong[i] = True
+        k += len(rs)
+    var = np.where(wrong, rng.uniform(0.05, 0.1, n), rng.uniform(0.001, 0.02, n))
+    known = os.path.join(root, "known")
+    write_eval(known, sessions, predicted, one_hot_probs(predicted), var, np.abs(rng.normal(0, 1, (n, DIM))),
+               detector="dense")
+
+    # degenerate: a dataset without FN, one predicted failure.
+    d_sessions = [("lab_s3", "indoor", session_rows((10, 15, 5, 0), phen, surf))]
+    data2 = os.path.join(root, "data_nofn")
+    write_dataset(data2, d_sessions)
+    d_label = np.array([r["label"] for r in d_sessions[0][2]])
+    d_pred = np.full(len(d_label), TN)
+    d_pred[0] = FP
+    degenerate = os.path.join(root, "degenerate")
+    write_eval(degenerate, d_sessions, d_pred, one_hot_probs(d_pred), rng.uniform(0.001, 0.05, len(d_label)),
+               np.abs(rng.normal(0, 1, (len(d_label), DIM))))
+    return types.SimpleNamespace(data=data, data2=data2, perfect=perfect, known=known, degenerate=degenerate,
+                                 label=label, predicted=predicted, wrong=wrong, sessions=sessions,
+                                 perfect_confidence=p_top)
+
+
+# ----------------------------------------------------------------------------- tests
+
+def read_text(path):
+    """A file's text (closed promptly)."""
+    with open(path, encoding="utf-8") as fh:
+        return fh.read()
+
+
+def load_tool():
+    """Imports the tool's modules in-process (for unit checks and fast bad-input runs)."""
+    if os.path.dirname(TOOL) not in sys.path:
+        sys.path.insert(0, os.path.dirname(TOOL))
+    import ivoa_report  # noqa: F401
+    return ivoa_report
+
+
+def run_main(argv):
+    """ivoa_report.main in-process; returns (exit code, stdout, stderr)."""
+    tool = load_tool()
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = tool.main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+class ReportTest(unittest.TestCase):
+    """End to end on the fabricated inputs, then the numbers in metrics.json."""
+
+    @classmethod
+    def setUpClass(cls):
+        if WORKDIR:  # kept after the test for a look at the report; only our subfolder is replaced
+            cls.root = os.path.join(WORKDIR, "fabricated")
+            shutil.rmtree(cls.root, ignore_errors=True)
+            os.makedirs(cls.root)
+        else:
+            cls.root = tempfile.mkdtemp(prefix="ivoa_report_test_")
+        cls.f = fabricate(cls.root)
+        cls.out = os.path.join(cls.root, "report")
+        t = time.time()
+        cls.proc = subprocess.run(
+            [sys.executable, TOOL, "--eval", cls.f.perfect, "--eval", cls.f.known, "--dataset", cls.f.data,
+             "--dataset", cls.f.data, "--out", cls.out, "--title", "Fabricated report", "--tsne-iterations", "250"],
+            capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
+        cls.seconds = time.time() - t
+        metrics_path = os.path.join(cls.out, "metrics.json")
+        cls.metrics = json.loads(read_text(metrics_path)) if os.path.isfile(metrics_path) else None
+
+    @classmethod
+    def tearDownClass(cls):
+        if not WORKDIR:
+            shutil.rmtree(cls.root, ignore_errors=True)
+
+    def model(self, prefix):
+        """metrics.json entry of the model whose slug starts with prefix."""
+        self.assertIsNotNone(self.metrics, f"no metrics.json; stderr:\n{self.proc.stderr}")
+        hits = [v for k, v in self.metrics["models"].items() if k.startswith(prefix)]
+        self.assertEqual(len(hits), 1, f"models: {list(self.metrics['models'])}")
+        return hits[0]
+
+    def test_runs_end_to_end(self):
+        self.assertEqual(self.proc.returncode, 0, f"stdout:\n{self.proc.stdout}\nstderr:\n{self.proc.stderr}")
+        self.assertIn("report:", self.proc.stdout)
+        self.assertIn("mean per-class accuracy 1.000", self.proc.stdout)
+        report = read_text(os.path.join(self.out, "report.md"))
+        for heading in ("# Fabricated report", "## Summary", "### 1. Classification metrics",
+                        "### 2. Failure detection", "### 3. Uncertainty", "### 4. Failure clustering",
+                        "### 5. Per-frame overlays", "## Comparison of the perception models",
+                        "## Method notes"):
+            self.assertIn(heading, report)
+        # every linked figure exists, is a PNG, and lies inside the report folder
+        import re
+        links = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", report)
+        self.assertGreaterEqual(len(links), 20)
+        for rel in links:
+            self.assertFalse(os.path.isabs(rel), rel)
+            path = os.path.join(self.out, rel)
+            self.assertTrue(os.path.isfile(path), rel)
+            with open(path, "rb") as fh:
+                self.assertEqual(fh.read(8), b"\x89PNG\r\n\x1a\n", rel)
+        for must in ("confusion.png", "failure_roc.png", "accuracy_vs_threshold.png", "retained_vs_threshold.png",
+                     "accuracy_vs_retained.png", "clusters_tsne.png", "cluster_0_mosaic.png",
+                     "cluster_1_mosaic.png", "phenomena_fn_fp.png", "office_s1_1000000.png"):
+            self.assertTrue(any(l.endswith(must) for l in links), must)
+        self.assertLess(self.seconds, 60, "the report on 400 samples should take seconds")
+
+    def test_perfect_model(self):
+        m = self.model("jppc")
+        self.assertEqual(m["overall"]["n"], 200)
+        self.assertAlmostEqual(m["overall"]["mean_per_class_accuracy"], 1.0)
+        self.assertAlmostEqual(m["overall"]["overall_accuracy"], 1.0)
+        self.assertEqual(m["overall"]["per_class_accuracy"], [1.0, 1.0, 1.0, 1.0])
+        self.assertAlmostEqual(m["failure"]["auroc"], 1.0)
+        self.assertAlmostEqual(m["failure"]["precision"], 1.0)
+        self.assertAlmostEqual(m["failure"]["recall"], 1.0)
+        for g in m["sessions"] + m["environments"]:
+            self.assertAlmostEqual(g["mean_per_class_accuracy"], 1.0)
+        self.assertEqual(sorted(g["group"] for g in m["environments"]), ["indoor", "outdoor"])
+
+    def test_perfect_model_clusters_by_phenomenon(self):
+        c = self.model("jppc")["clustering"]
+        self.assertTrue(c["ok"], c["message"])
+        self.assertEqual(c["n_predicted_fp"], 50)
+        self.assertEqual(c["n_predicted_fn"], 30)
+        self.assertEqual(c["n_selected"], 40)  # top 50 % by confidence
+        conf = self.f.perfect_confidence[(self.f.label == FP) | (self.f.label == FN)]
+        self.assertAlmostEqual(c["confidence_cut"], np.sort(conf)[::-1][39], places=5)
+        for e in c["clusters"]:
+            self.assertGreaterEqual(e["mean_confidence"], c["confidence_cut"])
+        self.assertEqual(c["pca_components"], 26)
+        self.assertGreaterEqual(c["purity"], 0.99)
+        dominant = sorted(e["dominant_phenomenon"] for e in c["clusters"])
+        self.assertEqual(dominant, [REFLECTION, TEXTURELESS])
+
+    def test_known_model_metrics(self):
+        m = self.model("dense")["overall"]
+        expected = [1 - WRONG_TOTAL[c] / (2 * COUNTS[c]) for c in range(4)]  # 0.75, 0.9, 0.7, 0.6
+        for got, want in zip(m["per_class_accuracy"], expected):
+            self.assertAlmostEqual(got, want)
+        self.assertAlmostEqual(m["mean_per_class_accuracy"], 0.7375)
+        self.assertAlmostEqual(m["overall_accuracy"], 155 / 200)
+        self.assertEqual(m["confusion"][TP][FN], 10)
+        self.assertEqual(m["confusion"][TN][FP], 8)
+        self.assertAlmostEqual(m["confusion_normalised"][FP][TN], 15 / 50)
+        # per session, counted here independently
+        f = self.f
+        for g in self.model("dense")["sessions"]:
+            sel = np.array([s == g["group"] for s, _, rs in f.sessions for _ in rs])
+            accs = [np.mean(f.predicted[sel & (f.label == c)] == c) for c in range(4)]
+            self.assertAlmostEqual(g["mean_per_class_accuracy"], float(np.mean(accs)))
+
+    def test_known_model_failure_detection(self):
+        fd = self.model("dense")["failure"]
+        self.assertEqual(fd["failures"], 80)
+        self.assertEqual(fd["flagged"], 71)
+        self.assertAlmostEqual(fd["precision"], 53 / 71)
+        self.assertAlmostEqual(fd["recall"], 53 / 80)
+        self.assertAlmostEqual(fd["auroc"], 7260 / 9600)
+
+    def test_known_model_uncertainty(self):
+        s = self.model("dense")["sweep"]
+        self.assertAlmostEqual(s["unfiltered"]["retained"], 1.0)
+        self.assertAlmostEqual(s["unfiltered"]["mean_per_class_accuracy"], 0.7375)
+        self.assertEqual(s["at_70"]["retained_count"], 140)
+        self.assertAlmostEqual(s["at_70"]["mean_per_class_accuracy"], 1.0)
+        self.assertAlmostEqual(s["at_70"]["overall_accuracy"], 1.0)
+        self.assertTrue(s["accuracy_rises_as_threshold_falls"])
+        self.assertGreater(s["mean_var_wrong"], 0.05)
+        self.assertLess(s["mean_var_correct"], 0.02)
+        # the model's own threshold (0.03) keeps exactly the correct predictions
+        self.assertEqual(s["at_model_threshold"]["retained_count"], 155)
+        # the curve runs from high to low threshold with non-increasing retained fraction
+        retained = [p["retained"] for p in s["curve"]]
+        self.assertTrue(all(a >= b for a, b in zip(retained, retained[1:])))
+
+    def test_comparison_per_phenomenon(self):
+        perfect = {e["phenomenon"]: e for e in self.model("jppc")["per_phenomenon"]}
+        known = {e["phenomenon"]: e for e in self.model("dense")["per_phenomenon"]}
+        self.assertAlmostEqual(perfect[TEXTURELESS]["pred_fn"], 1.0)
+        self.assertAlmostEqual(known[TEXTURELESS]["pred_fn"], 18 / 30)
+        self.assertAlmostEqual(known[REFLECTION]["pred_fp"], 35 / 50)
+        self.assertAlmostEqual(known[REFLECTION]["true_fp"], 1.0)
+        sentences = " ".join(self.metrics["models"]["_comparison"]["sentences"])
+        self.assertIn("textureless", sentences)
+        report = read_text(os.path.join(self.out, "report.md"))
+        self.assertIn("| textureless |", report)
+
+    def test_mosaic_shows_the_dataset_patches(self):
+        """Tiles are the patches of the chosen rows, converted BGR -> RGB."""
+        load_tool()
+        from report_figures import make_mosaic
+        from report_inputs import Dataset, attach_dataset, load_eval, make_names
+        run = load_eval(self.f.perfect)
+        make_names([run])
+        attach_dataset(run, Dataset(self.f.data))
+        rows = np.array([3, 150, 199])
+        img = make_mosaic(run, rows, rows_n=1, cols_n=3, border=2)
+        for i, r in enumerate(rows):
+            tile = img[2:2 + PATCH, i * (PATCH + 4) + 2: i * (PATCH + 4) + 2 + PATCH]
+            session = run.dataset.session(str(run.session[r]))
+            bgr = np.fromfile(os.path.join(session.path, "patches.bin"), np.uint8).reshape(-1, PATCH, PATCH, 3)
+            np.testing.assert_array_equal(tile, bgr[run.sample[r]][:, :, ::-1])
+            self.assertEqual(tile[0, 0, 0], 200)  # R came from the file's third (R) byte
+
+
+class DegenerateAndBadInputTest(unittest.TestCase):
+    """Degenerate cases are explained in the report; bad inputs give exit code 3."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.root = tempfile.mkdtemp(prefix="ivoa_report_bad_")  # removed in tearDownClass
+        cls.f = fabricate(cls.root)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.root, ignore_errors=True)
+
+    def copy_eval(self, src, name):
+        dst = os.path.join(self.root, name)
+        shutil.copytree(src, dst)
+        return dst
+
+    def test_degenerate_inputs_are_reported(self):
+        out = os.path.join(self.root, "report_degenerate")
+        code, stdout, stderr = run_main(["--eval", self.f.degenerate, "--dataset", self.f.data2, "--out", out])
+        self.assertEqual(code, 0, stderr)
+        m = json.loads(read_text(os.path.join(out, "metrics.json")))["models"]
+        m = next(iter(m.values()))
+        self.assertEqual(m["overall"]["absent"], ["FN"])
+        self.assertIsNone(m["overall"]["per_class_accuracy"][FN])
+        # TP 0/10, TN 15/15, FP 0/5 -> mean over the three present classes
+        self.assertAlmostEqual(m["overall"]["mean_per_class_accuracy"], 1 / 3)
+        self.assertFalse(m["clustering"]["ok"])
+        report = read_text(os.path.join(out, "report.md"))
+        self.assertIn("Clustering not possible", report)
+        self.assertIn("absent from the truth: FN", report)
+
+    def assert_bad_input(self, argv, *fragments):
+        code, _, stderr = run_main(argv + ["--out", os.path.join(self.root, "report_bad")])
+        self.assertEqual(code, 3, stderr)
+        for frag in fragments:
+            self.assertIn(frag, stderr)
+
+    def test_missing_eval_folder(self):
+        self.assert_bad_input(["--eval", os.path.join(self.root, "nope"), "--dataset", self.f.data],
+                              "nope", "not found")
+
+    def test_missing_predictions(self):
+        d = self.copy_eval(self.f.perfect, "no_predictions")
+        os.remove(os.path.join(d, "predictions.csv"))
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "missing")
+
+    def test_truncated_embeddings(self):
+        d = self.copy_eval(self.f.perfect, "short_embeddings")
+        path = os.path.join(d, "embeddings.f32")
+        with open(path, "r+b") as fh:
+            fh.truncate(os.path.getsize(path) - DIM * 4)
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "embeddings.f32", "200 rows")
+
+    def test_label_out_of_range(self):
+        d = self.copy_eval(self.f.perfect, "bad_label")
+        path = os.path.join(d, "predictions.csv")
+        lines = read_text(path).splitlines()
+        fields = lines[5].split(",")
+        fields[10] = "7"
+        lines[5] = ",".join(fields)
+        with open(path, "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "row 5", "label")
+
+    def test_empty_predictions(self):
+        d = self.copy_eval(self.f.perfect, "empty")
+        with open(os.path.join(d, "predictions.csv"), "w") as fh:
+            fh.write(PRED_HEADER + "\n")
+        with open(os.path.join(d, "embeddings.f32"), "wb"):
+            pass
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "no predictions")
+
+    def test_wrong_dataset(self):
+        self.assert_bad_input(["--eval", self.f.perfect, "--dataset", self.f.data2], "session folder not found")
+
+    def test_dataset_labels_disagree(self):
+        d = os.path.join(self.root, "data_other_labels")
+        shutil.copytree(self.f.data, d)
+        path = os.path.join(d, "office_s1", "samples.csv")
+        with open(path, newline="") as fh:
+            rows = list(csv.reader(fh))
+        rows[1][5] = "3" if rows[1][5] != "3" else "0"
+        with open(path, "w", newline="") as fh:
+            csv.writer(fh).writerows(rows)
+        self.assert_bad_input(["--eval", self.f.perfect, "--dataset", d], "samples.csv", "does not match")
+
+    def test_patches_size_mismatch(self):
+        d = os.path.join(self.root, "data_short_patches")
+        shutil.copytree(self.f.data, d)
+        path = os.path.join(d, "campus_s2", "patches.bin")
+        with open(path, "ab") as fh:
+            fh.write(b"\0" * 10)
+        self.assert_bad_input(["--eval", self.f.perfect, "--dataset", d], "patches.bin", "bytes")
+
+    def test_dataset_count_must_match(self):
+        code, _, _ = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--dataset", self.f.data,
+                               "--dataset", self.f.data, "--out", os.path.join(self.root, "x")])
+        self.assertEqual(code, 2)
+
+
+class MetricUnitTest(unittest.TestCase):
+    """The metric functions against scikit-learn and a negative control."""
+
+    def test_mean_per_class_accuracy_is_balanced_accuracy(self):
+        load_tool()
+        from sklearn.metrics import accuracy_score, balanced_accuracy_score
+        from report_metrics import class_metrics
+        rng = np.random.default_rng(5)
+        y = rng.integers(0, 4, 500)
+        p = np.where(rng.random(500) < 0.6, y, rng.integers(0, 4, 500))
+        m = class_metrics(y, p)
+        self.assertAlmostEqual(m["mean_per_class_accuracy"], balanced_accuracy_score(y, p))
+        self.assertAlmostEqual(m["overall_accuracy"], accuracy_score(y, p))
+
+    def test_uncertainty_on_correct_predictions_does_not_rise(self):
+        """Negative control: variance high on the *correct* predictions, so
+        filtering removes good predictions and accuracy falls."""
+        load_tool()
+        from report_metrics import uncertainty_sweep
+        rng = np.random.default_rng(9)
+        y = np.repeat(np.arange(4), 50)
+        p = np.where(rng.random(200) < 0.7, y, (y + 1) % 4)
+        var = np.where(p == y, rng.uniform(0.05, 0.1, 200), rng.uniform(0.001, 0.02, 200))
+        run = types.SimpleNamespace(label=y, predicted=p, var_predicted=var, model_threshold=None)
+        s = uncertainty_sweep(run)
+        self.assertFalse(s["accuracy_rises_as_threshold_falls"])
+        self.assertLess(s["at_70"]["overall_accuracy"], s["unfiltered"]["overall_accuracy"])
+
+    def test_auroc_undefined_without_failures(self):
+        load_tool()
+        from report_metrics import failure_detection
+        y = np.array([TP, TN, TN, TP])
+        fd = failure_detection(y, y, np.full((4, 4), 0.25))
+        self.assertIsNone(fd["auroc"])
+        self.assertIn("no true failure", fd["message"])
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--tool", default=TOOL)
+    ap.add_argument("--workdir", default=None, help="keep the fabricated inputs and report here")
+    args, rest = ap.parse_known_args()
+    TOOL = os.path.abspath(args.tool)
+    WORKDIR = os.path.abspath(args.workdir) if args.workdir else None
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    unittest.main(argv=[sys.argv[0]] + rest, verbosity=2)
