@@ -20,6 +20,10 @@ from matplotlib.patches import Patch  # noqa: E402
 from report_inputs import FN, FP, LABEL_NAMES, EvalRun, phenomenon_name  # noqa: E402
 
 CLASS_COLOURS = ("#2ca02c", "#1f77b4", "#ff7f0e", "#d62728")   # TP, TN, FP, FN
+# One colour per phenomenon code, the same in every figure and model.
+PHENOMENON_COLOURS = {0: "#9e9e9e", 1: "#1f77b4", 2: "#2ca02c", 4: "#e6b800", 8: "#8c564b", 16: "#9467bd",
+                      32: "#17becf", 64: "#e377c2"}
+CLUSTER_CMAP = "Dark2"
 DPI = 110
 
 
@@ -181,19 +185,24 @@ def plot_cluster_scatter(run: EvalRun, res, title: str, path: str) -> str:
     xy = res.tsne_xy
     rows = res.rows[res.tsne_index]
     cl = res.cluster[res.tsne_index]
-    panels = [("k-means cluster", [f"cluster {c}" for c in cl])]
+    # (title, category per point, categories in legend order, colour per category)
+    k = len(res.clusters)
+    cmap = plt.get_cmap(CLUSTER_CMAP)
+    panels = [("k-means cluster", [f"cluster {c}" for c in cl], [f"cluster {c}" for c in range(k)],
+               [cmap(c % cmap.N) for c in range(k)])]
     if res.has_truth:
-        panels.append(("true phenomenon under the patch centre",
-                       [phenomenon_name(p) for p in run.phenomenon[rows]]))
-    panels.append(("true label (did the detector fail?)", [LABEL_NAMES[l] for l in run.label[rows]]))
+        codes = run.phenomenon[rows]
+        present = sorted(set(codes.tolist()), key=lambda c: -np.sum(codes == c))
+        extra = iter(_category_colours(len(present) + 10)[10:] if len(present) > 0 else [])
+        panels.append(("true phenomenon under the patch centre", [phenomenon_name(p) for p in codes],
+                       [phenomenon_name(c) for c in present],
+                       [PHENOMENON_COLOURS.get(c) or next(extra, "black") for c in present]))
+    present = [c for c in range(4) if np.any(run.label[rows] == c)]
+    panels.append(("true label (did the detector fail?)", [LABEL_NAMES[l] for l in run.label[rows]],
+                   [LABEL_NAMES[c] for c in present], [CLASS_COLOURS[c] for c in present]))
     fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.9), squeeze=False)
-    for ax, (what, cats) in zip(axes[0], panels):
+    for ax, (what, cats, names, colours) in zip(axes[0], panels):
         cats = np.array(cats)
-        names = [c for c, _ in sorted(((c, -np.sum(cats == c)) for c in set(cats.tolist())), key=lambda t: t[1])]
-        if what.startswith("true label"):
-            colours = [CLASS_COLOURS[LABEL_NAMES.index(n)] for n in names]
-        else:
-            colours = _category_colours(len(names))
         for name, colour in zip(names, colours):
             m = cats == name
             ax.scatter(xy[m, 0], xy[m, 1], s=8, color=colour, alpha=0.75, label=f"{name} ({m.sum()})",
