@@ -213,6 +213,7 @@ class EvalRun:
     embeddings: np.ndarray          # (N, 256) float32, memory-mapped
     overlays: List[str] = field(default_factory=list)
     dataset: Optional[Dataset] = None
+    label_detector: str = ""        # the detector the dataset's labels are about (session.json), if one
 
     @property
     def size(self) -> int:
@@ -356,6 +357,7 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
     dataset's labels are about another detector than the model's)."""
     warnings = []
     other_detector = {}
+    label_detectors = set()
     pred_path = os.path.join(run.path, "predictions.csv")
     for name in sorted(set(run.session.tolist())):
         s = dataset.session(name)
@@ -378,6 +380,7 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
                 f"{len(rows)} rows): is --dataset the dataset this eval ran on?")
         s.patches()  # size check now, not in the middle of the figures
         det = s.info.get("detector")
+        label_detectors.add(det or "unknown")
         if det and run.detector != "unknown" and det != run.detector:
             other_detector.setdefault(det, []).append(name)
     for det, names in sorted(other_detector.items()):
@@ -385,6 +388,7 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
             f"{run.name}: the model was trained for detector '{run.detector}' but the labels of session(s) "
             f"{', '.join(names)} in {dataset.path} are about '{det}'")
     run.dataset = dataset
+    run.label_detector = label_detectors.pop() if len(label_detectors) == 1 else run.detector
     return warnings
 
 

@@ -317,9 +317,11 @@ def comparison_sentences(runs: List[EvalRun], metrics: Dict[str, dict], min_diff
             if len(vals) < 2:
                 continue
             hi, lo = max(vals, key=lambda t: t[0]), min(vals, key=lambda t: t[0])
+            det = {r.name: r.label_detector or r.detector for r in runs}
             if hi[0] - lo[0] >= min_diff:
-                out.append(f"Labels: on **{phenomenon_name(c)}** the detector behind {hi[1]} truly fails as {kind} "
-                           f"{pct(hi[0], 0)} of the time, the one behind {lo[1]} {pct(lo[0], 0)}.")
+                out.append(f"Labels: on **{phenomenon_name(c)}** the {det[hi[1]]} detector (labels of {hi[1]}) truly "
+                           f"fails as {kind} {pct(hi[0], 0)} of the time, the {det[lo[1]]} detector (labels of "
+                           f"{lo[1]}) {pct(lo[0], 0)}.")
     return out
 
 
