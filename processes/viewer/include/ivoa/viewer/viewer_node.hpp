@@ -1,0 +1,68 @@
+#pragma once
+// The viewer process's logic. LCM handlers (the bus thread) file each
+// message under its frame's utime (FrameMatcher); tick() hands the newest
+// drawable frame to a latest-value mailbox; a worker thread decodes the
+// left image, draws the figure and writes it (PNG, video, window), so a
+// slow disk or display skips frames (counted) instead of falling behind.
+#include <atomic>
+#include <string>
+#include <thread>
+
+#include "ivoa/core/bus.hpp"
+#include "ivoa/core/channels.hpp"
+#include "ivoa/core/heartbeat.hpp"
+#include "ivoa/core/mailbox.hpp"
+#include "ivoa/viewer/figure.hpp"
+#include "ivoa/viewer/figure_writer.hpp"
+#include "ivoa/viewer/frame_matcher.hpp"
+
+namespace ivoa::viewer {
+
+struct ViewerOptions {
+  std::string stereo_channel{channels::kStereoImages};
+  std::string stereo_grid_channel{channels::kObstaclesStereo};
+  std::string depth_grid_channel{channels::kObstaclesDepth};
+  std::string labels_channel{channels::kIntrospectionLabels};
+  std::string introspection_channel{channels::kIntrospection};
+  MatcherOptions matcher;
+  FigureOptions figure;
+  OutputOptions output;
+  int64_t max_figures = 0;  // > 0: done() after this many figures
+};
+
+class ViewerNode {
+ public:
+  // Throws OutputError if the outputs cannot be set up.
+  ViewerNode(Bus& bus, Heartbeat& heartbeat, ViewerOptions options);
+  ~ViewerNode();  // stops the worker
+
+  // Call from the bus thread between handle() calls.
+  void tick();
+  // Hands out the best remaining frame and waits until the worker has drawn
+  // everything handed out (end of a log, shutdown).
+  void finish();
+
+  int64_t figures() const { return figures_.load(); }
+  bool done() const;              // max_figures reached, the window asked to quit, or an output failed
+  bool output_failed() const { return output_failed_.load(); }
+
+ private:
+  void subscribe();
+  void work();
+  void draw(const FrameSet& frame);
+  void update_drop_count();
+
+  Bus& bus_;
+  Heartbeat& heartbeat_;
+  ViewerOptions options_;
+  FrameMatcher matcher_;         // bus thread only
+  FigureWriter writer_;          // worker thread only (after construction)
+  LatestMailbox<FrameSet> frames_;
+  std::atomic<int64_t> figures_{0};
+  std::atomic<bool> output_failed_{false}, quit_{false};
+  uint64_t counted_dropped_ = 0;
+  bool seen_image_ = false;
+  std::thread worker_;
+};
+
+}  // namespace ivoa::viewer

@@ -1,0 +1,99 @@
+// ivoa-viewer: the live overlay. Draws each frame's left image with the
+// ground grid (label or verdict rings, prediction dots), the P(FP)+P(FN)
+// heatmap and the uncertainty heatmap; shows them in a window where there
+// is a display (--window), and writes PNGs (--out-dir) and/or a video (--video).
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/process.hpp"
+#include "ivoa/core/stop_signal.hpp"
+#include "ivoa/viewer/viewer_node.hpp"
+
+namespace {
+
+void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
+  auto& out = o.output;
+  app.add_flag("--window", out.window, "show a window (OpenCV highgui) when a display is present");
+  app.add_option("--out-dir", out.out_dir, "write figures here as frame_<utime>.png");
+  app.add_option("--every", out.every_frames, "a PNG every N figures")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--every-seconds", out.every_seconds, "and at least S seconds apart")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--max-images", out.max_images, "keep only the newest N PNGs this run wrote (0: all)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  app.add_option("--video", out.video, "also write every figure to this video (.avi, MJPG)");
+  app.add_option("--video-fps", out.video_fps, "frame rate written in the video")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--scale", o.figure.scale, "figure panel size relative to the image")
+      ->capture_default_str()->check(CLI::Range(0.05, 4.0));
+  app.add_option("--max-figures", o.max_figures, "exit after this many figures (0: run until stopped)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+}
+
+void add_matching_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
+  const char* g = "Matching";
+  app.add_option("--settle-ms", o.matcher.settle_ms,
+                 "with no frame complete for this long, draw the best one there is, ms")
+      ->capture_default_str()->group(g)->check(CLI::NonNegativeNumber);
+  app.add_option("--active-ms", o.matcher.active_ms, "a channel seen this recently is expected in every frame, ms")
+      ->capture_default_str()->group(g)->check(CLI::NonNegativeNumber);
+  app.add_option("--match-frames", o.matcher.max_frames, "frames kept waiting for their parts")
+      ->capture_default_str()->group(g)->check(CLI::Range(1, 256));
+}
+
+void add_channel_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
+  const char* g = "Channels";
+  app.add_option("--stereo-channel", o.stereo_channel)->capture_default_str()->group(g);
+  app.add_option("--stereo-grid-channel", o.stereo_grid_channel)->capture_default_str()->group(g);
+  app.add_option("--depth-grid-channel", o.depth_grid_channel)->capture_default_str()->group(g);
+  app.add_option("--labels-channel", o.labels_channel)->capture_default_str()->group(g);
+  app.add_option("--introspection-channel", o.introspection_channel)->capture_default_str()->group(g);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Viewer: left image with the ground grid (label or stereo verdict rings, introspection prediction dots; "
+               "TP green, TN blue, FP orange, FN red), P(FP)+P(FN) and uncertainty heatmaps, in a window and/or as "
+               "PNG files and video. Exit codes: 0 ok, 1 LCM failure, 2 bad flags, 4 cannot write the output."};
+  ivoa::CommonOptions common;
+  ivoa::viewer::ViewerOptions options;
+  ivoa::add_common_options(app, common);
+  add_output_options(app, options);
+  add_matching_options(app, options);
+  add_channel_options(app, options);
+  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  ivoa::init_logging("viewer", common.log_level);
+  ivoa::install_stop_handlers();
+
+  std::string why_no_window;
+  const bool window = options.output.window && ivoa::viewer::window_possible(&why_no_window);
+  if (options.output.out_dir.empty() && options.output.video.empty() && !window) {
+    spdlog::error("nothing to show{}: give --out-dir DIR and/or --video FILE.avi",
+                  options.output.window ? " (" + why_no_window + ")" : std::string());
+    return ivoa::kExitUsage;
+  }
+  try {
+    ivoa::Bus bus(common.lcm_url);
+    ivoa::Heartbeat heartbeat(bus, "viewer");
+    ivoa::viewer::ViewerNode node(bus, heartbeat, options);
+    spdlog::info("listening on {}{}{}{}", bus.url(), options.output.out_dir.empty() ? "" : "; PNGs in " + options.output.out_dir,
+                 options.output.video.empty() ? "" : "; video " + options.output.video, window ? "; window" : "");
+    const bool offline = bus.url().rfind("file://", 0) == 0;
+    const int code = ivoa::run_until_stopped(
+        bus, &heartbeat,
+        [&] {
+          node.tick();
+          if (node.done()) ivoa::request_stop();
+        },
+        50, offline);
+    node.finish();
+    spdlog::info("{} figures drawn", node.figures());
+    return node.output_failed() ? ivoa::kExitIoError : code;
+  } catch (const ivoa::BusError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitFailure;
+  } catch (const ivoa::viewer::OutputError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitIoError;
+  }
+}

@@ -1,0 +1,209 @@
+#include "ivoa/viewer/figure.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include <opencv2/imgproc.hpp>
+
+#include "ivoa/monitor/labeler.hpp"
+
+namespace ivoa::viewer {
+namespace {
+
+constexpr int kRingRadius = 15, kDotRadius = 8;
+const char* kClassNames[] = {"TP", "TN", "FP", "FN"};
+
+bool drawable(float u, float v, const cv::Size& size) {
+  return std::isfinite(u) && std::isfinite(v) && u >= 0 && v >= 0 && u < size.width && v < size.height;
+}
+
+// A dark band with white text, so titles stay readable on any image.
+void banner(cv::Mat& image, int y, int height, const std::string& text, double font_scale = 0.8) {
+  cv::Mat band = image(cv::Rect(0, y, image.cols, height) & cv::Rect(0, 0, image.cols, image.rows));
+  band *= 0.3;
+  cv::putText(image, text, {12, y + height - 12}, cv::FONT_HERSHEY_SIMPLEX, font_scale, {255, 255, 255}, 2, cv::LINE_AA);
+}
+
+void draw_marks(cv::Mat& out, const std::vector<CellMark>& cells, const std::vector<PredictionMark>& predictions) {
+  for (const auto& c : cells) {
+    if (!drawable(c.u, c.v, out.size())) continue;
+    const cv::Point p(cvRound(c.u), cvRound(c.v));
+    if (c.ring_label >= 0) cv::circle(out, p, kRingRadius, class_colour(c.ring_label), 4, cv::LINE_AA);
+    else if (c.ring_verdict >= 0) cv::circle(out, p, kRingRadius, verdict_colour(c.ring_verdict), 3, cv::LINE_AA);
+    else if (c.none_label) cv::circle(out, p, kRingRadius, verdict_colour(obstacle_grid_t::STATE_UNKNOWN), 1, cv::LINE_AA);
+  }
+  for (const auto& d : predictions) {
+    if (!drawable(d.u, d.v, out.size()) || d.predicted < 0) continue;
+    const cv::Point p(cvRound(d.u), cvRound(d.v));
+    cv::circle(out, p, kDotRadius, class_colour(d.predicted), d.announced ? cv::FILLED : 2, cv::LINE_AA);
+  }
+}
+
+void draw_legend(cv::Mat& out, bool verdict_rings) {
+  banner(out, 0, 44,
+         verdict_rings ? "ring: stereo verdict (white free, magenta obstacle)   dot: prediction (hollow: withheld)"
+                       : "ring: label (stereo vs depth)   dot: prediction (hollow: withheld)",
+         0.7);
+  banner(out, 44, 36, "");
+  int x = 12;
+  for (int k = 0; k < 4; ++k) {
+    cv::circle(out, {x + 10, 62}, 9, class_colour(k), cv::FILLED, cv::LINE_AA);
+    cv::putText(out, kClassNames[k], {x + 26, 72}, cv::FONT_HERSHEY_SIMPLEX, 0.8, {255, 255, 255}, 2, cv::LINE_AA);
+    x += 100;
+  }
+}
+
+std::string status_line(const FrameSet& f) {
+  char text[320];
+  int n = std::snprintf(text, sizeof(text), "t %.3f", static_cast<double>(f.utime) * 1e-6);
+  auto add = [&](const char* fmt, auto... args) {
+    if (n < static_cast<int>(sizeof(text))) n += std::snprintf(text + n, sizeof(text) - static_cast<size_t>(n), fmt, args...);
+  };
+  if (f.stereo) add("  stereo %s %.0f ms", f.stereo->detector.c_str(), f.stereo->compute_ms);
+  if (f.labels) {
+    int counts[4] = {0, 0, 0, 0};
+    for (auto l : f.labels->label)
+      if (l >= 0 && l < 4) ++counts[l];
+    add("  TP %d TN %d FP %d FN %d", counts[0], counts[1], counts[2], counts[3]);
+  }
+  if (f.introspection) add("  CNN T=%d %.0f ms", f.introspection->mc_passes, f.introspection->compute_ms);
+  for (Part p : {kStereoGrid, kDepthGrid, kLabels, kIntrospection})
+    if (!f.has(p)) add("  no %s", part_name(p));
+  return text;
+}
+
+// Heatmap cell (r, c) covers the patch at (c * stride, r * stride): each value
+// sits at its patch centre, interpolated between centres, blended over the image.
+cv::Mat draw_heatmap(const cv::Mat& left, const introspection_t& h, const cv::Mat& values, double max_value,
+                     const std::string& title) {
+  cv::Mat scaled, colour, up;
+  values.convertTo(scaled, CV_8U, 255.0 / std::max(max_value, 1e-9));
+  cv::applyColorMap(scaled, colour, cv::COLORMAP_JET);
+  const cv::Rect inner(h.patch_size / 2 - h.stride / 2, h.patch_size / 2 - h.stride / 2, h.cols * h.stride,
+                       h.rows * h.stride);
+  cv::resize(colour, up, inner.size(), 0, 0, cv::INTER_LINEAR);
+  cv::Mat full(left.size(), CV_8UC3, cv::Scalar(0, 0, 0));
+  const cv::Rect visible = inner & cv::Rect(0, 0, left.cols, left.rows);
+  up(cv::Rect(visible.tl() - inner.tl(), visible.size())).copyTo(full(visible));
+  cv::Mat out;
+  cv::addWeighted(left, 0.45, full, 0.55, 0, out);
+  banner(out, 0, 44, title);
+  return out;
+}
+
+cv::Mat missing_panel(const cv::Mat& left, const std::string& title, const std::string& why) {
+  cv::Mat out = left * 0.25;
+  banner(out, 0, 44, title);
+  cv::putText(out, why, {24, out.rows / 2}, cv::FONT_HERSHEY_SIMPLEX, 1.0, {255, 255, 255}, 2, cv::LINE_AA);
+  return out;
+}
+
+cv::Mat heatmap_of(const introspection_t& h, const std::vector<float>& a, const std::vector<float>* b = nullptr) {
+  cv::Mat m(h.rows, h.cols, CV_32F);
+  for (int i = 0; i < h.num_cells; ++i)
+    m.at<float>(i / h.cols, i % h.cols) = a[static_cast<size_t>(i)] + (b ? (*b)[static_cast<size_t>(i)] : 0.0f);
+  return m;
+}
+
+}  // namespace
+
+cv::Scalar class_colour(int label) {
+  switch (label) {
+    case introspection_labels_t::LABEL_TP: return {60, 180, 60};    // green
+    case introspection_labels_t::LABEL_TN: return {200, 120, 30};   // blue
+    case introspection_labels_t::LABEL_FP: return {0, 150, 255};    // orange
+    case introspection_labels_t::LABEL_FN: return {40, 40, 220};    // red
+    default: return {160, 160, 160};
+  }
+}
+
+cv::Scalar verdict_colour(int state) {
+  switch (state) {
+    case obstacle_grid_t::STATE_FREE: return {255, 255, 255};
+    case obstacle_grid_t::STATE_OBSTACLE: return {255, 0, 255};
+    default: return {140, 140, 140};
+  }
+}
+
+std::vector<CellMark> cell_marks(const FrameSet& f) {
+  std::vector<CellMark> out;
+  if (f.labels) {
+    const auto& l = *f.labels;
+    for (int i = 0; i < l.num_cells; ++i) {
+      CellMark m{l.u[static_cast<size_t>(i)], l.v[static_cast<size_t>(i)], l.label[static_cast<size_t>(i)], -1, false};
+      m.none_label = m.ring_label < 0;
+      out.push_back(m);
+    }
+    return out;
+  }
+  const obstacle_grid_t* one = f.stereo ? &*f.stereo : f.depth ? &*f.depth : nullptr;
+  if (!one) return out;
+  const bool both = f.stereo && f.depth && f.stereo->num_cells == f.depth->num_cells;
+  for (size_t i = 0; i < static_cast<size_t>(one->num_cells); ++i) {
+    if (!one->in_image[i]) continue;
+    CellMark m{one->u[i], one->v[i], -1, -1, false};
+    if (both) {
+      m.ring_label = monitor::label_for(f.stereo->state[i], f.depth->state[i]);
+      m.none_label = m.ring_label < 0;
+    } else {
+      m.ring_verdict = one->state[i];
+    }
+    out.push_back(m);
+  }
+  return out;
+}
+
+std::vector<PredictionMark> prediction_marks(const FrameSet& f) {
+  std::vector<PredictionMark> out;
+  if (!f.introspection) return out;
+  const auto& h = *f.introspection;
+  for (size_t i = 0; i < static_cast<size_t>(h.num_queries); ++i)
+    out.push_back({h.query_u[i], h.query_v[i], h.query_class[i], h.query_announced[i] != 0});
+  return out;
+}
+
+std::string check_introspection(const introspection_t& h) {
+  if (h.rows <= 0 || h.cols <= 0 || h.stride <= 0 || h.patch_size <= 0)
+    return "heatmap geometry " + std::to_string(h.rows) + "x" + std::to_string(h.cols) + ", stride " +
+           std::to_string(h.stride) + ", patch " + std::to_string(h.patch_size) + " is not drawable";
+  if (static_cast<int64_t>(h.rows) * h.cols != h.num_cells)
+    return "heatmap " + std::to_string(h.rows) + "x" + std::to_string(h.cols) + " but " + std::to_string(h.num_cells) +
+           " cells";
+  return "";
+}
+
+cv::Mat draw_frame_figure(const cv::Mat& left, const FrameSet& f, const FigureOptions& options) {
+  const auto cells = cell_marks(f);
+  cv::Mat grid = left.clone();
+  draw_marks(grid, cells, prediction_marks(f));
+  const bool verdict_rings = !cells.empty() && cells.front().ring_verdict >= 0;
+  draw_legend(grid, verdict_rings);
+  banner(grid, grid.rows - 40, 40, status_line(f), 0.7);
+
+  cv::Mat failure, uncertainty;
+  const std::string failure_title = "P(FP) + P(FN): 0 blue .. 1 red";
+  std::string problem = f.introspection ? check_introspection(*f.introspection) : "no INTROSPECTION for this frame";
+  if (problem.empty() && (f.introspection->image_width != left.cols || f.introspection->image_height != left.rows))
+    problem = "INTROSPECTION is for a " + std::to_string(f.introspection->image_width) + "x" +
+              std::to_string(f.introspection->image_height) + " image";
+  if (problem.empty()) {
+    const auto& h = *f.introspection;
+    const cv::Mat u = heatmap_of(h, h.uncertainty);
+    double max_u = 0;
+    cv::minMaxLoc(u, nullptr, &max_u);
+    max_u = std::max(max_u, 0.01);
+    char title[96];
+    std::snprintf(title, sizeof(title), "uncertainty (class variance): 0 .. %.3f", max_u);
+    failure = draw_heatmap(left, h, heatmap_of(h, h.prob_fp, &h.prob_fn), 1.0, failure_title);
+    uncertainty = draw_heatmap(left, h, u, max_u, title);
+  } else {
+    failure = missing_panel(left, failure_title, problem);
+    uncertainty = missing_panel(left, "uncertainty", problem);
+  }
+  cv::Mat row;
+  cv::hconcat(std::vector<cv::Mat>{grid, failure, uncertainty}, row);
+  if (options.scale > 0 && options.scale != 1.0) cv::resize(row, row, cv::Size(), options.scale, options.scale, cv::INTER_AREA);
+  return row;
+}
+
+}  // namespace ivoa::viewer

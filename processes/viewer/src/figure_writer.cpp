@@ -1,0 +1,149 @@
+#include "ivoa/viewer/figure_writer.hpp"
+
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
+#ifdef IVOA_VIEWER_HAS_VIDEOIO
+#include <opencv2/videoio.hpp>
+#endif
+#ifdef IVOA_VIEWER_HAS_HIGHGUI
+#include <opencv2/highgui.hpp>
+#endif
+
+namespace ivoa::viewer {
+namespace {
+constexpr const char* kWindowName = "ivoa-viewer";
+}
+
+struct FigureWriter::Video {
+#ifdef IVOA_VIEWER_HAS_VIDEOIO
+  cv::VideoWriter writer;
+#endif
+  cv::Size size;
+};
+
+bool window_possible(std::string* why_not) {
+  auto fail = [&](const char* why) {
+    if (why_not) *why_not = why;
+    return false;
+  };
+#ifndef IVOA_VIEWER_HAS_HIGHGUI
+  return fail("built without OpenCV highgui (libopencv-highgui-dev)");
+#endif
+  const char* display = std::getenv("DISPLAY");
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  if ((!display || !*display) && (!wayland || !*wayland)) return fail("no display ($DISPLAY is not set)");
+  return true;
+}
+
+FigureWriter::FigureWriter(OutputOptions options) : options_(std::move(options)) {
+  if (!options_.out_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(options_.out_dir, ec);
+    if (ec) throw OutputError("cannot create " + options_.out_dir + ": " + ec.message());
+  }
+  if (!options_.video.empty()) {
+#ifndef IVOA_VIEWER_HAS_VIDEOIO
+    throw OutputError("cannot write " + options_.video + ": built without OpenCV videoio (libopencv-videoio-dev)");
+#endif
+    video_ = std::make_unique<Video>();
+  }
+  std::string why;
+  if (options_.window && !window_possible(&why)) {
+    spdlog::warn("not opening a window: {}; writing files only", why);
+    options_.window = false;
+  }
+}
+
+FigureWriter::~FigureWriter() {
+#ifdef IVOA_VIEWER_HAS_HIGHGUI
+  if (window_open_) cv::destroyWindow(kWindowName);
+#endif
+}
+
+void FigureWriter::write(const cv::Mat& figure, int64_t utime, double now_ms) {
+  ++figures_since_png_;
+  if (!options_.out_dir.empty() && figures_since_png_ >= options_.every_frames &&
+      now_ms - last_png_ms_ >= options_.every_seconds * 1000.0) {
+    write_png(figure, utime);
+    figures_since_png_ = 0;
+    last_png_ms_ = now_ms;
+  }
+  if (video_) write_video(figure);
+  if (options_.window) show(figure);
+}
+
+void FigureWriter::write_png(const cv::Mat& figure, int64_t utime) {
+  char name[64];
+  std::snprintf(name, sizeof(name), "frame_%" PRId64 ".png", utime);
+  const std::string path = (std::filesystem::path(options_.out_dir) / name).string();
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path, figure);
+  } catch (const cv::Exception& e) {
+    throw OutputError("cannot write " + path + ": " + e.what());
+  }
+  if (!ok) throw OutputError("cannot write " + path);
+  ++images_written_;
+  written_.push_back(path);
+  while (options_.max_images > 0 && static_cast<int>(written_.size()) > options_.max_images) {
+    std::error_code ec;
+    std::filesystem::remove(written_.front(), ec);
+    written_.pop_front();
+  }
+}
+
+void FigureWriter::write_video(const cv::Mat& figure) {
+#ifdef IVOA_VIEWER_HAS_VIDEOIO
+  if (!video_->writer.isOpened()) {
+    video_->size = figure.size();
+    if (!video_->writer.open(options_.video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), options_.video_fps,
+                             video_->size))
+      throw OutputError("cannot open the video " + options_.video + " for writing (MJPG)");
+  }
+  if (figure.size() == video_->size) {
+    video_->writer.write(figure);
+  } else {
+    cv::Mat resized;
+    cv::resize(figure, resized, video_->size, 0, 0, cv::INTER_AREA);
+    video_->writer.write(resized);
+  }
+  ++video_frames_;
+#else
+  (void)figure;
+#endif
+}
+
+void FigureWriter::poll_window() {
+#ifdef IVOA_VIEWER_HAS_HIGHGUI
+  if (!window_open_) return;
+  const int key = cv::waitKey(1);
+  if (key == 'q' || key == 27) quit_requested_ = true;
+#endif
+}
+
+void FigureWriter::show(const cv::Mat& figure) {
+#ifdef IVOA_VIEWER_HAS_HIGHGUI
+  if (!window_open_) {
+    cv::namedWindow(kWindowName, cv::WINDOW_NORMAL | cv::WINDOW_KEEPRATIO);
+    cv::resizeWindow(kWindowName, figure.cols, figure.rows);
+    window_open_ = true;
+  } else if (cv::getWindowProperty(kWindowName, cv::WND_PROP_VISIBLE) < 1) {
+    spdlog::info("window closed; writing files only");
+    options_.window = window_open_ = false;
+    return;
+  }
+  cv::imshow(kWindowName, figure);
+  const int key = cv::waitKey(1);
+  if (key == 'q' || key == 27) quit_requested_ = true;
+#else
+  (void)figure;
+#endif
+}
+
+}  // namespace ivoa::viewer

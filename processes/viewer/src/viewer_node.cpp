@@ -1,0 +1,121 @@
+#include "ivoa/viewer/viewer_node.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/image_convert.hpp"
+#include "ivoa/core/time.hpp"
+#include "ivoa/stereo_image_t.hpp"
+
+namespace ivoa::viewer {
+
+ViewerNode::ViewerNode(Bus& bus, Heartbeat& heartbeat, ViewerOptions options)
+    : bus_(bus),
+      heartbeat_(heartbeat),
+      options_(std::move(options)),
+      matcher_(options_.matcher),
+      writer_(options_.output) {
+  subscribe();
+  heartbeat_.set_state("waiting for images");
+  worker_ = std::thread([this] { work(); });
+}
+
+ViewerNode::~ViewerNode() {
+  frames_.close();
+  if (worker_.joinable()) worker_.join();
+}
+
+void ViewerNode::subscribe() {
+  bus_.subscribe<stereo_image_t>(options_.stereo_channel, [this](const stereo_image_t& msg, const ReceiveInfo&) {
+    heartbeat_.count_in();
+    matcher_.add_image(msg.utime, msg.left, monotonic_ms());
+    if (!seen_image_) heartbeat_.set_state("drawing");
+    seen_image_ = true;
+  });
+  bus_.subscribe<obstacle_grid_t>(options_.stereo_grid_channel, [this](const obstacle_grid_t& msg, const ReceiveInfo&) {
+    heartbeat_.count_in();
+    matcher_.add_stereo_grid(msg, monotonic_ms());
+  });
+  bus_.subscribe<obstacle_grid_t>(options_.depth_grid_channel, [this](const obstacle_grid_t& msg, const ReceiveInfo&) {
+    heartbeat_.count_in();
+    matcher_.add_depth_grid(msg, monotonic_ms());
+  });
+  bus_.subscribe<introspection_labels_t>(options_.labels_channel,
+                                         [this](const introspection_labels_t& msg, const ReceiveInfo&) {
+                                           heartbeat_.count_in();
+                                           matcher_.add_labels(msg, monotonic_ms());
+                                         });
+  bus_.subscribe<introspection_t>(options_.introspection_channel, [this](const introspection_t& msg, const ReceiveInfo& info) {
+    heartbeat_.count_in();
+    if (const std::string problem = check_introspection(msg); !problem.empty()) {
+      heartbeat_.bad_input(info.channel + " utime " + std::to_string(msg.utime) + ": " + problem);
+      return;
+    }
+    matcher_.add_introspection(msg, monotonic_ms());
+  });
+  bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
+}
+
+void ViewerNode::tick() {
+  if (auto frame = matcher_.take(monotonic_ms())) {
+    frames_.put(std::move(*frame));
+  }
+  update_drop_count();
+}
+
+void ViewerNode::update_drop_count() {
+  const uint64_t dropped = matcher_.skipped() + frames_.dropped();
+  if (dropped > counted_dropped_) heartbeat_.count_dropped(static_cast<int64_t>(dropped - counted_dropped_));
+  counted_dropped_ = dropped;
+}
+
+void ViewerNode::finish() {
+  if (auto frame = matcher_.take(monotonic_ms(), true)) {
+    frames_.put(std::move(*frame));
+  }
+  update_drop_count();
+  frames_.close();
+  if (worker_.joinable()) worker_.join();
+}
+
+bool ViewerNode::done() const {
+  return output_failed_.load() || quit_.load() ||
+         (options_.max_figures > 0 && figures_.load() >= options_.max_figures);
+}
+
+void ViewerNode::work() {
+  while (true) {
+    auto frame = frames_.take(std::chrono::milliseconds(50));
+    if (!frame) {
+      if (frames_.closed()) return;
+      writer_.poll_window();
+      if (writer_.quit_requested()) quit_ = true;
+      continue;
+    }
+    draw(*frame);
+  }
+}
+
+void ViewerNode::draw(const FrameSet& frame) {
+  cv::Mat left;
+  try {
+    left = decode_image(*frame.left);
+  } catch (const ImageError& e) {
+    heartbeat_.bad_input(options_.stereo_channel + " utime " + std::to_string(frame.utime) + ": left image: " + e.what());
+    return;
+  }
+  try {
+    writer_.write(draw_frame_figure(left, frame, options_.figure), frame.utime, monotonic_ms());
+  } catch (const OutputError& e) {
+    spdlog::error("{}", e.what());
+    output_failed_ = true;
+    return;
+  }
+  if (writer_.quit_requested()) quit_ = true;
+  heartbeat_.latency(monotonic_ms() - frame.image_received_ms);
+  heartbeat_.count_out();
+  heartbeat_.set_counter("images_written", writer_.images_written());
+  heartbeat_.set_counter("video_frames", writer_.video_frames());
+  ++figures_;
+}
+
+}  // namespace ivoa::viewer

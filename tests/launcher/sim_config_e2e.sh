@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# End to end: ivoa-launch runs procman_configs/sim.pmd (simulator driver,
+# stereo detector, depth monitor, introspection, logger, viewer) over real
+# UDP multicast LCM. The stereo detector is killed with SIGKILL mid-session
+# and must come back (auto_respawn) and publish again; the log must hold
+# every channel, each frame's images exactly once; the viewer must have
+# written its figures; the launcher must stop everything and exit 0.
+# The introspection model is the shipped one, or a random-weight model
+# written here when none is shipped (its predictions mean nothing).
+set -euo pipefail
+B=${IVOA_BUILD_DIR:?}; S=${IVOA_SOURCE_DIR:?}
+. "$S/tests/harness/wait_for.sh"
+out=$(mktemp -d)
+launcher=
+cleanup() {
+  [ -n "$launcher" ] && kill -TERM "$launcher" 2>/dev/null && wait "$launcher" 2>/dev/null
+  rm -rf "$out"
+}
+trap cleanup EXIT
+frames=24
+rate=2
+
+model="$S/libs/introspection/models/introspection_jppc.pt"
+if [ ! -f "$model" ]; then
+  model="$out/random_model.pt"
+  "$B/tests/ivoa-test-random-model" "$model"
+  echo "no shipped model: using a random-weight one"
+fi
+
+"$B/bin/ivoa-launch" "$S/procman_configs/sim.pmd" --script start --plain --status-every 0 \
+  --set FRAMES=$frames --set RATE=$rate --set SEED=3 --set MODEL="$model" \
+  --set LOG_DIR="$out" --set LOG_FILE="$out/sim.lcmlog" --set VIEWER_ARGS="--every 1 --max-images 0" \
+  --until sim_driver --grace 4 --duration 80 --respawn-delay 0.5 \
+  --status-file "$out/status.json" > "$out/launch.txt" 2>&1 &
+launcher=$!
+
+# The detector is up once it has published; then kill it mid-session.
+"$B/bin/ivoa-lcm-stats" --channels OBSTACLES_STEREO --expect OBSTACLES_STEREO=2 --duration 40 --print-every 0 > /dev/null \
+  || { cat "$out/launch.txt"; echo "the stereo detector never published"; exit 1; }
+first_pid=$(sed -n 's/^\[launcher\] stereo_detector: started, pid \([0-9]*\)$/\1/p' "$out/launch.txt" | head -1)
+[ -n "$first_pid" ] || { cat "$out/launch.txt"; echo "no start line for stereo_detector"; exit 1; }
+killed_at=$(date +%s%6N)
+kill -KILL "$first_pid"
+starts() { grep -c '^\[launcher\] stereo_detector: started, pid' "$out/launch.txt"; }
+for _ in $(seq 200); do [ "$(starts)" -ge 2 ] && break; sleep 0.1; done
+[ "$(starts)" -ge 2 ] || { cat "$out/launch.txt"; echo "the stereo detector did not come back within 20 s"; exit 1; }
+grep -q '^\[launcher\] stereo_detector: ended: signal 9' "$out/launch.txt"
+
+set +e
+wait "$launcher"
+code=$?
+set -e
+launcher=
+if [ $code -ne 0 ]; then cat "$out/launch.txt"; echo "ivoa-launch exited with $code"; exit 1; fi
+
+# Each frame's raw images exactly once (the logger starts before the driver).
+"$B/bin/ivoa-log-check" "$out/sim.lcmlog" --json "$out/check.json" \
+  --expect STEREO_IMAGES=$frames DEPTH_IMAGE=$frames SIM_GROUND_TRUTH=$frames \
+  || { cat "$out/launch.txt"; exit 1; }
+
+python3 - "$out" "$killed_at" "$frames" <<'PY'
+import json, os, struct, sys
+out, killed_at, frames = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+status = json.load(open(f"{out}/status.json"))
+check = json.load(open(f"{out}/check.json"))
+cmds = {c["name"]: c for c in status["commands"]}
+launch = open(f"{out}/launch.txt").read()
+assert status["end_reason"] == "--until: done", status["end_reason"]
+assert set(cmds) == {"sim_driver", "stereo_detector", "depth_monitor", "introspection", "logger", "viewer"}, cmds.keys()
+for name, c in cmds.items():
+    assert c["state"] == "stopped" and not c["failed"] and not c["killed"], (name, c)
+det = cmds["stereo_detector"]
+assert det["restarts"] == 1, f"stereo_detector restarts {det['restarts']}, expected 1 (killed once)"
+for name in ("depth_monitor", "introspection", "logger", "viewer"):
+    assert cmds[name]["restarts"] == 0, (name, cmds[name])
+assert cmds["sim_driver"]["exit_code"] == 0
+# Heartbeats reached the launcher's table.
+for name in ("sim_driver", "stereo_detector", "depth_monitor", "introspection", "viewer"):
+    assert cmds[name]["heartbeat"] is not None, f"no heartbeat from {name}"
+assert cmds["viewer"]["heartbeat"]["messages_out"] >= 1
+
+channels = check["channels"]
+expected = ["STEREO_IMAGES", "DEPTH_IMAGE", "RIG_CALIBRATION", "SIM_GROUND_TRUTH", "OBSTACLES_STEREO",
+            "OBSTACLES_DEPTH", "INTROSPECTION_LABELS", "INTROSPECTION", "PROCESS_STATUS"]
+missing = [c for c in expected if channels.get(c, {}).get("count", 0) == 0]
+assert not missing, f"channels missing from the log: {missing}"
+# The respawned detector worked on frames captured after the kill.
+last = channels["OBSTACLES_STEREO"]["last_utime"]
+assert last > killed_at, f"no OBSTACLES_STEREO after the kill (last {last}, kill at {killed_at})"
+
+pngs = sorted(f for f in os.listdir(f"{out}/viewer") if f.endswith(".png"))
+assert len(pngs) >= frames // 3, f"the viewer wrote {len(pngs)} figures for {frames} frames"
+with open(f"{out}/viewer/{pngs[-1]}", "rb") as f:
+    head = f.read(24)
+assert head[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
+width, height = struct.unpack(">II", head[16:24])
+assert (width, height) == (3 * 480, 300), f"figure is {width}x{height}, expected three 480x300 panels"
+counts = {c: channels[c]["count"] for c in expected}
+print(f"OK: detector killed and respawned (restarts 1), log channels {counts}, {len(pngs)} viewer figures")
+PY
