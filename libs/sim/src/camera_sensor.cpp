@@ -26,8 +26,9 @@ const std::vector<uint8_t>& gamma_lut(double gamma) {
 }
 
 // Horizontal box smear (motion blur while the robot turns), centred.
-std::vector<Rgbf> smear_rows(const std::vector<Rgbf>& in, int width, int height, int length) {
-  std::vector<Rgbf> out(in.size());
+const std::vector<Rgbf>& smear_rows(const std::vector<Rgbf>& in, int width, int height, int length) {
+  thread_local std::vector<Rgbf> out;  // scratch reused across frames, fully written below
+  out.resize(in.size());
   const int half = length / 2;
   const float inv = 1.0f / static_cast<float>(length);
   for (int y = 0; y < height; ++y) {
@@ -78,9 +79,7 @@ CameraImage expose(const std::vector<Rgbf>& radiance_in, int width, int height, 
                    double sensitivity, const CameraSensorConfig& c, uint64_t frame, uint32_t stream, double smear_px,
                    bool with_saturation) {
   const int smear = c.motion_blur ? static_cast<int>(std::lround(smear_px)) : 0;
-  std::vector<Rgbf> smeared;
-  if (smear >= 2) smeared = smear_rows(radiance_in, width, height, smear);
-  const std::vector<Rgbf>& radiance = smear >= 2 ? smeared : radiance_in;
+  const std::vector<Rgbf>& radiance = smear >= 2 ? smear_rows(radiance_in, width, height, smear) : radiance_in;
   const float* rad = &radiance[0].r;
   const uint8_t* lut = gamma_lut(c.gamma).data();
   const NoiseTable& table = NoiseTable::instance();

@@ -43,17 +43,20 @@ Texture::Texture(int size, double texel_m, const std::vector<Rgbf>& linear)
   const double count = static_cast<double>(linear.size());
   mean_ = Rgbf(static_cast<float>(sum_r / count), static_cast<float>(sum_g / count), static_cast<float>(sum_b / count));
   size_t total = 0;
-  for (int m = size; m >= 1; m /= 2) total += static_cast<size_t>(m) * m;
+  for (int m = size; m >= 4; m /= 2) total += static_cast<size_t>(m) * m;
   data_ = HugeBuffer(total);
+  lod_scale_ = inv_texel_ * 1.25f;
   size_t base = 0;
-  while (n >= 1) {
-    offsets_.push_back(base);
+  while (n >= 4 && levels_ < 16) {
+    Level& lv = level_[levels_];
+    lv.texels = data_.data() + base;
+    lv.scale = inv_texel_ / static_cast<float>(1 << levels_);
+    lv.mask = n - 1;
+    while ((4 << lv.shift) < n) ++lv.shift;
     for (int y = 0; y < n; ++y)
-      for (int x = 0; x < n; ++x) data_[base + tiled(x, y, n)] = encode_texel(level[static_cast<size_t>(y) * n + x]);
+      for (int x = 0; x < n; ++x) data_[base + tiled(x, y, lv.shift)] = encode_texel(level[static_cast<size_t>(y) * n + x]);
     base += static_cast<size_t>(n) * n;
-    level_scale_[levels_] = inv_texel_ / static_cast<float>(1 << levels_);
     ++levels_;
-    if (n == 1) break;
     const int m = n / 2;
     std::vector<Rgbf> next(static_cast<size_t>(m) * m);
     for (int y = 0; y < m; ++y)

@@ -60,22 +60,22 @@ class Texture {
 
   // Albedo at (u, v) metres for a pixel covering `footprint` metres of the surface.
   Rgbf sample(float u, float v, float footprint) const {
-    int level = floor_log2(footprint * inv_texel_ * 1.25f + 1e-30f);
+    int level = floor_log2(footprint * lod_scale_ + 1e-30f);
     level = level < 0 ? 0 : (level >= levels_ ? levels_ - 1 : level);
-    const int n = size_ >> level;
-    const uint32_t* texels = data_.data() + offsets_[static_cast<size_t>(level)];
-    const float scale = level_scale_[level];
-    const float x = u * scale - 0.5f, y = v * scale - 0.5f;
+    const Level& lv = level_[level];
+    const float x = u * lv.scale - 0.5f, y = v * lv.scale - 0.5f;
     const int x0 = floor_to_int(x), y0 = floor_to_int(y);
     const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
-    const int mask = n - 1;
-    const int xa = x0 & mask, xb = (x0 + 1) & mask, ya = y0 & mask, yb = (y0 + 1) & mask;
+    const int xa = x0 & lv.mask, xb = (x0 + 1) & lv.mask, ya = y0 & lv.mask, yb = (y0 + 1) & lv.mask;
+    const uint32_t* t = lv.texels;
+    const uint32_t t00 = t[tiled(xa, ya, lv.shift)], t10 = t[tiled(xb, ya, lv.shift)];
+    const uint32_t t01 = t[tiled(xa, yb, lv.shift)], t11 = t[tiled(xb, yb, lv.shift)];
     const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
 #if defined(__SSE2__)
-    const __m128i t = _mm_set_epi32(static_cast<int>(texels[tiled(xb, yb, n)]), static_cast<int>(texels[tiled(xa, yb, n)]),
-                                    static_cast<int>(texels[tiled(xb, ya, n)]), static_cast<int>(texels[tiled(xa, ya, n)]));
+    const __m128i packed = _mm_set_epi32(static_cast<int>(t11), static_cast<int>(t01), static_cast<int>(t10),
+                                         static_cast<int>(t00));
     const __m128i zero = _mm_setzero_si128();
-    const __m128i lo = _mm_unpacklo_epi8(t, zero), hi = _mm_unpackhi_epi8(t, zero);
+    const __m128i lo = _mm_unpacklo_epi8(packed, zero), hi = _mm_unpackhi_epi8(packed, zero);
     __m128 c = _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(lo, zero)), _mm_set1_ps(w00));
     c = _mm_add_ps(c, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpackhi_epi16(lo, zero)), _mm_set1_ps(w10)));
     c = _mm_add_ps(c, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(hi, zero)), _mm_set1_ps(w01)));
@@ -85,8 +85,6 @@ class Texture {
     _mm_store_ps(out, c);
     return {out[0], out[1], out[2]};
 #else
-    const uint32_t t00 = texels[tiled(xa, ya, n)], t10 = texels[tiled(xb, ya, n)], t01 = texels[tiled(xa, yb, n)],
-                   t11 = texels[tiled(xb, yb, n)];
     auto channel = [&](int shift) {
       const float c = w00 * static_cast<float>((t00 >> shift) & 0xff) + w10 * static_cast<float>((t10 >> shift) & 0xff) +
                       w01 * static_cast<float>((t01 >> shift) & 0xff) + w11 * static_cast<float>((t11 >> shift) & 0xff);
@@ -100,20 +98,25 @@ class Texture {
 
   // Texels are stored in 4 x 4 tiles (64 bytes, one cache line): a bilinear
   // lookup and its neighbours mostly stay in one line, whatever the direction
-  // in which the image walks over the surface.
-  static size_t tiled(int x, int y, int n) {
-    if (n < 4) return static_cast<size_t>(y) * n + x;
-    return (static_cast<size_t>((y >> 2) * (n >> 2) + (x >> 2)) << 4) | static_cast<size_t>(((y & 3) << 2) | (x & 3));
+  // in which the image walks over the surface. `row_shift`: log2 of the
+  // tiles per row.
+  static uint32_t tiled(int x, int y, int row_shift) {
+    return static_cast<uint32_t>(((((y >> 2) << row_shift) + (x >> 2)) << 4) | ((y & 3) << 2) | (x & 3));
   }
   Rgbf mean() const { return mean_; }
 
  private:
-  int size_ = 0, levels_ = 0;
-  float inv_texel_ = 1;
-  float level_scale_[32] = {};  // texels per metre at each level
+  struct Level {
+    const uint32_t* texels = nullptr;
+    float scale = 1;  // texels per metre
+    int mask = 0;     // side - 1
+    int shift = 0;    // log2(side / 4)
+  };
+  int size_ = 0, levels_ = 0;  // levels down to 4 x 4 texels
+  float inv_texel_ = 1, lod_scale_ = 1;
+  Level level_[16];
   Rgbf mean_;
   HugeBuffer data_;  // all levels; texel = sqrt(linear) * 255 per channel (gamma 2)
-  std::vector<size_t> offsets_;
 };
 
 // Linear-RGB image with metric placement, bilinear and clamped at the edges,

@@ -515,9 +515,9 @@ namespace {
 // sparsely and interpolated; a still water surface is traced at every pixel.
 int reflection_step(float fresnel, float roughness) {
   if (fresnel <= 0) return 0;
-  if (roughness >= 0.03f) return 4;
-  if (roughness >= 0.006f) return 2;
-  return 1;
+  if (roughness >= 0.01f) return 4;   // polished stone and rougher: >= 6 px of blur far out
+  if (roughness >= 0.005f) return 2;
+  return 1;                            // still water
 }
 
 }  // namespace
@@ -547,24 +547,30 @@ void Tracer::shade_image(Shaded* out) const {
   // A pixel off its lattice, inside a lattice cell whose four corners share
   // its spacing, takes its reflection from those corners.
   auto interpolated = [&](int x, int y) {
-    const int s = step[static_cast<size_t>(y) * width + x], m = s - 1;  // s is 1, 2 or 4
+    const int s = step[static_cast<size_t>(y) * width + x] & 0x7f, m = s - 1;  // s is 1, 2 or 4
     if (s < 2 || ((x | y) & m) == 0) return false;
     const int x0 = x & ~m, y0 = y & ~m, x1 = x0 + s, y1 = y0 + s;
     if (x1 >= width || y1 >= height) return false;
-    auto same = [&](int xx, int yy) { return step[static_cast<size_t>(yy) * width + xx] == s; };
+    auto same = [&](int xx, int yy) { return (step[static_cast<size_t>(yy) * width + xx] & 0x7f) == s; };
     return same(x0, y0) && same(x1, y0) && same(x0, y1) && same(x1, y1);
   };
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const size_t i = static_cast<size_t>(y) * width + x;
-      if (step[i] && !interpolated(x, y)) reflected[i] = floor_reflection(static_cast<int>(i), roughness[i]);
-    }
+  // step[i] becomes 0: no reflection, 1: traced here, 2+: interpolated.
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
       const size_t i = static_cast<size_t>(y) * width + x;
       if (!step[i]) continue;
       if (interpolated(x, y)) {
-        const int s = step[i], x0 = x & ~(s - 1), y0 = y & ~(s - 1);
+        step[i] |= 0x80;
+        continue;
+      }
+      reflected[i] = floor_reflection(static_cast<int>(i), roughness[i]);
+    }
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(y) * width + x;
+      if (!step[i]) continue;
+      if (step[i] & 0x80) {
+        const int s = step[i] & 0x7f, x0 = x & ~(s - 1), y0 = y & ~(s - 1);
         const float fx = static_cast<float>(x - x0) / static_cast<float>(s), fy = static_cast<float>(y - y0) / static_cast<float>(s);
         const size_t a = static_cast<size_t>(y0) * width + x0, b = a + static_cast<size_t>(s) * width;
         reflected[i] = lerp(lerp(reflected[a], reflected[a + s], fx), lerp(reflected[b], reflected[b + s], fx), fy);
