@@ -239,5 +239,17 @@ TEST(Detectors, JppcHalfBoxHasFifteenSamplesAndIsCachedPerPair) {
   EXPECT_EQ(detector.check(-1.0, 0.0, 0.10), Verdict::kUnknown);  // behind the camera
 }
 
+TEST(Detectors, JppcDiscFootprintHasThirteenSamplesWithinR) {
+  const RigCalibration rig = test::make_test_rig();
+  cv::Mat left, right;
+  test::render_pair(room(), rig, left, right, 1);
+  JppConfig config;
+  config.footprint = "disc";
+  JppcDetector detector(rig, config);
+  detector.set_frame(left, right);
+  EXPECT_EQ(detector.check(1.5, 0.0, 0.10), Verdict::kFree);
+  EXPECT_EQ(detector.stats().cp_tests, 13);  // the 0.05 m lattice points within 0.10 m
+}
+
 }  // namespace
 }  // namespace ivoa::stereo

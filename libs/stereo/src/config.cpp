@@ -27,6 +27,7 @@ void validate(const JppConfig& c) {
   require(c.conf_pos_thresh > 0, "conf_pos_thresh must be positive");
   // JPP's config is in mm: 50 there is 0.05 here.
   require(c.grid_size > 0 && c.grid_size <= 1.0, "grid_size must be in (0, 1] metres (JPP's .cfg uses mm)");
+  require(c.footprint == "disc" || c.footprint == "half_box", "jpp_footprint must be 'disc' or 'half_box'");
   require(c.min_window_fraction > 0 && c.min_window_fraction <= 1, "jpp_min_window_fraction must be in (0, 1]");
   require(c.texture_gate >= 0, "jpp_texture_gate must be >= 0");
 }

@@ -56,12 +56,23 @@ JppcDetector::Projection JppcDetector::project(const Eigen::Vector3d& p_robot) c
 
 template <class Visit>
 void JppcDetector::for_each_sample(double x, double y, double radius, Visit visit) const {
-  // JPP's is_bot_clear with col_check = false: the half box ahead of (x, y).
   const double step = config_.grid_size;
-  const int n_forward = samples_up_to(radius, step), n_lateral = samples_up_to(2.0 * radius, step);
-  for (int i = 0; i < n_forward; ++i)
-    for (int j = 0; j < n_lateral; ++j)
-      if (!visit(Eigen::Vector3d(x + i * step, y - radius + j * step, 0.0))) return;
+  if (config_.footprint == "half_box") {
+    // JPP's is_bot_clear with col_check = false: the half box ahead of (x, y).
+    const int n_forward = samples_up_to(radius, step), n_lateral = samples_up_to(2.0 * radius, step);
+    for (int i = 0; i < n_forward; ++i)
+      for (int j = 0; j < n_lateral; ++j)
+        if (!visit(Eigen::Vector3d(x + i * step, y - radius + j * step, 0.0))) return;
+    return;
+  }
+  // The lattice points within r of (x, y) (integer steps, a small tolerance
+  // so points exactly at r are in).
+  const int n = samples_up_to(radius, step) - 1;
+  const double limit = radius * radius * (1.0 + 1e-9);
+  for (int i = -n; i <= n; ++i)
+    for (int j = -n; j <= n; ++j)
+      if ((i * i + j * j) * step * step <= limit)
+        if (!visit(Eigen::Vector3d(x + i * step, y + j * step, 0.0))) return;
 }
 
 PointCheck JppcDetector::confident_positive(const Eigen::Vector3d& p_robot) {

@@ -36,6 +36,12 @@ void add_jpp_options(CLI::App& app, JppConfig& c) {
                  "step between ground samples of one footprint check, m (JPP grid_size, mm there; not --grid-spacing)")
       ->capture_default_str()
       ->group(kJppGroup);
+  app.add_option("--jpp_footprint", c.footprint,
+                 "ground samples of a footprint check: half_box (JPP's is_bot_clear: ahead of the point) or "
+                 "disc (within r)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"disc", "half_box"}))
+      ->group(kJppGroup);
   add_jpp_matcher_options(app, c);
 }
 

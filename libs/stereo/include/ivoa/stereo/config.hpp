@@ -31,6 +31,18 @@ struct JppConfig {
   // Step between the ground samples of one footprint check, metres (JPP
   // grid_size, in mm there; not the query grid's --grid-spacing).
   double grid_size = 0.05;
+  // Which ground samples a footprint check tests, at step grid_size:
+  //  "half_box" (default): JPP's is_bot_clear, the box ahead of (x, y)
+  //          (dx in [0, r], dy in [-r, r]: 15 samples for r = 0.10, step 0.05).
+  //  "disc": the lattice points within r (13 samples), the shape the depth
+  //          monitor checks. Measured on the simulator, it is the worse
+  //          choice: an obstacle in the disc's rear half stands between the
+  //          camera and the half box's samples, so JPP's half box flags it
+  //          anyway (the ground it must see is hidden), while the disc's
+  //          rear samples near the robot fall on steeply slanted ground,
+  //          where JPP's fronto-parallel window fails and clean floor reads
+  //          as an obstacle.
+  std::string footprint = "half_box";
 
   // Departures from JPP (see jppc_detector.hpp).
   // Border bias fix: the window cost divides by the pixels actually compared;

@@ -1,7 +1,7 @@
 #pragma once
 // JPP-C (Ghosh & Biswas, "Joint Perception and Planning", convex world): a
-// footprint is free iff every ground sample of a forward half box around it
-// is a confident positive, i.e. the ground plane there matches between the
+// footprint is free iff every ground sample in it is a confident positive,
+// i.e. the ground plane there matches between the
 // rectified left and right images (ivoa_jpp_spec.md §1). An obstacle standing
 // on the ground occludes the ground differently in the two views, so the
 // ground hypothesis fails to match. Only ground points are tested: the IVOA
@@ -11,8 +11,10 @@
 // Faithful to JPP: half-resolution rectification by remapping (no
 // anti-aliasing), 3-float DAISY with its index-offset quirk, 11x11 L1 window
 // cost, conf_pos_thresh 0.75, forward half box dx in [0, r], dy in [-r, r]
-// at step grid_size (15 samples for r = 0.10, step 0.05), texture-less
-// regions matching anything. Departures, each to fix a defect of JPP's code:
+// at step grid_size (15 samples for r = 0.10, step 0.05; JppConfig::footprint
+// "disc" tests the samples within r instead), texture-less regions matching
+// anything.
+// Departures, each to fix a defect of JPP's code:
 //  - samples are counted with integers (JPP accumulates floats, so the
 //    number of samples depended on rounding);
 //  - points behind the camera are rejected (JPP projected them anyway);
@@ -74,7 +76,7 @@ class JppcDetector : public ObstacleDetector {
     cv::Point left, right;
   };
   Projection project(const Eigen::Vector3d& p_robot) const;
-  // The ground samples of JPP's half box around (x, y).
+  // The ground samples of the footprint around (x, y) (JppConfig::footprint).
   template <class Visit>
   void for_each_sample(double x, double y, double radius, Visit visit) const;
   // Rectifies and builds descriptor layers for windows inside the regions
