@@ -7,13 +7,14 @@
 
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
+#include "ivoa/viewer/figure_window.hpp"
 #include "ivoa/viewer/viewer_node.hpp"
 
 namespace {
 
 void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   auto& out = o.output;
-  app.add_flag("--window", out.window, "show a window (OpenCV highgui) when a display is present");
+  app.add_flag("--window", o.window, "show a window (OpenCV highgui) when a display is present");
   app.add_option("--out-dir", out.out_dir, "write figures here as frame_<utime>.png");
   app.add_option("--every", out.every_frames, "a PNG every N figures")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--every-seconds", out.every_seconds, "and at least S seconds apart")
@@ -66,10 +67,10 @@ int main(int argc, char** argv) {
   ivoa::install_stop_handlers();
 
   std::string why_no_window;
-  const bool window = options.output.window && ivoa::viewer::window_possible(&why_no_window);
+  const bool window = options.window && ivoa::viewer::window_possible(&why_no_window);
   if (options.output.out_dir.empty() && options.output.video.empty() && !window) {
     spdlog::error("nothing to show{}: give --out-dir DIR and/or --video FILE.avi",
-                  options.output.window ? " (" + why_no_window + ")" : std::string());
+                  options.window ? " (" + why_no_window + ")" : std::string());
     return ivoa::kExitUsage;
   }
   try {

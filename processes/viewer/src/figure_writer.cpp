@@ -7,39 +7,17 @@
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <spdlog/spdlog.h>
 #ifdef IVOA_VIEWER_HAS_VIDEOIO
 #include <opencv2/videoio.hpp>
 #endif
-#ifdef IVOA_VIEWER_HAS_HIGHGUI
-#include <opencv2/highgui.hpp>
-#endif
 
 namespace ivoa::viewer {
-namespace {
-constexpr const char* kWindowName = "ivoa-viewer";
-}
-
 struct FigureWriter::Video {
 #ifdef IVOA_VIEWER_HAS_VIDEOIO
   cv::VideoWriter writer;
 #endif
   cv::Size size;
 };
-
-bool window_possible(std::string* why_not) {
-  auto fail = [&](const char* why) {
-    if (why_not) *why_not = why;
-    return false;
-  };
-#ifndef IVOA_VIEWER_HAS_HIGHGUI
-  return fail("built without OpenCV highgui (libopencv-highgui-dev)");
-#endif
-  const char* display = std::getenv("DISPLAY");
-  const char* wayland = std::getenv("WAYLAND_DISPLAY");
-  if ((!display || !*display) && (!wayland || !*wayland)) return fail("no display ($DISPLAY is not set)");
-  return true;
-}
 
 FigureWriter::FigureWriter(OutputOptions options) : options_(std::move(options)) {
   if (!options_.out_dir.empty()) {
@@ -53,18 +31,9 @@ FigureWriter::FigureWriter(OutputOptions options) : options_(std::move(options))
 #endif
     video_ = std::make_unique<Video>();
   }
-  std::string why;
-  if (options_.window && !window_possible(&why)) {
-    spdlog::warn("not opening a window: {}; writing files only", why);
-    options_.window = false;
-  }
 }
 
-FigureWriter::~FigureWriter() {
-#ifdef IVOA_VIEWER_HAS_HIGHGUI
-  if (window_open_) cv::destroyWindow(kWindowName);
-#endif
-}
+FigureWriter::~FigureWriter() = default;
 
 void FigureWriter::write(const cv::Mat& figure, int64_t utime, double now_ms) {
   ++figures_since_png_;
@@ -75,7 +44,6 @@ void FigureWriter::write(const cv::Mat& figure, int64_t utime, double now_ms) {
     last_png_ms_ = now_ms;
   }
   if (video_) write_video(figure);
-  if (options_.window) show(figure);
 }
 
 void FigureWriter::write_png(const cv::Mat& figure, int64_t utime) {
@@ -114,33 +82,6 @@ void FigureWriter::write_video(const cv::Mat& figure) {
     video_->writer.write(resized);
   }
   ++video_frames_;
-#else
-  (void)figure;
-#endif
-}
-
-void FigureWriter::poll_window() {
-#ifdef IVOA_VIEWER_HAS_HIGHGUI
-  if (!window_open_) return;
-  const int key = cv::waitKey(1);
-  if (key == 'q' || key == 27) quit_requested_ = true;
-#endif
-}
-
-void FigureWriter::show(const cv::Mat& figure) {
-#ifdef IVOA_VIEWER_HAS_HIGHGUI
-  if (!window_open_) {
-    cv::namedWindow(kWindowName, cv::WINDOW_NORMAL | cv::WINDOW_KEEPRATIO);
-    cv::resizeWindow(kWindowName, figure.cols, figure.rows);
-    window_open_ = true;
-  } else if (cv::getWindowProperty(kWindowName, cv::WND_PROP_VISIBLE) < 1) {
-    spdlog::info("window closed; writing files only");
-    options_.window = window_open_ = false;
-    return;
-  }
-  cv::imshow(kWindowName, figure);
-  const int key = cv::waitKey(1);
-  if (key == 'q' || key == 27) quit_requested_ = true;
 #else
   (void)figure;
 #endif

@@ -14,6 +14,11 @@ ViewerNode::ViewerNode(Bus& bus, Heartbeat& heartbeat, ViewerOptions options)
       options_(std::move(options)),
       matcher_(options_.matcher),
       writer_(options_.output) {
+  std::string why_not;
+  if (options_.window && !window_possible(&why_not)) {
+    spdlog::warn("not opening a window: {}", why_not);
+    options_.window = false;
+  }
   subscribe();
   heartbeat_.set_state("waiting for images");
   worker_ = std::thread([this] { work(); });
@@ -56,10 +61,11 @@ void ViewerNode::subscribe() {
 }
 
 void ViewerNode::tick() {
-  if (auto frame = matcher_.take(monotonic_ms())) {
-    frames_.put(std::move(*frame));
-  }
+  if (auto frame = matcher_.take(monotonic_ms())) frames_.put(std::move(*frame));
   update_drop_count();
+  if (!options_.window) return;
+  if (auto figure = display_.take(std::chrono::milliseconds(0))) window_.show(*figure);
+  if (window_.poll()) quit_ = true;
 }
 
 void ViewerNode::update_drop_count() {
@@ -75,6 +81,7 @@ void ViewerNode::finish() {
   update_drop_count();
   frames_.close();
   if (worker_.joinable()) worker_.join();
+  window_.close();
 }
 
 bool ViewerNode::done() const {
@@ -85,13 +92,8 @@ bool ViewerNode::done() const {
 void ViewerNode::work() {
   while (true) {
     auto frame = frames_.take(std::chrono::milliseconds(50));
-    if (!frame) {
-      if (frames_.closed()) return;
-      writer_.poll_window();
-      if (writer_.quit_requested()) quit_ = true;
-      continue;
-    }
-    draw(*frame);
+    if (frame) draw(*frame);
+    else if (frames_.closed()) return;
   }
 }
 
@@ -103,14 +105,15 @@ void ViewerNode::draw(const FrameSet& frame) {
     heartbeat_.bad_input(options_.stereo_channel + " utime " + std::to_string(frame.utime) + ": left image: " + e.what());
     return;
   }
+  const cv::Mat figure = draw_frame_figure(left, frame, options_.figure);
   try {
-    writer_.write(draw_frame_figure(left, frame, options_.figure), frame.utime, monotonic_ms());
+    writer_.write(figure, frame.utime, monotonic_ms());
   } catch (const OutputError& e) {
     spdlog::error("{}", e.what());
     output_failed_ = true;
     return;
   }
-  if (writer_.quit_requested()) quit_ = true;
+  if (options_.window) display_.put(figure);
   heartbeat_.latency(monotonic_ms() - frame.image_received_ms);
   heartbeat_.count_out();
   heartbeat_.set_counter("images_written", writer_.images_written());

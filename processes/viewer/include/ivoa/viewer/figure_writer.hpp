@@ -1,7 +1,7 @@
 #pragma once
 // Where figures go: PNG files (--out-dir; one every N figures and/or every
-// S seconds; only the newest --max-images kept), an MJPG .avi video, and a
-// live window (OpenCV highgui) when asked for and a display is present.
+// S seconds; only the newest --max-images kept) and an MJPG .avi video. The
+// live window is FigureWindow (figure_window.hpp).
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -19,17 +19,12 @@ struct OutputOptions {
   int max_images = 100;       // keep the newest N PNGs written (0 = all)
   std::string video;          // "" = no video; an .avi file (MJPG)
   double video_fps = 5;
-  bool window = false;        // show a window if there is a display
 };
 
 class OutputError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
-
-// True if a window can be opened: built with highgui and $DISPLAY or
-// $WAYLAND_DISPLAY set. `why_not` says why when it cannot.
-bool window_possible(std::string* why_not = nullptr);
 
 class FigureWriter {
  public:
@@ -40,19 +35,12 @@ class FigureWriter {
   // Throws OutputError if a PNG or the video cannot be written.
   void write(const cv::Mat& figure, int64_t utime, double now_ms);
 
-  // Keeps an open window responsive between figures; call often.
-  void poll_window();
-
   int64_t images_written() const { return images_written_; }
   int64_t video_frames() const { return video_frames_; }
-  bool window_open() const { return window_open_; }
-  // The window asked the process to stop ('q' or Esc).
-  bool quit_requested() const { return quit_requested_; }
 
  private:
   void write_png(const cv::Mat& figure, int64_t utime);
   void write_video(const cv::Mat& figure);
-  void show(const cv::Mat& figure);
 
   OutputOptions options_;
   std::deque<std::string> written_;
@@ -60,7 +48,6 @@ class FigureWriter {
   double last_png_ms_ = -1e18;
   struct Video;
   std::unique_ptr<Video> video_;
-  bool window_open_ = false, quit_requested_ = false;
 };
 
 }  // namespace ivoa::viewer

@@ -2,8 +2,9 @@
 // The viewer process's logic. LCM handlers (the bus thread) file each
 // message under its frame's utime (FrameMatcher); tick() hands the newest
 // drawable frame to a latest-value mailbox; a worker thread decodes the
-// left image, draws the figure and writes it (PNG, video, window), so a
-// slow disk or display skips frames (counted) instead of falling behind.
+// left image, draws the figure and writes it (PNG, video), so a slow disk
+// skips frames (counted) instead of falling behind. The window, if any, is
+// shown from tick(), on the bus thread: highgui wants a single GUI thread.
 #include <atomic>
 #include <string>
 #include <thread>
@@ -13,6 +14,7 @@
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/mailbox.hpp"
 #include "ivoa/viewer/figure.hpp"
+#include "ivoa/viewer/figure_window.hpp"
 #include "ivoa/viewer/figure_writer.hpp"
 #include "ivoa/viewer/frame_matcher.hpp"
 
@@ -27,6 +29,7 @@ struct ViewerOptions {
   MatcherOptions matcher;
   FigureOptions figure;
   OutputOptions output;
+  bool window = false;      // show a window where there is a display
   int64_t max_figures = 0;  // > 0: done() after this many figures
 };
 
@@ -45,6 +48,7 @@ class ViewerNode {
   int64_t figures() const { return figures_.load(); }
   bool done() const;              // max_figures reached, the window asked to quit, or an output failed
   bool output_failed() const { return output_failed_.load(); }
+  bool window_shown() const { return window_.open(); }
 
  private:
   void subscribe();
@@ -57,7 +61,9 @@ class ViewerNode {
   ViewerOptions options_;
   FrameMatcher matcher_;         // bus thread only
   FigureWriter writer_;          // worker thread only (after construction)
+  FigureWindow window_;          // bus thread only
   LatestMailbox<FrameSet> frames_;
+  LatestMailbox<cv::Mat> display_;  // drawn figures for the window
   std::atomic<int64_t> figures_{0};
   std::atomic<bool> output_failed_{false}, quit_{false};
   uint64_t counted_dropped_ = 0;

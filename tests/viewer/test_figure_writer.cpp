@@ -1,0 +1,79 @@
+// Where figures go: PNGs every N figures / S seconds with only the newest
+// kept, and an MJPG .avi video.
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "ivoa/viewer/figure_writer.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa::viewer {
+namespace {
+
+namespace fs = std::filesystem;
+
+cv::Mat figure() { return cv::Mat(60, 90, CV_8UC3, cv::Scalar(10, 200, 30)); }
+
+std::vector<std::string> files_in(const fs::path& dir) {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(dir)) out.push_back(e.path().filename().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(ViewerFigureWriter, WritesEveryNthFigureAndKeepsTheNewest) {
+  ivoa::test::TempDir dir;
+  OutputOptions o;
+  o.out_dir = dir.file("figures");
+  o.every_frames = 2;
+  o.max_images = 2;
+  FigureWriter w(o);
+  for (int64_t t = 1; t <= 6; ++t) w.write(figure(), t * 100, static_cast<double>(t));
+  EXPECT_EQ(w.images_written(), 3);
+  EXPECT_EQ(files_in(o.out_dir), (std::vector<std::string>{"frame_400.png", "frame_600.png"}));
+}
+
+TEST(ViewerFigureWriter, WritesAtMostOnePngPerPeriod) {
+  ivoa::test::TempDir dir;
+  OutputOptions o;
+  o.out_dir = dir.path().string();
+  o.every_seconds = 1.0;
+  o.max_images = 0;
+  FigureWriter w(o);
+  w.write(figure(), 1, 0.0);
+  w.write(figure(), 2, 500.0);
+  w.write(figure(), 3, 1000.0);
+  w.write(figure(), 4, 1200.0);
+  EXPECT_EQ(files_in(o.out_dir), (std::vector<std::string>{"frame_1.png", "frame_3.png"}));
+}
+
+TEST(ViewerFigureWriter, WritesAnMjpgVideo) {
+  ivoa::test::TempDir dir;
+  OutputOptions o;
+  o.video = dir.file("view.avi");
+  {
+    FigureWriter w(o);
+    for (int64_t t = 0; t < 5; ++t) w.write(figure(), t, 0.0);
+    cv::Mat bigger(120, 180, CV_8UC3, cv::Scalar(0, 0, 0));
+    w.write(bigger, 5, 0.0);  // resized to the video's size
+    EXPECT_EQ(w.video_frames(), 6);
+  }
+  std::ifstream in(o.video, std::ios::binary);
+  std::string header(12, '\0');
+  in.read(header.data(), 12);
+  EXPECT_EQ(header.substr(0, 4), "RIFF");
+  EXPECT_EQ(header.substr(8, 4), "AVI ");
+  EXPECT_GT(fs::file_size(o.video), 1000u);
+}
+
+TEST(ViewerFigureWriter, UnwritableOutputIsAnError) {
+  ivoa::test::TempDir dir;
+  std::ofstream(dir.file("a_file")) << "x";
+  OutputOptions o;
+  o.out_dir = dir.file("a_file") + "/figures";
+  EXPECT_THROW(FigureWriter{o}, OutputError);
+}
+
+}  // namespace
+}  // namespace ivoa::viewer
