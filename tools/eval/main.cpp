@@ -158,11 +158,14 @@ int main(int argc, char** argv) {
     progress.finish();
     std::fclose(csv);
     std::fclose(emb);
+    std::string evaluated;
+    for (const auto& [split, name] : sessions)
+      evaluated += std::string(evaluated.empty() ? "" : ", ") + "{\"split\": \"" + split + "\", \"session\": \"" + name + "\"}";
     std::ofstream(o.out + "/eval.json") << "{\"model\": \"" << model->info().id << "\", \"mc_passes\": "
                                         << o.inference.mc_passes << ", \"uncertainty_threshold\": " << model->threshold()
-                                        << ", \"samples\": " << done << ", \"metadata\": " << "{\"detector\": \""
-                                        << model->info().detector << "\", \"architecture\": \""
-                                        << model->info().architecture << "\", \"training\": "
+                                        << ", \"samples\": " << done << ", \"sessions\": [" << evaluated << "]"
+                                        << ", \"metadata\": {\"detector\": \"" << model->info().detector
+                                        << "\", \"architecture\": \"" << model->info().architecture << "\", \"training\": "
                                         << (model->info().training_summary.empty() ? "{}" : model->info().training_summary)
                                         << "}}\n";
     if (!o.logs.empty()) write_overlays(o, *model);
