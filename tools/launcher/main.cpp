@@ -6,6 +6,7 @@
 #include <sys/prctl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <climits>
 #include <cstdlib>
 #include <filesystem>
@@ -113,8 +114,11 @@ int main(int argc, char** argv) {
     selected = select_commands(config, o.selection, variables);
     o.launcher.supervisor.environment = variables.exported();
     if (!o.launcher.script.empty()) flatten_script(config, o.launcher.script);
-    for (const auto& name : o.launcher.until)
-      if (!config.find_command(name)) throw ConfigError(config.path + ": no cmd \"" + name + "\" (--until)");
+    for (const auto& name : o.launcher.until) {
+      const bool selected_here = std::any_of(selected.commands.begin(), selected.commands.end(),
+                                             [&](const LaunchCommand& c) { return c.spec.name == name; });
+      if (!selected_here) throw ConfigError(config.path + ": --until " + name + ": no such command runs here");
+    }
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;
@@ -132,6 +136,9 @@ int main(int argc, char** argv) {
                   config.path, o.selection.host, fmt::join(hosts, ", "));
     return ivoa::kExitUsage;
   }
+  if (o.launcher.once && std::all_of(selected.commands.begin(), selected.commands.end(),
+                                     [](const LaunchCommand& c) { return c.spec.auto_respawn; }))
+    spdlog::warn("--once: every command respawns, so only --duration or a signal ends the run");
   o.launcher.redraw = !o.plain && isatty(STDOUT_FILENO);
   // Orphans of the commands come to us, so a command's group can be seen to empty.
   prctl(PR_SET_CHILD_SUBREAPER, 1);

@@ -111,14 +111,15 @@ class Run {
       publish_own_heartbeat();
       show_periodically();
     }
+    // The screen is left as it is; the stop's events print below it.
+    printer_.end_redraw();
     printer_.event("all", "stopping (" + reason + ")");
     supervisor_.stop_all();
     while (supervisor_.busy()) {
       if (supervisor_.step(100, monitor_ ? monitor_->fd() : -1)) monitor_->drain();
     }
-    printer_.end_redraw();
     const int code = exit_code();
-    printer_.show(header(), format_status_table(rows()));
+    printer_.show(header(false), format_status_table(rows()));
     write_status_file(reason, code);
     return code;
   }
@@ -192,10 +193,10 @@ class Run {
     return out;
   }
 
-  std::string header() const {
+  std::string header(bool live = true) const {
     char text[512];
     std::snprintf(text, sizeof(text), "ivoa-launch %s  host %s  %.0f s%s", config_.path.c_str(), host_.c_str(),
-                  seconds_since(started_), options_.redraw ? "  (Ctrl-C stops everything)" : "");
+                  seconds_since(started_), live && options_.redraw ? "  (Ctrl-C stops everything)" : "");
     return text;
   }
 
@@ -236,7 +237,7 @@ class Run {
     const bool json = path.size() >= 5 && path.compare(path.size() - 5, 5, ".json") == 0;
     RunSummary summary{config_.path, host_, seconds_since(started_), reason, code};
     std::ofstream out(path);
-    out << (json ? format_status_json(rows(), summary) : header() + "\n" + format_status_table(rows()));
+    out << (json ? format_status_json(rows(), summary) : header(false) + "\n" + format_status_table(rows()));
     if (!out) spdlog::error("cannot write the status file {}", path);
   }
 

@@ -179,30 +179,28 @@ int Supervisor::poll_timeout_ms(int limit_ms) const {
 }
 
 void Supervisor::read_output(Instance& c, bool to_end) {
+  // A bounded amount per call, so one chatty command cannot starve the others
+  // (nor, at its end, keep us reading what an escaped child still writes).
   char buffer[8192];
-  for (;;) {
+  const int max_reads = to_end ? 1024 : 8;
+  bool at_end = false;
+  for (int reads = 0; reads < max_reads && !at_end; ++reads) {
     const ssize_t n = read(c.output_fd, buffer, sizeof(buffer));
-    if (n > 0) {
-      c.partial_line.append(buffer, static_cast<size_t>(n));
-      size_t newline;
-      while ((newline = c.partial_line.find('\n')) != std::string::npos) {
-        on_output_(c.status.name, c.partial_line.substr(0, newline));
-        c.partial_line.erase(0, newline + 1);
-      }
-      continue;
-    }
     if (n < 0 && errno == EINTR) continue;
-    const bool at_end = n == 0;
-    if (at_end || to_end) {
-      if (!c.partial_line.empty()) on_output_(c.status.name, c.partial_line);
-      c.partial_line.clear();
-      if (at_end || to_end) {
-        close(c.output_fd);
-        c.output_fd = -1;
-      }
+    if (n < 0) break;  // nothing more for now
+    at_end = n == 0;
+    c.partial_line.append(buffer, static_cast<size_t>(n));
+    size_t newline;
+    while ((newline = c.partial_line.find('\n')) != std::string::npos) {
+      on_output_(c.status.name, c.partial_line.substr(0, newline));
+      c.partial_line.erase(0, newline + 1);
     }
-    return;
   }
+  if (!at_end && !to_end) return;
+  if (!c.partial_line.empty()) on_output_(c.status.name, c.partial_line);
+  c.partial_line.clear();
+  close(c.output_fd);
+  c.output_fd = -1;
 }
 
 void Supervisor::reap() {
