@@ -61,7 +61,6 @@ void build_plan_grid(SceneData& s) {
   g.ny = static_cast<int>(std::ceil(box.sizes().y() / g.cell));
   const size_t cells = static_cast<size_t>(g.nx) * g.ny;
   std::vector<std::vector<uint16_t>> features(cells);
-  std::vector<std::vector<uint32_t>> prisms(cells);
   auto cover = [&](float cx, float cy, float r, auto&& add) {
     const int i0 = std::max(0, static_cast<int>((cx - r - g.x0) / g.cell));
     const int i1 = std::min(g.nx - 1, static_cast<int>((cx + r - g.x0) / g.cell));
@@ -74,22 +73,13 @@ void build_plan_grid(SceneData& s) {
     const FloorFeature& f = s.floor_features[k];
     cover(f.cx, f.cy, std::hypot(f.hx, f.hy), [&](size_t c) { features[c].push_back(static_cast<uint16_t>(k)); });
   }
-  for (size_t k = 0; k < s.prisms.size(); ++k) {
-    const Prism& p = s.prisms[k];
-    cover(p.cx, p.cy, p.radius() + 0.5f, [&](size_t c) { prisms[c].push_back(static_cast<uint32_t>(k)); });
-  }
   g.feature_start.assign(cells + 1, 0);
-  g.prism_start.assign(cells + 1, 0);
   g.features.clear();
-  g.prisms.clear();
   for (size_t c = 0; c < cells; ++c) {
     g.feature_start[c] = static_cast<uint32_t>(g.features.size());
     g.features.insert(g.features.end(), features[c].begin(), features[c].end());
-    g.prism_start[c] = static_cast<uint32_t>(g.prisms.size());
-    g.prisms.insert(g.prisms.end(), prisms[c].begin(), prisms[c].end());
   }
   g.feature_start[cells] = static_cast<uint32_t>(g.features.size());
-  g.prism_start[cells] = static_cast<uint32_t>(g.prisms.size());
 }
 
 }  // namespace detail

@@ -82,14 +82,13 @@ struct SkyData {
   float sun_radius = 0.0047f;        // radians
 };
 
-// Uniform grid over the floor plan listing the floor features (in paint
-// order) and prisms overlapping each cell.
+// Uniform grid over the floor plan listing the floor features overlapping
+// each cell, in paint order (later ones lie on top).
 struct PlanGrid {
   float x0 = 0, y0 = 0, cell = 1, inv_cell = 1;
   int nx = 0, ny = 0;
-  std::vector<uint32_t> feature_start, prism_start;
+  std::vector<uint32_t> feature_start;
   std::vector<uint16_t> features;
-  std::vector<uint32_t> prisms;
   bool inside(float x, float y) const {
     return x >= x0 && y >= y0 && x < x0 + cell * nx && y < y0 + cell * ny;
   }

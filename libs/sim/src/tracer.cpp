@@ -357,7 +357,7 @@ Rgbf Tracer::light_lobes(const Ray& ray, float x, float y, float roughness) cons
   return sum;
 }
 
-Rgbf Tracer::reflection(const Ray& ray, float s_floor, float roughness, bool& emitter) const {
+Rgbf Tracer::reflection(const Ray& ray, float s_floor, float roughness) const {
   // Mirror world: the ray goes on below the floor; the ceiling mirrors to z = -H.
   const float s_hi = scene_.has_ceiling ? (-scene_.ceiling_height - oz_) * ray.inv_slope : kInf;
   Hit hit;
@@ -365,11 +365,9 @@ Rgbf Tracer::reflection(const Ray& ray, float s_floor, float roughness, bool& em
   const float pa = rays_.pixel_angle();
   const float s = hit.candidate >= 0 ? hit.s : s_hi;
   const float blur = 2.0f * roughness * (s - s_floor) * ray.len;
-  emitter = false;
   if (hit.candidate >= 0) {
     Shaded sh;
     shade_solid(ray, hit, true, blur, sh);
-    emitter = scene_.materials[scene_.prisms[candidates_[static_cast<size_t>(hit.candidate)].prism].material].emission.r > 0;
     return sh.radiance;
   }
   if (scene_.has_ceiling) {
@@ -441,8 +439,7 @@ Rgbf Tracer::floor_reflection(int pixel, float roughness) const {
   const Ray ray = make_ray(pr);
   const float x = px_ + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
   const float y = py_ + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
-  bool emitter;
-  Rgbf r = reflection(ray, pr.s_floor, roughness, emitter);
+  Rgbf r = reflection(ray, pr.s_floor, roughness);
   if (!glare_lights_.empty()) r += light_lobes(ray, x, y, roughness);
   return r;
 }
@@ -454,7 +451,7 @@ void Tracer::add_reflection(Shaded& out, float fresnel, const Rgbf& reflected) {
   if (out.specular > 0.35f * out.radiance.luminance()) out.phenomena |= GT::PHENOMENON_REFLECTION;
 }
 
-bool Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, float& roughness, FloorSample* floor) const {
+bool Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, FloorSample* floor) const {
   const PixelRay& pr = rays_.ray(pixel);
   const Ray ray = make_ray(pr);
   float s_hi = pr.s_floor;
@@ -475,12 +472,9 @@ bool Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, float& roughn
     f.y = py_ + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
     if (const FloorFeature* pit = floor_feature(f.x, f.y, f.material)) {
       shade_pit(ray, *pit, pr.s_floor, out);
-    } else if (floor) {
+    } else {
       *floor = f;
       return true;
-    } else {
-      finish_floor(f, out, fresnel, roughness);
-      return false;
     }
   } else if (scene_.has_ceiling) {
     const float x = ox_ + s_hi * ray.wx, y = oy_ + s_hi * ray.wy;
@@ -499,12 +493,6 @@ bool Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, float& roughn
   }
   out.depth *= pr.planar;
   return false;
-}
-
-void Tracer::shade(int pixel, Shaded& out) const {
-  float fresnel, roughness = 0;
-  shade_primary(pixel, out, fresnel, roughness, nullptr);
-  if (fresnel > 0) add_reflection(out, fresnel, floor_reflection(pixel, roughness));
 }
 
 namespace {
@@ -538,7 +526,7 @@ void Tracer::shade_image(Shaded* out) const {
   floor.resize(n);
   size_t floor_count = 0;
   for (size_t i = 0; i < n; ++i)
-    floor_count += shade_primary(static_cast<int>(i), out[i], fresnel[i], roughness[i], &floor[floor_count]);
+    floor_count += shade_primary(static_cast<int>(i), out[i], fresnel[i], &floor[floor_count]);
   for (size_t k = 0; k < floor_count; ++k) {
     const size_t i = static_cast<size_t>(floor[k].pixel);
     finish_floor(floor[k], out[i], fresnel[i], roughness[i]);

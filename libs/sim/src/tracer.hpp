@@ -44,7 +44,6 @@ class Tracer {
   // roughness) and interpolated between: the surface blurs them over more
   // pixels anyway. Mirror-like ones (water) are traced at every pixel.
   void shade_image(Shaded* out) const;
-  void shade(int pixel, Shaded& out) const;  // one pixel, everything traced
   Ranged range(int pixel) const;
   size_t num_candidates() const { return candidates_.size(); }
 
@@ -83,15 +82,15 @@ class Tracer {
     uint16_t material;
   };
   // What the pixel sees. Returns true for an ordinary floor pixel, which it
-  // leaves in *floor for finish_floor (shades it at once if floor is null).
-  bool shade_primary(int pixel, Shaded& out, float& fresnel, float& roughness, FloorSample* floor) const;
+  // leaves in *floor for finish_floor.
+  bool shade_primary(int pixel, Shaded& out, float& fresnel, FloorSample* floor) const;
   // The floor's own (diffuse) radiance; `fresnel` > 0 when a reflection must be added.
   void finish_floor(const FloorSample& f, Shaded& out, float& fresnel, float& roughness) const;
   // Mirror image plus highlight lobes seen in the floor at a pixel.
   Rgbf floor_reflection(int pixel, float roughness) const;
   static void add_reflection(Shaded& out, float fresnel, const Rgbf& reflected);
   void shade_pit(const Ray& ray, const FloorFeature& pit, float s_floor, Shaded& out) const;
-  Rgbf reflection(const Ray& ray, float s_floor, float roughness, bool& emitter) const;
+  Rgbf reflection(const Ray& ray, float s_floor, float roughness) const;
   Rgbf sky(float dx, float dy, float dz, float blur) const;
   Rgbf light_lobes(const Ray& ray, float x, float y, float roughness) const;
   const FloorFeature* floor_feature(float x, float y, uint16_t& material) const;
