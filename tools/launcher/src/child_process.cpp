@@ -1,6 +1,7 @@
 #include "child_process.hpp"
 
 #include <fcntl.h>
+#include <pthread.h>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -35,7 +36,8 @@ std::vector<std::string> merged_environment(const std::map<std::string, std::str
   setsid();
   prctl(PR_SET_PDEATHSIG, death_signal);
   if (getppid() != launcher) _exit(127);  // the launcher died before prctl
-  // Dispositions the launcher ignores would be inherited through exec.
+  // Dispositions the launcher ignores would be inherited through exec, and
+  // its handlers must not catch a stop meant for the command.
   for (int s : {SIGINT, SIGTERM, SIGPIPE, SIGHUP, SIGQUIT, SIGCHLD}) signal(s, SIG_DFL);
   sigset_t none;
   sigemptyset(&none);
@@ -82,7 +84,13 @@ ChildProcess spawn_shell_command(const std::string& command, const std::map<std:
   int fds[2];
   if (pipe2(fds, O_CLOEXEC) != 0) throw std::system_error(errno, std::generic_category(), "pipe");
   const pid_t launcher = getpid();
+  // Signals wait until the child has reset the launcher's handlers: a stop
+  // sent right after the fork must not land in a copy of our handler.
+  sigset_t all, previous;
+  sigfillset(&all);
+  pthread_sigmask(SIG_SETMASK, &all, &previous);
   const pid_t pid = fork();
+  if (pid != 0) pthread_sigmask(SIG_SETMASK, &previous, nullptr);
   if (pid < 0) {
     const int err = errno;
     close(fds[0]);
