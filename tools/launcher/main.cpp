@@ -41,7 +41,7 @@ struct CliOptions {
 
 void add_options(CLI::App& app, CliOptions& o) {
   auto& l = o.launcher;
-  app.add_option("config", o.config_path, "procman configuration (.pmd)")->required()->check(CLI::ExistingFile);
+  app.add_option("file", o.config_path, "procman configuration (.pmd)")->required()->check(CLI::ExistingFile);
   app.add_option("--host", o.selection.host, "run the commands for this host (host/deputy); '*' = all")
       ->capture_default_str();
   app.add_option("--group,-g", o.selection.groups, "only the commands in these groups (\"a/b\" for nested)");
@@ -93,8 +93,8 @@ void print_commands(const SelectedCommands& selected) {
 
 int main(int argc, char** argv) {
   CLI::App app{"Run a procman configuration (.pmd) on this machine: the commands for --host, respawned when they die, "
-               "stopped cleanly on Ctrl-C. Exit codes: 0 ok, 1 a command without auto_respawn failed, 2 bad flags or "
-               "configuration."};
+               "stopped cleanly on Ctrl-C; PROCESS_STATUS heartbeats in the status table (--lcm-url none: without LCM). "
+               "Exit codes: 0 ok, 1 a command without auto_respawn failed, 2 bad flags or configuration."};
   ivoa::CommonOptions common;
   CliOptions o;
   ivoa::add_common_options(app, common);
