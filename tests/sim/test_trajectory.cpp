@@ -61,7 +61,7 @@ TEST(SimTrajectory, CollisionFreeVariedAndOftenClose) {
     SCOPED_TRACE(name);
     const Scene scene = shipped(name, 2);
     const DriveStats s = drive(scene, 2, 180.0);
-    EXPECT_GE(s.min_clearance, 0.09) << "the footprint must never touch anything";
+    EXPECT_GE(s.min_clearance, 0.2) << "the footprint keeps its distance (0.3-0.5 m, less only while braking)";
     EXPECT_GT(s.distance, 15.0);
     EXPECT_GE(s.max_speed, 0.35);
     EXPECT_LE(s.max_speed, 0.6 + 1e-9);

@@ -131,9 +131,12 @@ struct Trajectory::Impl {
     next.yaw = wrap(next.yaw + tw.omega * dt);
     next.x += tw.v * dt * std::cos(next.yaw);
     next.y += tw.v * dt * std::sin(next.yaw);
-    // Hard safety: never move the footprint closer than min_clearance.
-    const double c = clearance(next);
-    if (c < config.min_clearance && c < clearance(last.pose) + 1e-9) {
+    // Like a careful operator: stop once the footprint comes within this
+    // leg's gap (0.3-0.5 m) of anything, in any direction, and turn away.
+    // And never, whatever the mode, closer than min_clearance.
+    const double c = clearance(next), c_now = clearance(last.pose);
+    const bool closing = c < c_now - 1e-9;
+    if (closing && (c < config.min_clearance || (mode != Mode::kTurnAway && c < gap))) {
       next.x = last.pose.x;
       next.y = last.pose.y;
       tw.v = 0;
