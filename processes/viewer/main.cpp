@@ -26,6 +26,8 @@ void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--scale", o.figure.scale, "figure panel size relative to the image")
       ->capture_default_str()->check(CLI::Range(0.05, 4.0));
+  app.add_flag("--every-frame,!--newest-only", o.every_frame,
+               "draw every frame in order, reading waits for the drawing (default for file:// logs)");
   app.add_option("--max-figures", o.max_figures, "exit after this many figures (0: run until stopped)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
 }
@@ -64,6 +66,8 @@ int main(int argc, char** argv) {
   add_channel_options(app, options);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("viewer", common.log_level);
+  const bool offline = common.lcm_url.rfind("file://", 0) == 0;
+  if (offline && app.get_option("--every-frame")->count() == 0) options.every_frame = true;
   ivoa::install_stop_handlers();
 
   std::string why_no_window;
@@ -79,7 +83,6 @@ int main(int argc, char** argv) {
     ivoa::viewer::ViewerNode node(bus, heartbeat, options);
     spdlog::info("listening on {}{}{}{}", bus.url(), options.output.out_dir.empty() ? "" : "; PNGs in " + options.output.out_dir,
                  options.output.video.empty() ? "" : "; video " + options.output.video, window ? "; window" : "");
-    const bool offline = bus.url().rfind("file://", 0) == 0;
     const int code = ivoa::run_until_stopped(
         bus, &heartbeat,
         [&] {

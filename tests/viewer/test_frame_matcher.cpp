@@ -112,6 +112,28 @@ TEST(ViewerFrameMatcher, KeepsABoundedNumberOfFramesAndFlushes) {
   EXPECT_EQ(m.skipped(), 19u);
 }
 
+TEST(ViewerFrameMatcher, EveryFrameModeHandsOutFramesInOrder) {
+  MatcherOptions o = options();
+  o.every_frame = true;
+  FrameMatcher m(o);
+  // As a log plays: frame 100's introspection never came (the live process
+  // skipped it); frame 200 is complete.
+  m.add_image(100, gray_image(100), 0);
+  m.add_stereo_grid(grid(100, {0}), 0);
+  m.add_image(200, gray_image(200), 1);
+  m.add_stereo_grid(grid(200, {0}), 1);
+  m.add_introspection(introspection(200), 2);
+  m.add_image(300, gray_image(300), 3);
+  auto f = m.take(4);
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->utime, 100) << "a newer complete frame means this one's parts are all in";
+  EXPECT_FALSE(f->introspection);
+  EXPECT_EQ(m.take(4)->utime, 200);
+  EXPECT_FALSE(m.take(4)) << "frame 300 may still get its parts";
+  EXPECT_EQ(m.take(5, true)->utime, 300);
+  EXPECT_EQ(m.skipped(), 0u);
+}
+
 TEST(ViewerFrameMatcher, OverlaysWithoutTheirImageAreNotDrawn) {
   FrameMatcher m(options());
   m.add_stereo_grid(grid(100, {0}), 0);

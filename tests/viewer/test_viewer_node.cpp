@@ -100,6 +100,24 @@ TEST(ViewerNode, UndecodableImageIsBadInput) {
   EXPECT_EQ(heartbeat.bad_input_count(), 1);
 }
 
+TEST(ViewerNode, EveryFrameModeDrawsEachFrameOfALog) {
+  ivoa::test::TempDir dir;
+  Bus bus("memq://");
+  Heartbeat heartbeat(bus, "viewer", "VIEWER_TEST_STATUS", 3600);
+  ViewerOptions o;
+  o.every_frame = true;
+  o.output.out_dir = dir.path().string();
+  o.output.max_images = 0;
+  ViewerNode node(bus, heartbeat, o);
+  // Published back to back, as a log read at full speed.
+  for (int64_t t = 1; t <= 5; ++t) publish_frame(bus, t * 100, t != 3);
+  handle_all(bus);
+  node.tick();
+  node.finish();
+  EXPECT_EQ(node.figures(), 5);
+  EXPECT_EQ(heartbeat.snapshot().dropped, 0);
+}
+
 TEST(ViewerNode, NoWindowWithoutADisplayButFilesStillWritten) {
   const char* display = std::getenv("DISPLAY");
   const std::string saved = display ? display : "";

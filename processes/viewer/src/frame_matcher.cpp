@@ -88,7 +88,20 @@ FrameSet FrameMatcher::hand_out(std::map<int64_t, FrameSet>::iterator it, double
   return out;
 }
 
+std::optional<FrameSet> FrameMatcher::take_oldest(double now_ms, bool flush) {
+  auto oldest = frames_.begin();
+  while (oldest != frames_.end() && !oldest->second.left) ++oldest;
+  if (oldest == frames_.end()) return std::nullopt;
+  // Messages come in time order: once a newer frame is complete, this one's
+  // parts have all come that ever will.
+  bool ready = flush || complete(oldest->second, now_ms) || now_ms - oldest->second.image_received_ms >= options_.settle_ms;
+  for (auto it = std::next(oldest); !ready && it != frames_.end(); ++it) ready = it->second.left && complete(it->second, now_ms);
+  if (!ready) return std::nullopt;
+  return hand_out(oldest, now_ms);
+}
+
 std::optional<FrameSet> FrameMatcher::take(double now_ms, bool flush) {
+  if (options_.every_frame) return take_oldest(now_ms, flush);
   for (auto it = frames_.rbegin(); it != frames_.rend(); ++it)
     if (complete(it->second, now_ms)) return hand_out(std::prev(it.base()), now_ms);
   const bool waited = !last_take_ms_ || now_ms - *last_take_ms_ >= options_.settle_ms;

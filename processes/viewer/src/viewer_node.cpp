@@ -12,7 +12,11 @@ ViewerNode::ViewerNode(Bus& bus, Heartbeat& heartbeat, ViewerOptions options)
     : bus_(bus),
       heartbeat_(heartbeat),
       options_(std::move(options)),
-      matcher_(options_.matcher),
+      matcher_([&] {
+        MatcherOptions m = options_.matcher;
+        m.every_frame = options_.every_frame;
+        return m;
+      }()),
       writer_(options_.output) {
   std::string why_not;
   if (options_.window && !window_possible(&why_not)) {
@@ -21,7 +25,7 @@ ViewerNode::ViewerNode(Bus& bus, Heartbeat& heartbeat, ViewerOptions options)
   }
   subscribe();
   heartbeat_.set_state("waiting for images");
-  worker_ = std::thread([this] { work(); });
+  if (!options_.every_frame) worker_ = std::thread([this] { work(); });
 }
 
 ViewerNode::~ViewerNode() {
@@ -60,8 +64,16 @@ void ViewerNode::subscribe() {
   bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
 }
 
+void ViewerNode::hand_out(FrameSet frame) {
+  if (options_.every_frame) draw(frame);
+  else frames_.put(std::move(frame));
+}
+
 void ViewerNode::tick() {
-  if (auto frame = matcher_.take(monotonic_ms())) frames_.put(std::move(*frame));
+  while (auto frame = matcher_.take(monotonic_ms())) {
+    hand_out(std::move(*frame));
+    if (!options_.every_frame) break;
+  }
   update_drop_count();
   if (!options_.window) return;
   if (auto figure = display_.take(std::chrono::milliseconds(0))) window_.show(*figure);
@@ -75,8 +87,9 @@ void ViewerNode::update_drop_count() {
 }
 
 void ViewerNode::finish() {
-  if (auto frame = matcher_.take(monotonic_ms(), true)) {
-    frames_.put(std::move(*frame));
+  while (auto frame = matcher_.take(monotonic_ms(), true)) {
+    hand_out(std::move(*frame));
+    if (!options_.every_frame) break;
   }
   update_drop_count();
   frames_.close();

@@ -5,7 +5,8 @@
 // take() hands out the newest frame that has every part currently being
 // published ("active": seen in the last few seconds); when none has for a
 // while, the best there is (most parts, then newest), so a missing process
-// never stops the drawing. Older frames are dropped and counted.
+// never stops the drawing. Older frames are dropped and counted, except
+// with every_frame (logs), where frames are handed out oldest first.
 #include <array>
 #include <cstdint>
 #include <map>
@@ -37,6 +38,7 @@ struct MatcherOptions {
   size_t max_frames = 16;    // frames kept waiting for their parts (each holds a left image)
   double active_ms = 3000;   // a part seen this recently is expected in every frame
   double settle_ms = 1000;   // nothing complete for this long: draw the best frame there is
+  bool every_frame = false;  // hand out every frame with an image, in order, once it or a newer one is complete
 };
 
 class FrameMatcher {
@@ -63,6 +65,7 @@ class FrameMatcher {
   FrameSet* slot(int64_t utime, Part part, double now_ms);
   bool complete(const FrameSet& frame, double now_ms) const;
   FrameSet hand_out(std::map<int64_t, FrameSet>::iterator it, double now_ms);
+  std::optional<FrameSet> take_oldest(double now_ms, bool flush);
 
   MatcherOptions options_;
   std::map<int64_t, FrameSet> frames_;

@@ -31,6 +31,7 @@ struct ViewerOptions {
   OutputOptions output;
   bool window = false;      // show a window where there is a display
   int64_t max_figures = 0;  // > 0: done() after this many figures
+  bool every_frame = false;  // logs: draw every frame in order, on the bus thread (reading waits)
 };
 
 class ViewerNode {
@@ -54,6 +55,7 @@ class ViewerNode {
   void subscribe();
   void work();
   void draw(const FrameSet& frame);
+  void hand_out(FrameSet frame);
   void update_drop_count();
 
   Bus& bus_;
