@@ -4,6 +4,7 @@
 // mip level that matches the pixel's footprint, so distant surfaces average
 // their texture instead of aliasing.
 #include <cstdint>
+#include <cmath>
 #include <cstring>
 #include <utility>
 #include <vector>
@@ -64,12 +65,14 @@ class Texture {
     level = level < 0 ? 0 : (level >= levels_ ? levels_ - 1 : level);
     const Level& lv = level_[level];
     const float x = u * lv.scale - 0.5f, y = v * lv.scale - 0.5f;
-    const int x0 = floor_to_int(x), y0 = floor_to_int(y);
+    // Round-to-nearest of (x - 0.5): floor(x), or one less at an exact
+    // integer, where the interpolation gives the same value either way.
+    const int x0 = round_to_int(x - 0.5f), y0 = round_to_int(y - 0.5f);
     const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
-    const int xa = x0 & lv.mask, xb = (x0 + 1) & lv.mask, ya = y0 & lv.mask, yb = (y0 + 1) & lv.mask;
-    const uint32_t* t = lv.texels;
-    const uint32_t t00 = t[tiled(xa, ya, lv.shift)], t10 = t[tiled(xb, ya, lv.shift)];
-    const uint32_t t01 = t[tiled(xa, yb, lv.shift)], t11 = t[tiled(xb, yb, lv.shift)];
+    // Each level carries a copy of its first column and row after the last,
+    // so the 2 x 2 neighbourhood never wraps.
+    const uint32_t* t = lv.texels + (y0 & lv.mask) * lv.stride + (x0 & lv.mask);
+    const uint32_t t00 = t[0], t10 = t[1], t01 = t[lv.stride], t11 = t[lv.stride + 1];
     const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
 #if defined(__SSE2__)
     const __m128i packed = _mm_set_epi32(static_cast<int>(t11), static_cast<int>(t01), static_cast<int>(t10),
@@ -96,21 +99,21 @@ class Texture {
 
   double period() const { return size_ / inv_texel_; }  // metres before the map repeats
 
-  // Texels are stored in 4 x 4 tiles (64 bytes, one cache line): a bilinear
-  // lookup and its neighbours mostly stay in one line, whatever the direction
-  // in which the image walks over the surface. `row_shift`: log2 of the
-  // tiles per row.
-  static uint32_t tiled(int x, int y, int row_shift) {
-    return static_cast<uint32_t>(((((y >> 2) << row_shift) + (x >> 2)) << 4) | ((y & 3) << 2) | (x & 3));
+  static int round_to_int(float x) {
+#if defined(__SSE2__)
+    return _mm_cvtss_si32(_mm_set_ss(x));
+#else
+    return static_cast<int>(std::nearbyint(x));
+#endif
   }
   Rgbf mean() const { return mean_; }
 
  private:
   struct Level {
-    const uint32_t* texels = nullptr;
+    const uint32_t* texels = nullptr;  // (side + 1) x (side + 1), the last row and column repeat the first
     float scale = 1;  // texels per metre
     int mask = 0;     // side - 1
-    int shift = 0;    // log2(side / 4)
+    int stride = 1;   // side + 1
   };
   int size_ = 0, levels_ = 0;  // levels down to 4 x 4 texels
   float inv_texel_ = 1, lod_scale_ = 1;
