@@ -176,41 +176,77 @@ group "robot" {
   EXPECT_FALSE(contains(r.output, "cam --rate")) << r.output;
 }
 
+// ivoa-launch in the background, its stdout in `out`.
+pid_t spawn_launcher(const std::string& config, const std::string& out) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  const char* argv[] = {IVOA_LAUNCH_EXE, config.c_str(), "--lcm-url", "none", "--duration", "60", nullptr};
+  pid_t pid = 0;
+  const int err = posix_spawn(&pid, IVOA_LAUNCH_EXE, &actions, nullptr, const_cast<char**>(argv), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  return err == 0 ? pid : -1;
+}
+
+// The pid a command wrote to `path`, waiting up to 10 s; 0 if none.
+int wait_for_pid_file(const std::string& path) {
+  int pid = 0;
+  for (int i = 0; i < 200 && pid == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    std::ifstream(path) >> pid;
+  }
+  return pid;
+}
+
+// The launcher's wait status, or -1 (after killing it) if it has not exited within `limit_s`.
+int wait_for_exit(pid_t pid, double limit_s) {
+  int status = 0;
+  for (int i = 0; i < limit_s * 20; ++i) {
+    if (waitpid(pid, &status, WNOHANG) == pid) return status;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  kill(pid, SIGKILL);
+  waitpid(pid, &status, 0);
+  return -1;
+}
+
 TEST(LaunchCli, SigtermStopsEveryCommandAndExitsCleanly) {
   ivoa::test::TempDir dir;
   const std::string pid_file = dir.file("worker.pid");
   const auto config = write_file(dir, "t.pmd", "cmd \"worker\" { exec = \"echo $$ > " + pid_file +
                                                    "; exec sleep 30\"; auto_respawn = \"true\"; }\n");
   const std::string out = dir.file("out.txt");
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  const char* argv[] = {IVOA_LAUNCH_EXE, config.c_str(), "--lcm-url", "none", "--duration", "60", nullptr};
-  pid_t launcher = 0;
-  ASSERT_EQ(posix_spawn(&launcher, IVOA_LAUNCH_EXE, &actions, nullptr, const_cast<char**>(argv), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
-
-  int worker = 0;
-  for (int i = 0; i < 200 && worker == 0; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    std::ifstream(pid_file) >> worker;
-  }
+  const pid_t launcher = spawn_launcher(config, out);
+  ASSERT_GT(launcher, 0);
+  const int worker = wait_for_pid_file(pid_file);
   ASSERT_GT(worker, 0) << "the command never started";
   kill(launcher, SIGTERM);
-  int status = 0;
-  pid_t done = 0;
-  for (int i = 0; i < 200 && done == 0; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    done = waitpid(launcher, &status, WNOHANG);
-  }
-  if (done == 0) {
-    kill(launcher, SIGKILL);
-    waitpid(launcher, &status, 0);
-    FAIL() << "ivoa-launch did not exit within 10 s of SIGTERM";
-  }
+  const int status = wait_for_exit(launcher, 10);
+  ASSERT_NE(status, -1) << "ivoa-launch did not exit within 10 s of SIGTERM";
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
   EXPECT_NE(kill(worker, 0), 0) << "the command outlived the launcher";
   EXPECT_TRUE(contains(read_file(out), "stopping (signal 15)")) << read_file(out);
+}
+
+TEST(LaunchCli, SecondStopSignalKillsAtOnce) {
+  ivoa::test::TempDir dir;
+  const std::string pid_file = dir.file("stubborn.pid");
+  // Ignores the stop signal and would be given 60 s before SIGKILL.
+  const auto config = write_file(dir, "k.pmd", "cmd \"stubborn\" { exec = \"trap '' INT TERM; echo $$ > " + pid_file +
+                                                   "; sleep 60\"; stop_time_allowed = 60; }\n");
+  const std::string out = dir.file("out.txt");
+  const pid_t launcher = spawn_launcher(config, out);
+  ASSERT_GT(launcher, 0);
+  const int stubborn = wait_for_pid_file(pid_file);
+  ASSERT_GT(stubborn, 0);
+  kill(launcher, SIGINT);
+  for (int i = 0; i < 100 && !contains(read_file(out), "stopping (signal 2)"); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  kill(launcher, SIGINT);
+  const int status = wait_for_exit(launcher, 20);
+  ASSERT_NE(status, -1) << "a second Ctrl-C must not wait for stop_time_allowed";
+  EXPECT_TRUE(contains(read_file(out), "second stop signal: SIGKILL to every command")) << read_file(out);
+  EXPECT_NE(kill(stubborn, 0), 0);
 }
 
 }  // namespace

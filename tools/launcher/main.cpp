@@ -19,7 +19,6 @@
 
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/process.hpp"
-#include "ivoa/core/stop_signal.hpp"
 #include "ivoa/launcher/config.hpp"
 #include "ivoa/launcher/launcher.hpp"
 #include "ivoa/launcher/selection.hpp"
@@ -143,6 +142,12 @@ int main(int argc, char** argv) {
   // Orphans of the commands come to us, so a command's group can be seen to empty.
   prctl(PR_SET_CHILD_SUBREAPER, 1);
   o.launcher.supervisor.reap_orphans = true;
-  ivoa::install_stop_handlers();
-  return run_launcher(config, std::move(selected.commands), o.selection.host, o.launcher);
+  install_launcher_signal_handlers();
+  try {
+    return run_launcher(config, std::move(selected.commands), o.selection.host, o.launcher);
+  } catch (const std::exception& e) {
+    // The commands die with us (PR_SET_PDEATHSIG): say why.
+    spdlog::error("{}", e.what());
+    return ivoa::kExitFailure;
+  }
 }

@@ -3,7 +3,9 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <deque>
 #include <filesystem>
@@ -16,7 +18,6 @@
 #include "heartbeat_monitor.hpp"
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/heartbeat.hpp"
-#include "ivoa/core/stop_signal.hpp"
 #include "ivoa/launcher/script_runner.hpp"
 #include "ivoa/launcher/status_report.hpp"
 
@@ -24,6 +25,14 @@ namespace ivoa::launcher {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+std::atomic<int> g_stop_signals{0};
+std::atomic<int> g_last_signal{0};
+extern "C" void on_launcher_stop_signal(int sig) {
+  g_last_signal.store(sig);
+  g_stop_signals.fetch_add(1);
+}
+
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Where command output goes: "[name] line" on stdout (or, while a live
@@ -115,8 +124,15 @@ class Run {
     printer_.end_redraw();
     printer_.event("all", "stopping (" + reason + ")");
     supervisor_.stop_all();
+    const int signals_before = g_stop_signals.load();
+    bool killed = false;
     while (supervisor_.busy()) {
       if (supervisor_.step(100, monitor_ ? monitor_->fd() : -1)) monitor_->drain();
+      if (!killed && g_stop_signals.load() > signals_before) {
+        printer_.event("all", "second stop signal: SIGKILL to every command");
+        supervisor_.kill_all();
+        killed = true;
+      }
     }
     const int code = exit_code();
     printer_.show(header(false), format_status_table(rows()));
@@ -166,7 +182,7 @@ class Run {
   }
 
   std::string end_reason() {
-    if (stop_requested()) return "signal " + std::to_string(stop_signal());
+    if (g_stop_signals.load() > 0) return "signal " + std::to_string(g_last_signal.load());
     if (options_.duration_s > 0 && seconds_since(started_) >= options_.duration_s) return "--duration reached";
     if (!supervisor_.busy() && (!script_ || script_->done())) return "every command has ended";
     const bool condition = (options_.once && once_condition()) || until_condition();
@@ -255,6 +271,14 @@ class Run {
 };
 
 }  // namespace
+
+void install_launcher_signal_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_launcher_stop_signal;
+  sigemptyset(&action.sa_mask);
+  for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaction(s, &action, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+}
 
 int run_launcher(const Config& config, std::vector<LaunchCommand> commands, const std::string& host,
                  const LauncherOptions& options) {

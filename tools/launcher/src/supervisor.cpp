@@ -124,20 +124,45 @@ void Supervisor::stop_all() {
   for (auto& c : commands_) stop(c->status.name);
 }
 
+void Supervisor::kill_all() {
+  for (auto& c : commands_) {
+    c->start_when_ended = false;
+    c->status.stop_requested = true;
+    if (c->status.state == RunState::kRespawning) c->status.state = RunState::kStopped;
+    if (c->status.state != RunState::kRunning && c->status.state != RunState::kStopping) continue;
+    signal_group(*c, SIGKILL);
+    c->status.state = RunState::kStopping;
+    c->status.killed = c->leader_alive;
+    c->kill_sent = true;
+    c->deadline = Clock::now();
+  }
+}
+
 void Supervisor::spawn(Instance& c) {
   const auto& spec = c.command.spec;
-  const ChildProcess child =
-      spawn_shell_command(exec_form(c.command.shell_command), options_.environment, spec.stop_signal);
-  if (c.status.pid > 0) ++c.status.restarts;
+  if (c.status.pid > 0 || c.status.failed) ++c.status.restarts;
+  c.start_when_ended = false;
+  c.status.stop_requested = false;
+  c.status.killed = false;
+  c.started_at = Clock::now();
+  ChildProcess child;
+  try {
+    child = spawn_shell_command(exec_form(c.command.shell_command), options_.environment, spec.stop_signal);
+  } catch (const std::system_error& e) {
+    // Out of processes or descriptors: a failed start, retried like a crash.
+    on_event_(spec.name, std::string("cannot start: ") + e.what());
+    c.status.exit_code = -1;
+    c.status.exit_signal = 0;
+    c.status.failed = true;
+    if (spec.auto_respawn) schedule_respawn(c);
+    else c.status.state = RunState::kStopped;
+    return;
+  }
   c.status.pid = child.pid;
   c.output_fd = child.output_fd;
   c.leader_alive = true;
   c.kill_sent = false;
-  c.start_when_ended = false;
   c.status.state = RunState::kRunning;
-  c.status.stop_requested = false;
-  c.status.killed = false;
-  c.started_at = Clock::now();
   on_event_(spec.name, "started, pid " + std::to_string(child.pid));
 }
 
@@ -250,6 +275,10 @@ void Supervisor::finish(Instance& c) {
     c.status.state = RunState::kStopped;
     return;
   }
+  schedule_respawn(c);
+}
+
+void Supervisor::schedule_respawn(Instance& c) {
   // Back-off: 1, 2, 4 ... s while it keeps failing quickly; reset after a healthy run.
   if (seconds(Clock::now() - c.started_at) >= options_.healthy_after_s) c.backoff_s = options_.respawn_delay_s;
   c.status.state = RunState::kRespawning;

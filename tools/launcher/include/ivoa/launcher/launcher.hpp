@@ -26,6 +26,10 @@ struct LauncherOptions {
   SupervisorOptions supervisor;
 };
 
+// SIGINT, SIGTERM and SIGHUP stop the run cleanly; a second one kills
+// every command at once. SIGPIPE is ignored.
+void install_launcher_signal_handlers();
+
 // Runs until the end condition; returns the exit code: 0, or 1 if a
 // command without auto_respawn ended on its own with a failure.
 int run_launcher(const Config& config, std::vector<LaunchCommand> commands, const std::string& host,

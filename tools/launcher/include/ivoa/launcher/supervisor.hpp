@@ -71,6 +71,8 @@ class Supervisor {
   void restart(const std::string& name);
   void start_all();
   void stop_all();
+  // SIGKILL to every command now (a second Ctrl-C).
+  void kill_all();
 
   // Waits up to timeout_ms for output or for `wake_fd` (if >= 0), then
   // reaps ended commands, respawns those due and escalates overdue stops.
@@ -93,6 +95,7 @@ class Supervisor {
   Instance& find(const std::string& name);
   const Instance& find(const std::string& name) const;
   void spawn(Instance& c);
+  void schedule_respawn(Instance& c);
   void signal_group(Instance& c, int signal);
   void read_output(Instance& c, bool to_end);
   void reap();
