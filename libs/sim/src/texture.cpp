@@ -43,11 +43,12 @@ Texture::Texture(int size, double texel_m, const std::vector<Rgbf>& linear)
   const double count = static_cast<double>(linear.size());
   mean_ = Rgbf(static_cast<float>(sum_r / count), static_cast<float>(sum_g / count), static_cast<float>(sum_b / count));
   size_t total = 0;
-  for (int m = size; m >= 4; m /= 2) total += static_cast<size_t>(m + 1) * (m + 1);
+  for (int m = size; m >= 1; m /= 2) total += static_cast<size_t>(m + 1) * (m + 1);
   data_ = HugeBuffer(total);
   lod_scale_ = inv_texel_ * 1.25f;
   size_t base = 0;
-  while (n >= 4 && levels_ < 16) {
+  // Down to 1 x 1: rough reflections of far surfaces need the coarsest averages.
+  while (n >= 1 && levels_ < 16) {
     Level& lv = level_[levels_];
     lv.texels = data_.data() + base;
     lv.scale = inv_texel_ / static_cast<float>(1 << levels_);
@@ -58,6 +59,7 @@ Texture::Texture(int size, double texel_m, const std::vector<Rgbf>& linear)
         data_[base + static_cast<size_t>(y) * (n + 1) + x] = encode_texel(level[static_cast<size_t>(y % n) * n + (x % n)]);
     base += static_cast<size_t>(n + 1) * (n + 1);
     ++levels_;
+    if (n == 1) break;
     const int m = n / 2;
     std::vector<Rgbf> next(static_cast<size_t>(m) * m);
     for (int y = 0; y < m; ++y)

@@ -115,7 +115,7 @@ class Texture {
     int mask = 0;     // side - 1
     int stride = 1;   // side + 1
   };
-  int size_ = 0, levels_ = 0;  // levels down to 4 x 4 texels
+  int size_ = 0, levels_ = 0;  // levels down to 1 x 1 texel
   float inv_texel_ = 1, lod_scale_ = 1;
   Level level_[16];
   Rgbf mean_;
