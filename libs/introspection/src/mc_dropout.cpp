@@ -22,27 +22,31 @@ McStats mc_dropout_head(IntrospectionNetImpl& net, const torch::Tensor& features
   const double p = net.dropout_p;
   const auto options = features.options();
   const int64_t n = features.size(0), f = features.size(1);
-  const auto w1 = net.fc1->weight.t();  // [F, H1]
-  const int64_t h1 = w1.size(1);
+  const auto& w1 = net.fc1->weight;  // [H1, F]
+  const int64_t h1 = w1.size(0);
   const auto m1 = sample_masks(passes, f, p, generator, options);  // [T, F]
-  torch::Tensor h;                                                  // [T, N, H1]
+  torch::Tensor h;  // [N, T * H1], column t * H1 + j = unit j of pass t
   if (passes * f * h1 <= kMaxMaskedWeights) {
     // FC1 with input dropout for all passes in one product:
     // x (m_t * W1) for t = 1..T  ==  x [m_1 W1 | ... | m_T W1].
-    const auto w1_all = (m1.unsqueeze(2) * w1.unsqueeze(0)).permute({1, 0, 2}).reshape({f, passes * h1});
-    h = torch::mm(features, w1_all).view({n, passes, h1}).permute({1, 0, 2});
+    const auto w1_all = (w1.unsqueeze(0) * m1.unsqueeze(1)).reshape({passes * h1, f});
+    h = torch::addmm(net.fc1->bias.repeat({passes}), features, w1_all.t());
   } else {
     // A wide head (AlexNet's 9216 x 2048): T masked weight copies would not
     // fit in memory, so mask the inputs pass by pass.
     std::vector<torch::Tensor> per_pass;
-    for (int t = 0; t < passes; ++t) per_pass.push_back(torch::mm(features * m1[t], w1));
-    h = torch::stack(per_pass);
+    for (int t = 0; t < passes; ++t) per_pass.push_back(torch::addmm(net.fc1->bias, features * m1[t], w1.t()));
+    h = torch::cat(per_pass, 1);
   }
-  h = torch::relu(h + net.fc1->bias);
-  const auto w2 = net.fc2->weight.t();  // [H1, 256]
-  const auto m2 = sample_masks(passes, h1, p, generator, options);
-  h = torch::relu(torch::matmul(h * m2.unsqueeze(1), w2) + net.fc2->bias);  // [T, N, 256]
-  const auto probs = torch::softmax(torch::matmul(h, net.fc3->weight.t()) + net.fc3->bias, -1);  // [T, N, 4]
+  h.relu_();
+  // Dropout before FC2, then FC2 for all (cell, pass) rows in one product.
+  const auto m2 = sample_masks(passes, h1, p, generator, options);  // [T, H1]
+  h.mul_(m2.reshape({1, passes * h1}));
+  auto h2 = torch::addmm(net.fc2->bias, h.view({n * passes, h1}), net.fc2->weight.t());  // [N * T, 256]
+  h2.relu_();
+  const auto probs = torch::softmax(torch::addmm(net.fc3->bias, h2, net.fc3->weight.t()), -1)
+                         .view({n, passes, 4})
+                         .permute({1, 0, 2});  // [T, N, 4]
   return {probs.mean(0), probs.var(0, /*unbiased=*/true), probs, m1, m2};
 }
 

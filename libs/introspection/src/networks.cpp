@@ -33,7 +33,7 @@ torch::Tensor IntrospectionNetImpl::embedding(const torch::Tensor& f) {
   return torch::relu(fc2(torch::relu(fc1(f))));
 }
 
-SlideNetImpl::SlideNetImpl(double dropout) : IntrospectionNetImpl(64 * 2 * 2, 256, dropout) {
+SlideNetImpl::SlideNetImpl(double dropout) : IntrospectionNetImpl(64 * 2 * 2, kFc1Width, dropout) {
   nn::Sequential t;
   t = conv_bn_relu(t, 3, 32, 5, 5);
   t = conv_bn_relu(t, 32, 64, 3);

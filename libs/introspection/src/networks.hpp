@@ -14,6 +14,9 @@
 //   conv3 3x3 (7)   conv4 3x3 (5)   conv5 3x3 (3)   maxpool 2/1 (2)
 // FC1 then reads the 2x2x64 block of each cell: on a whole image it is a
 // 2x2 convolution with stride 2 (the patch stride, 20, over the trunk's 10).
+// FC1 is 128 wide (the paper fixes only FC2, the 256-d embedding): the T
+// dropout passes recompute FC1 and FC2 for every cell, and at 256 that
+// alone took longer than the 100 ms frame budget on two cores.
 //
 // "alexnet": the reference model (torchvision AlexNet trunk at 224x224,
 // head 9216 -> 2048 -> 256 -> 4), for parity and for users with GPUs and
@@ -43,7 +46,7 @@ class IntrospectionNetImpl : public torch::nn::Module {
 
 class SlideNetImpl : public IntrospectionNetImpl {
  public:
-  static constexpr int kPatch = 100, kStride = 20, kTrunkStride = 10;
+  static constexpr int kPatch = 100, kStride = 20, kTrunkStride = 10, kFc1Width = 128;
   SlideNetImpl(double dropout = 0.5);
   torch::Tensor features(const torch::Tensor& patches) override;
   // Normalised image [1, 3, H, W] -> FC1 inputs of every cell [rows * cols, F],

@@ -29,11 +29,17 @@ torch::Tensor normalize_patches(const torch::Tensor& bgr_uint8, const ModelInfo&
 
 torch::Tensor image_to_tensor(const cv::Mat& bgr, const ModelInfo& info) {
   CV_Assert(bgr.type() == CV_8UC3);
-  const cv::Mat contiguous = bgr.isContinuous() ? bgr : bgr.clone();
-  const auto raw = torch::from_blob(contiguous.data, {1, bgr.rows, bgr.cols, 3}, torch::kUInt8);
-  ModelInfo whole = info;
-  whole.input_size = bgr.rows;  // whole images are not resized
-  return normalize(to_unit_rgb(raw), whole);
+  // One pass per channel straight into the planar float tensor:
+  // RGB plane c = (BGR channel 2 - c) / 255, minus mean, over std.
+  auto out = torch::empty({1, 3, bgr.rows, bgr.cols}, torch::kFloat);
+  std::vector<cv::Mat> channels;
+  cv::split(bgr, channels);
+  for (int c = 0; c < 3; ++c) {
+    cv::Mat plane(bgr.rows, bgr.cols, CV_32F, out.data_ptr<float>() + static_cast<size_t>(c) * bgr.total());
+    const double scale = 1.0 / (255.0 * info.std[static_cast<size_t>(c)]);
+    channels[static_cast<size_t>(2 - c)].convertTo(plane, CV_32F, scale, -info.mean[static_cast<size_t>(c)] / info.std[static_cast<size_t>(c)]);
+  }
+  return out;
 }
 
 torch::Tensor patches_to_tensor(const std::vector<cv::Mat>& patches, const ModelInfo& info) {
