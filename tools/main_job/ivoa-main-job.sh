@@ -1,0 +1,182 @@
+#!/usr/bin/env bash
+# The main job: the whole self-supervised loop of the IVOA paper on the
+# simulated robot, through the real process graph.
+#
+#   1. record training, validation and test sessions: ivoa-launch runs
+#      procman_configs/sim.pmd (simulator -> stereo detector + depth monitor
+#      -> logger) once per session, over UDP multicast LCM;
+#   2. build datasets from the logs: JPP-C from the labels the live
+#      processes recorded, the dense (SGBM) detector by re-running it offline
+#      on the same raw frames;
+#   3. train an introspection model for each detector;
+#   4. evaluate them (and the shipped model) on the held-out test sessions:
+#      scenes generated from seeds never used in training;
+#   5. write the report (metrics, uncertainty, failure clusters, figures).
+#
+# Usage: ivoa-main-job.sh [--scale default|full] [--out DIR] [--live]
+#   --scale full   more sessions and training: the recipe of the shipped model
+#   --live         the short variant: run the shipped model live on the
+#                  simulator (sim.pmd with introspection and the viewer)
+set -euo pipefail
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+BUILD=${IVOA_BUILD_DIR:-$ROOT/build}
+BIN=$BUILD/bin
+PY=/usr/bin/python3          # Debian's, with numpy/matplotlib/sklearn
+SCENES=$ROOT/libs/sim/scenes
+SHIPPED=$ROOT/libs/introspection/models/introspection_jppc.pt
+scale=default
+out=""
+live=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --scale) scale=$2; shift 2 ;;
+    --out) out=$2; shift 2 ;;
+    --live) live=1; shift ;;
+    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
+    *) echo "ivoa-main-job: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+out=${out:-$ROOT/out/main-job-$scale}
+
+# Scene files, and the sessions of each split per scale.
+SCENE_NAMES=(indoor_office home corridor polished_lobby warehouse outdoor_campus sidewalk wet_parking_lot night_plaza)
+case "$scale" in
+  default)
+    TRAIN_SEEDS=(11); TRAIN_FRAMES=48
+    VAL_SEEDS=(21); VAL_SCENES=(indoor_office polished_lobby wet_parking_lot); VAL_FRAMES=24
+    TEST_SEEDS=(31); TEST_FRAMES=24
+    STEPS=1500; BATCH=128 ;;
+  smoke)  # seconds-scale: checks the whole chain (used by the tests)
+    SCENE_NAMES=(indoor_office polished_lobby wet_parking_lot); TRAIN_SEEDS=(11); TRAIN_FRAMES=8
+    VAL_SEEDS=(21); VAL_SCENES=(indoor_office); VAL_FRAMES=6
+    TEST_SEEDS=(31); TEST_FRAMES=6
+    STEPS=60; BATCH=32 ;;
+  full)
+    TRAIN_SEEDS=(11 12 13 14); TRAIN_FRAMES=120
+    VAL_SEEDS=(21); VAL_SCENES=("${SCENE_NAMES[@]}"); VAL_FRAMES=60
+    TEST_SEEDS=(31); TEST_FRAMES=60
+    STEPS=20000; BATCH=128 ;;
+  *) echo "ivoa-main-job: --scale must be default, full or smoke" >&2; exit 2 ;;
+esac
+RATE=2  # frames per second of session time: consecutive frames 0.5 s of driving apart
+
+start_time=$(date +%s)
+step_no=0
+step() {
+  step_no=$((step_no + 1))
+  printf '\n\033[1m[%s] %s\033[0m  (%ds elapsed)\n' "$step_no" "$*" $(($(date +%s) - start_time))
+}
+
+# Multicast LCM needs a route; a private network namespace on loopback gives
+# one everywhere and keeps the session's traffic off any real network.
+in_lcm_net() {
+  if [ "$(id -u)" = 0 ] && unshare -n true 2>/dev/null; then
+    IVOA_TEST_LCM_URL="udpm://239.255.76.67:7672?ttl=0" "$ROOT/tests/harness/in_netns.sh" "$@"
+  else
+    LCM_DEFAULT_URL=${LCM_DEFAULT_URL:-udpm://239.255.76.67:7672?ttl=0} "$@"
+  fi
+}
+
+# record_session NAME SCENE SEED FRAMES: one session through sim.pmd.
+record_session() {
+  local name=$1 scene=$2 seed=$3 frames=$4
+  local log=$out/logs/$name.lcmlog
+  [ -s "$log" ] && { echo "  $name: already recorded"; return; }
+  rm -f "$log" "$log.json"
+  # A fixed start time per seed: the same session is the same log bytes.
+  local utime=$((1700000000000000 + seed * 10000000000))
+  in_lcm_net "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
+    --set SCENE="$SCENES/$scene.yaml" --set SEED="$seed" --set FRAMES="$frames" --set RATE=$RATE \
+    --set SIM_ARGS="--as-fast-as-possible --start-utime $utime" \
+    --set LOG_FILE="$log" --set VIEWER_DIR="$out/viewer/$name" --set VIEWER_ARGS="--every 12 --max-images 4" \
+    --skip introspection --until sim_driver --grace 3 --plain --status-every 0 \
+    --output-dir "$out/process_logs/$name" --status-file "$out/process_logs/$name/status.txt" \
+    > "$out/process_logs/$name.launch.log" 2>&1 ||
+    { echo "  $name: the launcher failed; see $out/process_logs/$name.launch.log" >&2; tail -20 "$out/process_logs/$name.launch.log" >&2; exit 1; }
+  "$BIN/ivoa-log-check" "$log" --expect STEREO_IMAGES="$frames" > "$out/process_logs/$name.check.txt" 2>&1 ||
+    { echo "  $name: the log is incomplete:" >&2; cat "$out/process_logs/$name.check.txt" >&2; exit 1; }
+  local labels
+  labels=$(awk '$1 == "INTROSPECTION_LABELS" {print $3}' "$out/process_logs/$name.check.txt")
+  printf '  %-28s %s frames, %s labelled live\n' "$name" "$frames" "${labels:-0}"
+}
+
+# ------------------------------------------------------------------ live variant
+if [ $live = 1 ]; then
+  [ -f "$SHIPPED" ] || { echo "ivoa-main-job: no shipped model at $SHIPPED" >&2; exit 3; }
+  mkdir -p "$out/live"
+  step "Running the shipped model live on the simulator (sim.pmd: simulator, detector, monitor, introspection, logger, viewer)"
+  in_lcm_net "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
+    --set SEED=41 --set FRAMES=60 --set RATE=$RATE --set MODEL="$SHIPPED" \
+    --set LOG_FILE="$out/live/live.lcmlog" --set VIEWER_DIR="$out/live/viewer" \
+    --set VIEWER_ARGS="--every 5 --max-images 12" --until sim_driver --grace 4 --status-every 10 \
+    --status-file "$out/live/status.txt" --output-dir "$out/live/process_logs"
+  "$BIN/ivoa-log-check" "$out/live/live.lcmlog" || true
+  echo
+  echo "Live run: log $out/live/live.lcmlog, viewer figures in $out/live/viewer/, process status in $out/live/status.txt"
+  exit 0
+fi
+
+# ------------------------------------------------------------------ full loop
+mkdir -p "$out/logs" "$out/process_logs"
+split_file=$out/split.yaml
+declare -a train=() val=() test=()
+
+step "Recording sessions through the process graph (scale: $scale)"
+echo "  sim.pmd per session: simulator -> stereo detector (JPP-C) + depth monitor -> logger, viewer; UDP multicast LCM"
+for seed in "${TRAIN_SEEDS[@]}"; do for s in "${SCENE_NAMES[@]}"; do
+  record_session "${s}_s$seed" "$s" "$seed" "$TRAIN_FRAMES"; train+=("${s}_s$seed"); done; done
+for seed in "${VAL_SEEDS[@]}"; do for s in "${VAL_SCENES[@]}"; do
+  record_session "${s}_s$seed" "$s" "$seed" "$VAL_FRAMES"; val+=("${s}_s$seed"); done; done
+for seed in "${TEST_SEEDS[@]}"; do for s in "${SCENE_NAMES[@]}"; do
+  record_session "${s}_s$seed" "$s" "$seed" "$TEST_FRAMES"; test+=("${s}_s$seed"); done; done
+join() { local IFS=,; echo "$*" | sed 's/,/, /g'; }
+cat > "$split_file" <<EOF
+# Sessions by split. Test sessions use seeds never used for training.
+train: [$(join "${train[@]}")]
+val: [$(join "${val[@]}")]
+test: [$(join "${test[@]}")]
+EOF
+
+step "Building datasets from the logs"
+logs=()
+for s in "${train[@]}" "${val[@]}" "${test[@]}"; do logs+=("$out/logs/$s.lcmlog"); done
+rm -rf "$out/data_jppc" "$out/data_dense"
+echo "  JPP-C: the labels the live stereo detector and depth monitor published"
+"$BIN/ivoa-dataset" --log-level warn build --out "$out/data_jppc" --labels recorded "${logs[@]}" | tee "$out/dataset_jppc.txt"
+echo "  dense (SGBM): the detector and the monitor re-run offline on the same raw frames"
+"$BIN/ivoa-dataset" --log-level warn build --out "$out/data_dense" --labels dense "${logs[@]}" | tee "$out/dataset_dense.txt"
+
+for detector in jppc dense; do
+  step "Training introspection for $detector ($STEPS steps, batch $BATCH)"
+  "$BIN/ivoa-train" --dataset "$out/data_$detector" --split "$split_file" --out "$out/model_$detector.pt" \
+    --steps "$STEPS" --batch-size "$BATCH" --validate-every $((STEPS / 6)) --checkpoint-every $((STEPS / 3)) \
+    --resume | tee "$out/train_$detector.txt"
+done
+
+step "Evaluating on the held-out test sessions (T = 20 MC-dropout passes)"
+overlay_logs=()
+for i in 0 3 7; do [ $i -lt ${#test[@]} ] && overlay_logs+=("$out/logs/${test[$i]}.lcmlog"); done
+evals=()
+datasets=()
+for detector in jppc dense; do
+  "$BIN/ivoa-eval" --log-level warn --model "$out/model_$detector.pt" --dataset "$out/data_$detector" \
+    --split "$split_file" --splits test --out "$out/eval_$detector" --logs "${overlay_logs[@]}" --max-overlays 6
+  evals+=(--eval "$out/eval_$detector"); datasets+=(--dataset "$out/data_$detector")
+done
+if [ -f "$SHIPPED" ]; then
+  echo "  and the shipped JPP-C model (trained with --scale full) on the same test sessions"
+  "$BIN/ivoa-eval" --log-level warn --model "$SHIPPED" --dataset "$out/data_jppc" --split "$split_file" --splits test \
+    --out "$out/eval_shipped_jppc" --logs "${overlay_logs[@]}" --max-overlays 6
+  evals+=(--eval "$out/eval_shipped_jppc"); datasets+=(--dataset "$out/data_jppc")
+fi
+
+step "Writing the report"
+"$PY" "$ROOT/tools/report/ivoa_report.py" "${evals[@]}" "${datasets[@]}" --out "$out/report" \
+  --title "IVOA on the simulated robot ($scale scale)" | tee "$out/report_summary.txt"
+
+elapsed=$(($(date +%s) - start_time))
+printf '\n\033[1mMain job done in %dm%02ds.\033[0m\n' $((elapsed / 60)) $((elapsed % 60))
+echo "  sessions: ${#train[@]} train, ${#val[@]} validation, ${#test[@]} test (held out): $split_file"
+echo "  report:   $out/report/report.md"
+echo "  models:   $out/model_jppc.pt, $out/model_dense.pt"
