@@ -69,28 +69,34 @@ step() {
 }
 
 # Multicast LCM needs a route; a private network namespace on loopback gives
-# one everywhere and keeps the session's traffic off any real network.
+# one everywhere and keeps the session's traffic off any real network (and
+# away from the other session being recorded at the same time). Without
+# namespaces, each worker gets its own LCM port on the host.
+# in_lcm_net WORKER COMMAND...
+have_netns() { [ "$(id -u)" = 0 ] && unshare -n true 2>/dev/null; }
 in_lcm_net() {
-  if [ "$(id -u)" = 0 ] && unshare -n true 2>/dev/null; then
-    IVOA_TEST_LCM_URL="udpm://239.255.76.67:7672?ttl=0" "$ROOT/tests/harness/in_netns.sh" "$@"
+  local url="udpm://239.255.76.67:$((7672 + $1))?ttl=0"
+  shift
+  if have_netns; then
+    IVOA_TEST_LCM_URL="$url" "$ROOT/tests/harness/in_netns.sh" "$@"
   else
-    LCM_DEFAULT_URL=${LCM_DEFAULT_URL:-udpm://239.255.76.67:7672?ttl=0} "$@"
+    LCM_DEFAULT_URL="$url" "$@"
   fi
 }
 
-# record_session NAME SCENE SEED FRAMES: one session through sim.pmd.
+# record_session WORKER NAME SCENE SEED FRAMES: one session through sim.pmd.
 record_session() {
-  local name=$1 scene=$2 seed=$3 frames=$4
+  local worker=$1 name=$2 scene=$3 seed=$4 frames=$5
   local log=$out/logs/$name.lcmlog
   [ -s "$log" ] && { echo "  $name: already recorded"; return; }
   rm -f "$log" "$log.json"
   # A fixed start time per seed: the same session is the same log bytes.
   local utime=$((1700000000000000 + seed * 10000000000))
-  in_lcm_net "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
+  in_lcm_net "$worker" "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
     --set SCENE="$SCENES/$scene.yaml" --set SEED="$seed" --set FRAMES="$frames" --set RATE=$RATE \
     --set SIM_ARGS="--as-fast-as-possible --start-utime $utime" \
     --set LOG_FILE="$log" --set VIEWER_DIR="$out/viewer/$name" --set VIEWER_ARGS="--every 12 --max-images 4" \
-    --skip introspection --until sim_driver --grace 3 --plain --status-every 0 \
+    --skip introspection --until sim_driver --grace 2 --plain --status-every 0 \
     --output-dir "$out/process_logs/$name" --status-file "$out/process_logs/$name/status.txt" \
     > "$out/process_logs/$name.launch.log" 2>&1 ||
     { echo "  $name: the launcher failed; see $out/process_logs/$name.launch.log" >&2; tail -20 "$out/process_logs/$name.launch.log" >&2; exit 1; }
@@ -106,7 +112,7 @@ if [ $live = 1 ]; then
   [ -f "$SHIPPED" ] || { echo "ivoa-main-job: no shipped model at $SHIPPED" >&2; exit 3; }
   mkdir -p "$out/live"
   step "Running the shipped model live on the simulator (sim.pmd: simulator, detector, monitor, introspection, logger, viewer)"
-  in_lcm_net "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
+  in_lcm_net 0 "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
     --set SEED=41 --set FRAMES=60 --set RATE=$RATE --set MODEL="$SHIPPED" \
     --set LOG_FILE="$out/live/live.lcmlog" --set VIEWER_DIR="$out/live/viewer" \
     --set VIEWER_ARGS="--every 5 --max-images 12" --until sim_driver --grace 4 --status-every 10 \
@@ -124,12 +130,26 @@ declare -a train=() val=() test=()
 
 step "Recording sessions through the process graph (scale: $scale)"
 echo "  sim.pmd per session: simulator -> stereo detector (JPP-C) + depth monitor -> logger, viewer; UDP multicast LCM"
+# Two at a time where each gets its own network namespace (the simulator
+# renders on one core); one at a time on the shared host network.
+parallel=1
+have_netns && parallel=2
+echo "  $parallel session(s) at a time"
+sessions=()  # "name scene seed frames"
 for seed in "${TRAIN_SEEDS[@]}"; do for s in "${SCENE_NAMES[@]}"; do
-  record_session "${s}_s$seed" "$s" "$seed" "$TRAIN_FRAMES"; train+=("${s}_s$seed"); done; done
+  sessions+=("${s}_s$seed $s $seed $TRAIN_FRAMES"); train+=("${s}_s$seed"); done; done
 for seed in "${VAL_SEEDS[@]}"; do for s in "${VAL_SCENES[@]}"; do
-  record_session "${s}_s$seed" "$s" "$seed" "$VAL_FRAMES"; val+=("${s}_s$seed"); done; done
+  sessions+=("${s}_s$seed $s $seed $VAL_FRAMES"); val+=("${s}_s$seed"); done; done
 for seed in "${TEST_SEEDS[@]}"; do for s in "${SCENE_NAMES[@]}"; do
-  record_session "${s}_s$seed" "$s" "$seed" "$TEST_FRAMES"; test+=("${s}_s$seed"); done; done
+  sessions+=("${s}_s$seed $s $seed $TEST_FRAMES"); test+=("${s}_s$seed"); done; done
+running=0
+for i in "${!sessions[@]}"; do
+  # shellcheck disable=SC2086
+  record_session $((i % parallel)) ${sessions[$i]} &
+  running=$((running + 1))
+  if [ $running -ge $parallel ]; then wait -n || exit 1; running=$((running - 1)); fi
+done
+while [ $running -gt 0 ]; do wait -n || exit 1; running=$((running - 1)); done
 join() { local IFS=,; echo "$*" | sed 's/,/, /g'; }
 cat > "$split_file" <<EOF
 # Sessions by split. Test sessions use seeds never used for training.

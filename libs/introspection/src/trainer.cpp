@@ -72,20 +72,37 @@ int label_of(const SplitData& d, const SampleRef& r) { return d.sessions[r.sessi
 // Photometric changes a camera sees from frame to frame and rig to rig:
 // exposure, contrast, gamma, white balance, sensor noise. No geometric
 // flips: JPP's descriptor uses the positive horizontal gradient only, so a
-// mirrored patch can fail differently.
-torch::Tensor augment(torch::Tensor x, torch::Generator& g) {
-  const int64_t b = x.size(0);
-  auto uniform = [&](std::vector<int64_t> shape, double lo, double hi) {
-    return torch::rand(shape, g) * (hi - lo) + lo;
-  };
-  const auto mean = x.mean({1, 2, 3}, true);
-  x = (x - mean) * uniform({b, 1, 1, 1}, 0.7, 1.3) + mean;   // contrast
-  x = x * uniform({b, 1, 1, 1}, 0.6, 1.4);                   // exposure
-  x = x * uniform({b, 3, 1, 1}, 0.9, 1.1);                   // white balance
-  x = x.clamp(0, 1).pow(uniform({b, 1, 1, 1}, 0.8, 1.25));   // gamma
-  x = x + torch::randn(x.sizes(), g) * uniform({b, 1, 1, 1}, 0.0, 0.03);  // noise
-  return x.clamp_(0, 1);
-}
+// mirrored patch can fail differently. Written as few whole-batch passes as
+// possible (contrast, exposure and white balance are one affine map per
+// sample and channel; the noise comes from a fixed bank), because on a CPU
+// these passes cost as much as the network's forward and backward.
+class Augmenter {
+ public:
+  Augmenter(int patch_size, torch::Generator& g)
+      : generator_(g), noise_bank_(torch::randn({kBankSize, 3, patch_size, patch_size}, g)) {}
+
+  // x: [B, 3, S, S] RGB on [0, 1] -> augmented, same layout.
+  torch::Tensor operator()(const torch::Tensor& x) {
+    const int64_t b = x.size(0);
+    const auto mean = x.mean({1, 2, 3}, true);                     // [B, 1, 1, 1]
+    const auto contrast = uniform({b, 1, 1, 1}, 0.7, 1.3);
+    const auto gain = contrast * uniform({b, 1, 1, 1}, 0.6, 1.4) * uniform({b, 3, 1, 1}, 0.9, 1.1);  // [B, 3, 1, 1]
+    const auto offset = mean * (1 - contrast) * gain / contrast;  // (x - m) c + m, times exposure and balance
+    auto y = torch::addcmul(offset, x, gain).clamp_(0, 1);
+    y.pow_(uniform({b, 1, 1, 1}, 0.8, 1.25));                        // gamma
+    const auto pick = torch::randint(kBankSize, {b}, generator_, torch::kLong);
+    y.add_(noise_bank_.index_select(0, pick).mul_(uniform({b, 1, 1, 1}, 0.0, 0.03)));  // sensor noise
+    return y.clamp_(0, 1);
+  }
+
+ private:
+  static constexpr int64_t kBankSize = 256;
+  torch::Tensor uniform(std::vector<int64_t> shape, double lo, double hi) {
+    return torch::rand(shape, generator_) * (hi - lo) + lo;
+  }
+  torch::Generator& generator_;
+  torch::Tensor noise_bank_;
+};
 
 struct Confusion {
   std::array<std::array<int64_t, kNumClasses>, kNumClasses> m{};  // [true][predicted]
@@ -253,6 +270,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   std::mt19937_64 rng(c.seed * 7919 + static_cast<uint64_t>(first_step));
   std::discrete_distribution<size_t> pick_class(class_weights.begin(), class_weights.end());
   auto generator = at::detail::createCPUGenerator(c.seed + static_cast<uint64_t>(first_step));
+  Augmenter augment(train.patch_size, generator);
   const std::vector<SampleRef> val_refs = validation_subset(val, c.max_val_samples);
   report.val_samples = static_cast<int64_t>(val_refs.size());
 
@@ -264,14 +282,15 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   for (int64_t step = first_step; step < c.steps; ++step) {
     net->train();
     std::vector<SampleRef> batch;
-    torch::Tensor labels = torch::empty({c.batch_size}, torch::kLong);
+    std::vector<int64_t> batch_labels;
     for (int i = 0; i < c.batch_size; ++i) {
       const auto& pool = train.by_class[static_cast<size_t>(classes[pick_class(rng)])];
       batch.push_back(pool[std::uniform_int_distribution<size_t>(0, pool.size() - 1)(rng)]);
-      labels[i] = label_of(train, batch.back());
+      batch_labels.push_back(label_of(train, batch.back()));
     }
+    auto labels = torch::tensor(batch_labels, torch::kLong);
     auto x = to_unit_rgb(gather_patches(train, batch));
-    if (c.augment) x = augment(x, generator);
+    if (c.augment) x = augment(x);
     x = normalize(x, info).to(device);
     labels = labels.to(device);
     for (auto& group : optimizer.param_groups())

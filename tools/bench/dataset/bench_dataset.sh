@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Dataset generation speed: a simulated session recorded at 30 Hz (stereo
+# 960x600 Bayer + depth 640x480 + calibration + ground truth) is turned into
+# a dataset by re-running a perception model and the depth monitor offline.
+# The baseline, side by side, is the recording itself: 30 frames/s. Ratio
+# > 1 = faster than real time.
+#   tools/bench/dataset/bench_dataset.sh [--frames N] [--build DIR]
+set -euo pipefail
+root=$(cd "$(dirname "$0")/../../.." && pwd)
+build=$root/build
+frames=300
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --frames) frames=$2; shift 2 ;;
+    --build) build=$2; shift 2 ;;
+    *) echo "usage: $0 [--frames N] [--build DIR]" >&2; exit 2 ;;
+  esac
+done
+B=$build/bin
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+echo "Recording a $frames-frame session of the office scene at 30 Hz session time..."
+"$B/ivoa-sim-driver" --scene "$root/libs/sim/scenes/indoor_office.yaml" --seed 9 --rate 30 --frames "$frames" \
+  --as-fast-as-possible --start-utime 1700000000000000 --lcm-url "file://$tmp/s.lcmlog?mode=w" --log-level warn
+size=$(du -m "$tmp/s.lcmlog" | cut -f1)
+printf '\nDataset generation from a %d-frame log (%d MB), one process, OMP/OpenCV default threads:\n' "$frames" "$size"
+printf '  %-44s %10s %12s %14s\n' "labels" "seconds" "frames/s" "x real time"
+for labels in jppc dense; do
+  start=$(date +%s.%N)
+  "$B/ivoa-dataset" --log-level warn build --out "$tmp/d_$labels" --labels "$labels" "$tmp/s.lcmlog" > "$tmp/$labels.txt" 2>&1
+  end=$(date +%s.%N)
+  /usr/bin/python3 - "$start" "$end" "$frames" "$labels" "$(tail -1 "$tmp/$labels.txt")" <<'PY'
+import sys
+start, end, frames, labels, line = float(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3]), sys.argv[4], sys.argv[5]
+s = end - start
+desc = {"jppc": "re-run JPP-C + depth monitor + Algorithm 1", "dense": "re-run dense SGBM + depth monitor + Algorithm 1"}[labels]
+print(f"  {desc:<44} {s:10.1f} {frames / s:12.1f} {frames / s / 30:13.1f}x")
+PY
+done
+echo "  baseline: the recording rate                     30.0 frames/s     1.0x"
