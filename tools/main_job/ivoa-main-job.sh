@@ -95,7 +95,7 @@ record_session() {
   in_lcm_net "$worker" "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
     --set SCENE="$SCENES/$scene.yaml" --set SEED="$seed" --set FRAMES="$frames" --set RATE=$RATE \
     --set SIM_ARGS="--as-fast-as-possible --start-utime $utime" \
-    --set LOG_FILE="$log" --set VIEWER_DIR="$out/viewer/$name" --set VIEWER_ARGS="--every 12 --max-images 4" \
+    --set LOG_FILE="$log" --set VIEWER_DIR="$out/viewer/$name" --set VIEWER_ARGS="--every $(( frames >= 8 ? frames / 4 : 1 )) --max-images 4" \
     --skip introspection --until sim_driver --grace 2 --plain --status-every 0 \
     --output-dir "$out/process_logs/$name" --status-file "$out/process_logs/$name/status.txt" \
     > "$out/process_logs/$name.launch.log" 2>&1 ||

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# The main job at smoke scale: records sessions through sim.pmd, builds both
+# datasets, trains, evaluates on held-out sessions and writes the report.
+# Checks that every stage produced its output and that the report's numbers
+# are consistent with the evaluation (not that the tiny model is accurate).
+set -euo pipefail
+S=${IVOA_SOURCE_DIR:?}
+OUT=$(mktemp -d)
+trap 'if [ "${KEEP_OUT:-0}" = 1 ]; then echo "outputs kept in $OUT" >&2; else rm -rf "$OUT"; fi' EXIT
+
+"$S/tools/main_job/ivoa-main-job.sh" --scale smoke --out "$OUT" > "$OUT/main_job.log" 2>&1 ||
+  { echo "FAILED: the main job exited non-zero" >&2; tail -40 "$OUT/main_job.log" >&2; exit 1; }
+
+for f in split.yaml model_jppc.pt model_dense.pt eval_jppc/eval.json eval_dense/eval.json \
+  report/report.md report/metrics.json report/jppc_eval_jppc/confusion.png report/jppc_eval_jppc/clusters_tsne.png; do
+  [ -s "$OUT/$f" ] || { echo "FAILED: $f missing or empty" >&2; tail -40 "$OUT/main_job.log" >&2; exit 1; }
+done
+ls "$OUT"/viewer/*/*.png > /dev/null || { echo "FAILED: the viewer wrote no figures" >&2; exit 1; }
+
+/usr/bin/python3 - "$OUT" <<'PY'
+import json, sys, pathlib
+out = pathlib.Path(sys.argv[1])
+split = (out / "split.yaml").read_text()
+metrics = json.loads((out / "report/metrics.json").read_text())["models"]
+for detector in ("jppc", "dense"):
+    ev = json.loads((out / f"eval_{detector}/eval.json").read_text())
+    m = metrics[f"{detector}_eval_{detector}"]["overall"]
+    assert m["n"] == ev["samples"] > 0, (detector, m["n"], ev["samples"])
+    confusion = m["confusion"]
+    assert sum(map(sum, confusion)) == m["n"], detector
+    assert [sum(row) for row in confusion] == m["support"], detector
+    for s in ev["sessions"]:
+        assert s["split"] == "test" and s["session"] in split and s["session"].endswith("_s31"), \
+            f"{detector}: evaluated on a session that is not held out: {s}"
+    assert 0.0 <= m["mean_per_class_accuracy"] <= 1.0
+    print(f"{detector}: {m['n']} held-out samples, mean per-class accuracy {m['mean_per_class_accuracy']:.3f}")
+report = (out / "report/report.md").read_text()
+assert "ean per-class" in report, "the report does not state the mean per-class accuracy"
+PY
+echo "OK: main job (smoke) $(grep -o 'Main job done in [0-9ms]*' "$OUT/main_job.log")"
