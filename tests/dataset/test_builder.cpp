@@ -110,6 +110,24 @@ TEST(DatasetBuilder, RecordedLabelsAreUsedAsRecorded) {
   for (const auto& s : session.samples()) EXPECT_EQ(s.label, (recorded.at({s.utime, s.cell})));
 }
 
+TEST(DatasetBuilder, EnvironmentComesFromTheSimulatorNotTheSceneName) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("wet.lcmlog");
+  test::write_sim_log(log_path, std::string(IVOA_SCENES_DIR) + "/wet_parking_lot.yaml", 2, 2);
+  BuildOptions options;
+  options.labels = "jppc";
+  SessionBuilder builder(dir.file("data"), "wet", options);
+  builder.add_log(log_path);
+  builder.finish();
+  EXPECT_EQ(SessionReader(dir.file("data") + "/wet").info().environment, "outdoor");
+
+  options.environment = "indoor";  // the user's word overrides
+  SessionBuilder overridden(dir.file("data2"), "wet", options);
+  overridden.add_log(log_path);
+  overridden.finish();
+  EXPECT_EQ(SessionReader(dir.file("data2") + "/wet").info().environment, "indoor");
+}
+
 TEST(DatasetBuilder, TruncatedLogKeepsWhatCameBeforeAndSaysWhere) {
   test::TempDir dir;
   const std::string log_path = dir.file("cut.lcmlog");

@@ -84,8 +84,11 @@ void SessionBuilder::Impl::bad(const std::string& what) {
 void SessionBuilder::Impl::open_writer() {
   if (writer) return;
   info.patch_size = rerun() ? options.grid.patch_size : info.patch_size;
-  if (info.environment.empty() || info.environment == "unknown")
-    info.environment = options.environment.empty() ? environment_of(info.scene) : options.environment;
+  // The user's word first, then the simulator's, then the scene name's.
+  if (!options.environment.empty())
+    info.environment = options.environment;
+  else if (info.environment.empty() || info.environment == "unknown")
+    info.environment = environment_of(info.scene);
   writer = std::make_unique<SessionWriter>(root, info);
 }
 
@@ -167,6 +170,7 @@ void SessionBuilder::Impl::on_truth(const logio::LogEvent& e) {
   if (info.scene.empty()) {
     info.scene = msg.scene;
     info.seed = msg.seed;
+    info.environment = msg.environment.empty() ? "unknown" : msg.environment;
   }
   try {
     truths[msg.utime] = {decode_image(msg.phenomena, ColorOutput::kGray), decode_image(msg.surface, ColorOutput::kGray)};

@@ -33,6 +33,7 @@ sim_ground_truth_t make_truth_message(const SimFrame& frame, const Scene& scene,
   msg.seq = seq;
   msg.scene = scene.name();
   msg.seed = static_cast<int64_t>(scene.seed());
+  msg.environment = scene.environment() == Environment::kOutdoor ? "outdoor" : "indoor";
   msg.robot_x = pose.x;
   msg.robot_y = pose.y;
   msg.robot_yaw = pose.yaw;

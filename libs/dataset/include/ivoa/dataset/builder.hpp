@@ -26,7 +26,7 @@ struct BuildOptions {
   QueryGridConfig grid;  // for re-run labels; recorded labels carry their own
   monitor::DepthMonitorConfig monitor;
   monitor::PairingConfig pairing;
-  std::string environment;  // "" = from the scene name (indoor_*/outdoor_*) if known
+  std::string environment;  // "" = the simulator's truth messages, else the scene name (indoor_*/outdoor_*)
   std::string stereo_channel{channels::kStereoImages};
   std::string depth_channel{channels::kDepthImage};
   std::string calibration_channel{channels::kRigCalibration};
