@@ -16,7 +16,7 @@ if ! wait_exit check 40; then show driver check rig; exit 1; fi
 assert_json "$OUT/summary.json" \
   's["checked"] >= 25' 's["content_mismatch"] == 0' 's["stamp_missing"] == 0' \
   's["stamp_mismatch"] == 0' 's["off_beat_pairs"] == 0' 's["distinct_ticks"] >= 20' \
-  's["pixelformat"] == "GRAY"' '0 < s["rate_hz"] <= 18' 's["utime_regressions"] == 0' \
+  's["pixelformat"] == "GRAY"' '1.5 <= s["rate_hz"] <= 18' 's["utime_regressions"] == 0' \
   || { show driver rig; exit 1; }
 grep -q "trigger software" "$OUT/driver.log" || { echo "driver did not report software trigger" >&2; show driver; exit 1; }
 echo "OK: $(cat "$OUT/summary.json")"

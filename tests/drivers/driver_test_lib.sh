@@ -1,8 +1,8 @@
 # Shared by the driver integration tests (source it; they run inside
 # tests/harness/in_netns.sh). Starts processes in the background, remembers
 # their PIDs and stops exactly those on exit; bounded waits only.
-# Rates are checked only from above (never faster than the camera): how
-# fast a loaded CI host keeps up is a benchmark question, not a test.
+# Rates: never faster than the camera, and at least a tenth of it (a CI host
+# running other tests beside these delivered a third of the 30 Hz once).
 set -euo pipefail
 B=${IVOA_BUILD_DIR:?}
 S=${IVOA_SOURCE_DIR:?}

@@ -127,7 +127,7 @@ int main(int argc, char** argv) {
                     "'recorded' (the log's INTROSPECTION_LABELS) or a detector to re-run offline: jppc, dense")
       ->capture_default_str();
   build->add_option("--session", session, "session name for all logs (default: per log, from the file name)");
-  build->add_option("--environment", options.environment, "indoor or outdoor (default: from the simulated scene name)");
+  build->add_option("--environment", options.environment, "indoor or outdoor (default: what the simulator logged, else the scene name)");
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
       ->capture_default_str();
   build->add_option("logs", logs, "LCM log files, in order")->required()->check(CLI::ExistingFile);
