@@ -6,17 +6,6 @@
 #include "ivoa/core/message_registry.hpp"
 
 namespace ivoa::tools {
-namespace {
-
-int64_t read_be64(const uint8_t* p) {
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
-  return static_cast<int64_t>(v);
-}
-
-bool has_seq(const std::string& type) { return type == "ivoa.stereo_image_t" || type == "ivoa.depth_image_t"; }
-
-}  // namespace
 
 double ChannelStats::rate_hz() const {
   const double span_s = static_cast<double>(last_recv_utime - first_recv_utime) * 1e-6;
@@ -32,15 +21,13 @@ void TrafficStats::add(const std::string& channel, const void* data, size_t size
   ++s.count;
   s.bytes += static_cast<int64_t>(size);
   s.last_recv_utime = recv_utime;
-  if (s.type == "unknown" || size < 24) return;
-  const auto* b = static_cast<const uint8_t*>(data);
-  const int64_t utime = read_be64(b + 8);  // first field after the fingerprint
-  if (s.count > 1 && utime < s.last_utime) ++s.utime_regressions;
-  s.last_utime = utime;
-  if (has_seq(s.type)) {
-    const int64_t seq = read_be64(b + 16);
-    if (s.last_seq >= 0 && seq > s.last_seq + 1) s.seq_gaps += seq - s.last_seq - 1;
-    s.last_seq = seq;
+  const auto utime = payload_utime(data, size);
+  if (s.type == "unknown" || !utime) return;
+  if (s.count > 1 && *utime < s.last_utime) ++s.utime_regressions;
+  s.last_utime = *utime;
+  if (const auto seq = payload_seq(s.type, data, size)) {
+    if (s.last_seq >= 0 && *seq > s.last_seq + 1) s.seq_gaps += *seq - s.last_seq - 1;
+    s.last_seq = *seq;
   }
 }
 

@@ -3,6 +3,15 @@
 #include "ivoa/core/message_counts.hpp"
 
 namespace ivoa {
+namespace {
+
+int64_t read_be64(const uint8_t* b) {
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | b[i];  // LCM encodes big-endian
+  return static_cast<int64_t>(v);
+}
+
+}  // namespace
 
 const std::vector<MessageTypeInfo>& message_types() {
   static const std::vector<MessageTypeInfo> types = {
@@ -22,10 +31,21 @@ const std::vector<MessageTypeInfo>& message_types() {
 
 std::optional<int64_t> payload_fingerprint(const void* data, size_t size) {
   if (size < 8) return std::nullopt;
-  const auto* b = static_cast<const uint8_t*>(data);
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v = (v << 8) | b[i];  // LCM encodes big-endian
-  return static_cast<int64_t>(v);
+  return read_be64(static_cast<const uint8_t*>(data));
+}
+
+std::optional<int64_t> payload_utime(const void* data, size_t size) {
+  if (size < 16) return std::nullopt;
+  return read_be64(static_cast<const uint8_t*>(data) + 8);
+}
+
+bool type_has_seq(std::string_view type_name) {
+  return type_name == "ivoa.stereo_image_t" || type_name == "ivoa.depth_image_t";
+}
+
+std::optional<int64_t> payload_seq(std::string_view type_name, const void* data, size_t size) {
+  if (!type_has_seq(type_name) || size < 24) return std::nullopt;
+  return read_be64(static_cast<const uint8_t*>(data) + 16);
 }
 
 std::optional<std::string_view> payload_type_name(const void* data, size_t size) {

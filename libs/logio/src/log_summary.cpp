@@ -8,14 +8,6 @@
 namespace ivoa::logio {
 namespace {
 
-int64_t read_be64(const uint8_t* p) {
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
-  return static_cast<int64_t>(v);
-}
-
-bool has_seq(const std::string& type) { return type == "ivoa.stereo_image_t" || type == "ivoa.depth_image_t"; }
-
 void add_seq(ChannelSummary& s, int64_t seq) {
   if (s.count == 1) {
     s.first_seq = seq;
@@ -40,7 +32,7 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
   if (s.count == 0) {
     s.fingerprint = fingerprint;
     s.type = std::string(payload_type_name(data, size).value_or("unknown"));
-    s.has_seq = has_seq(s.type);
+    s.has_seq = type_has_seq(s.type);
     s.first_timestamp = timestamp;
   }
   ++s.count;
@@ -50,13 +42,12 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
     ++s.other_fingerprints;
     return;
   }
-  if (s.type == "unknown" || size < 16) return;
-  const auto* bytes = static_cast<const uint8_t*>(data);
-  const int64_t utime = read_be64(bytes + 8);
-  if (s.count == 1) s.first_utime = utime;
-  else if (utime < s.last_utime) ++s.utime_regressions;
-  s.last_utime = utime;
-  if (s.has_seq && size >= 24) add_seq(s, read_be64(bytes + 16));
+  const auto utime = payload_utime(data, size);
+  if (s.type == "unknown" || !utime) return;
+  if (s.count == 1) s.first_utime = *utime;
+  else if (*utime < s.last_utime) ++s.utime_regressions;
+  s.last_utime = *utime;
+  if (const auto seq = payload_seq(s.type, data, size)) add_seq(s, *seq);
 }
 
 std::string LogSummary::table() const {

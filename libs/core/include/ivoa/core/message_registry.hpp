@@ -21,4 +21,11 @@ std::optional<int64_t> payload_fingerprint(const void* data, size_t size);
 // "ivoa.stereo_image_t", or empty for a payload of another or unknown type.
 std::optional<std::string_view> payload_type_name(const void* data, size_t size);
 
+// Every ivoa type starts with utime; stereo and depth images follow it with
+// seq. Read straight from the payload of an ivoa message (no decoding);
+// empty if the payload is too short or the type has no such field.
+bool type_has_seq(std::string_view type_name);
+std::optional<int64_t> payload_utime(const void* data, size_t size);
+std::optional<int64_t> payload_seq(std::string_view type_name, const void* data, size_t size);
+
 }  // namespace ivoa
