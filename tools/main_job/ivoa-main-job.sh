@@ -13,8 +13,9 @@
 #      scenes generated from seeds never used in training;
 #   5. write the report (metrics, uncertainty, failure clusters, figures).
 #
-# Usage: ivoa-main-job.sh [--scale default|full] [--out DIR] [--live]
+# Usage: ivoa-main-job.sh [--scale default|smoke|full] [--out DIR] [--live]
 #   --scale full   more sessions and training: the recipe of the shipped model
+#   --scale smoke  a few frames per session: checks the whole chain (a test)
 #   --live         the short variant: run the shipped model live on the
 #                  simulator (sim.pmd with introspection and the viewer)
 set -euo pipefail
@@ -33,7 +34,7 @@ while [ $# -gt 0 ]; do
     --scale) scale=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --live) live=1; shift ;;
-    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
     *) echo "ivoa-main-job: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
