@@ -25,7 +25,16 @@ void HeartbeatMonitor::on_status(const process_status_t& status) {
   } else if (supervisor_.has(status.name)) {
     command = status.name;
   }
-  if (command) latest_[*command] = {status, std::chrono::steady_clock::now()};
+  if (!command) return;
+  Latest next{status, std::chrono::steady_clock::now()};
+  // A heartbeat's latency covers its own period; one with no work in it
+  // (a process idle or stopping) keeps the last latency measured.
+  const auto previous = latest_.find(*command);
+  if (status.latency_ms_max == 0 && previous != latest_.end()) {
+    next.status.latency_ms_mean = previous->second.status.latency_ms_mean;
+    next.status.latency_ms_max = previous->second.status.latency_ms_max;
+  }
+  latest_[*command] = next;
 }
 
 std::optional<HeartbeatMonitor::Latest> HeartbeatMonitor::latest(const std::string& command) const {
