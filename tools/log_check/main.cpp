@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/json_text.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/logio/log_summary.hpp"
@@ -63,7 +64,7 @@ void print_file(const FileResult& r) {
 }
 
 std::string results_json(const std::vector<FileResult>& files, const LogSummary& summary) {
-  using ivoa::logio::json_quote;
+  using ivoa::json_quote;
   std::string out = "{\"files\": [";
   for (size_t i = 0; i < files.size(); ++i) {
     const FileResult& f = files[i];

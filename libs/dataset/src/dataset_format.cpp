@@ -14,6 +14,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "ivoa/core/json_text.hpp"
+
 namespace fs = std::filesystem;
 
 namespace ivoa::dataset {
@@ -22,26 +24,17 @@ namespace {
 constexpr const char* kSamplesHeader =
     "sample,frame,utime,depth_utime,cell,label,stereo_state,depth_state,x,y,u,v,phenomena,phenomenon,surface";
 
-std::string quote(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
-}
-
 std::string session_json(const SessionInfo& i) {
   std::ostringstream o;
   o.precision(10);
-  o << "{\n  \"session\": " << quote(i.session) << ",\n  \"detector\": " << quote(i.detector)
-    << ",\n  \"labels_from\": " << quote(i.labels_from) << ",\n  \"logs\": [";
-  for (size_t k = 0; k < i.logs.size(); ++k) o << (k ? ", " : "") << quote(i.logs[k]);
-  o << "],\n  \"scene\": " << quote(i.scene) << ",\n  \"seed\": " << i.seed
-    << ",\n  \"environment\": " << quote(i.environment) << ",\n  \"rig_name\": " << quote(i.rig_name)
+  o << "{\n  \"session\": " << json_quote(i.session) << ",\n  \"detector\": " << json_quote(i.detector)
+    << ",\n  \"labels_from\": " << json_quote(i.labels_from) << ",\n  \"logs\": [";
+  for (size_t k = 0; k < i.logs.size(); ++k) o << (k ? ", " : "") << json_quote(i.logs[k]);
+  o << "],\n  \"scene\": " << json_quote(i.scene) << ",\n  \"seed\": " << i.seed
+    << ",\n  \"environment\": " << json_quote(i.environment) << ",\n  \"rig_name\": " << json_quote(i.rig_name)
     << ",\n  \"patch_size\": " << i.patch_size << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples
     << ",\n  \"class_counts\": {";
-  for (int c = 0; c < kNumClasses; ++c) o << (c ? ", " : "") << quote(kLabelNames[c]) << ": " << i.class_counts[c];
+  for (int c = 0; c < kNumClasses; ++c) o << (c ? ", " : "") << json_quote(kLabelNames[c]) << ": " << i.class_counts[c];
   const QueryGridConfig& g = i.grid;
   o << "},\n  \"grid\": {\"x_min\": " << g.x_min << ", \"x_max\": " << g.x_max << ", \"y_min\": " << g.y_min
     << ", \"y_max\": " << g.y_max << ", \"spacing\": " << g.spacing << ", \"safety_radius\": " << g.safety_radius
@@ -245,7 +238,7 @@ void register_session(const std::string& dataset_root, const std::string& sessio
   std::ofstream out(dataset_root + "/dataset.json");
   out << "{\n  \"format\": \"ivoa-dataset\",\n  \"version\": 1,\n  \"patch_size\": " << patch_size
       << ",\n  \"label_names\": [\"TP\", \"TN\", \"FP\", \"FN\"],\n  \"sessions\": [";
-  for (size_t k = 0; k < sessions.size(); ++k) out << (k ? ", " : "") << quote(sessions[k]);
+  for (size_t k = 0; k < sessions.size(); ++k) out << (k ? ", " : "") << json_quote(sessions[k]);
   out << "]\n}\n";
 }
 

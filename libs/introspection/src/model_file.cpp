@@ -9,21 +9,10 @@
 #include <torch/script.h>
 #include <yaml-cpp/yaml.h>
 
+#include "ivoa/core/json_text.hpp"
+
 namespace ivoa::introspection {
 namespace {
-
-std::string quote(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (c == '\n') {
-      out += "\\n";
-      continue;
-    }
-    out += c;
-  }
-  return out + "\"";
-}
 
 std::string file_hash(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -50,12 +39,12 @@ std::string from_bytes(const torch::Tensor& t) {
 std::string info_to_json(const ModelInfo& i) {
   std::ostringstream o;
   o.precision(8);
-  o << "{\"format\": " << quote(kFormat) << ", \"version\": 1, \"architecture\": " << quote(i.architecture)
-    << ", \"detector\": " << quote(i.detector) << ", \"patch_size\": " << i.patch_size << ", \"stride\": " << i.stride
+  o << "{\"format\": " << json_quote(kFormat) << ", \"version\": 1, \"architecture\": " << json_quote(i.architecture)
+    << ", \"detector\": " << json_quote(i.detector) << ", \"patch_size\": " << i.patch_size << ", \"stride\": " << i.stride
     << ", \"input_size\": " << i.input_size << ", \"dropout\": " << i.dropout << ", \"color\": \"RGB\""
     << ", \"mean\": [" << i.mean[0] << ", " << i.mean[1] << ", " << i.mean[2] << "], \"std\": [" << i.std[0] << ", "
     << i.std[1] << ", " << i.std[2] << "], \"classes\": [";
-  for (size_t k = 0; k < i.classes.size(); ++k) o << (k ? ", " : "") << quote(i.classes[k]);
+  for (size_t k = 0; k < i.classes.size(); ++k) o << (k ? ", " : "") << json_quote(i.classes[k]);
   o << "], \"uncertainty_threshold\": " << i.uncertainty_threshold
     << ", \"training\": " << (i.training_summary.empty() ? "{}" : i.training_summary) << "}";
   return o.str();

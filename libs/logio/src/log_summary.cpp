@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "ivoa/core/json_text.hpp"
 #include "ivoa/core/message_registry.hpp"
 #include "ivoa/logio/log_reader.hpp"
 
@@ -66,22 +67,6 @@ std::string LogSummary::table() const {
   return out;
 }
 
-std::string json_quote(const std::string& text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
 
 std::string fingerprint_hex(int64_t fingerprint) {
   char buf[24];

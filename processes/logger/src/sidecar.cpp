@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "ivoa/core/json_text.hpp"
 #include "ivoa/core/message_registry.hpp"
 #include "ivoa/logio/log_summary.hpp"
 
@@ -13,7 +14,7 @@ namespace ivoa::logger {
 namespace {
 
 using logio::fingerprint_hex;
-using logio::json_quote;
+using ivoa::json_quote;
 
 std::string base_name(const std::string& path) {
   const auto slash = path.rfind('/');

@@ -9,6 +9,7 @@
 
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/channels.hpp"
+#include "ivoa/core/json_text.hpp"
 #include "ivoa/process_status_t.hpp"
 
 namespace ivoa::test {
@@ -20,8 +21,8 @@ class JsonObject {
   void set(const std::string& key, int64_t value) { fields_[key] = std::to_string(value); }
   void set(const std::string& key, int value) { fields_[key] = std::to_string(value); }
   void set(const std::string& key, bool value) { fields_[key] = value ? "true" : "false"; }
-  void set(const std::string& key, const std::string& value) { fields_[key] = quote(value); }
-  void set(const std::string& key, const char* value) { fields_[key] = quote(value); }
+  void set(const std::string& key, const std::string& value) { fields_[key] = json_quote(value); }
+  void set(const std::string& key, const char* value) { fields_[key] = json_quote(value); }
   void set(const std::string& key, const JsonObject& value) { fields_[key] = value.str(); }
 
   std::string str() const {
@@ -29,7 +30,7 @@ class JsonObject {
     out << "{";
     bool first = true;
     for (const auto& [k, v] : fields_) {
-      out << (first ? "" : ", ") << quote(k) << ": " << v;
+      out << (first ? "" : ", ") << json_quote(k) << ": " << v;
       first = false;
     }
     out << "}";
@@ -43,15 +44,6 @@ class JsonObject {
     out.precision(10);
     out << v;
     return out.str();
-  }
-  static std::string quote(const std::string& s) {
-    std::string out = "\"";
-    for (char c : s) {
-      if (c == '"' || c == '\\') out += '\\';
-      if (static_cast<unsigned char>(c) < 0x20) continue;
-      out += c;
-    }
-    return out + "\"";
   }
   std::map<std::string, std::string> fields_;
 };

@@ -6,29 +6,10 @@
 #include <cstring>
 #include <sstream>
 
+#include "ivoa/core/json_text.hpp"
+
 namespace ivoa::launcher {
 namespace {
-
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
 
 std::string fixed(double v, int decimals) {
   char buf[32];
@@ -85,14 +66,14 @@ std::string format_status_table(const std::vector<StatusRow>& rows) {
 
 std::string format_status_json(const std::vector<StatusRow>& rows, const RunSummary& summary) {
   std::ostringstream out;
-  out << "{\"config\": " << json_string(summary.config_path) << ", \"host\": " << json_string(summary.host)
-      << ", \"elapsed_s\": " << fixed(summary.elapsed_s, 3) << ", \"end_reason\": " << json_string(summary.end_reason)
+  out << "{\"config\": " << json_quote(summary.config_path) << ", \"host\": " << json_quote(summary.host)
+      << ", \"elapsed_s\": " << fixed(summary.elapsed_s, 3) << ", \"end_reason\": " << json_quote(summary.end_reason)
       << ", \"exit_code\": " << summary.exit_code << ",\n \"commands\": [";
   for (size_t i = 0; i < rows.size(); ++i) {
     const auto& c = rows[i].command;
-    out << (i ? ",\n  " : "\n  ") << "{\"name\": " << json_string(c.name) << ", \"group\": " << json_string(c.group)
-        << ", \"host\": " << json_string(c.host) << ", \"auto_respawn\": " << (c.auto_respawn ? "true" : "false")
-        << ", \"pid\": " << c.pid << ", \"state\": " << json_string(to_string(c.state))
+    out << (i ? ",\n  " : "\n  ") << "{\"name\": " << json_quote(c.name) << ", \"group\": " << json_quote(c.group)
+        << ", \"host\": " << json_quote(c.host) << ", \"auto_respawn\": " << (c.auto_respawn ? "true" : "false")
+        << ", \"pid\": " << c.pid << ", \"state\": " << json_quote(to_string(c.state))
         << ", \"restarts\": " << c.restarts << ", \"exit_code\": " << c.exit_code
         << ", \"exit_signal\": " << c.exit_signal << ", \"failed\": " << (c.failed ? "true" : "false")
         << ", \"killed\": " << (c.killed ? "true" : "false") << ", \"heartbeat\": ";
@@ -101,11 +82,11 @@ std::string format_status_json(const std::vector<StatusRow>& rows, const RunSumm
       continue;
     }
     const auto& h = *rows[i].heartbeat;
-    out << "{\"name\": " << json_string(h.name) << ", \"pid\": " << h.pid << ", \"messages_in\": " << h.messages_in
+    out << "{\"name\": " << json_quote(h.name) << ", \"pid\": " << h.pid << ", \"messages_in\": " << h.messages_in
         << ", \"messages_out\": " << h.messages_out << ", \"dropped\": " << h.dropped
         << ", \"bad_input\": " << h.bad_input << ", \"latency_ms_mean\": " << fixed(h.latency_ms_mean, 3)
-        << ", \"latency_ms_max\": " << fixed(h.latency_ms_max, 3) << ", \"state\": " << json_string(h.state)
-        << ", \"last_error\": " << json_string(h.last_error) << ", \"age_s\": " << fixed(rows[i].heartbeat_age_s, 3)
+        << ", \"latency_ms_max\": " << fixed(h.latency_ms_max, 3) << ", \"state\": " << json_quote(h.state)
+        << ", \"last_error\": " << json_quote(h.last_error) << ", \"age_s\": " << fixed(rows[i].heartbeat_age_s, 3)
         << "}}";
   }
   out << "\n]}\n";

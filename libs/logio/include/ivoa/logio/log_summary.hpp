@@ -34,11 +34,10 @@ struct ChannelSummary {
 
 inline constexpr size_t kMaxGapsListed = 20;
 
-// JSON for tools and sidecars: a channel as one object; a string as a
-// quoted literal; a fingerprint as a "0x..." string (JSON readers lose
+// JSON for tools and sidecars (strings: ivoa::json_quote): a channel as
+// one object; a fingerprint as a "0x..." string (JSON readers lose
 // precision on 64-bit integers).
 std::string channel_json(const ChannelSummary& summary);
-std::string json_quote(const std::string& text);
 std::string fingerprint_hex(int64_t fingerprint);
 
 class LogSummary {
