@@ -282,6 +282,20 @@ def comparison_section(runs: List[EvalRun], metrics: Dict[str, dict], figs: Dict
     return "\n".join(out)
 
 
+def _rate_extremes(runs: List[EvalRun], metrics: Dict[str, dict], code, key: str, min_samples: int):
+    """(highest, lowest) of one per-phenomenon rate over the models with enough
+    samples of that phenomenon, each as (rate, model name, entry); None if fewer
+    than two models qualify."""
+    vals = []
+    for r in runs:
+        e = next((e for e in metrics[r.slug]["per_phenomenon"] if e["phenomenon"] == code), None)
+        if e is not None and e["n"] >= min_samples:
+            vals.append((e[key], r.name, e))
+    if len(vals) < 2:
+        return None
+    return max(vals, key=lambda t: t[0]), min(vals, key=lambda t: t[0])
+
+
 def comparison_sentences(runs: List[EvalRun], metrics: Dict[str, dict], min_diff: float = 0.2,
                          min_samples: int = 5) -> List[str]:
     """Plain-language differences such as "textureless patches are a predicted FN
@@ -292,14 +306,10 @@ def comparison_sentences(runs: List[EvalRun], metrics: Dict[str, dict], min_diff
     codes = sorted({e["phenomenon"] for r in runs for e in metrics[r.slug]["per_phenomenon"]})
     for c in codes:
         for key, kind in (("pred_fn", "FN"), ("pred_fp", "FP")):
-            vals = []
-            for r in runs:
-                e = next((e for e in metrics[r.slug]["per_phenomenon"] if e["phenomenon"] == c), None)
-                if e is not None and e["n"] >= min_samples:
-                    vals.append((e[key], r.name, e))
-            if len(vals) < 2:
+            extremes = _rate_extremes(runs, metrics, c, key, min_samples)
+            if extremes is None:
                 continue
-            hi, lo = max(vals, key=lambda t: t[0]), min(vals, key=lambda t: t[0])
+            hi, lo = extremes
             if hi[0] - lo[0] >= min_diff:
                 truth = "true_fn" if kind == "FN" else "true_fp"
                 out.append(
@@ -309,14 +319,10 @@ def comparison_sentences(runs: List[EvalRun], metrics: Dict[str, dict], min_diff
                     f"true {kind} rate {pct(lo[2][truth], 0)}).")
     for c in codes:
         for key, kind in (("true_fn", "FN"), ("true_fp", "FP")):
-            vals = []
-            for r in runs:
-                e = next((e for e in metrics[r.slug]["per_phenomenon"] if e["phenomenon"] == c), None)
-                if e is not None and e["n"] >= min_samples:
-                    vals.append((e[key], r.name, e))
-            if len(vals) < 2:
+            extremes = _rate_extremes(runs, metrics, c, key, min_samples)
+            if extremes is None:
                 continue
-            hi, lo = max(vals, key=lambda t: t[0]), min(vals, key=lambda t: t[0])
+            hi, lo = extremes
             det = {r.name: r.label_detector or r.detector for r in runs}
             if hi[0] - lo[0] >= min_diff:
                 out.append(f"Labels: on **{phenomenon_name(c)}** the {det[hi[1]]} detector (labels of {hi[1]}) truly "
