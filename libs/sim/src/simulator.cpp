@@ -103,27 +103,31 @@ SimFrame Simulator::render(const RenderRequest& req) const {
   shaded.resize(std::max(n, right_radiance.size()));
   {
     const Tracer tracer(data, s.left, req.stereo_pose, accel);
-    tracer.shade_image(shaded.data());
-    for (int y = 0; y < h; ++y) {
-      float* depth = f.truth_depth.ptr<float>(y);
-      uint8_t* surface = f.truth_surface.ptr<uint8_t>(y);
-      uint8_t* phenomena = f.truth_phenomena.ptr<uint8_t>(y);
-      for (int x = 0; x < w; ++x) {
-        const size_t i = static_cast<size_t>(y) * w + x;
-        const Shaded& sh = shaded[i];
-        left_radiance[i] = sh.radiance;
-        specular[i] = sh.specular;
-        depth[x] = sh.depth;
-        surface[x] = sh.surface;
-        phenomena[x] = sh.phenomena;
+    tracer.shade_image(shaded.data(), [&](int y0, int y1) {
+      for (int y = y0; y < y1; ++y) {
+        float* depth = f.truth_depth.ptr<float>(y);
+        uint8_t* surface = f.truth_surface.ptr<uint8_t>(y);
+        uint8_t* phenomena = f.truth_phenomena.ptr<uint8_t>(y);
+        for (int x = 0; x < w; ++x) {
+          const size_t i = static_cast<size_t>(y) * w + x;
+          const Shaded& sh = shaded[i];
+          left_radiance[i] = sh.radiance;
+          specular[i] = sh.specular;
+          depth[x] = sh.depth;
+          surface[x] = sh.surface;
+          phenomena[x] = sh.phenomena;
+        }
       }
-    }
+    });
   }
   lap(f.timings.left_ms);
   {
     const Tracer tracer(data, s.right, req.stereo_pose, accel);
-    tracer.shade_image(shaded.data());
-    for (size_t i = 0; i < right_radiance.size(); ++i) right_radiance[i] = shaded[i].radiance;
+    const int rw = s.right.width();
+    tracer.shade_image(shaded.data(), [&](int y0, int y1) {
+      const size_t end = static_cast<size_t>(y1) * rw;
+      for (size_t i = static_cast<size_t>(y0) * rw; i < end; ++i) right_radiance[i] = shaded[i].radiance;
+    });
   }
   lap(f.timings.right_ms);
 

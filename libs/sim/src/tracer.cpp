@@ -166,7 +166,7 @@ void Tracer::build_candidates(bool accelerate) {
               [](const Candidate& x, const Candidate& y) { return x.s_min < y.s_min || (x.s_min == y.s_min && x.prism < y.prism); });
 }
 
-Tracer::Ray Tracer::make_ray(const PixelRay& r) const {
+inline Tracer::Ray Tracer::make_ray(const PixelRay& r) const {
   Ray ray;
   ray.ux = r.ux;
   ray.uy = r.uy;
@@ -444,7 +444,7 @@ Rgbf Tracer::floor_reflection(int pixel, float roughness) const {
   return r;
 }
 
-void Tracer::add_reflection(Shaded& out, float fresnel, const Rgbf& reflected) {
+inline void Tracer::add_reflection(Shaded& out, float fresnel, const Rgbf& reflected) {
   const Rgbf specular = reflected * fresnel;
   out.radiance = out.radiance * (1.0f - fresnel) + specular;
   out.specular = specular.luminance();
@@ -510,7 +510,7 @@ int reflection_step(float fresnel, float roughness) {
 
 }  // namespace
 
-void Tracer::shade_image(Shaded* out) const {
+void Tracer::shade_image(Shaded* out, const std::function<void(int, int)>& rows_done) const {
   const int width = rays_.width(), height = rays_.height();
   const size_t n = static_cast<size_t>(width) * height;
   // Scratch reused across frames (no page faults, no clearing): every entry
@@ -523,47 +523,87 @@ void Tracer::shade_image(Shaded* out) const {
   roughness.resize(n);
   reflected.resize(n);
   step.resize(n);
-  floor.resize(n);
+  floor.resize(static_cast<size_t>(width) * kBandRows);
+  // The image goes in bands of rows through three passes; a band's later
+  // passes run while what its earlier ones wrote is still in cache. Pass 2
+  // of band k reads the lattice spacing of the next band's first row and
+  // pass 3 its traced reflections, so the passes run two bands apart.
+  const int num_bands = (height + kBandRows - 1) / kBandRows;
+  auto rows = [&](int band) { return std::make_pair(band * kBandRows, std::min(height, (band + 1) * kBandRows)); };
+  for (int k = 0; k < num_bands + 2; ++k) {
+    if (k < num_bands) {
+      const auto [y0, y1] = rows(k);
+      shade_band(y0, y1, out, fresnel.data(), roughness.data(), step.data(), floor.data());
+    }
+    if (k >= 1 && k - 1 < num_bands) {
+      const auto [y0, y1] = rows(k - 1);
+      trace_reflections(y0, y1, step.data(), roughness.data(), reflected.data());
+    }
+    if (k >= 2) {
+      const auto [y0, y1] = rows(k - 2);
+      blend_reflections(y0, y1, step.data(), fresnel.data(), reflected.data(), out);
+      rows_done(y0, y1);
+    }
+  }
+}
+
+void Tracer::shade_band(int y0, int y1, Shaded* out, float* fresnel, float* roughness, uint8_t* step,
+                        FloorSample* floor) const {
+  const int width = rays_.width();
+  const size_t begin = static_cast<size_t>(y0) * width, end = static_cast<size_t>(y1) * width;
   size_t floor_count = 0;
-  for (size_t i = 0; i < n; ++i)
+  for (size_t i = begin; i < end; ++i)
     floor_count += shade_primary(static_cast<int>(i), out[i], fresnel[i], &floor[floor_count]);
   for (size_t k = 0; k < floor_count; ++k) {
     const size_t i = static_cast<size_t>(floor[k].pixel);
     finish_floor(floor[k], out[i], fresnel[i], roughness[i]);
   }
-  for (size_t i = 0; i < n; ++i) step[i] = static_cast<uint8_t>(reflection_step(fresnel[i], roughness[i]));
-  // A pixel off its lattice, inside a lattice cell whose four corners share
-  // its spacing, takes its reflection from those corners.
-  auto interpolated = [&](int x, int y) {
-    const int s = step[static_cast<size_t>(y) * width + x] & 0x7f, m = s - 1;  // s is 1, 2 or 4
-    if (s < 2 || ((x | y) & m) == 0) return false;
-    const int x0 = x & ~m, y0 = y & ~m, x1 = x0 + s, y1 = y0 + s;
-    if (x1 >= width || y1 >= height) return false;
-    auto same = [&](int xx, int yy) { return (step[static_cast<size_t>(yy) * width + xx] & 0x7f) == s; };
-    return same(x0, y0) && same(x1, y0) && same(x0, y1) && same(x1, y1);
-  };
-  // step[i] becomes 0: no reflection, 1: traced here, 2+: interpolated.
-  for (int y = 0; y < height; ++y)
+  for (size_t i = begin; i < end; ++i) step[i] = static_cast<uint8_t>(reflection_step(fresnel[i], roughness[i]));
+}
+
+// A pixel off its lattice, inside a lattice cell whose four corners share
+// its spacing, takes its reflection from those corners.
+inline bool Tracer::interpolated(const uint8_t* step, int x, int y) const {
+  const int width = rays_.width(), height = rays_.height();
+  const int s = step[static_cast<size_t>(y) * width + x] & 0x7f, m = s - 1;  // s is 1, 2 or 4
+  if (s < 2 || ((x | y) & m) == 0) return false;
+  const int x0 = x & ~m, y0 = y & ~m, x1 = x0 + s, y1 = y0 + s;
+  if (x1 >= width || y1 >= height) return false;
+  auto same = [&](int xx, int yy) { return (step[static_cast<size_t>(yy) * width + xx] & 0x7f) == s; };
+  return same(x0, y0) && same(x1, y0) && same(x0, y1) && same(x1, y1);
+}
+
+// step[i] becomes 0: no reflection, 1: traced here, 2+ with the top bit: interpolated.
+void Tracer::trace_reflections(int y0, int y1, uint8_t* step, const float* roughness, Rgbf* reflected) const {
+  const int width = rays_.width();
+  for (int y = y0; y < y1; ++y)
     for (int x = 0; x < width; ++x) {
       const size_t i = static_cast<size_t>(y) * width + x;
       if (!step[i]) continue;
-      if (interpolated(x, y)) {
+      if (interpolated(step, x, y)) {
         step[i] |= 0x80;
         continue;
       }
       reflected[i] = floor_reflection(static_cast<int>(i), roughness[i]);
     }
-  for (int y = 0; y < height; ++y)
+}
+
+void Tracer::blend_reflections(int y0, int y1, const uint8_t* step, const float* fresnel, const Rgbf* reflected,
+                               Shaded* out) const {
+  const int width = rays_.width();
+  for (int y = y0; y < y1; ++y)
     for (int x = 0; x < width; ++x) {
       const size_t i = static_cast<size_t>(y) * width + x;
       if (!step[i]) continue;
-      if (step[i] & 0x80) {
-        const int s = step[i] & 0x7f, x0 = x & ~(s - 1), y0 = y & ~(s - 1);
-        const float fx = static_cast<float>(x - x0) / static_cast<float>(s), fy = static_cast<float>(y - y0) / static_cast<float>(s);
-        const size_t a = static_cast<size_t>(y0) * width + x0, b = a + static_cast<size_t>(s) * width;
-        reflected[i] = lerp(lerp(reflected[a], reflected[a + s], fx), lerp(reflected[b], reflected[b + s], fx), fy);
+      if (!(step[i] & 0x80)) {
+        add_reflection(out[i], fresnel[i], reflected[i]);
+        continue;
       }
-      add_reflection(out[i], fresnel[i], reflected[i]);
+      const int s = step[i] & 0x7f, x0 = x & ~(s - 1), ys = y & ~(s - 1);
+      const float inv_s = 1.0f / static_cast<float>(s);  // exact: s is a power of two
+      const float fx = static_cast<float>(x - x0) * inv_s, fy = static_cast<float>(y - ys) * inv_s;
+      const size_t a = static_cast<size_t>(ys) * width + x0, b = a + static_cast<size_t>(s) * width;
+      add_reflection(out[i], fresnel[i], lerp(lerp(reflected[a], reflected[a + s], fx), lerp(reflected[b], reflected[b + s], fx), fy));
     }
 }
 
@@ -574,7 +614,9 @@ Ranged Tracer::range(int pixel) const {
   const bool up = pr.slope > 0;
   if (up && scene_.has_ceiling) s_hi = s_ceiling_up_ * ray.inv_slope;
   Hit hit;
-  nearest(ray, 0.0f, s_hi, false, hit);
+  const size_t first = brute_force_ ? 0 : bin_start_[static_cast<size_t>(ray.bin)];
+  const size_t last = brute_force_ ? candidates_.size() : bin_start_[static_cast<size_t>(ray.bin) + 1];
+  if (first < last && (brute_force_ || candidates_[first].s_min <= s_hi)) nearest(ray, 0.0f, s_hi, false, hit);
   const SkyData& sky = scene_.sky;
   const float sun_strength = sky.has_sun ? sky.sun_irradiance.luminance() / 300.0f : 0.0f;
   Ranged out;

@@ -7,6 +7,7 @@
 // mirror-like floor continues the same 2-D ray with z mirrored, so the
 // reflection reuses the bin's list.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "camera_rays.hpp"
@@ -43,7 +44,9 @@ class Tracer {
   // reflections are traced on a sparse lattice (every 2nd or 4th pixel by
   // roughness) and interpolated between: the surface blurs them over more
   // pixels anyway. Mirror-like ones (water) are traced at every pixel.
-  void shade_image(Shaded* out) const;
+  // rows_done(y0, y1) is called as soon as rows [y0, y1) of out are final,
+  // while they are still in cache.
+  void shade_image(Shaded* out, const std::function<void(int, int)>& rows_done) const;
   Ranged range(int pixel) const;
   size_t num_candidates() const { return candidates_.size(); }
 
@@ -69,7 +72,7 @@ class Tracer {
   };
 
   void build_candidates(bool accelerate);
-  Ray make_ray(const PixelRay& r) const;
+  inline Ray make_ray(const PixelRay& r) const;
   // Nearest solid along the ray with s in [s_lo, s_hi); mirrored: below the floor.
   void nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored, Hit& best) const;
   void shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float extra_blur, Shaded& out) const;
@@ -86,6 +89,14 @@ class Tracer {
   bool shade_primary(int pixel, Shaded& out, float& fresnel, FloorSample* floor) const;
   // The floor's own (diffuse) radiance; `fresnel` > 0 when a reflection must be added.
   void finish_floor(const FloorSample& f, Shaded& out, float& fresnel, float& roughness) const;
+  // shade_image's passes over rows [y0, y1): what each pixel sees and its
+  // reflection lattice spacing; the reflections traced on the lattice; the
+  // interpolated ones and the blend into the radiance.
+  static constexpr int kBandRows = 8;  // a multiple of the widest lattice spacing (4)
+  void shade_band(int y0, int y1, Shaded* out, float* fresnel, float* roughness, uint8_t* step, FloorSample* floor) const;
+  bool interpolated(const uint8_t* step, int x, int y) const;
+  void trace_reflections(int y0, int y1, uint8_t* step, const float* roughness, Rgbf* reflected) const;
+  void blend_reflections(int y0, int y1, const uint8_t* step, const float* fresnel, const Rgbf* reflected, Shaded* out) const;
   // Mirror image plus highlight lobes seen in the floor at a pixel.
   Rgbf floor_reflection(int pixel, float roughness) const;
   static void add_reflection(Shaded& out, float fresnel, const Rgbf& reflected);
