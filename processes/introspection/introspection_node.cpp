@@ -1,5 +1,8 @@
 #include "introspection_node.hpp"
 
+#include <utility>
+
+#include <opencv2/core.hpp>
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/image_convert.hpp"
@@ -60,6 +63,9 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
     heartbeat_.count_in();
     frames_.put({m, monotonic_ms()});
   });
+  if (model_->info().views == 2)
+    bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
+                                      [this](const rig_calibration_t& m, const ReceiveInfo&) { on_calibration(m); });
   if (!options_.grid_channel.empty())
     bus_.subscribe<obstacle_grid_t>(options_.grid_channel, [this](const obstacle_grid_t& m, const ReceiveInfo&) {
       std::lock_guard<std::mutex> lock(grid_mutex_);
@@ -84,18 +90,56 @@ void IntrospectionNode::work() {
   }
 }
 
-void IntrospectionNode::process(const Frame& frame) {
-  const std::string where = options_.stereo_channel + " utime " + std::to_string(frame.msg.utime);
-  cv::Mat left;
+void IntrospectionNode::on_calibration(const rig_calibration_t& msg) {
+  rig_calibration_t content = msg;
+  content.utime = 0;  // republished every second: compare content only
+  std::vector<uint8_t> bytes(static_cast<size_t>(content.getEncodedSize()));
+  content.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  std::lock_guard<std::mutex> lock(calibration_mutex_);
+  if (bytes == calibration_bytes_) return;
+  try {
+    new_rig_ = from_message(msg);
+  } catch (const CalibrationError& e) {
+    heartbeat_.bad_input(options_.calibration_channel + ": " + e.what());
+    return;
+  }
+  calibration_bytes_ = std::move(bytes);
+}
+
+cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& where, cv::Mat& left) {
   try {
     left = decode_image(frame.msg.left);
   } catch (const ImageError& e) {
     heartbeat_.bad_input(where + ": left image: " + e.what());
-    return;
+    return {};
   }
+  if (model_->info().views == 1) return left;
+  {
+    std::lock_guard<std::mutex> lock(calibration_mutex_);
+    if (new_rig_) warp_ = std::make_unique<GroundWarp>(*std::exchange(new_rig_, std::nullopt));
+  }
+  if (!warp_) {
+    heartbeat_.bad_input(where + ": no " + options_.calibration_channel + " yet (a two-view model needs it)");
+    return {};
+  }
+  try {
+    cv::Mat stacked;
+    cv::vconcat(left, warp_->warp(decode_image(frame.msg.right)), stacked);
+    return stacked;
+  } catch (const std::exception& e) {
+    heartbeat_.bad_input(where + ": right image: " + e.what());
+    return {};
+  }
+}
+
+void IntrospectionNode::process(const Frame& frame) {
+  const std::string where = options_.stereo_channel + " utime " + std::to_string(frame.msg.utime);
+  cv::Mat left;
+  const cv::Mat input = model_input(frame, where, left);
+  if (input.empty()) return;
   introspection::Heatmaps h;
   try {
-    h = model_->run(left);
+    h = model_->run(input);
   } catch (const introspection::ModelError& e) {
     heartbeat_.bad_input(where + ": " + e.what());
     return;

@@ -3,15 +3,21 @@
 // per-query-cell predictions out. A receive handler drops each stereo frame
 // into a latest-value mailbox; a worker thread runs the CNN on the newest
 // one, so a slow CPU skips frames (counted) instead of falling behind.
+// A two-view model also needs the rig calibration, to warp the right image
+// onto the ground plane; frames before the first calibration are skipped
+// (counted as bad input).
 #include <atomic>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/core/calibration.hpp"
 #include "ivoa/core/channels.hpp"
+#include "ivoa/core/ground_warp.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/mailbox.hpp"
 #include "ivoa/introspection/model.hpp"
@@ -23,6 +29,7 @@ struct IntrospectionNodeOptions {
   std::string stereo_channel{channels::kStereoImages};
   std::string grid_channel{channels::kObstaclesStereo};  // "" = no query cells
   std::string out_channel{channels::kIntrospection};
+  std::string calibration_channel{channels::kRigCalibration};  // two-view models only
 };
 
 // Builds the message for one frame (exposed for tests).
@@ -45,6 +52,10 @@ class IntrospectionNode {
   };
   void work();
   void process(const Frame& frame);
+  void on_calibration(const rig_calibration_t& msg);
+  // The image the model runs on (left, or left over the ground-warped
+  // right); empty after reporting bad input.
+  cv::Mat model_input(const Frame& frame, const std::string& where, cv::Mat& left);
 
   Bus& bus_;
   Heartbeat& heartbeat_;
@@ -54,6 +65,10 @@ class IntrospectionNode {
   LatestMailbox<Frame> frames_;
   std::mutex grid_mutex_;
   std::optional<obstacle_grid_t> latest_grid_;  // query cells: fixed geometry, from the newest grid
+  std::mutex calibration_mutex_;
+  std::vector<uint8_t> calibration_bytes_;       // the newest calibration's content (utime zeroed)
+  std::optional<RigCalibration> new_rig_;        // handed to the worker, which builds the warp
+  std::unique_ptr<GroundWarp> warp_;             // worker thread only
   std::atomic<int64_t> frames_done_{0};
   std::thread worker_;
 };

@@ -37,6 +37,9 @@ int main(int argc, char** argv) {
   app.add_option("--grid-channel", options.grid_channel, "obstacle grid giving the query cells (\"\" = none)")
       ->capture_default_str()->group("Channels");
   app.add_option("--out-channel", options.out_channel)->capture_default_str()->group("Channels");
+  app.add_option("--calibration-channel", options.calibration_channel, "rig calibration (two-view models warp the right image with it)")
+      ->capture_default_str()
+      ->group("Channels");
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   config.lookup = lookup == "bilinear" ? ivoa::introspection::QueryLookup::kBilinear
                                        : ivoa::introspection::QueryLookup::kNearest;

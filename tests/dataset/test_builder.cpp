@@ -12,6 +12,7 @@
 #include "ivoa/core/camera_model.hpp"
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/ground_warp.hpp"
 #include "ivoa/dataset/builder.hpp"
 #include "ivoa/dataset/patch.hpp"
 #include "ivoa/monitor/depth_monitor.hpp"
@@ -84,6 +85,34 @@ TEST(DatasetBuilder, RerunLabelsMatchAnIndependentRecomputationAndPatchesTheFram
     const cv::Mat crop = extract_patch(expected.left.at(s.utime), s.u, s.v, 100);
     EXPECT_EQ(cv::norm(session.patch(k), crop, cv::NORM_INF), 0) << "patch " << k;
   }
+}
+
+TEST(DatasetBuilder, TwoViewPatchesStackTheGroundWarpedRightView) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("two_s4.lcmlog");
+  std::map<int64_t, std::pair<cv::Mat, cv::Mat>> frames;  // utime -> left, right
+  test::write_sim_log(log_path, kScene, 4, 3, [&](Bus&, const test::SimLogFrame& f, const sim::SimFrame& frame) {
+    frames[f.utime] = {frame.left.clone(), frame.right.clone()};
+  });
+  BuildOptions options;
+  options.labels = "jppc";
+  options.views = 2;
+  SessionBuilder builder(dir.file("data"), "two", options);
+  builder.add_log(log_path);
+  builder.finish();
+  const SessionReader session(dir.file("data") + "/two");
+  EXPECT_EQ(session.info().views, 2);
+  ASSERT_GT(session.size(), 20u);
+  const GroundWarp warp(sim::make_sim_rig());
+  for (size_t k = 0; k < session.size(); k += 7) {
+    const SampleRecord& s = session.samples()[k];
+    const auto& [left, right] = frames.at(s.utime);
+    EXPECT_EQ(cv::norm(session.left_patch(k), extract_patch(left, s.u, s.v, 100), cv::NORM_INF), 0) << k;
+    const cv::Mat warped = extract_patch(warp.warp(right), s.u, s.v, 100);
+    EXPECT_EQ(cv::norm(session.patch(k).rowRange(100, 200), warped, cv::NORM_INF), 0) << k;
+  }
+  options.views = 3;
+  EXPECT_THROW(SessionBuilder(dir.file("data"), "three", options), std::invalid_argument);
 }
 
 TEST(DatasetBuilder, RecordedLabelsAreUsedAsRecorded) {

@@ -72,6 +72,29 @@ TEST(DatasetFormat, SessionRoundTripsPatchesIndexAndMetadata) {
   EXPECT_EQ(r.samples()[0].phenomenon, 2);
 }
 
+TEST(DatasetFormat, TwoViewPatchesRoundTripStacked) {
+  test::TempDir dir;
+  SessionInfo i = info("two");
+  i.views = 2;
+  const cv::Mat left = numbered_patch(1);
+  cv::Mat stacked;
+  {
+    SessionWriter w(dir.path().string(), i);
+    const int64_t f = w.add_frame(1000, 1004, 1);
+    SampleRecord s;
+    s.frame = f;
+    cv::vconcat(left, numbered_patch(2), stacked);
+    EXPECT_THROW(w.add_sample(s, left), DatasetError);  // one view where two are due
+    w.add_sample(s, stacked);
+  }
+  const SessionReader r((dir.path() / "two").string());
+  EXPECT_EQ(r.info().views, 2);
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r.patch(0).rows, 200);
+  EXPECT_EQ(cv::norm(r.patch(0), stacked, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(r.left_patch(0), left, cv::NORM_INF), 0);
+}
+
 TEST(DatasetFormat, TruncatedPatchStoreIsReported) {
   test::TempDir dir;
   {

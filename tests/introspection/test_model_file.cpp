@@ -12,16 +12,17 @@
 namespace ivoa::introspection {
 namespace {
 
-std::string write_random_model(const test::TempDir& dir, const std::string& architecture = "slidenet") {
+std::string write_random_model(const test::TempDir& dir, const std::string& architecture = "slidenet", int views = 1) {
   torch::manual_seed(9);
-  auto net = make_network(architecture, 0.5);
+  auto net = make_network(architecture, 0.5, views);
   ModelInfo info;
+  info.views = views;
   info.architecture = architecture;
   info.input_size = input_size_of(architecture);
   info.detector = "jppc";
   info.uncertainty_threshold = 0.0123;
   info.training_summary = "{\"steps\": 7}";
-  const std::string path = dir.file(architecture + ".pt");
+  const std::string path = dir.file(architecture + std::to_string(views) + ".pt");
   save_model(*net, info, path);
   return path;
 }
@@ -43,7 +44,8 @@ TEST(ModelFile, SavedAndLoadedModelGivesIdenticalOutputsAndMetadata) {
   EXPECT_EQ(a->info().detector, "jppc");
   EXPECT_DOUBLE_EQ(a->info().uncertainty_threshold, 0.0123);
   EXPECT_NE(a->info().training_summary.find("steps"), std::string::npos);
-  EXPECT_NE(a->info().id.find("slidenet.pt#"), std::string::npos);
+  EXPECT_NE(a->info().id.find("slidenet1.pt#"), std::string::npos);
+  EXPECT_EQ(a->info().views, 1);
   const cv::Mat image = random_image(300, 220);
   const Heatmaps ha = a->run(image), hb = b->run(image);
   for (int k = 0; k < kNumClasses; ++k)
@@ -72,6 +74,39 @@ TEST(ModelFile, HeatmapCellsEqualTheirPatches) {
       for (int k = 0; k < kNumClasses; ++k)
         EXPECT_NEAR(h.probability[static_cast<size_t>(k)].at<float>(r, col),
                     out.predictions[static_cast<size_t>(r * h.cols + col)].probability[static_cast<size_t>(k)], 1e-5);
+}
+
+TEST(ModelFile, TwoViewHeatmapCellsEqualTheirStackedPatches) {
+  // The image is the left view stacked over the warped right one; each
+  // cell's prediction is that of its two squares stacked, as datasets store them.
+  test::TempDir dir;
+  InferenceConfig c;
+  c.mc_passes = 1;
+  c.mean_filter = 1;
+  const auto model = IntrospectionModel::load(write_random_model(dir, "slidenet", 2), c);
+  EXPECT_EQ(model->info().views, 2);
+  const cv::Mat image = random_image(300, 2 * 180);
+  const Heatmaps h = model->run(image);
+  ASSERT_EQ(h.rows, 5);  // (180 - 100) / 20 + 1
+  ASSERT_EQ(h.cols, 11);
+  std::vector<cv::Mat> patches;
+  for (int r = 0; r < h.rows; ++r)
+    for (int col = 0; col < h.cols; ++col) {
+      cv::Mat stacked;
+      cv::vconcat(image(cv::Rect(col * 20, r * 20, 100, 100)), image(cv::Rect(col * 20, 180 + r * 20, 100, 100)), stacked);
+      patches.push_back(stacked);
+    }
+  const PatchOutputs out = model->run_patches(patches, false);
+  for (int r = 0; r < h.rows; ++r)
+    for (int col = 0; col < h.cols; ++col)
+      for (int k = 0; k < kNumClasses; ++k)
+        EXPECT_NEAR(h.probability[static_cast<size_t>(k)].at<float>(r, col),
+                    out.predictions[static_cast<size_t>(r * h.cols + col)].probability[static_cast<size_t>(k)], 1e-5);
+  // The right view matters: changing it changes the predictions.
+  cv::Mat other = image.clone();
+  cv::randu(other.rowRange(180, 360), 0, 255);
+  EXPECT_GT(cv::norm(model->run(other).probability[0], h.probability[0], cv::NORM_INF), 1e-4);
+  EXPECT_THROW(model->run(random_image(300, 181)), ModelError);  // not two stacked views
 }
 
 TEST(ModelFile, McHeatmapsHaveVarianceAndGateByThreshold) {

@@ -128,6 +128,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   build->add_option("--session", session, "session name for all logs (default: per log, from the file name)");
   build->add_option("--environment", options.environment, "indoor or outdoor (default: what the simulator logged, else the scene name)");
+  build->add_option("--views", options.views,
+                    "1: left patches (the paper); 2: each with the right image warped onto the ground plane below it")
+      ->check(CLI::IsMember({1, 2}))
+      ->capture_default_str();
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
       ->capture_default_str();
   build->add_option("logs", logs, "LCM log files, in order")->required()->check(CLI::ExistingFile);

@@ -4,18 +4,23 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/calibration.hpp"
+#include "ivoa/core/channels.hpp"
+#include "ivoa/core/ground_warp.hpp"
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
 #include "ivoa/introspection/model.hpp"
 #include "ivoa/logio/log_reader.hpp"
+#include "ivoa/rig_calibration_t.hpp"
 #include "ivoa/stereo_image_t.hpp"
 #include "overlay.hpp"
 
@@ -42,6 +47,10 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
                 introspection::IntrospectionModel& model, Progress& progress, double& done) {
   constexpr size_t kBatch = 256;
   const auto& info = session.info();
+  if (info.views != model.info().views)
+    throw dataset::DatasetError("session " + info.session + " has " + std::to_string(info.views) + " view(s) per patch, model " +
+                                model.info().id + " takes " + std::to_string(model.info().views) +
+                                " (build the dataset with --views " + std::to_string(model.info().views) + ")");
   for (size_t begin = 0; begin < session.size(); begin += kBatch) {
     const size_t end = std::min(session.size(), begin + kBatch);
     std::vector<cv::Mat> patches;
@@ -87,13 +96,25 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
     logio::LogReader in(log);
     logio::LogEvent e;
     int64_t index = 0;
+    std::unique_ptr<GroundWarp> warp;  // two-view models, from the log's calibration
     while (in.next(e) && written < o.max_overlays) {
+      if (model.info().views == 2 && !warp && e.channel == channels::kRigCalibration) {
+        rig_calibration_t rig;
+        if (rig.decode(e.data.data(), 0, static_cast<int>(e.data.size())) >= 0)
+          warp = std::make_unique<GroundWarp>(from_message(rig));
+        continue;
+      }
       stereo_image_t msg;
-      if (e.channel != "STEREO_IMAGES" || msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) < 0) continue;
+      if (e.channel != channels::kStereoImages || msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) < 0) continue;
       const auto it = frames.find(msg.utime);
       if (it == frames.end() || index++ % o.overlay_every != 0) continue;
       const cv::Mat left = decode_image(msg.left);
-      const introspection::Heatmaps h = model.run(left);
+      cv::Mat input = left;
+      if (model.info().views == 2) {
+        if (!warp) throw dataset::DatasetError(log + ": no rig calibration before the first frame (a two-view model needs it)");
+        cv::vconcat(left, warp->warp(decode_image(msg.right)), input);
+      }
+      const introspection::Heatmaps h = model.run(input);
       for (auto& cell : it->second) {
         const auto p = model.predict_at(h, cell.u, cell.v);
         cell.predicted = p.predicted;

@@ -119,13 +119,16 @@ class DatasetSession:
     def size(self) -> int:
         return len(self.utime)
 
-    def patches(self) -> np.memmap:
-        """(N, P, P, 3) uint8 BGR view of patches.bin, size-checked on first use."""
+    def patches(self) -> np.ndarray:
+        """(N, P, P, 3) uint8 BGR view of the left-image squares in patches.bin
+        (a two-view dataset stores the warped right square below each), size-checked
+        on first use."""
         if self._patches is None:
             p = os.path.join(self.path, "patches.bin")
             if not os.path.isfile(p):
                 raise InputError(f"{p}: missing (the patches of session {self.name})")
-            per = self.patch_size * self.patch_size * 3
+            views = int(self.info.get("views", 1))
+            per = self.patch_size * self.patch_size * 3 * views
             got = os.path.getsize(p)
             if got != per * self.size:
                 raise InputError(
@@ -134,8 +137,9 @@ class DatasetSession:
             if self.size == 0:
                 self._patches = np.zeros((0, self.patch_size, self.patch_size, 3), np.uint8)
             else:
-                self._patches = np.memmap(p, dtype=np.uint8, mode="r",
-                                          shape=(self.size, self.patch_size, self.patch_size, 3))
+                stacked = np.memmap(p, dtype=np.uint8, mode="r",
+                                    shape=(self.size, views * self.patch_size, self.patch_size, 3))
+                self._patches = stacked[:, :self.patch_size]
         return self._patches
 
 

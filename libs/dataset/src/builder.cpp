@@ -9,6 +9,7 @@
 
 #include "ivoa/core/camera_model.hpp"
 #include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/ground_warp.hpp"
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/dataset/patch.hpp"
 #include "ivoa/core/message_counts.hpp"
@@ -58,7 +59,8 @@ struct SessionBuilder::Impl {
   std::unique_ptr<stereo::ObstacleDetector> detector;
   std::unique_ptr<monitor::LabelingPipeline> pipeline;
 
-  std::map<int64_t, cv::Mat> left_images;  // utime -> raw left BGR
+  std::unique_ptr<GroundWarp> warp;        // views == 2
+  std::map<int64_t, cv::Mat> left_images;  // utime -> raw left BGR (views == 2: the warped right view below it)
   std::map<int64_t, Truth> truths;         // utime -> simulator truth
   std::deque<introspection_labels_t> ready;  // labels waiting for their frame's truth
 
@@ -84,6 +86,7 @@ void SessionBuilder::Impl::bad(const std::string& what) {
 void SessionBuilder::Impl::open_writer() {
   if (writer) return;
   info.patch_size = rerun() ? options.grid.patch_size : info.patch_size;
+  info.views = options.views;
   // The user's word first, then the simulator's, then the scene name's.
   if (!options.environment.empty())
     info.environment = options.environment;
@@ -106,6 +109,7 @@ void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
   }
   calibration_bytes = std::move(bytes);
   info.rig_name = rig->rig_name;
+  if (options.views == 2) warp = std::make_unique<GroundWarp>(*rig);
   if (rerun()) {
     if (pipeline) take(pipeline->flush());
     detector = stereo::make_detector(options.labels, *rig, options.detector);
@@ -119,15 +123,18 @@ void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
   ++report.stereo_frames;
   try {
     cv::Mat left = decode_image(msg.left);
+    const cv::Mat right = rerun() || warp ? decode_image(msg.right) : cv::Mat();
+    cv::Mat views = left;
+    if (warp) cv::vconcat(left, warp->warp(right), views);
     if (rerun()) {
       if (!detector) return bad("stereo frame " + std::to_string(msg.utime) + " before any calibration");
-      detector->set_frame(left, decode_image(msg.right));
+      detector->set_frame(left, right);
       obstacle_grid_t grid = make_obstacle_grid(pipeline->grid(), detector->name(), msg.utime);
       detector->evaluate(pipeline->grid(), grid);
-      left_images[msg.utime] = std::move(left);
+      left_images[msg.utime] = std::move(views);
       take(pipeline->add_stereo(std::move(grid)));
     } else {
-      left_images[msg.utime] = std::move(left);
+      left_images[msg.utime] = std::move(views);
     }
   } catch (const std::exception& err) {
     return bad("stereo frame " + std::to_string(msg.utime) + ": " + err.what());
@@ -213,7 +220,7 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
   int64_t samples = 0;
   for (size_t i = 0; i < labels.label.size(); ++i) {
     if (labels.label[i] == introspection_labels_t::LABEL_NONE) continue;
-    const cv::Mat patch = extract_patch(image->second, labels.u[i], labels.v[i], info.patch_size);
+    const cv::Mat patch = extract_views(image->second, info.views, labels.u[i], labels.v[i], info.patch_size);
     if (patch.empty()) continue;  // the patch would leave the image
     SampleRecord s;
     s.frame = frame;
@@ -254,6 +261,8 @@ SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::strin
     impl_->info.grid = impl_->options.grid;
     impl_->info.patch_size = impl_->options.grid.patch_size;
   }
+  if (impl_->options.views != 1 && impl_->options.views != 2)
+    throw std::invalid_argument("views must be 1 or 2, not " + std::to_string(impl_->options.views));
   impl_->info.session = session;
   impl_->info.labels_from = impl_->rerun() ? "rerun" : "recorded";
 }

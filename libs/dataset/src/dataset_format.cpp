@@ -32,7 +32,7 @@ std::string session_json(const SessionInfo& i) {
   for (size_t k = 0; k < i.logs.size(); ++k) o << (k ? ", " : "") << json_quote(i.logs[k]);
   o << "],\n  \"scene\": " << json_quote(i.scene) << ",\n  \"seed\": " << i.seed
     << ",\n  \"environment\": " << json_quote(i.environment) << ",\n  \"rig_name\": " << json_quote(i.rig_name)
-    << ",\n  \"patch_size\": " << i.patch_size << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples
+    << ",\n  \"patch_size\": " << i.patch_size << ",\n  \"views\": " << i.views << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples
     << ",\n  \"class_counts\": {";
   for (int c = 0; c < kNumClasses; ++c) o << (c ? ", " : "") << json_quote(kLabelNames[c]) << ": " << i.class_counts[c];
   const QueryGridConfig& g = i.grid;
@@ -69,6 +69,8 @@ SessionInfo parse_session_json(const std::string& path) {
   i.environment = get<std::string>(root, "environment", path);
   i.rig_name = get<std::string>(root, "rig_name", path);
   i.patch_size = get<int>(root, "patch_size", path);
+  i.views = root["views"] ? get<int>(root, "views", path) : 1;  // datasets written before views existed
+  if (i.views != 1 && i.views != 2) throw DatasetError(path + ": views must be 1 or 2, not " + std::to_string(i.views));
   i.frames = get<int64_t>(root, "frames", path);
   i.samples = get<int64_t>(root, "samples", path);
   const YAML::Node counts = root["class_counts"];
@@ -139,12 +141,13 @@ int64_t SessionWriter::add_frame(int64_t utime, int64_t depth_utime, int32_t cel
 void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch) {
   const int p = info_.patch_size;
   if (!files_->patches) throw DatasetError(dir_ + ": session already closed");
-  if (patch.rows != p || patch.cols != p || patch.type() != CV_8UC3)
-    throw DatasetError("patch must be " + std::to_string(p) + "x" + std::to_string(p) + " 8-bit BGR");
+  if (patch.rows != p * info_.views || patch.cols != p || patch.type() != CV_8UC3)
+    throw DatasetError("patch must be " + std::to_string(p * info_.views) + "x" + std::to_string(p) + " 8-bit BGR (" +
+                       std::to_string(info_.views) + " view(s) of " + std::to_string(p) + " px)");
   if (s.label < 0 || s.label >= kNumClasses) throw DatasetError("sample label " + std::to_string(s.label) + " out of range");
   if (s.frame < 0 || s.frame >= static_cast<int64_t>(frames_.size())) throw DatasetError("sample refers to no frame");
   const cv::Mat contiguous = patch.isContinuous() ? patch : patch.clone();
-  const size_t bytes = static_cast<size_t>(p) * p * 3;
+  const size_t bytes = static_cast<size_t>(p) * p * 3 * info_.views;
   if (std::fwrite(contiguous.data, 1, bytes, files_->patches) != bytes)
     throw DatasetError(dir_ + "/patches.bin: write failed (disk full?)");
   std::fprintf(files_->samples, "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%.4f,%.4f,%.2f,%.2f,%d,%d,%d\n",
@@ -186,7 +189,7 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
     ++row;
     if (!line.empty()) samples_.push_back(parse_sample_row(line, dir_ + "/samples.csv line " + std::to_string(row)));
   }
-  const size_t patch_bytes = static_cast<size_t>(info_.patch_size) * info_.patch_size * 3;
+  const size_t patch_bytes = this->patch_bytes();
   const std::string patches = dir_ + "/patches.bin";
   const int fd = ::open(patches.c_str(), O_RDONLY);
   if (fd < 0) throw DatasetError(patches + ": cannot open");
@@ -213,12 +216,14 @@ SessionReader::~SessionReader() {
   if (mapped_) munmap(const_cast<uint8_t*>(mapped_), mapped_bytes_);
 }
 
-const uint8_t* SessionReader::patch_data(size_t i) const {
-  return mapped_ + i * static_cast<size_t>(info_.patch_size) * info_.patch_size * 3;
+size_t SessionReader::patch_bytes() const {
+  return static_cast<size_t>(info_.patch_size) * info_.patch_size * 3 * info_.views;
 }
 
+const uint8_t* SessionReader::patch_data(size_t i) const { return mapped_ + i * patch_bytes(); }
+
 cv::Mat SessionReader::patch(size_t i) const {
-  return cv::Mat(info_.patch_size, info_.patch_size, CV_8UC3, const_cast<uint8_t*>(patch_data(i)));
+  return cv::Mat(info_.patch_size * info_.views, info_.patch_size, CV_8UC3, const_cast<uint8_t*>(patch_data(i)));
 }
 
 std::vector<std::string> list_sessions(const std::string& dataset_root) {

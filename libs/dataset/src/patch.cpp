@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <vector>
 
 #include "ivoa/core/query_grid.hpp"
 
@@ -11,6 +12,20 @@ cv::Mat extract_patch(const cv::Mat& image, double u, double v, int patch_size) 
   const cv::Rect rect = patch_rect(u, v, patch_size);
   if ((rect & cv::Rect(0, 0, image.cols, image.rows)) != rect) return {};
   return image(rect).clone();
+}
+
+cv::Mat extract_views(const cv::Mat& stacked, int views, double u, double v, int patch_size) {
+  if (views == 1) return extract_patch(stacked, u, v, patch_size);
+  const int height = stacked.rows / views;
+  std::vector<cv::Mat> parts;
+  for (int k = 0; k < views; ++k) {
+    cv::Mat part = extract_patch(stacked.rowRange(k * height, (k + 1) * height), u, v, patch_size);
+    if (part.empty()) return {};
+    parts.push_back(std::move(part));
+  }
+  cv::Mat out;
+  cv::vconcat(parts, out);
+  return out;
 }
 
 PatchTruth summarize_truth(const cv::Mat& phenomena, const cv::Mat& surface, double u, double v, int patch_size) {

@@ -79,20 +79,31 @@ Prediction prediction_of(const float* mean, const float* var, double threshold) 
   return p;
 }
 
-// All patches of the heatmap grid, for models that run patch by patch.
+// All patches of the heatmap grid (views stacked), for models that run patch by patch.
 std::vector<cv::Mat> grid_patches(const cv::Mat& image, const ModelInfo& info, int& rows, int& cols) {
-  rows = (image.rows - info.patch_size) / info.stride + 1;
+  const int height = image.rows / info.views;
+  rows = (height - info.patch_size) / info.stride + 1;
   cols = (image.cols - info.patch_size) / info.stride + 1;
   std::vector<cv::Mat> patches;
   for (int r = 0; r < rows; ++r)
-    for (int c = 0; c < cols; ++c)
-      patches.push_back(image(cv::Rect(c * info.stride, r * info.stride, info.patch_size, info.patch_size)));
+    for (int c = 0; c < cols; ++c) {
+      std::vector<cv::Mat> views;
+      for (int k = 0; k < info.views; ++k)
+        views.push_back(image(cv::Rect(c * info.stride, k * height + r * info.stride, info.patch_size, info.patch_size)));
+      cv::Mat stacked;
+      if (info.views == 1) stacked = views[0];
+      else cv::vconcat(views, stacked);
+      patches.push_back(stacked);
+    }
   return patches;
 }
 
 void check_image(const cv::Mat& image, const ModelInfo& info) {
   if (image.type() != CV_8UC3) throw ModelError("introspection needs an 8-bit BGR image");
-  if (image.rows < info.patch_size || image.cols < info.patch_size)
+  if (info.views > 1 && image.rows % info.views != 0)
+    throw ModelError("a " + std::to_string(info.views) + "-view model needs its views stacked: " +
+                     std::to_string(image.rows) + " rows is not a multiple of " + std::to_string(info.views));
+  if (image.rows / info.views < info.patch_size || image.cols < info.patch_size)
     throw ModelError("image " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
                      " is smaller than one patch");
 }
@@ -107,17 +118,17 @@ class NativeIntrospectionModel : public IntrospectionModel {
   }
   const ModelInfo& info() const override { return model_.info; }
 
-  Heatmaps run(const cv::Mat& left) override {
-    check_image(left, model_.info);
+  Heatmaps run(const cv::Mat& image) override {
+    check_image(image, model_.info);
     torch::NoGradGuard no_grad;
     const double start = monotonic_ms();
     int64_t rows = 0, cols = 0;
     torch::Tensor features;
     if (auto* slide = dynamic_cast<SlideNetImpl*>(model_.net.get())) {
-      features = slide->cell_features(image_to_tensor(left, model_.info).to(device_), rows, cols);
+      features = slide->cell_features(image_to_tensor(image, model_.info).to(device_), rows, cols);
     } else {
       int r = 0, c = 0;
-      features = patch_features(grid_patches(left, model_.info, r, c));
+      features = patch_features(grid_patches(image, model_.info, r, c));
       rows = r;
       cols = c;
     }
@@ -182,11 +193,11 @@ class ScriptedIntrospectionModel : public IntrospectionModel {
   }
   const ModelInfo& info() const override { return info_; }
 
-  Heatmaps run(const cv::Mat& left) override {
-    check_image(left, info_);
+  Heatmaps run(const cv::Mat& image) override {
+    check_image(image, info_);
     const double start = monotonic_ms();
     int rows = 0, cols = 0;
-    const McStats s = stats(grid_patches(left, info_, rows, cols));
+    const McStats s = stats(grid_patches(image, info_, rows, cols));
     Heatmaps h = make_heatmaps(s, rows, cols, info_, config_.mean_filter);
     h.compute_ms = monotonic_ms() - start;
     return h;

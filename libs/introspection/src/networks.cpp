@@ -33,9 +33,9 @@ torch::Tensor IntrospectionNetImpl::embedding(const torch::Tensor& f) {
   return torch::relu(fc2(torch::relu(fc1(f))));
 }
 
-SlideNetImpl::SlideNetImpl(double dropout) : IntrospectionNetImpl(64 * 2 * 2, kFc1Width, dropout) {
+SlideNetImpl::SlideNetImpl(double dropout, int64_t in_channels) : IntrospectionNetImpl(64 * 2 * 2, kFc1Width, dropout) {
   nn::Sequential t;
-  t = conv_bn_relu(t, 3, 32, 5, 5);
+  t = conv_bn_relu(t, in_channels, 32, 5, 5);
   t = conv_bn_relu(t, 32, 64, 3);
   t->push_back(nn::MaxPool2d(nn::MaxPool2dOptions(2).stride(2)));
   t = conv_bn_relu(t, 64, 96, 3);
@@ -60,9 +60,9 @@ torch::Tensor SlideNetImpl::cell_features(const torch::Tensor& image, int64_t& r
   return blocks[0].t().contiguous();  // [rows * cols, 256]
 }
 
-AlexNet224Impl::AlexNet224Impl(double dropout) : IntrospectionNetImpl(256 * 6 * 6, 2048, dropout) {
+AlexNet224Impl::AlexNet224Impl(double dropout, int64_t in_channels) : IntrospectionNetImpl(256 * 6 * 6, 2048, dropout) {
   trunk = register_module(
-      "trunk", nn::Sequential(nn::Conv2d(nn::Conv2dOptions(3, 64, 11).stride(4).padding(2)), nn::ReLU(true),
+      "trunk", nn::Sequential(nn::Conv2d(nn::Conv2dOptions(in_channels, 64, 11).stride(4).padding(2)), nn::ReLU(true),
                               nn::MaxPool2d(nn::MaxPool2dOptions(3).stride(2)),
                               nn::Conv2d(nn::Conv2dOptions(64, 192, 5).padding(2)), nn::ReLU(true),
                               nn::MaxPool2d(nn::MaxPool2dOptions(3).stride(2)),
@@ -75,9 +75,10 @@ AlexNet224Impl::AlexNet224Impl(double dropout) : IntrospectionNetImpl(256 * 6 * 
 
 torch::Tensor AlexNet224Impl::features(const torch::Tensor& patches) { return trunk->forward(patches).flatten(1); }
 
-std::shared_ptr<IntrospectionNetImpl> make_network(const std::string& architecture, double dropout) {
-  if (architecture == "slidenet") return SlideNet(dropout).ptr();
-  if (architecture == "alexnet") return AlexNet224(dropout).ptr();
+std::shared_ptr<IntrospectionNetImpl> make_network(const std::string& architecture, double dropout, int views) {
+  if (views != 1 && views != 2) throw std::invalid_argument("views must be 1 or 2, not " + std::to_string(views));
+  if (architecture == "slidenet") return SlideNet(dropout, 3 * views).ptr();
+  if (architecture == "alexnet") return AlexNet224(dropout, 3 * views).ptr();
   throw std::invalid_argument("unknown architecture '" + architecture + "' (slidenet, alexnet)");
 }
 

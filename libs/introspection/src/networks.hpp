@@ -31,7 +31,7 @@ class IntrospectionNetImpl : public torch::nn::Module {
  public:
   IntrospectionNetImpl(int64_t features, int64_t fc1_width, double dropout);
 
-  // Normalised patches [B, 3, S, S] -> FC1 inputs [B, F].
+  // Normalised patches [B, 3 x views, S, S] -> FC1 inputs [B, F].
   virtual torch::Tensor features(const torch::Tensor& patches) = 0;
   // Training/deterministic forward: logits [B, 4] (dropout per the module's mode).
   torch::Tensor forward(const torch::Tensor& patches) { return head(features(patches)); }
@@ -47,9 +47,9 @@ class IntrospectionNetImpl : public torch::nn::Module {
 class SlideNetImpl : public IntrospectionNetImpl {
  public:
   static constexpr int kPatch = 100, kStride = 20, kTrunkStride = 10, kFc1Width = 128;
-  SlideNetImpl(double dropout = 0.5);
+  explicit SlideNetImpl(double dropout = 0.5, int64_t in_channels = 3);
   torch::Tensor features(const torch::Tensor& patches) override;
-  // Normalised image [1, 3, H, W] -> FC1 inputs of every cell [rows * cols, F],
+  // Normalised image [1, 3 x views, H, W] -> FC1 inputs of every cell [rows * cols, F],
   // row-major; rows/cols are set to the heatmap size.
   torch::Tensor cell_features(const torch::Tensor& image, int64_t& rows, int64_t& cols);
   torch::nn::Sequential trunk{nullptr};
@@ -59,14 +59,15 @@ TORCH_MODULE(SlideNet);
 class AlexNet224Impl : public IntrospectionNetImpl {
  public:
   static constexpr int kInput = 224;
-  AlexNet224Impl(double dropout = 0.5);
+  explicit AlexNet224Impl(double dropout = 0.5, int64_t in_channels = 3);
   torch::Tensor features(const torch::Tensor& patches) override;
   torch::nn::Sequential trunk{nullptr};
 };
 TORCH_MODULE(AlexNet224);
 
-// "slidenet" or "alexnet"; throws std::invalid_argument otherwise.
-std::shared_ptr<IntrospectionNetImpl> make_network(const std::string& architecture, double dropout);
+// "slidenet" or "alexnet" for 1 or 2 views (3 or 6 input channels); throws
+// std::invalid_argument otherwise.
+std::shared_ptr<IntrospectionNetImpl> make_network(const std::string& architecture, double dropout, int views = 1);
 int input_size_of(const std::string& architecture);
 
 }  // namespace ivoa::introspection

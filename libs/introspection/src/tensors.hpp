@@ -9,15 +9,18 @@
 
 namespace ivoa::introspection {
 
-// 8-bit BGR image -> [1, 3, H, W] float, RGB, (x/255 - mean) / std.
+// Views (ModelInfo::views) travel stacked along the rows, as the dataset
+// stores them, and become channel groups: view k is channels 3k..3k+2.
+
+// 8-bit BGR image (views x H rows) -> [1, 3 x views, H, W] float, RGB, (x/255 - mean) / std.
 torch::Tensor image_to_tensor(const cv::Mat& bgr, const ModelInfo& info);
-// Patches (8-bit BGR, all the same size) -> [B, 3, S, S], resized to
-// info.input_size if needed.
+// Patches (8-bit BGR, all the same size, views x S rows) -> [B, 3 x views, S, S],
+// resized to info.input_size if needed.
 torch::Tensor patches_to_tensor(const std::vector<cv::Mat>& patches, const ModelInfo& info);
-// Raw uint8 patches [B, S, S, 3] BGR (e.g. memory-mapped) -> normalised [B, 3, S, S].
+// Raw uint8 patches [B, views x S, S, 3] BGR (e.g. memory-mapped) -> normalised [B, 3 x views, S, S].
 torch::Tensor normalize_patches(const torch::Tensor& bgr_uint8, const ModelInfo& info);
 // The two steps of normalize_patches, for training-time augmentation in between:
-// uint8 BGR [B, S, S, 3] -> float RGB [B, 3, S, S] on [0, 1] ...
+// uint8 BGR [B, views x S, S, 3] -> float RGB [B, 3 x views, S, S] on [0, 1] ...
 torch::Tensor to_unit_rgb(const torch::Tensor& bgr_uint8);
 // ... -> (x - mean) / std, resized to info.input_size.
 torch::Tensor normalize(const torch::Tensor& unit_rgb, const ModelInfo& info);

@@ -30,6 +30,7 @@ struct SplitData {
   std::array<std::vector<SampleRef>, kNumClasses> by_class;
   std::vector<std::string> names;
   int patch_size = 0;
+  int views = 0;
 
   size_t size() const {
     size_t n = 0;
@@ -49,6 +50,10 @@ SplitData load_split_data(const TrainConfig& c, const std::string& split) {
     if (d.patch_size == 0) d.patch_size = reader->info().patch_size;
     if (reader->info().patch_size != d.patch_size)
       throw std::runtime_error(name + ": patch size differs from the other sessions");
+    if (d.views == 0) d.views = reader->info().views;
+    if (reader->info().views != d.views)
+      throw std::runtime_error(name + ": " + std::to_string(reader->info().views) + " view(s), the other sessions " +
+                               std::to_string(d.views));
     const auto session = static_cast<uint32_t>(d.sessions.size());
     for (size_t i = 0; i < reader->size(); ++i)
       d.by_class[static_cast<size_t>(reader->samples()[i].label)].push_back({session, static_cast<uint32_t>(i)});
@@ -60,8 +65,8 @@ SplitData load_split_data(const TrainConfig& c, const std::string& split) {
 
 torch::Tensor gather_patches(const SplitData& d, const std::vector<SampleRef>& refs) {
   const int p = d.patch_size;
-  const size_t bytes = static_cast<size_t>(p) * p * 3;
-  auto out = torch::empty({static_cast<int64_t>(refs.size()), p, p, 3}, torch::kUInt8);
+  const size_t bytes = static_cast<size_t>(p) * p * 3 * d.views;
+  auto out = torch::empty({static_cast<int64_t>(refs.size()), p * d.views, p, 3}, torch::kUInt8);
   for (size_t i = 0; i < refs.size(); ++i)
     std::memcpy(out.data_ptr<uint8_t>() + i * bytes, d.sessions[refs[i].session]->patch_data(refs[i].index), bytes);
   return out;
@@ -78,15 +83,18 @@ int label_of(const SplitData& d, const SampleRef& r) { return d.sessions[r.sessi
 // these passes cost as much as the network's forward and backward.
 class Augmenter {
  public:
-  Augmenter(int patch_size, torch::Generator& g)
-      : generator_(g), noise_bank_(torch::randn({kBankSize, 3, patch_size, patch_size}, g)) {}
+  Augmenter(int patch_size, int views, torch::Generator& g)
+      : generator_(g), views_(views), noise_bank_(torch::randn({kBankSize, 3 * views, patch_size, patch_size}, g)) {}
 
-  // x: [B, 3, S, S] RGB on [0, 1] -> augmented, same layout.
+  // x: [B, 3 x views, S, S] RGB on [0, 1] -> augmented, same layout. The
+  // views of a pair share exposure and white balance (one rig), each with
+  // a little gain of its own (the right sensor's sensitivity differs).
   torch::Tensor operator()(const torch::Tensor& x) {
     const int64_t b = x.size(0);
     const auto mean = x.mean({1, 2, 3}, true);                     // [B, 1, 1, 1]
     const auto contrast = uniform({b, 1, 1, 1}, 0.7, 1.3);
-    const auto gain = contrast * uniform({b, 1, 1, 1}, 0.6, 1.4) * uniform({b, 3, 1, 1}, 0.9, 1.1);  // [B, 3, 1, 1]
+    auto gain = contrast * uniform({b, 1, 1, 1}, 0.6, 1.4) * uniform({b, 3, 1, 1}, 0.9, 1.1);  // [B, 3, 1, 1]
+    if (views_ > 1) gain = gain.repeat({1, views_, 1, 1}) * uniform({b, views_, 1, 1}, 0.95, 1.05).repeat_interleave(3, 1);
     const auto offset = mean * (1 - contrast) * gain / contrast;  // (x - m) c + m, times exposure and balance
     auto y = torch::addcmul(offset, x, gain).clamp_(0, 1);
     y.pow_(uniform({b, 1, 1, 1}, 0.8, 1.25));                        // gamma
@@ -101,6 +109,7 @@ class Augmenter {
     return torch::rand(shape, generator_) * (hi - lo) + lo;
   }
   torch::Generator& generator_;
+  int64_t views_;
   torch::Tensor noise_bank_;
 };
 
@@ -238,6 +247,10 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   ModelInfo info;
   info.architecture = c.architecture;
   info.patch_size = train.patch_size;
+  info.views = train.views;
+  if (val.views != train.views)
+    throw std::runtime_error("the validation sessions have " + std::to_string(val.views) + " view(s), the training ones " +
+                             std::to_string(train.views));
   info.input_size = input_size_of(c.architecture);
   info.dropout = c.dropout;
   info.detector = train.sessions[0]->info().detector;
@@ -250,9 +263,12 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     NativeModel start_from = load_native_model(resuming ? checkpoint + ".model" : c.init);
     if (start_from.info.architecture != c.architecture)
       throw std::runtime_error(start_from.info.id + ": architecture is not " + c.architecture);
+    if (start_from.info.views != train.views)
+      throw std::runtime_error(start_from.info.id + ": " + std::to_string(start_from.info.views) +
+                               " view(s), the dataset " + std::to_string(train.views));
     net = start_from.net;
   } else {
-    net = make_network(c.architecture, c.dropout);
+    net = make_network(c.architecture, c.dropout, train.views);
   }
   net->to(device);
   torch::optim::SGD optimizer(net->parameters(),
@@ -270,7 +286,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   std::mt19937_64 rng(c.seed * 7919 + static_cast<uint64_t>(first_step));
   std::discrete_distribution<size_t> pick_class(class_weights.begin(), class_weights.end());
   auto generator = at::detail::createCPUGenerator(c.seed + static_cast<uint64_t>(first_step));
-  Augmenter augment(train.patch_size, generator);
+  Augmenter augment(train.patch_size, train.views, generator);
   const std::vector<SampleRef> val_refs = validation_subset(val, c.max_val_samples);
   report.val_samples = static_cast<int64_t>(val_refs.size());
 

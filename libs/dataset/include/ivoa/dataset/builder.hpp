@@ -27,6 +27,7 @@ struct BuildOptions {
   monitor::DepthMonitorConfig monitor;
   monitor::PairingConfig pairing;
   std::string environment;  // "" = the simulator's truth messages, else the scene name (indoor_*/outdoor_*)
+  int views = 1;            // 2: store the ground-warped right view under each patch (SessionInfo::views)
   std::string stereo_channel{channels::kStereoImages};
   std::string depth_channel{channels::kDepthImage};
   std::string calibration_channel{channels::kRigCalibration};

@@ -57,6 +57,11 @@ struct SessionInfo {
   std::string environment = "unknown";  // indoor, outdoor, unknown
   std::string rig_name;
   int patch_size = 100;
+  // 1: the left image's patch (the paper); 2: the left patch with, below
+  // it, the same square of the right image warped onto the ground plane
+  // (core's GroundWarp). A stored patch is (views x patch_size) rows by
+  // patch_size columns, 8-bit BGR.
+  int views = 1;
   QueryGridConfig grid;
   // Filled by the writer / reader:
   int64_t frames = 0;
@@ -75,7 +80,7 @@ class SessionWriter {
 
   // Starts a frame; returns its index for the samples that follow.
   int64_t add_frame(int64_t utime, int64_t depth_utime, int32_t cells_labelled);
-  // `patch` must be patch_size x patch_size CV_8UC3.
+  // `patch` must be (views x patch_size) x patch_size CV_8UC3.
   void add_sample(SampleRecord sample, const cv::Mat& patch);
   void close();
   const SessionInfo& info() const { return info_; }
@@ -99,8 +104,11 @@ class SessionReader {
   const SessionInfo& info() const { return info_; }
   const std::vector<SampleRecord>& samples() const { return samples_; }
   size_t size() const { return samples_.size(); }
-  // A view of patch i (no copy; valid while the reader lives).
+  // A view of patch i, all its views stacked (no copy; valid while the reader lives).
   cv::Mat patch(size_t i) const;
+  // Its left-image square only (pictures, mosaics).
+  cv::Mat left_patch(size_t i) const { return patch(i).rowRange(0, info_.patch_size); }
+  size_t patch_bytes() const;
   const uint8_t* patch_data(size_t i) const;
 
  private:

@@ -36,6 +36,10 @@ struct ModelInfo {
   int patch_size = 100;       // pixels of the left image per patch
   int stride = 20;            // heatmap stride, pixels
   int input_size = 100;       // patches are resized to this before the network
+  // 1: the left image (the paper). 2: the left image and, stacked below it,
+  // the right image warped onto the ground plane (core's GroundWarp), so
+  // the network sees what the stereo matcher compares.
+  int views = 1;
   double dropout = 0.5;
   std::array<float, 3> mean{0.485f, 0.456f, 0.406f};  // RGB, on [0, 1]
   std::array<float, 3> std{0.229f, 0.224f, 0.225f};
@@ -106,12 +110,14 @@ class IntrospectionModel {
   virtual const ModelInfo& info() const = 0;
   double threshold() const;
 
-  // Full-frame heatmaps of a left image (8-bit BGR).
-  virtual Heatmaps run(const cv::Mat& left_bgr) = 0;
+  // Full-frame heatmaps of a left image (8-bit BGR); for a two-view model,
+  // the left image stacked over the ground-warped right one (2 x height rows).
+  virtual Heatmaps run(const cv::Mat& image) = 0;
   // The prediction at image point (u, v) from the heatmaps.
   Prediction predict_at(const Heatmaps& heatmaps, double u, double v) const;
 
-  // Patches (patch_size square, 8-bit BGR); MC dropout when mc_passes > 1.
+  // Patches (patch_size square, 8-bit BGR; views stacked for a two-view
+  // model, as the dataset stores them); MC dropout when mc_passes > 1.
   virtual PatchOutputs run_patches(const std::vector<cv::Mat>& patches, bool with_embeddings) = 0;
 
  protected:
