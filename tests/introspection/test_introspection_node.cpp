@@ -1,0 +1,82 @@
+// The introspection process logic on memq:// with a two-view model: frames
+// before the rig calibration are counted and skipped; after it, each frame
+// gives heatmaps of the left image's size.
+#include <chrono>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "introspection_node.hpp"
+#include "ivoa/core/calibration.hpp"
+#include "ivoa/core/image_convert.hpp"
+#include "model_file.hpp"
+#include "networks.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa {
+namespace {
+
+std::string write_two_view_model(const test::TempDir& dir) {
+  torch::manual_seed(3);
+  auto net = introspection::make_network("slidenet", 0.5, 2);
+  introspection::ModelInfo info;
+  info.architecture = "slidenet";
+  info.views = 2;
+  info.detector = "jppc";
+  const std::string path = dir.file("two_view.pt");
+  introspection::save_model(*net, info, path);
+  return path;
+}
+
+stereo_image_t stereo_frame(const RigCalibration& rig, int64_t utime) {
+  cv::Mat left(rig.left.height, rig.left.width, CV_8UC3), right(rig.right.height, rig.right.width, CV_8UC3);
+  cv::randu(left, 0, 255);
+  cv::randu(right, 0, 255);
+  stereo_image_t msg;
+  msg.utime = utime;
+  msg.left = encode_image(left, image_t::PIXEL_FORMAT_BGR, utime);
+  msg.right = encode_image(right, image_t::PIXEL_FORMAT_BGR, utime);
+  return msg;
+}
+
+TEST(IntrospectionNode, TwoViewModelWaitsForTheCalibrationThenRuns) {
+  test::TempDir dir;
+  Bus bus("memq://");
+  Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
+  introspection::InferenceConfig config;
+  config.mc_passes = 2;
+  config.seed = 1;
+  IntrospectionNodeOptions options;
+  options.grid_channel = "";
+  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_two_view_model(dir), config), options, 2);
+  std::vector<introspection_t> out;
+  bus.subscribe<introspection_t>(channels::kIntrospection, [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
+  // The worker runs asynchronously: deliver, then wait (bounded) for `done`.
+  auto wait_for = [&](auto done) {
+    for (int i = 0; i < 600 && !done(); ++i) {
+      bus.handle(5);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return done();
+  };
+  const RigCalibration rig = test::make_test_rig();
+  stereo_image_t early = stereo_frame(rig, 1000), frame = stereo_frame(rig, 2000);
+  rig_calibration_t calibration = to_message(rig, 1);
+  bus.publish(channels::kStereoImages, early);
+  ASSERT_TRUE(wait_for([&] { return heartbeat.bad_input_count() == 1; }));
+  EXPECT_NE(heartbeat.snapshot().last_error.find("no RIG_CALIBRATION yet"), std::string::npos);
+  EXPECT_TRUE(out.empty());
+
+  bus.publish(channels::kRigCalibration, calibration);
+  bus.handle(5);
+  bus.publish(channels::kStereoImages, frame);
+  ASSERT_TRUE(wait_for([&] { return !out.empty(); }));
+  EXPECT_EQ(out[0].utime, 2000);
+  EXPECT_EQ(out[0].image_height, rig.left.height);
+  EXPECT_EQ(out[0].rows, (rig.left.height - 100) / 20 + 1);
+  EXPECT_EQ(out[0].cols, (rig.left.width - 100) / 20 + 1);
+  EXPECT_EQ(heartbeat.bad_input_count(), 1);
+}
+
+}  // namespace
+}  // namespace ivoa
