@@ -23,10 +23,7 @@ MonitorNode::MonitorNode(Bus& bus, Heartbeat& heartbeat, MonitorNodeOptions opti
 }
 
 void MonitorNode::on_calibration(const rig_calibration_t& msg) {
-  rig_calibration_t copy = msg;
-  copy.utime = 0;  // republished every second: compare content, not time
-  std::vector<uint8_t> bytes(static_cast<size_t>(copy.getEncodedSize()));
-  copy.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  std::vector<uint8_t> bytes = calibration_content(msg);
   if (bytes == calibration_bytes_) return;
   try {
     const RigCalibration rig = from_message(msg);

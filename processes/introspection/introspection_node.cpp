@@ -91,10 +91,7 @@ void IntrospectionNode::work() {
 }
 
 void IntrospectionNode::on_calibration(const rig_calibration_t& msg) {
-  rig_calibration_t content = msg;
-  content.utime = 0;  // republished every second: compare content only
-  std::vector<uint8_t> bytes(static_cast<size_t>(content.getEncodedSize()));
-  content.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  std::vector<uint8_t> bytes = calibration_content(msg);
   std::lock_guard<std::mutex> lock(calibration_mutex_);
   if (bytes == calibration_bytes_) return;
   try {
@@ -114,10 +111,12 @@ cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& wh
     return {};
   }
   if (model_->info().views == 1) return left;
+  std::optional<RigCalibration> rig;
   {
     std::lock_guard<std::mutex> lock(calibration_mutex_);
-    if (new_rig_) warp_ = std::make_unique<GroundWarp>(*std::exchange(new_rig_, std::nullopt));
+    rig = std::exchange(new_rig_, std::nullopt);
   }
+  if (rig) warp_ = std::make_unique<GroundWarp>(*rig);  // outside the lock: it takes a while
   if (!warp_) {
     heartbeat_.bad_input(where + ": no " + options_.calibration_channel + " yet (a two-view model needs it)");
     return {};

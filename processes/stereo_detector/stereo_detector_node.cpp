@@ -14,16 +14,6 @@
 namespace ivoa {
 namespace {
 
-// The calibration message without its publication time: equal bytes mean
-// the same calibration (it is re-published at >= 1 Hz).
-std::vector<uint8_t> calibration_content(rig_calibration_t msg) {
-  msg.utime = 0;
-  set_counts(msg);
-  std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
-  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  return bytes;
-}
-
 std::string frame_name(const std::string& channel, const stereo_image_t& msg) {
   return channel + " seq " + std::to_string(msg.seq) + " (utime " + std::to_string(msg.utime) + ")";
 }

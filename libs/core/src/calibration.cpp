@@ -5,6 +5,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "ivoa/core/message_counts.hpp"
 #include "ivoa/rig_calibration_t.hpp"
 
 namespace ivoa {
@@ -187,6 +188,14 @@ void save_rig_calibration(const RigCalibration& rig, const std::string& path) {
   write_camera(fs, rig.depth, "K_depth", "D_depth");
   write_transform(fs, rig.depth_to_robot, "XR_depth", "XT_depth");
   fs << "depth_min_range" << rig.depth_min_range << "depth_max_range" << rig.depth_max_range;
+}
+
+std::vector<uint8_t> calibration_content(rig_calibration_t msg) {
+  msg.utime = 0;
+  set_counts(msg);
+  std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
+  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
 }
 
 rig_calibration_t to_message(const RigCalibration& rig, int64_t utime) {

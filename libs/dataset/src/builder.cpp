@@ -98,9 +98,7 @@ void SessionBuilder::Impl::open_writer() {
 void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
   rig_calibration_t msg;
   if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.rig_calibration_t");
-  msg.utime = 0;  // republished every second: compare content only
-  std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
-  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  std::vector<uint8_t> bytes = calibration_content(msg);
   if (bytes == calibration_bytes) return;
   try {
     rig = from_message(msg);

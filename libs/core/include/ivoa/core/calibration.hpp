@@ -9,6 +9,7 @@
 #include <array>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -54,5 +55,8 @@ void save_rig_calibration(const RigCalibration& rig, const std::string& path);
 
 rig_calibration_t to_message(const RigCalibration& rig, int64_t utime);
 RigCalibration from_message(const rig_calibration_t& msg);  // validates
+// The message's bytes without its publication time: calibrations are
+// re-published every second, and equal content means the same calibration.
+std::vector<uint8_t> calibration_content(rig_calibration_t msg);
 
 }  // namespace ivoa
