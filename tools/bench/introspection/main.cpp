@@ -16,7 +16,9 @@
 
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/time.hpp"
+#include "ivoa/core/ground_warp.hpp"
 #include "ivoa/introspection/model.hpp"
+#include "ivoa/sim/sim_rig.hpp"
 #include "model_file.hpp"
 #include "networks.hpp"
 #include "tensors.hpp"
@@ -56,23 +58,24 @@ double time_ms(F f, int runs) {
   return median(t);
 }
 
-std::string write_model(const std::string& architecture, const std::string& dir) {
-  auto net = make_network(architecture, 0.5);
+std::string write_model(const std::string& architecture, const std::string& dir, int views = 1) {
+  auto net = make_network(architecture, 0.5, views);
   ModelInfo info;
   info.architecture = architecture;
   info.input_size = input_size_of(architecture);
-  const std::string path = dir + "/bench_" + architecture + ".pt";
+  info.views = views;
+  const std::string path = dir + "/bench_" + architecture + std::to_string(views) + ".pt";
   save_model(*net, info, path);
   return path;
 }
 
 // ms per training step (forward, backward, SGD) of a batch of patches.
-double train_step_ms(const std::string& architecture, int batch, int runs) {
-  auto net = make_network(architecture, 0.5);
+double train_step_ms(const std::string& architecture, int batch, int runs, int views = 1) {
+  auto net = make_network(architecture, 0.5, views);
   net->train();
   torch::optim::SGD sgd(net->parameters(), torch::optim::SGDOptions(0.005).momentum(0.9));
   const int s = input_size_of(architecture);
-  const auto x = torch::randn({batch, 3, s, s});
+  const auto x = torch::randn({batch, 3 * views, s, s});
   const auto y = torch::randint(0, 4, {batch}, torch::kLong);
   return time_ms(
       [&] {
@@ -109,6 +112,17 @@ int main(int argc, char** argv) {
   introspection::Heatmaps h;
   const double ours_ms = time_ms([&] { h = ours->run(frame); }, runs);
   const int cells = h.rows * h.cols;
+  // Two views (the main job's and the shipped model's input): the right
+  // image warped onto the ground, stacked under the left, 6 channels.
+  const GroundWarp warp(sim::make_sim_rig());
+  const auto two_view = IntrospectionModel::load(write_model("slidenet", dir, 2), config);
+  const double two_view_ms = time_ms(
+      [&] {
+        cv::Mat stacked;
+        cv::vconcat(frame, warp.warp(frame), stacked);
+        h = two_view->run(stacked);
+      },
+      runs);
 
   // Reference: per patch, resize to 224 and run the whole AlexNet T times.
   auto alexnet = make_network("alexnet", 0.5);
@@ -144,17 +158,22 @@ int main(int argc, char** argv) {
               h.rows, h.cols, cells, passes, threads);
   std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours: slidenet, trunk once over the image, head x T batched",
               ours_ms, 1000.0 / ours_ms);
+  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours, two views: ground warp + slidenet on 6 channels",
+              two_view_ms, 1000.0 / two_view_ms);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "alexnet-224, trunk once per patch, head x T batched",
               alex_ms, reference_patches);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "reference: alexnet-224, whole network x T per patch",
               reference_ms, reference_patches);
-  std::printf("  speed-up over the reference: %.0fx; budget 100 ms: %s (%.2f of budget)\n", reference_ms / ours_ms,
-              ours_ms <= 100.0 ? "met" : "NOT met", ours_ms / 100.0);
+  const double worst_ms = std::max(ours_ms, two_view_ms);
+  std::printf("  speed-up over the reference: %.0fx (one view), %.0fx (two views); budget 100 ms: %s (%.2f of budget)\n",
+              reference_ms / ours_ms, reference_ms / two_view_ms, worst_ms <= 100.0 ? "met" : "NOT met", worst_ms / 100.0);
 
   const double slide_step = train_step_ms("slidenet", batch, std::max(1, runs / 2));
+  const double two_view_step = train_step_ms("slidenet", batch, std::max(1, runs / 2), 2);
   const double alex_step = train_step_ms("alexnet", std::min(batch, 32), 2);
   std::printf("Training throughput (forward + backward + SGD step):\n");
   std::printf("  %-58s %10.0f patches/s (batch %d)\n", "slidenet, 100x100 patches", 1000.0 * batch / slide_step, batch);
+  std::printf("  %-58s %10.0f patches/s (batch %d)\n", "slidenet, two views", 1000.0 * batch / two_view_step, batch);
   std::printf("  %-58s %10.0f patches/s (batch %d)\n", "alexnet-224, whole network", 1000.0 * std::min(batch, 32) / alex_step,
               std::min(batch, 32));
   return 0;
