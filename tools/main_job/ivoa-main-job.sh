@@ -52,7 +52,7 @@ case "$scale" in
     TRAIN_SEEDS=(11); TRAIN_FRAMES=48
     VAL_SEEDS=(21); VAL_SCENES=(indoor_office polished_lobby wet_parking_lot); VAL_FRAMES=24
     TEST_SEEDS=(31); TEST_FRAMES=24
-    STEPS=1500; BATCH=128 ;;
+    STEPS=1200; BATCH=128 ;;
   smoke)  # seconds-scale: checks the whole chain (used by the tests)
     SCENE_NAMES=(indoor_office polished_lobby wet_parking_lot); TRAIN_SEEDS=(11); TRAIN_FRAMES=8
     VAL_SEEDS=(21); VAL_SCENES=(indoor_office); VAL_FRAMES=6
