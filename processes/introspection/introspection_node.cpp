@@ -122,9 +122,7 @@ cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& wh
     return {};
   }
   try {
-    cv::Mat stacked;
-    cv::vconcat(left, warp_->warp(decode_image(frame.msg.right)), stacked);
-    return stacked;
+    return warp_->stack(left, decode_image(frame.msg.right));
   } catch (const std::exception& e) {
     heartbeat_.bad_input(where + ": right image: " + e.what());
     return {};

@@ -112,7 +112,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
       cv::Mat input = left;
       if (model.info().views == 2) {
         if (!warp) throw dataset::DatasetError(log + ": no rig calibration before the first frame (a two-view model needs it)");
-        cv::vconcat(left, warp->warp(decode_image(msg.right)), input);
+        input = warp->stack(left, decode_image(msg.right));
       }
       const introspection::Heatmaps h = model.run(input);
       for (auto& cell : it->second) {

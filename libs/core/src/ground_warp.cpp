@@ -31,4 +31,10 @@ cv::Mat GroundWarp::warp(const cv::Mat& right_bgr) const {
   return out;
 }
 
+cv::Mat GroundWarp::stack(const cv::Mat& left_bgr, const cv::Mat& right_bgr) const {
+  cv::Mat out;
+  cv::vconcat(left_bgr, warp(right_bgr), out);
+  return out;
+}
+
 }  // namespace ivoa

@@ -122,8 +122,7 @@ void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
   try {
     cv::Mat left = decode_image(msg.left);
     const cv::Mat right = rerun() || warp ? decode_image(msg.right) : cv::Mat();
-    cv::Mat views = left;
-    if (warp) cv::vconcat(left, warp->warp(right), views);
+    cv::Mat views = warp ? warp->stack(left, right) : left;
     if (rerun()) {
       if (!detector) return bad("stereo frame " + std::to_string(msg.utime) + " before any calibration");
       detector->set_frame(left, right);

@@ -180,6 +180,12 @@ inline Tracer::Ray Tracer::make_ray(const PixelRay& r) const {
   return ray;
 }
 
+inline bool Tracer::bin_may_hit(const Ray& ray, float s_hi) const {
+  if (brute_force_) return !candidates_.empty();
+  const size_t first = bin_start_[static_cast<size_t>(ray.bin)], last = bin_start_[static_cast<size_t>(ray.bin) + 1];
+  return first < last && candidates_[first].s_min <= s_hi;
+}
+
 void Tracer::nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored, Hit& best) const {
   best.s = s_hi;
   best.candidate = -1;
@@ -458,9 +464,7 @@ bool Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, FloorSample* 
   const bool up = pr.slope > 0;
   if (up && scene_.has_ceiling) s_hi = s_ceiling_up_ * ray.inv_slope;
   Hit hit;
-  const size_t first = brute_force_ ? 0 : bin_start_[static_cast<size_t>(ray.bin)];
-  const size_t last = brute_force_ ? candidates_.size() : bin_start_[static_cast<size_t>(ray.bin) + 1];
-  if (first < last && (brute_force_ || candidates_[first].s_min <= s_hi)) nearest(ray, 0.0f, s_hi, false, hit);
+  if (bin_may_hit(ray, s_hi)) nearest(ray, 0.0f, s_hi, false, hit);
   fresnel = 0;
   if (hit.candidate >= 0) {
     shade_solid(ray, hit, false, 0.0f, out);
@@ -614,9 +618,7 @@ Ranged Tracer::range(int pixel) const {
   const bool up = pr.slope > 0;
   if (up && scene_.has_ceiling) s_hi = s_ceiling_up_ * ray.inv_slope;
   Hit hit;
-  const size_t first = brute_force_ ? 0 : bin_start_[static_cast<size_t>(ray.bin)];
-  const size_t last = brute_force_ ? candidates_.size() : bin_start_[static_cast<size_t>(ray.bin) + 1];
-  if (first < last && (brute_force_ || candidates_[first].s_min <= s_hi)) nearest(ray, 0.0f, s_hi, false, hit);
+  if (bin_may_hit(ray, s_hi)) nearest(ray, 0.0f, s_hi, false, hit);
   const SkyData& sky = scene_.sky;
   const float sun_strength = sky.has_sun ? sky.sun_irradiance.luminance() / 300.0f : 0.0f;
   Ranged out;

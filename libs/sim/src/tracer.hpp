@@ -73,6 +73,8 @@ class Tracer {
 
   void build_candidates(bool accelerate);
   inline Ray make_ray(const PixelRay& r) const;
+  // False when no solid of the ray's azimuth bin starts before s_hi (nearest() would find none).
+  bool bin_may_hit(const Ray& ray, float s_hi) const;
   // Nearest solid along the ray with s in [s_lo, s_hi); mirrored: below the floor.
   void nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored, Hit& best) const;
   void shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float extra_blur, Shaded& out) const;
