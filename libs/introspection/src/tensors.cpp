@@ -5,7 +5,9 @@
 #include <opencv2/imgproc.hpp>
 
 namespace ivoa::introspection {
+namespace {
 
+// uint8 BGR [B, views x S, S, 3] -> float RGB [B, 3 x views, S, S] on [0, 1].
 torch::Tensor to_unit_rgb(const torch::Tensor& bgr_uint8) {
   const int64_t b = bgr_uint8.size(0), s = bgr_uint8.size(2), views = bgr_uint8.size(1) / s;
   // [B, V, S, S, 3]; BGR -> RGB by flipping the channel axis; views become channel groups.
@@ -17,6 +19,7 @@ torch::Tensor to_unit_rgb(const torch::Tensor& bgr_uint8) {
       .div_(255.0);
 }
 
+// -> (x - mean) / std, resized to info.input_size.
 torch::Tensor normalize(const torch::Tensor& unit_rgb, const ModelInfo& info) {
   const int64_t views = unit_rgb.size(1) / 3;
   const auto mean = torch::tensor({info.mean[0], info.mean[1], info.mean[2]}).view({1, 3, 1, 1}).repeat({1, views, 1, 1});
@@ -29,6 +32,8 @@ torch::Tensor normalize(const torch::Tensor& unit_rgb, const ModelInfo& info) {
                                                   .align_corners(false));
   return x.contiguous();
 }
+
+}  // namespace
 
 torch::Tensor normalize_patches(const torch::Tensor& bgr_uint8, const ModelInfo& info) {
   return normalize(to_unit_rgb(bgr_uint8), info);

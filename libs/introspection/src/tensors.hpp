@@ -19,11 +19,6 @@ torch::Tensor image_to_tensor(const cv::Mat& bgr, const ModelInfo& info);
 torch::Tensor patches_to_tensor(const std::vector<cv::Mat>& patches, const ModelInfo& info);
 // Raw uint8 patches [B, views x S, S, 3] BGR (e.g. memory-mapped) -> normalised [B, 3 x views, S, S].
 torch::Tensor normalize_patches(const torch::Tensor& bgr_uint8, const ModelInfo& info);
-// The two steps of normalize_patches, for training-time augmentation in between:
-// uint8 BGR [B, views x S, S, 3] -> float RGB [B, 3 x views, S, S] on [0, 1] ...
-torch::Tensor to_unit_rgb(const torch::Tensor& bgr_uint8);
-// ... -> (x - mean) / std, resized to info.input_size.
-torch::Tensor normalize(const torch::Tensor& unit_rgb, const ModelInfo& info);
 // [rows * cols] float tensor -> rows x cols CV_32F.
 cv::Mat to_mat(const torch::Tensor& values, int rows, int cols);
 

@@ -11,10 +11,10 @@
 #include <torch/torch.h>
 
 #include "ivoa/core/time.hpp"
+#include "augmentation.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
 #include "mc_dropout.hpp"
 #include "model_file.hpp"
-#include "tensors.hpp"
 
 namespace ivoa::introspection {
 namespace {
@@ -63,55 +63,15 @@ SplitData load_split_data(const TrainConfig& c, const std::string& split) {
   return d;
 }
 
-torch::Tensor gather_patches(const SplitData& d, const std::vector<SampleRef>& refs) {
-  const int p = d.patch_size;
-  const size_t bytes = static_cast<size_t>(p) * p * 3 * d.views;
-  auto out = torch::empty({static_cast<int64_t>(refs.size()), p * d.views, p, 3}, torch::kUInt8);
-  for (size_t i = 0; i < refs.size(); ++i)
-    std::memcpy(out.data_ptr<uint8_t>() + i * bytes, d.sessions[refs[i].session]->patch_data(refs[i].index), bytes);
+// Where each sample's raw patch lies (memory-mapped).
+std::vector<const uint8_t*> patch_pointers(const SplitData& d, const std::vector<SampleRef>& refs) {
+  std::vector<const uint8_t*> out;
+  out.reserve(refs.size());
+  for (const auto& r : refs) out.push_back(d.sessions[r.session]->patch_data(r.index));
   return out;
 }
 
 int label_of(const SplitData& d, const SampleRef& r) { return d.sessions[r.session]->samples()[r.index].label; }
-
-// Photometric changes a camera sees from frame to frame and rig to rig:
-// exposure, contrast, gamma, white balance, sensor noise. No geometric
-// flips: JPP's descriptor uses the positive horizontal gradient only, so a
-// mirrored patch can fail differently. Written as few whole-batch passes as
-// possible (contrast, exposure and white balance are one affine map per
-// sample and channel; the noise comes from a fixed bank), because on a CPU
-// these passes cost as much as the network's forward and backward.
-class Augmenter {
- public:
-  Augmenter(int patch_size, int views, torch::Generator& g)
-      : generator_(g), views_(views), noise_bank_(torch::randn({kBankSize, 3 * views, patch_size, patch_size}, g)) {}
-
-  // x: [B, 3 x views, S, S] RGB on [0, 1] -> augmented, same layout. The
-  // views of a pair share exposure and white balance (one rig), each with
-  // a little gain of its own (the right sensor's sensitivity differs).
-  torch::Tensor operator()(const torch::Tensor& x) {
-    const int64_t b = x.size(0);
-    const auto mean = x.mean({1, 2, 3}, true);                     // [B, 1, 1, 1]
-    const auto contrast = uniform({b, 1, 1, 1}, 0.7, 1.3);
-    auto gain = contrast * uniform({b, 1, 1, 1}, 0.6, 1.4) * uniform({b, 3, 1, 1}, 0.9, 1.1);  // [B, 3, 1, 1]
-    if (views_ > 1) gain = gain.repeat({1, views_, 1, 1}) * uniform({b, views_, 1, 1}, 0.95, 1.05).repeat_interleave(3, 1);
-    const auto offset = mean * (1 - contrast) * gain / contrast;  // (x - m) c + m, times exposure and balance
-    auto y = torch::addcmul(offset, x, gain).clamp_(0, 1);
-    y.pow_(uniform({b, 1, 1, 1}, 0.8, 1.25));                        // gamma
-    const auto pick = torch::randint(kBankSize, {b}, generator_, torch::kLong);
-    y.add_(noise_bank_.index_select(0, pick).mul_(uniform({b, 1, 1, 1}, 0.0, 0.03)));  // sensor noise
-    return y.clamp_(0, 1);
-  }
-
- private:
-  static constexpr int64_t kBankSize = 256;
-  torch::Tensor uniform(std::vector<int64_t> shape, double lo, double hi) {
-    return torch::rand(shape, generator_) * (hi - lo) + lo;
-  }
-  torch::Generator& generator_;
-  int64_t views_;
-  torch::Tensor noise_bank_;
-};
 
 struct Confusion {
   std::array<std::array<int64_t, kNumClasses>, kNumClasses> m{};  // [true][predicted]
@@ -162,6 +122,7 @@ struct ValOutputs {
 
 ValOutputs run_validation(IntrospectionNetImpl& net, const SplitData& d, const std::vector<SampleRef>& refs,
                           const ModelInfo& info, torch::Device device, int passes, torch::Generator& g) {
+  BatchAugmenter decode(info, false, 0);  // normalisation only
   torch::NoGradGuard no_grad;
   net.eval();
   ValOutputs out;
@@ -169,7 +130,7 @@ ValOutputs run_validation(IntrospectionNetImpl& net, const SplitData& d, const s
   for (size_t begin = 0; begin < refs.size(); begin += kBatch) {
     const std::vector<SampleRef> batch(refs.begin() + static_cast<long>(begin),
                                        refs.begin() + static_cast<long>(std::min(refs.size(), begin + kBatch)));
-    const auto features = net.features(normalize_patches(gather_patches(d, batch), info).to(device));
+    const auto features = net.features(decode(patch_pointers(d, batch)).to(device));
     const McStats s = passes > 1 ? mc_dropout_head(net, features, passes, g) : deterministic_head(net, features);
     const auto predicted = s.mean.argmax(1).to(torch::kCPU);
     const auto variance = s.variance.gather(1, s.mean.argmax(1, true)).squeeze(1).to(torch::kCPU);
@@ -286,7 +247,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   std::mt19937_64 rng(c.seed * 7919 + static_cast<uint64_t>(first_step));
   std::discrete_distribution<size_t> pick_class(class_weights.begin(), class_weights.end());
   auto generator = at::detail::createCPUGenerator(c.seed + static_cast<uint64_t>(first_step));
-  Augmenter augment(train.patch_size, train.views, generator);
+  BatchAugmenter make_batch(info, c.augment, c.seed * 104729 + static_cast<uint64_t>(first_step));
   const std::vector<SampleRef> val_refs = validation_subset(val, c.max_val_samples);
   report.val_samples = static_cast<int64_t>(val_refs.size());
 
@@ -305,9 +266,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
       batch_labels.push_back(label_of(train, batch.back()));
     }
     auto labels = torch::tensor(batch_labels, torch::kLong);
-    auto x = to_unit_rgb(gather_patches(train, batch));
-    if (c.augment) x = augment(x);
-    x = normalize(x, info).to(device);
+    const auto x = make_batch(patch_pointers(train, batch)).to(device);
     labels = labels.to(device);
     for (auto& group : optimizer.param_groups())
       static_cast<torch::optim::SGDOptions&>(group.options()).lr(learning_rate_at(c, step));
