@@ -43,7 +43,7 @@ WORKDIR = None
 PATCH = 16
 DIM = 256
 TP, TN, FP, FN = 0, 1, 2, 3
-REFLECTION, TEXTURELESS = 1, 2
+REFLECTION, TEXTURELESS, DARK_STRIPE = 1, 2, 8
 FLOOR, WALL = 1, 2
 
 PRED_HEADER = ("session,environment,split,sample,utime,cell,x,y,u,v,label,predicted,p_tp,p_tn,p_fp,p_fn,"
@@ -510,6 +510,23 @@ class MetricUnitTest(unittest.TestCase):
         s = uncertainty_sweep(run)
         self.assertFalse(s["accuracy_rises_as_threshold_falls"])
         self.assertLess(s["at_70"]["overall_accuracy"], s["unfiltered"]["overall_accuracy"])
+
+    def test_phenomena_present_counts_every_bit_and_its_lift(self):
+        """Co-occurring phenomena: each bit counts for every patch that shows
+        it, and the lift compares with all clustered samples."""
+        load_tool()
+        from report_clustering import _phenomena_present
+        # 10 clustered patches: 6 reflective (4 of them also texture-less), 4 dark stripe only.
+        bits = np.array([REFLECTION | TEXTURELESS] * 4 + [REFLECTION] * 2 + [DARK_STRIPE] * 4)
+        overall = {REFLECTION: 0.6, TEXTURELESS: 0.4, DARK_STRIPE: 0.4}
+        stripes = _phenomena_present(bits[6:], overall)
+        self.assertEqual([(e["phenomenon"], e["share"], e["lift"]) for e in stripes], [(DARK_STRIPE, 1.0, 2.5)])
+        shiny = {e["phenomenon"]: e for e in _phenomena_present(bits[:6], overall)}
+        self.assertEqual(sorted(shiny), [REFLECTION, TEXTURELESS])
+        self.assertAlmostEqual(shiny[REFLECTION]["share"], 1.0)
+        self.assertAlmostEqual(shiny[REFLECTION]["lift"], 1 / 0.6)
+        self.assertAlmostEqual(shiny[TEXTURELESS]["share"], 4 / 6)
+        self.assertEqual(_phenomena_present(bits, overall)[0]["lift"], 1.0)  # the whole set: no lift
 
     def test_auroc_undefined_without_failures(self):
         load_tool()

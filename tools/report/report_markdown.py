@@ -160,6 +160,14 @@ def _counts_text(d: Dict[int, int], namer, total: int, top: int = 4) -> str:
     return txt
 
 
+def _present_text(present, min_share: float = 0.1, top: int = 4) -> str:
+    """'dark stripe 51 % (×5.7), low light 55 % (×2.3)': phenomena under at
+    least min_share of a cluster's patches, most over-represented first."""
+    items = [e for e in present if e["share"] >= min_share][:top]
+    return ", ".join(f"{phenomenon_name(e['phenomenon'])} {100 * e['share']:.0f} % (×{e['lift']:.1f})"
+                     for e in items) or "none ≥ 10 %"
+
+
 def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, str]) -> str:
     """§4: clustering of confident predicted failures, composition and purity."""
     out = ["### 4. Failure clustering\n"]
@@ -191,11 +199,12 @@ def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, s
         if res.has_truth:
             row += [phenomenon_name(e["dominant_phenomenon"]) if e["dominant_phenomenon"] is not None else "n/a",
                     pct(e["purity"]), _counts_text(e["phenomena"], phenomenon_name, n),
-                    _counts_text(e["surfaces"], surface_name, n)]
+                    _present_text(e.get("present", [])), _counts_text(e["surfaces"], surface_name, n)]
         rows.append(row)
     headers = ["cluster", "samples", "predicted FP / FN", "true labels"]
     if res.has_truth:
-        headers += ["dominant phenomenon", "purity", "phenomena", "surfaces"]
+        headers += ["dominant phenomenon", "purity", "phenomena", "present under the patch (× all clustered)",
+                    "surfaces"]
     out.append(table(headers, rows))
     if res.has_truth:
         met = res.purity is not None and res.purity >= PURITY_TARGET
@@ -204,7 +213,11 @@ def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, s
             f"**{pct(res.purity)}** (target ≥ {int(100 * PURITY_TARGET)} %: {'met' if met else 'not met'}); "
             f"normalised mutual information with the phenomenon: {fmt(res.nmi)}, adjusted Rand index: "
             f"{fmt(res.ari)}. 'none' counts as a phenomenon: failures with no simulated phenomenon under the "
-            f"patch centre (e.g. geometry, distance).\n")
+            f"patch centre (e.g. geometry, distance). Phenomena co-occur (a polished floor is texture-less and "
+            f"reflects), so a patch has one dominant phenomenon but may show several: 'present under the patch' "
+            f"gives the share of a cluster's patches showing each one anywhere under the patch centre, and in "
+            f"brackets how over-represented that is against all clustered failures (×1 = no more than anywhere "
+            f"else): what sets the cluster apart.\n")
     else:
         out.append("\nNo simulator ground truth in these sessions (surface = unknown everywhere): cluster composition by "
                    "phenomenon and purity are not available; judge the clusters by their mosaics.\n")
