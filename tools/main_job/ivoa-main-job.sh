@@ -49,20 +49,20 @@ out=${out:-$ROOT/out/main-job-$scale}
 SCENE_NAMES=(indoor_office home corridor polished_lobby warehouse outdoor_campus sidewalk wet_parking_lot night_plaza)
 case "$scale" in
   default)
-    TRAIN_SEEDS=(11); TRAIN_FRAMES=48
+    TRAIN_SEEDS=(11); TRAIN_FRAMES=96
     VAL_SEEDS=(21); VAL_SCENES=(indoor_office polished_lobby wet_parking_lot); VAL_FRAMES=24
     TEST_SEEDS=(31); TEST_FRAMES=24
-    STEPS=1200; BATCH=128 ;;
+    STEPS=1400; BATCH=128 ;;
   smoke)  # seconds-scale: checks the whole chain (used by the tests)
     SCENE_NAMES=(indoor_office polished_lobby wet_parking_lot); TRAIN_SEEDS=(11); TRAIN_FRAMES=8
     VAL_SEEDS=(21); VAL_SCENES=(indoor_office); VAL_FRAMES=6
     TEST_SEEDS=(31); TEST_FRAMES=6
     STEPS=60; BATCH=32 ;;
   full)
-    TRAIN_SEEDS=(11 12 13 14); TRAIN_FRAMES=120
+    TRAIN_SEEDS=(11 12 13 14 15 16 17 18); TRAIN_FRAMES=120
     VAL_SEEDS=(21); VAL_SCENES=("${SCENE_NAMES[@]}"); VAL_FRAMES=60
     TEST_SEEDS=(31); TEST_FRAMES=60
-    STEPS=12000; BATCH=128 ;;
+    STEPS=24000; BATCH=128 ;;
   *) echo "ivoa-main-job: --scale must be default, full or smoke" >&2; exit 2 ;;
 esac
 RATE=2  # frames per second of session time: consecutive frames 0.5 s of driving apart
