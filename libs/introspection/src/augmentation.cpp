@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace ivoa::introspection {
 namespace {
@@ -19,7 +20,9 @@ double patch_mean(const uint8_t* patch, size_t values) {
 
 BatchAugmenter::BatchAugmenter(const ModelInfo& info, bool augment, uint64_t seed, PhotometricRanges ranges)
     : info_(info), augment_(augment), ranges_(ranges), rng_(seed), size_(info.patch_size) {
-  if (size_ <= 0 || info_.views < 1) throw std::invalid_argument("BatchAugmenter: the model info has no patch size or views");
+  if (size_ <= 0) throw std::invalid_argument("BatchAugmenter: the model info has no patch size");
+  if (info_.views != 1 && info_.views != 2)
+    throw std::invalid_argument("BatchAugmenter: views must be 1 or 2, not " + std::to_string(info_.views));
   if (!augment_) return;
   // A fixed bank of noise fields, drawn once: drawing fresh Gaussian noise
   // for every batch would cost more than the rest of the pass.

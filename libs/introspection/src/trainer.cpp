@@ -11,8 +11,8 @@
 #include <torch/torch.h>
 
 #include "ivoa/core/time.hpp"
-#include "augmentation.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
+#include "augmentation.hpp"
 #include "mc_dropout.hpp"
 #include "model_file.hpp"
 
