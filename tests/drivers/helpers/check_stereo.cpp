@@ -29,6 +29,7 @@
 namespace {
 
 using ivoa::image_t;
+using ivoa::sim_hardware::FrameStamp;
 using ivoa::sim_hardware::RigCamera;
 
 struct Flags {
@@ -38,6 +39,7 @@ struct Flags {
   double timeout_s = 30;
   int64_t skip_first = 2;
   std::string camera_format = "BayerRG8";
+  std::string stamps = "frame-time";
   ivoa::sim_hardware::PatternOptions pattern;
   std::vector<std::string> left_images, right_images;
   std::string status_name = "aravis_stereo";
@@ -50,6 +52,13 @@ cv::Mat raw_pixels(const image_t& msg) {
   return cv::Mat(msg.height, msg.width, channels == 3 ? CV_8UC3 : CV_8UC1, const_cast<uint8_t*>(msg.data.data()),
                  static_cast<size_t>(msg.row_stride))
       .clone();
+}
+
+// a - b for ticks stamped modulo 2^23, in [-2^22, 2^22).
+int64_t tick_difference(uint32_t a, uint32_t b) {
+  constexpr int64_t kModulus = int64_t{ivoa::sim_hardware::kStampTickMask} + 1;
+  const int64_t d = (int64_t{a} - int64_t{b}) & (kModulus - 1);
+  return d >= kModulus / 2 ? d - kModulus : d;
 }
 
 class StereoChecker {
@@ -99,6 +108,8 @@ class StereoChecker {
     o.set("stamp_missing", stamp_missing_);
     o.set("stamp_mismatch", stamp_mismatch_);
     o.set("off_beat_pairs", off_beat_pairs_);
+    o.set("count_slips", count_slips_);
+    o.set("first_slip", first_slip_);
     o.set("distinct_ticks", static_cast<int64_t>(ticks_.size()));
     o.set("max_colour_error", max_colour_error_);
     o.set("max_skew_ms", static_cast<double>(max_skew_us_) / 1000.0);
@@ -151,15 +162,8 @@ class StereoChecker {
       ++stamp_missing_;
       return fail("pair " + std::to_string(msg.seq) + ": no frame stamp");
     }
-    if (left_tick->off_beat || right_tick->off_beat) {
-      // A starved fake camera fired far off its slot: either pairing is defensible.
-      ++off_beat_pairs_;
-    } else if (left_tick->tick != right_tick->tick) {
-      ++stamp_mismatch_;
-      if (first_error_.empty())
-        first_error_ = "pair " + std::to_string(msg.seq) + ": left shows tick " + std::to_string(left_tick->tick) +
-                       ", right tick " + std::to_string(right_tick->tick);
-    }
+    if (flags_.stamps == "frame-count") check_counts(msg.seq, *left_tick, *right_tick);
+    else check_instant(msg.seq, *left_tick, *right_tick);
     ticks_.insert(left_tick->tick);
     bool ok = true;
     for (const auto& [camera, image, tick, format] :
@@ -177,6 +181,36 @@ class StereoChecker {
     if (ok) ++content_ok_;
   }
 
+  // Free-running stamps are frame times: a true pair shows one tick.
+  void check_instant(int64_t seq, const FrameStamp& left, const FrameStamp& right) {
+    if (left.off_beat || right.off_beat) {
+      // A starved fake camera fired far off its slot: either pairing is defensible.
+      ++off_beat_pairs_;
+    } else if (left.tick != right.tick) {
+      ++stamp_mismatch_;
+      if (first_error_.empty())
+        first_error_ = "pair " + std::to_string(seq) + ": left shows tick " + std::to_string(left.tick) +
+                       ", right tick " + std::to_string(right.tick);
+    }
+  }
+
+  // Software-trigger stamps are per-camera frame counts. The Aravis fake
+  // latches a trigger in one bit, so a camera thread starved for a trigger
+  // period merges two triggers into one frame and its count falls one behind
+  // for good; the true pairs then differ by a constant. What must hold: the
+  // difference changes rarely (once per lost trigger) and pairs are taken
+  // together (max_skew_ms), which a pairer that kept a stale offset fails.
+  void check_counts(int64_t seq, const FrameStamp& left, const FrameStamp& right) {
+    const int64_t offset = tick_difference(right.tick, left.tick);
+    if (count_offset_ && offset != *count_offset_) {
+      ++count_slips_;
+      if (first_slip_.empty())
+        first_slip_ = "pair " + std::to_string(seq) + ": right count minus left went from " +
+                      std::to_string(*count_offset_) + " to " + std::to_string(offset);
+    }
+    count_offset_ = offset;
+  }
+
   // Inside the squares demosaicing is exact: a red/blue swap shows here
   // even if the checker's own conversion were wrong the same way.
   void check_colours(RigCamera camera, const cv::Mat& bgr, uint32_t tick) {
@@ -192,6 +226,9 @@ class StereoChecker {
   const int32_t sensor_format_;
   int64_t received_ = 0, checked_ = 0, content_ok_ = 0, content_mismatch_ = 0;
   int64_t stamp_missing_ = 0, stamp_mismatch_ = 0, off_beat_pairs_ = 0, seq_gaps_ = 0, utime_regressions_ = 0;
+  int64_t count_slips_ = 0;
+  std::optional<int64_t> count_offset_;
+  std::string first_slip_;
   int64_t last_seq_ = -1, last_utime_ = 0, first_recv_ = 0, last_recv_ = 0, max_skew_us_ = 0;
   int32_t left_format_ = 0;
   int width_ = 0, height_ = 0;
@@ -216,6 +253,10 @@ int main(int argc, char** argv) {
   app.add_option("--camera-format", f.camera_format, "what the fake cameras serve")
       ->capture_default_str()
       ->check(CLI::IsMember({"BayerRG8", "Mono8"}));
+  app.add_option("--stamps", f.stamps,
+                 "what the frame stamps count: frame-time (free-running) or frame-count (software trigger)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"frame-time", "frame-count"}));
   app.add_option("--disparity", f.pattern.disparity_px)->capture_default_str();
   app.add_option("--speed", f.pattern.speed_px)->capture_default_str();
   app.add_option("--cell", f.pattern.cell_px)->capture_default_str();
