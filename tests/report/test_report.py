@@ -278,7 +278,7 @@ class ReportTest(unittest.TestCase):
             with open(path, "rb") as fh:
                 self.assertEqual(fh.read(8), b"\x89PNG\r\n\x1a\n", rel)
         for must in ("confusion.png", "failure_roc.png", "accuracy_vs_threshold.png", "retained_vs_threshold.png",
-                     "accuracy_vs_retained.png", "clusters_tsne.png", "cluster_0_mosaic.png",
+                     "accuracy_vs_retained.png", "accuracy_by_distance.png", "clusters_tsne.png", "cluster_0_mosaic.png",
                      "cluster_1_mosaic.png", "phenomena_fn_fp.png", "office_s1_1000000.png"):
             self.assertTrue(any(l.endswith(must) for l in links), must)
         self.assertLess(self.seconds, 60, "the report on 400 samples should take seconds")
@@ -295,6 +295,7 @@ class ReportTest(unittest.TestCase):
         for g in m["sessions"] + m["environments"]:
             self.assertAlmostEqual(g["mean_per_class_accuracy"], 1.0)
         self.assertEqual(sorted(g["group"] for g in m["environments"]), ["indoor", "outdoor"])
+        self.assertEqual([(g["group"], g["n"]) for g in m["distances"]], [("1 m", 200)])  # every row at x = 1 m
 
     def test_perfect_model_clusters_by_phenomenon(self):
         c = self.model("jppc")["clustering"]
@@ -527,6 +528,28 @@ class MetricUnitTest(unittest.TestCase):
         self.assertAlmostEqual(shiny[REFLECTION]["lift"], 1 / 0.6)
         self.assertAlmostEqual(shiny[TEXTURELESS]["share"], 4 / 6)
         self.assertEqual(_phenomena_present(bits, overall)[0]["lift"], 1.0)  # the whole set: no lift
+
+    def test_by_distance_groups_rows_and_sizes_the_safety_disc(self):
+        """Two grid rows over two frames: per-row accuracies, and the disc's
+        width from the image spacing of neighbouring cells (200 px and 50 px
+        per 0.25 m: 800 and 200 px/m, so 160 and 40 px for r = 0.1 m)."""
+        load_tool()
+        from report_metrics import by_distance
+        ys = np.tile([-0.25, 0.0, 0.25], 4)
+        xs = np.repeat([1.0, 2.0, 1.0, 2.0], 3)
+        us = np.where(xs == 1.0, 480 + 800 * ys, 480 + 200 * ys)
+        label = np.array([TP, TN, FP] * 4)
+        predicted = label.copy()
+        predicted[[0, 3]] = FN  # one TP wrong in each row
+        run = types.SimpleNamespace(session=np.array(["s"] * 12), utime=np.repeat([1, 2], 6), x=xs + 1e-6, y=ys,
+                                    u=us, label=label, predicted=predicted)
+        rows = by_distance(run, 0.1)
+        self.assertEqual([r["group"] for r in rows], ["1 m", "2 m"])
+        self.assertEqual([r["n"] for r in rows], [6, 6])
+        for r, disc in zip(rows, (160, 40)):
+            self.assertAlmostEqual(r["disc_px"], disc)
+            self.assertEqual(r["per_class_accuracy"][:3], [0.5, 1.0, 1.0])
+        self.assertIsNone(by_distance(run)[0]["disc_px"])  # no safety radius known
 
     def test_auroc_undefined_without_failures(self):
         load_tool()

@@ -72,7 +72,8 @@ import report_figures as figures  # noqa: E402
 import report_markdown as md  # noqa: E402
 import report_metrics as metrics  # noqa: E402
 from report_clustering import ClusterOptions, cluster_failures  # noqa: E402
-from report_inputs import Dataset, EvalRun, InputError, attach_dataset, load_eval, make_names  # noqa: E402
+from report_inputs import (Dataset, EvalRun, InputError, attach_dataset, load_eval, make_names,  # noqa: E402
+                           query_grid)
 
 
 def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
@@ -139,12 +140,15 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
     def rel(name):
         return os.path.relpath(os.path.join(d, name), out_dir)
 
+    grid = query_grid(run)
     rm = {
         "name": run.name, "eval_dir": run.path, "dataset": run.dataset.path if run.dataset else None,
         "detector": run.detector, "model": run.meta.get("model"), "mc_passes": run.meta.get("mc_passes"),
         "overall": metrics.class_metrics(run.label, run.predicted),
         "environments": metrics.grouped_metrics(run, run.environment),
         "sessions": metrics.grouped_metrics(run, run.session, describe_sessions=True),
+        "distances": metrics.by_distance(run, grid.get("safety_radius")),
+        "patch_size": grid.get("patch_size", run.dataset.patch_size if run.dataset else None),
         "failure": metrics.failure_detection(run.label, run.predicted, run.probs),
         "sweep": metrics.uncertainty_sweep(run),
         "per_phenomenon": metrics.per_phenomenon(run),
@@ -153,6 +157,9 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "confusion": figures.plot_confusion(rm["overall"], run.name, os.path.join(d, "confusion.png")),
         "sessions": figures.plot_group_bars(rm["sessions"], f"{run.name}: accuracy per session", "session",
                                             os.path.join(d, "accuracy_per_session.png")),
+        "distances": figures.plot_group_bars(rm["distances"], f"{run.name}: accuracy by distance ahead",
+                                             "query point ahead of the robot (x)",
+                                             os.path.join(d, "accuracy_by_distance.png")),
         "accuracy_vs_threshold": figures.plot_accuracy_vs_threshold(
             rm["sweep"], run.name, os.path.join(d, "accuracy_vs_threshold.png")),
         "retained_vs_threshold": figures.plot_retained_vs_threshold(

@@ -29,7 +29,7 @@ EMBEDDING_DIM = 256
 
 # predictions.csv columns the report uses (ivoa-eval writes more, in this order).
 REQUIRED_COLUMNS = (
-    "session", "environment", "split", "sample", "utime", "cell", "u", "v",
+    "session", "environment", "split", "sample", "utime", "cell", "x", "y", "u", "v",
     "label", "predicted", "p_tp", "p_tn", "p_fp", "p_fn", "var_predicted",
     "uncertainty", "phenomena", "phenomenon", "surface",
 )
@@ -204,6 +204,8 @@ class EvalRun:
     sample: np.ndarray
     utime: np.ndarray
     cell: np.ndarray
+    x: np.ndarray                   # the query point ahead of the robot, m
+    y: np.ndarray                   # ... and to its left, m
     u: np.ndarray
     v: np.ndarray
     label: np.ndarray
@@ -342,6 +344,7 @@ def load_eval(path: str) -> EvalRun:
         split=np.array(cols["split"]),
         sample=_numeric(pred_path, cols, "sample", int), utime=_numeric(pred_path, cols, "utime", int),
         cell=_numeric(pred_path, cols, "cell", int),
+        x=_numeric(pred_path, cols, "x", float), y=_numeric(pred_path, cols, "y", float),
         u=_numeric(pred_path, cols, "u", float), v=_numeric(pred_path, cols, "v", float),
         label=label, predicted=predicted, probs=probs, var_predicted=var_predicted,
         uncertainty=_numeric(pred_path, cols, "uncertainty", float),
@@ -350,6 +353,18 @@ def load_eval(path: str) -> EvalRun:
         surface=_numeric(pred_path, cols, "surface", int),
         embeddings=embeddings, overlays=overlays,
     )
+
+
+def query_grid(run: EvalRun) -> dict:
+    """The query grid of the run's sessions (session.json "grid": spacing,
+    safety radius, patch size), from the first session that records one."""
+    if run.dataset is None:
+        return {}
+    for name in dict.fromkeys(run.session.tolist()):
+        grid = run.dataset.session(name).info.get("grid")
+        if isinstance(grid, dict):
+            return grid
+    return {}
 
 
 def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:

@@ -76,12 +76,33 @@ def metrics_section(run: EvalRun, rm: dict, figs: Dict[str, str]) -> str:
                      [[g["group"], g["n"]] + _class_cells(g) + [fmt(g["mean_per_class_accuracy"]),
                                                                fmt(g["overall_accuracy"])]
                       for g in rm["environments"]]))
+    out.append(distance_table(rm))
+    out.append("\n" + image(figs["distances"], "accuracy by distance ahead"))
     out.append("\n**Per session**\n\n")
     out.append(table(["session", "split", "environment"] + headers,
                      [[g["group"], g["split"], g["environment"], g["n"]] + _class_cells(g)
                       + [fmt(g["mean_per_class_accuracy"]), fmt(g["overall_accuracy"])] for g in rm["sessions"]]))
     out.append("\n" + image(figs["sessions"], "accuracy per session"))
     return "\n".join(out)
+
+
+def distance_table(rm: dict) -> str:
+    """Accuracy per query-grid row, with how wide the safety disc appears
+    against the patch: a label about a disc wider than the patch depends on
+    things the patch does not show."""
+    rows, patch = rm["distances"], rm.get("patch_size")
+    out = ["\n**Per distance ahead** (query-grid rows)\n\n"]
+    headers = ["x", "n"] + [f"{n} acc." for n in LABEL_NAMES] + ["mean per-class", "overall",
+                                                                f"safety disc across (px; patch {patch or '?'})"]
+    out.append(table(headers, [[g["group"], g["n"]] + _class_cells(g)
+                               + [fmt(g["mean_per_class_accuracy"]), fmt(g["overall_accuracy"]),
+                                  fmt(g["disc_px"], 0)] for g in rows]))
+    wide = [g for g in rows if patch and g["disc_px"] is not None and g["disc_px"] > patch]
+    if wide:
+        share = sum(g["n"] for g in wide) / max(1, sum(g["n"] for g in rows))
+        out.append(f"\nAt {', '.join(g['group'] for g in wide)} the safety disc is wider than the {patch} px patch "
+                   f"({pct(share)} of the samples): the patch cannot show all of what the label is about there.\n")
+    return "".join(out)
 
 
 def failure_section(rm: dict, figs: Dict[str, str]) -> str:

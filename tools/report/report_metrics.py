@@ -81,6 +81,39 @@ def grouped_metrics(run: EvalRun, key: np.ndarray, describe_sessions: bool = Fal
     return out
 
 
+def by_distance(run: EvalRun, safety_radius_m: Optional[float] = None) -> List[dict]:
+    """class_metrics per query-grid row (distance ahead, x), nearest first.
+
+    With the safety radius, each row also gives the width in pixels of the
+    disc its labels are about, measured from the image spacing of neighbouring
+    cells of one frame and row: where the disc is wider than the patch, the
+    patch cannot show everything its label depends on."""
+    xs = np.round(run.x, 3)
+    scale = _pixels_per_metre_across(run, xs)
+    out = []
+    for value in sorted(set(xs.tolist())):
+        m = xs == value
+        entry = class_metrics(run.label[m], run.predicted[m])
+        entry["group"] = f"{value:g} m"
+        entry["x"] = value
+        ppm = scale.get(value)
+        entry["disc_px"] = 2 * safety_radius_m * ppm if ppm and safety_radius_m else None
+        out.append(entry)
+    return out
+
+
+def _pixels_per_metre_across(run: EvalRun, xs: np.ndarray) -> Dict[float, float]:
+    """Median |du / dy| over neighbouring cells of one frame and grid row, per row."""
+    order = np.lexsort((run.y, xs, run.utime, run.session))
+    s, t, x, y, u = run.session[order], run.utime[order], xs[order], run.y[order], run.u[order]
+    same_row = (s[1:] == s[:-1]) & (t[1:] == t[:-1]) & (x[1:] == x[:-1]) & (y[1:] != y[:-1])
+    if not np.any(same_row):
+        return {}
+    ratio = np.abs(np.diff(u)[same_row] / np.diff(y)[same_row])
+    rows = x[1:][same_row]
+    return {float(v): float(np.median(ratio[rows == v])) for v in np.unique(rows)}
+
+
 def failure_detection(label: np.ndarray, predicted: np.ndarray, probs: np.ndarray) -> dict:
     """Failure detection as a binary problem: positive = the detector failed
     (true FP or FN), predicted positive = the model predicts FP or FN.
