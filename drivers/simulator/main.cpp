@@ -40,8 +40,13 @@ int main(int argc, char** argv) {
   config.scene_file = std::string(IVOA_SIM_SCENES_DIR) + "/indoor_office.yaml";
   std::string pixel_format = "bayer_rggb", save_rig, rig_file, status_channel(ivoa::channels::kProcessStatus);
   bool fast = false, no_truth = false;
+  uint64_t noise_seed = 0;
   app.add_option("--scene", config.scene_file, "scene file (YAML, see libs/sim/scenes)")->capture_default_str();
   app.add_option("--seed", config.seed, "scene and trajectory seed (one seed + scene = one session)")->capture_default_str();
+  app.add_option("--noise-seed", noise_seed,
+                 "sensor noise realisation: 0 keys the noise by frame alone; another value, same session with other "
+                 "noise")
+      ->capture_default_str();
   app.add_option("--rate", config.rate_hz, "frames per second")->capture_default_str()->check(CLI::PositiveNumber);
   auto* realtime = app.add_flag("--realtime", config.realtime, "pace frames by the wall clock (default)");
   app.add_flag("--as-fast-as-possible", fast, "render frames back to back (session time stays frame / rate)")
@@ -77,6 +82,7 @@ int main(int argc, char** argv) {
   config.pixelformat = kPixelFormats.at(pixel_format);
 
   ivoa::sim::SimulatorConfig sim_config;
+  sim_config.noise_seed = noise_seed;
   try {
     if (!rig_file.empty()) sim_config.rig = ivoa::load_rig_calibration(rig_file);
   } catch (const std::exception& e) {

@@ -10,6 +10,7 @@
 #include "depth_sensor.hpp"
 #include "ivoa/core/camera_model.hpp"
 #include "ivoa/sim_ground_truth_t.hpp"
+#include "rng.hpp"
 #include "tracer.hpp"
 
 namespace ivoa::sim {
@@ -136,9 +137,12 @@ SimFrame Simulator::render(const RenderRequest& req) const {
   f.gain = exposure.gain;
   // Turning smears the image along rows by yaw rate x exposure x focal length.
   const double smear = std::abs(req.motion.omega) * exposure.time_ms * 1e-3 * s.config.rig.left.K(0, 0);
-  const auto left_image = detail::expose(left_radiance, w, h, exposure, 1.0, cam, req.frame_index, 0, smear, true);
+  // Seed 0 keeps the noise of earlier recordings bit-identical.
+  const uint64_t noise_key =
+      s.config.noise_seed == 0 ? req.frame_index : hash_combine(req.frame_index, s.config.noise_seed);
+  const auto left_image = detail::expose(left_radiance, w, h, exposure, 1.0, cam, noise_key, 0, smear, true);
   const auto right_image = detail::expose(right_radiance, s.right.width(), s.right.height(), exposure,
-                                          cam.right_sensitivity, cam, req.frame_index, 1, smear, false);
+                                          cam.right_sensitivity, cam, noise_key, 1, smear, false);
   f.left = left_image.bgr;
   f.right = right_image.bgr;
 
@@ -168,7 +172,7 @@ SimFrame Simulator::render(const RenderRequest& req) const {
     for (size_t i = 0; i < ranged.size(); ++i) ranged[i] = tracer.range(static_cast<int>(i));
     const auto& rig = s.config.rig;
     f.depth_mm = detail::depth_image(ranged, s.depth.width(), s.depth.height(), rig.depth.K(0, 0), rig.depth_min_range,
-                                     rig.depth_max_range, s.config.depth, req.frame_index);
+                                     rig.depth_max_range, s.config.depth, noise_key);
   } else {
     f.depth_mm = cv::Mat::zeros(s.depth.height(), s.depth.width(), CV_16UC1);
   }

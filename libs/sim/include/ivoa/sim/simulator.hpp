@@ -39,6 +39,11 @@ struct SimulatorConfig {
   CameraSensorConfig camera;
   DepthSensorConfig depth;
   bool render_depth = true;
+  // Which realisation of the sensor noise (camera and depth) frames get:
+  // 0 keys it by the frame index alone; another value gives every frame
+  // other noise with the same scene, poses and exposure, e.g. to measure how
+  // repeatable the labels are under noise alone.
+  uint64_t noise_seed = 0;
   // false: every pixel tests every solid (the brute-force baseline the
   // benchmark compares against); the images are identical either way.
   bool use_acceleration = true;
@@ -49,7 +54,7 @@ struct SimulatorConfig {
 struct RenderRequest {
   Pose2D stereo_pose;
   Pose2D depth_pose;
-  uint64_t frame_index = 0;  // seeds the sensor noise
+  uint64_t frame_index = 0;  // seeds the sensor noise (with SimulatorConfig::noise_seed)
   Twist2D motion;            // robot velocity during the exposure
 };
 
