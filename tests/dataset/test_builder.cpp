@@ -139,6 +139,36 @@ TEST(DatasetBuilder, RecordedLabelsAreUsedAsRecorded) {
   for (const auto& s : session.samples()) EXPECT_EQ(s.label, (recorded.at({s.utime, s.cell})));
 }
 
+TEST(DatasetBuilder, RecordedLabelsCanBeCutWithAnotherPatchSize) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("rec.lcmlog");
+  std::map<int64_t, cv::Mat> left;
+  size_t recorded = 0;
+  test::write_sim_log(log_path, kScene, 5, 3, [&](Bus& bus, const test::SimLogFrame& f, const sim::SimFrame& frame) {
+    introspection_labels_t labels = recompute_labels(sim::make_sim_rig(), frame, f.utime, f.depth_utime);
+    for (int8_t l : labels.label) recorded += l != introspection_labels_t::LABEL_NONE;
+    left[f.utime] = frame.left;
+    bus.publish(channels::kIntrospectionLabels, labels);
+  });
+  BuildOptions options;  // labels: recorded
+  options.recorded_patch_size = 360;
+  SessionBuilder builder(dir.file("data"), "rec", options);
+  builder.add_log(log_path);
+  builder.finish();
+  const SessionReader session(dir.file("data") + "/rec");
+  EXPECT_EQ(session.info().patch_size, 360);
+  EXPECT_EQ(session.info().grid.patch_size, 100);  // the grid that labelled the cells
+  ASSERT_GT(session.size(), 0u);
+  EXPECT_LT(session.size(), recorded);  // some 360 px squares leave the 960x600 image
+  for (size_t i = 0; i < session.size(); ++i) {
+    const auto& s = session.samples()[i];
+    const cv::Mat want = left.at(s.utime)(patch_rect(s.u, s.v, 360));
+    ASSERT_EQ(cv::norm(session.left_patch(i), want, cv::NORM_INF), 0) << "sample " << i;
+  }
+  options.labels = "jppc";  // re-run labels cut grid.patch_size: the override is refused
+  EXPECT_THROW(SessionBuilder(dir.file("data"), "rerun", options), std::invalid_argument);
+}
+
 TEST(DatasetBuilder, EnvironmentComesFromTheSimulatorNotTheSceneName) {
   test::TempDir dir;
   const std::string log_path = dir.file("wet.lcmlog");

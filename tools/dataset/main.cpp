@@ -145,6 +145,19 @@ int main(int argc, char** argv) {
 
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("dataset", common.log_level);
+  if (*build && options.labels == dataset::kRecordedLabels) {
+    // Recorded labels come with the live monitor's grid: only the patch
+    // cut around its cells can change; any other grid option would be ignored.
+    for (const char* name : {"--grid-x-min", "--grid-x-max", "--grid-y-min", "--grid-y-max", "--grid-spacing",
+                             "--safety-radius"}) {
+      if (build->get_option(name)->count() > 0) {
+        spdlog::error("{} does not apply to --labels recorded (the labels carry the grid the live monitor used); "
+                      "re-label offline with --labels jppc or dense to use another grid", name);
+        return kExitUsage;
+      }
+    }
+    if (build->get_option("--patch-size")->count() > 0) options.recorded_patch_size = options.grid.patch_size;
+  }
   try {
     if (*build) return run_build(out, session, logs, options);
     return run_info(root, split);

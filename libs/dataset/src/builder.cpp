@@ -161,7 +161,7 @@ void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
   if (info.detector.empty()) {
     info.detector = msg.detector;
     info.grid = geometry_of(msg);
-    info.patch_size = msg.patch_size;
+    info.patch_size = options.recorded_patch_size > 0 ? options.recorded_patch_size : msg.patch_size;
   } else if (msg.detector != info.detector) {
     return bad("labels for detector '" + msg.detector + "' in a session labelled for '" + info.detector + "'");
   }
@@ -258,6 +258,9 @@ SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::strin
     impl_->info.grid = impl_->options.grid;
     impl_->info.patch_size = impl_->options.grid.patch_size;
   }
+  if (impl_->options.recorded_patch_size < 0 || (impl_->rerun() && impl_->options.recorded_patch_size > 0))
+    throw std::invalid_argument("recorded_patch_size must be > 0 and is for recorded labels (re-run labels cut "
+                                "grid.patch_size)");
   if (impl_->options.views != 1 && impl_->options.views != 2)
     throw std::invalid_argument("views must be 1 or 2, not " + std::to_string(impl_->options.views));
   impl_->info.session = session;

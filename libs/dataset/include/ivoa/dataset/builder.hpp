@@ -24,6 +24,10 @@ struct BuildOptions {
   std::string labels = kRecordedLabels;
   stereo::DetectorConfig detector;
   QueryGridConfig grid;  // for re-run labels; recorded labels carry their own
+  // Recorded labels: > 0 cuts patches of this side (pixels) around each
+  // recorded cell instead of the recording grid's; cells whose patch would
+  // leave the image are skipped. Re-run labels use grid.patch_size.
+  int recorded_patch_size = 0;
   monitor::DepthMonitorConfig monitor;
   monitor::PairingConfig pairing;
   std::string environment;  // "" = the simulator's truth messages, else the scene name (indoor_*/outdoor_*)
