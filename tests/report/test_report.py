@@ -296,6 +296,7 @@ class ReportTest(unittest.TestCase):
             self.assertAlmostEqual(g["mean_per_class_accuracy"], 1.0)
         self.assertEqual(sorted(g["group"] for g in m["environments"]), ["indoor", "outdoor"])
         self.assertEqual([(g["group"], g["n"]) for g in m["distances"]], [("1 m", 200)])  # every row at x = 1 m
+        self.assertEqual(m["patch_size"], PATCH)  # the dataset's patches, for the disc-vs-patch column
 
     def test_perfect_model_clusters_by_phenomenon(self):
         c = self.model("jppc")["clustering"]

@@ -355,6 +355,11 @@ def load_eval(path: str) -> EvalRun:
     )
 
 
+def patch_size(run: EvalRun) -> Optional[int]:
+    """Side in pixels of the patches the run's model saw (its first session's)."""
+    return run.dataset.session(str(run.session[0])).patch_size if run.dataset is not None and run.size else None
+
+
 def query_grid(run: EvalRun) -> dict:
     """The query grid of the run's sessions (session.json "grid": spacing,
     safety radius, patch size), from the first session that records one."""
