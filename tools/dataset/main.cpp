@@ -135,8 +135,11 @@ int main(int argc, char** argv) {
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
       ->capture_default_str();
   build->add_option("logs", logs, "LCM log files, in order")->required()->check(CLI::ExistingFile);
+  const size_t before_relabel_flags = build->get_options().size();
   add_query_grid_options(*build, options.grid);
   stereo::add_detector_options(*build, options.detector);
+  std::vector<CLI::Option*> relabel_flags = build->get_options();  // a copy: erase what came before
+  relabel_flags.erase(relabel_flags.begin(), relabel_flags.begin() + static_cast<long>(before_relabel_flags));
 
   auto* info = app.add_subcommand("info", "sessions, class counts and splits of a dataset");
   std::string root, split;
@@ -146,17 +149,18 @@ int main(int argc, char** argv) {
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("dataset", common.log_level);
   if (*build && options.labels == dataset::kRecordedLabels) {
-    // Recorded labels come with the live monitor's grid: only the patch
-    // cut around its cells can change; any other grid option would be ignored.
-    for (const char* name : {"--grid-x-min", "--grid-x-max", "--grid-y-min", "--grid-y-max", "--grid-spacing",
-                             "--safety-radius"}) {
-      if (build->get_option(name)->count() > 0) {
-        spdlog::error("{} does not apply to --labels recorded (the labels carry the grid the live monitor used); "
-                      "re-label offline with --labels jppc or dense to use another grid", name);
-        return kExitUsage;
-      }
+    // Recorded labels come with the live monitor's grid and detector: only
+    // the patch cut around their cells can change; a grid or detector flag
+    // would be ignored, so it is refused.
+    const CLI::Option* patch_size = build->get_option("--patch-size");
+    for (const CLI::Option* flag : relabel_flags) {
+      if (flag == patch_size || flag->count() == 0) continue;
+      spdlog::error("{} does not apply to --labels recorded (the labels carry the grid and detector the live "
+                    "processes used); re-label offline with --labels jppc or dense to change them",
+                    flag->get_name());
+      return kExitUsage;
     }
-    if (build->get_option("--patch-size")->count() > 0) options.recorded_patch_size = options.grid.patch_size;
+    if (patch_size->count() > 0) options.recorded_patch_size = options.grid.patch_size;
   }
   try {
     if (*build) return run_build(out, session, logs, options);
