@@ -41,6 +41,15 @@ introspection_labels_t recompute_labels(const RigCalibration& rig, const sim::Si
   return monitor::label_frame(stereo, depth);
 }
 
+// Builds session `name` under `root` from one log and opens it.
+SessionReader build_session(const std::string& root, const std::string& name, const std::string& log,
+                            const BuildOptions& options) {
+  SessionBuilder builder(root, name, options);
+  builder.add_log(log);
+  builder.finish();
+  return SessionReader(root + "/" + name);
+}
+
 struct Expected {
   std::map<std::pair<int64_t, int>, int> labels;  // (utime, cell) -> label, patch inside the image
   std::map<int64_t, cv::Mat> left;
@@ -97,10 +106,7 @@ TEST(DatasetBuilder, TwoViewPatchesStackTheGroundWarpedRightView) {
   BuildOptions options;
   options.labels = "jppc";
   options.views = 2;
-  SessionBuilder builder(dir.file("data"), "two", options);
-  builder.add_log(log_path);
-  builder.finish();
-  const SessionReader session(dir.file("data") + "/two");
+  const SessionReader session = build_session(dir.file("data"), "two", log_path, options);
   EXPECT_EQ(session.info().views, 2);
   ASSERT_GT(session.size(), 20u);
   const GroundWarp warp(sim::make_sim_rig());
@@ -130,10 +136,7 @@ TEST(DatasetBuilder, RecordedLabelsAreUsedAsRecorded) {
     bus.publish(channels::kIntrospectionLabels, labels);
   });
   const BuildOptions recorded_options;  // labels: recorded
-  SessionBuilder builder(dir.file("data"), "rec", recorded_options);
-  builder.add_log(log_path);
-  builder.finish();
-  const SessionReader session(dir.file("data") + "/rec");
+  const SessionReader session = build_session(dir.file("data"), "rec", log_path, recorded_options);
   EXPECT_EQ(session.info().labels_from, "recorded");
   ASSERT_EQ(session.size(), recorded.size());
   for (const auto& s : session.samples()) EXPECT_EQ(s.label, (recorded.at({s.utime, s.cell})));
@@ -152,10 +155,7 @@ TEST(DatasetBuilder, RecordedLabelsCanBeCutWithAnotherPatchSize) {
   });
   BuildOptions options;  // labels: recorded
   options.recorded_patch_size = 360;
-  SessionBuilder builder(dir.file("data"), "rec", options);
-  builder.add_log(log_path);
-  builder.finish();
-  const SessionReader session(dir.file("data") + "/rec");
+  const SessionReader session = build_session(dir.file("data"), "rec", log_path, options);
   EXPECT_EQ(session.info().patch_size, 360);
   EXPECT_EQ(session.info().grid.patch_size, 100);  // the grid that labelled the cells
   ASSERT_GT(session.size(), 0u);
@@ -175,16 +175,10 @@ TEST(DatasetBuilder, EnvironmentComesFromTheSimulatorNotTheSceneName) {
   test::write_sim_log(log_path, std::string(IVOA_SCENES_DIR) + "/wet_parking_lot.yaml", 2, 2);
   BuildOptions options;
   options.labels = "jppc";
-  SessionBuilder builder(dir.file("data"), "wet", options);
-  builder.add_log(log_path);
-  builder.finish();
-  EXPECT_EQ(SessionReader(dir.file("data") + "/wet").info().environment, "outdoor");
+  EXPECT_EQ(build_session(dir.file("data"), "wet", log_path, options).info().environment, "outdoor");
 
   options.environment = "indoor";  // the user's word overrides
-  SessionBuilder overridden(dir.file("data2"), "wet", options);
-  overridden.add_log(log_path);
-  overridden.finish();
-  EXPECT_EQ(SessionReader(dir.file("data2") + "/wet").info().environment, "indoor");
+  EXPECT_EQ(build_session(dir.file("data2"), "wet", log_path, options).info().environment, "indoor");
 }
 
 TEST(DatasetBuilder, TruncatedLogKeepsWhatCameBeforeAndSaysWhere) {

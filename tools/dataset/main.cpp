@@ -36,6 +36,17 @@ std::string session_name_of(const std::string& path) {
   return name;
 }
 
+// Recorded labels come with the grid and detector the live processes used:
+// only the patch cut around their cells can change. Applies --patch-size and
+// returns the first other relabelling flag given (it would be ignored), if any.
+const CLI::Option* ignored_with_recorded_labels(const std::vector<CLI::Option*>& relabel_flags,
+                                                const CLI::Option& patch_size, dataset::BuildOptions& options) {
+  if (patch_size.count() > 0) options.recorded_patch_size = options.grid.patch_size;
+  for (const CLI::Option* flag : relabel_flags)
+    if (flag != &patch_size && flag->count() > 0) return flag;
+  return nullptr;
+}
+
 std::string class_counts(const std::array<int64_t, dataset::kNumClasses>& c) {
   std::string out;
   for (int k = 0; k < dataset::kNumClasses; ++k)
@@ -149,18 +160,13 @@ int main(int argc, char** argv) {
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("dataset", common.log_level);
   if (*build && options.labels == dataset::kRecordedLabels) {
-    // Recorded labels come with the live monitor's grid and detector: only
-    // the patch cut around their cells can change; a grid or detector flag
-    // would be ignored, so it is refused.
-    const CLI::Option* patch_size = build->get_option("--patch-size");
-    for (const CLI::Option* flag : relabel_flags) {
-      if (flag == patch_size || flag->count() == 0) continue;
+    const CLI::Option& patch_size = *build->get_option("--patch-size");
+    if (const CLI::Option* flag = ignored_with_recorded_labels(relabel_flags, patch_size, options)) {
       spdlog::error("{} does not apply to --labels recorded (the labels carry the grid and detector the live "
                     "processes used); re-label offline with --labels jppc or dense to change them",
                     flag->get_name());
       return kExitUsage;
     }
-    if (patch_size->count() > 0) options.recorded_patch_size = options.grid.patch_size;
   }
   try {
     if (*build) return run_build(out, session, logs, options);
