@@ -5,6 +5,7 @@
 #include <opencv2/core.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/footprint_patch.hpp"
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/core/time.hpp"
@@ -16,9 +17,31 @@ std::vector<float> flatten(const cv::Mat& m) { return std::vector<float>(m.begin
 
 }  // namespace
 
+std::vector<introspection::Prediction> query_predictions(introspection::IntrospectionModel& model,
+                                                         const introspection::Heatmaps& h, const cv::Mat& input,
+                                                         const obstacle_grid_t& grid) {
+  const double scale = model.info().patch_scale;
+  std::vector<int> sides;
+  if (scale > 0) {
+    QueryGridConfig geometry = geometry_of(grid);
+    geometry.patch_size = model.info().patch_size;
+    sides = footprint_patch_sides(geometry, grid.num_x, grid.num_y, grid.u, grid.v,
+                                  cv::Size(input.cols, input.rows / model.info().views), scale);
+  }
+  std::vector<introspection::Prediction> out;
+  std::vector<introspection::IntrospectionModel::CellPatch> cells;
+  for (size_t i = 0; i < grid.state.size(); ++i) {
+    if (!grid.in_image[i]) continue;
+    if (scale > 0) cells.push_back({grid.u[i], grid.v[i], sides[i]});
+    else out.push_back(model.predict_at(h, grid.u[i], grid.v[i]));
+  }
+  return scale > 0 ? model.predict_cells(input, cells) : out;
+}
+
 introspection_t make_introspection_message(const introspection::IntrospectionModel& model,
                                            const introspection::Heatmaps& h, int64_t utime, int image_width,
-                                           int image_height, const obstacle_grid_t* grid, int mc_passes) {
+                                           int image_height, const obstacle_grid_t* grid,
+                                           const std::vector<introspection::Prediction>& predictions, int mc_passes) {
   introspection_t msg;
   msg.utime = utime;
   msg.model_id = model.info().id;
@@ -37,9 +60,10 @@ introspection_t make_introspection_message(const introspection::IntrospectionMod
   msg.uncertainty = flatten(h.uncertainty);
   msg.class_variance = flatten(h.predicted_variance);
   if (grid) {
+    size_t next = 0;
     for (size_t i = 0; i < grid->state.size(); ++i) {
       if (!grid->in_image[i]) continue;
-      const auto p = model.predict_at(h, grid->u[i], grid->v[i]);
+      const auto& p = predictions.at(next++);
       msg.query_x.push_back(grid->x[i]);
       msg.query_y.push_back(grid->y[i]);
       msg.query_u.push_back(grid->u[i]);
@@ -134,20 +158,22 @@ void IntrospectionNode::process(const Frame& frame) {
   cv::Mat left;
   const cv::Mat input = model_input(frame, where, left);
   if (input.empty()) return;
-  introspection::Heatmaps h;
-  try {
-    h = model_->run(input);
-  } catch (const introspection::ModelError& e) {
-    heartbeat_.bad_input(where + ": " + e.what());
-    return;
-  }
   std::optional<obstacle_grid_t> grid;
   {
     std::lock_guard<std::mutex> lock(grid_mutex_);
     grid = latest_grid_;
   }
+  introspection::Heatmaps h;
+  std::vector<introspection::Prediction> predictions;
+  try {
+    h = model_->run(input);
+    if (grid) predictions = query_predictions(*model_, h, input, *grid);
+  } catch (const introspection::ModelError& e) {
+    heartbeat_.bad_input(where + ": " + e.what());
+    return;
+  }
   introspection_t msg = make_introspection_message(*model_, h, frame.msg.utime, left.cols, left.rows,
-                                                   grid ? &*grid : nullptr, mc_passes_);
+                                                   grid ? &*grid : nullptr, predictions, mc_passes_);
   msg.compute_ms = monotonic_ms() - frame.received_ms;
   bus_.publish(options_.out_channel, msg);
   heartbeat_.count_out();

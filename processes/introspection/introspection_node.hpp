@@ -32,10 +32,19 @@ struct IntrospectionNodeOptions {
   std::string calibration_channel{channels::kRigCalibration};  // two-view models only
 };
 
-// Builds the message for one frame (exposed for tests).
+// The predictions at the grid's in-image cells, in cell order: looked up in
+// the heatmaps, or, for a footprint-scaled model (ModelInfo::patch_scale),
+// from each cell's own scaled patch of `input` (the model's input image).
+std::vector<introspection::Prediction> query_predictions(introspection::IntrospectionModel& model,
+                                                         const introspection::Heatmaps& heatmaps, const cv::Mat& input,
+                                                         const obstacle_grid_t& query_grid);
+
+// Builds the message for one frame (exposed for tests); `predictions` are
+// query_predictions() of `query_grid`.
 introspection_t make_introspection_message(const introspection::IntrospectionModel& model,
                                            const introspection::Heatmaps& heatmaps, int64_t utime, int image_width,
-                                           int image_height, const obstacle_grid_t* query_grid, int mc_passes);
+                                           int image_height, const obstacle_grid_t* query_grid,
+                                           const std::vector<introspection::Prediction>& predictions, int mc_passes);
 
 class IntrospectionNode {
  public:

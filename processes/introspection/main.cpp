@@ -54,8 +54,11 @@ int main(int argc, char** argv) {
     return ivoa::kExitBadInput;
   }
   const auto& info = model->info();
-  spdlog::info("model {}: {} for '{}', {}px patches at stride {}, T = {}, gate {:.5f}", info.id, info.architecture,
-               info.detector, info.patch_size, info.stride, config.mc_passes, model->threshold());
+  spdlog::info("model {}: {} for '{}', {}px patches at stride {}{}, T = {}, gate {:.5f}", info.id, info.architecture,
+               info.detector, info.patch_size, info.stride,
+               info.patch_scale > 0 ? fmt::format(", query cells from footprint-scaled patches (x{})", info.patch_scale)
+                                    : std::string(),
+               config.mc_passes, model->threshold());
   try {
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "introspection");

@@ -8,9 +8,12 @@
 
 #include <gtest/gtest.h>
 
+#include "ivoa/core/footprint_patch.hpp"
+
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/camera_model.hpp"
 #include "ivoa/core/channels.hpp"
+#include "ivoa/core/footprint_patch.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/ground_warp.hpp"
 #include "ivoa/dataset/builder.hpp"
@@ -167,6 +170,42 @@ TEST(DatasetBuilder, RecordedLabelsCanBeCutWithAnotherPatchSize) {
   }
   options.labels = "jppc";  // re-run labels cut grid.patch_size: the override is refused
   EXPECT_THROW(SessionBuilder(dir.file("data"), "rerun", options), std::invalid_argument);
+}
+
+TEST(DatasetBuilder, ScaledPatchesShowTheWholeFootprintNearTheRobot) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("scaled.lcmlog");
+  std::map<int64_t, cv::Mat> left;
+  std::map<int64_t, introspection_labels_t> recorded;
+  test::write_sim_log(log_path, kScene, 5, 3, [&](Bus& bus, const test::SimLogFrame& f, const sim::SimFrame& frame) {
+    introspection_labels_t labels = recompute_labels(sim::make_sim_rig(), frame, f.utime, f.depth_utime);
+    left[f.utime] = frame.left;
+    recorded[f.utime] = labels;
+    bus.publish(channels::kIntrospectionLabels, labels);
+  });
+  BuildOptions options;  // labels: recorded
+  const size_t fixed = build_session(dir.file("fixed"), "s", log_path, options).size();
+  options.patch_scale = 1.6;
+  const SessionReader session = build_session(dir.file("data"), "s", log_path, options);
+  EXPECT_EQ(session.info().patch_scale, 1.6);
+  EXPECT_EQ(session.info().patch_size, 100);
+  EXPECT_EQ(session.size(), fixed);  // a scaled square shrinks to fit: no cell is lost
+  int scaled = 0;
+  for (size_t i = 0; i < session.size(); ++i) {
+    const auto& s = session.samples()[i];
+    const auto& labels = recorded.at(s.utime);
+    const int side = footprint_patch_sides(labels, {960, 600}, 1.6)[static_cast<size_t>(s.cell)];
+    ASSERT_EQ(s.patch_side, side) << "sample " << i;
+    scaled += side > 100;
+    // The stored patch is the side x side square, shrunk to 100 px; near cells (x < 2 m) are scaled.
+    const cv::Mat want = cut_patch(left.at(s.utime), 1, s.u, s.v, side, 100);
+    ASSERT_EQ(cv::norm(session.left_patch(i), want, cv::NORM_INF), 0) << "sample " << i;
+    if (s.x < 1.9) EXPECT_GT(side, 100) << "x = " << s.x;
+    else EXPECT_EQ(side, 100) << "x = " << s.x;
+  }
+  EXPECT_GT(scaled, 0);
+  options.patch_scale = -1;
+  EXPECT_THROW(SessionBuilder(dir.file("data"), "bad", options), std::invalid_argument);
 }
 
 TEST(DatasetBuilder, EnvironmentComesFromTheSimulatorNotTheSceneName) {

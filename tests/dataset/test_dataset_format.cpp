@@ -1,5 +1,6 @@
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include <gtest/gtest.h>
 
@@ -70,6 +71,49 @@ TEST(DatasetFormat, SessionRoundTripsPatchesIndexAndMetadata) {
   EXPECT_EQ(r.samples()[4].frame, 1);
   EXPECT_FLOAT_EQ(r.samples()[0].u, 480.5f);
   EXPECT_EQ(r.samples()[0].phenomenon, 2);
+}
+
+TEST(DatasetFormat, PatchScaleAndSidesRoundTripAndOldSessionsReadAsFixed) {
+  test::TempDir dir;
+  SessionInfo scaled = info("s1");
+  scaled.patch_scale = 1.6;
+  {
+    SessionWriter w(dir.path().string(), scaled);
+    const int64_t f = w.add_frame(1000, 1004, 2);
+    SampleRecord s;
+    s.frame = f;
+    s.patch_side = 252;
+    w.add_sample(s, numbered_patch(0));
+    s.patch_side = 0;  // not given: the fixed patch
+    w.add_sample(s, numbered_patch(1));
+  }
+  const std::string session = (dir.path() / "s1").string();
+  {
+    const SessionReader r(session);
+    EXPECT_DOUBLE_EQ(r.info().patch_scale, 1.6);
+    EXPECT_EQ(r.samples()[0].patch_side, 252);
+    EXPECT_EQ(r.samples()[1].patch_side, r.info().patch_size);
+  }
+  // A session written before patch_side existed: no column, no key.
+  std::ifstream in(session + "/samples.csv");
+  std::string header, row, csv;
+  std::getline(in, header);
+  csv = header.substr(0, header.rfind(',')) + "\n";
+  while (std::getline(in, row)) csv += row.substr(0, row.rfind(',')) + "\n";
+  in.close();
+  std::ofstream(session + "/samples.csv") << csv;
+  std::string json;
+  {
+    std::ifstream j(session + "/session.json");
+    json.assign(std::istreambuf_iterator<char>(j), {});
+  }
+  const size_t key = json.find("  \"patch_scale\"");
+  ASSERT_NE(key, std::string::npos);
+  json.erase(key, json.find('\n', key) - key + 1);
+  std::ofstream(session + "/session.json") << json;
+  const SessionReader old(session);
+  EXPECT_EQ(old.info().patch_scale, 0.0);
+  EXPECT_EQ(old.samples()[0].patch_side, old.info().patch_size);
 }
 
 TEST(DatasetFormat, TwoViewPatchesRoundTripStacked) {

@@ -8,6 +8,9 @@
 
 #include "introspection_node.hpp"
 #include "ivoa/core/calibration.hpp"
+#include "ivoa/core/camera_model.hpp"
+#include "ivoa/core/footprint_patch.hpp"
+#include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/image_convert.hpp"
 #include "model_file.hpp"
 #include "networks.hpp"
@@ -16,14 +19,15 @@
 namespace ivoa {
 namespace {
 
-std::string write_two_view_model(const test::TempDir& dir) {
+std::string write_model(const test::TempDir& dir, int views, double patch_scale = 0) {
   torch::manual_seed(3);
-  auto net = introspection::make_network("slidenet", 0.5, 2);
+  auto net = introspection::make_network("slidenet", 0.5, views);
   introspection::ModelInfo info;
   info.architecture = "slidenet";
-  info.views = 2;
+  info.views = views;
+  info.patch_scale = patch_scale;
   info.detector = "jppc";
-  const std::string path = dir.file("two_view.pt");
+  const std::string path = dir.file("model_" + std::to_string(views) + "_" + std::to_string(patch_scale) + ".pt");
   introspection::save_model(*net, info, path);
   return path;
 }
@@ -48,7 +52,7 @@ TEST(IntrospectionNode, TwoViewModelWaitsForTheCalibrationThenRuns) {
   config.seed = 1;
   IntrospectionNodeOptions options;
   options.grid_channel = "";
-  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_two_view_model(dir), config), options, 2);
+  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 2), config), options, 2);
   std::vector<introspection_t> out;
   bus.subscribe<introspection_t>(channels::kIntrospection, [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
   // The worker runs asynchronously: deliver, then wait (bounded) for `done`.
@@ -76,6 +80,44 @@ TEST(IntrospectionNode, TwoViewModelWaitsForTheCalibrationThenRuns) {
   EXPECT_EQ(out[0].rows, (rig.left.height - 100) / 20 + 1);
   EXPECT_EQ(out[0].cols, (rig.left.width - 100) / 20 + 1);
   EXPECT_EQ(heartbeat.bad_input_count(), 1);
+}
+
+TEST(IntrospectionNode, ScaledModelPredictsQueryCellsFromTheirOwnPatches) {
+  test::TempDir dir;
+  introspection::InferenceConfig config;
+  config.mc_passes = 1;
+  config.mean_filter = 1;
+  const RigCalibration rig = test::make_test_rig();
+  const QueryGrid query_grid(QueryGridConfig{}, RigGeometry(rig).left);
+  const obstacle_grid_t grid = make_obstacle_grid(query_grid, "jppc", 1000);
+  cv::Mat image(rig.left.height, rig.left.width, CV_8UC3);
+  cv::randu(image, 0, 255);
+  std::vector<introspection::IntrospectionModel::CellPatch> cells;
+  const auto sides = footprint_patch_sides(grid, image.size(), 1.6);
+  for (size_t i = 0; i < grid.state.size(); ++i)
+    if (grid.in_image[i]) cells.push_back({grid.u[i], grid.v[i], sides[i]});
+  ASSERT_GT(cells.size(), 10u);
+
+  const auto scaled = introspection::IntrospectionModel::load(write_model(dir, 1, 1.6), config);
+  const auto h = scaled->run(image);
+  const auto got = query_predictions(*scaled, h, image, grid);
+  const auto want = scaled->predict_cells(image, cells);
+  ASSERT_EQ(got.size(), cells.size());
+  int differ_from_heatmap = 0;
+  for (size_t i = 0; i < cells.size(); ++i) {
+    EXPECT_EQ(got[i].probability, want[i].probability) << "cell " << i;
+    differ_from_heatmap += got[i].probability != scaled->predict_at(h, cells[i].u, cells[i].v).probability;
+  }
+  EXPECT_GT(differ_from_heatmap, 0);  // near cells see more than the heatmap's square
+
+  const auto fixed = introspection::IntrospectionModel::load(write_model(dir, 1), config);
+  const auto hf = fixed->run(image);
+  const auto from_heatmap = query_predictions(*fixed, hf, image, grid);
+  ASSERT_EQ(from_heatmap.size(), cells.size());
+  for (size_t i = 0; i < cells.size(); ++i)
+    EXPECT_EQ(from_heatmap[i].probability, fixed->predict_at(hf, cells[i].u, cells[i].v).probability) << "cell " << i;
+  const introspection_t msg = make_introspection_message(*fixed, hf, 1000, image.cols, image.rows, &grid, from_heatmap, 1);
+  EXPECT_EQ(msg.query_class.size(), cells.size());
 }
 
 }  // namespace

@@ -3,7 +3,9 @@
 #include <fstream>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
+#include "ivoa/core/query_grid.hpp"
 #include "ivoa/introspection/model.hpp"
 #include "model_file.hpp"
 #include "networks.hpp"
@@ -12,17 +14,19 @@
 namespace ivoa::introspection {
 namespace {
 
-std::string write_random_model(const test::TempDir& dir, const std::string& architecture = "slidenet", int views = 1) {
+std::string write_random_model(const test::TempDir& dir, const std::string& architecture = "slidenet", int views = 1,
+                               double patch_scale = 0) {
   torch::manual_seed(9);
   auto net = make_network(architecture, 0.5, views);
   ModelInfo info;
   info.views = views;
+  info.patch_scale = patch_scale;
   info.architecture = architecture;
   info.input_size = input_size_of(architecture);
   info.detector = "jppc";
   info.uncertainty_threshold = 0.0123;
   info.training_summary = "{\"steps\": 7}";
-  const std::string path = dir.file(architecture + std::to_string(views) + ".pt");
+  const std::string path = dir.file(architecture + std::to_string(views) + (patch_scale > 0 ? "_scaled" : "") + ".pt");
   save_model(*net, info, path);
   return path;
 }
@@ -74,6 +78,38 @@ TEST(ModelFile, HeatmapCellsEqualTheirPatches) {
       for (int k = 0; k < kNumClasses; ++k)
         EXPECT_NEAR(h.probability[static_cast<size_t>(k)].at<float>(r, col),
                     out.predictions[static_cast<size_t>(r * h.cols + col)].probability[static_cast<size_t>(k)], 1e-5);
+}
+
+TEST(ModelFile, CellPredictionsComeFromTheirOwnResizedSquares) {
+  test::TempDir dir;
+  InferenceConfig c;
+  c.mc_passes = 1;
+  c.mean_filter = 1;
+  const auto model = IntrospectionModel::load(write_random_model(dir, "slidenet", 2, 1.6), c);
+  EXPECT_DOUBLE_EQ(model->info().patch_scale, 1.6);
+  const cv::Mat image = random_image(400, 2 * 300);  // two stacked 400 x 300 views
+  const std::vector<IntrospectionModel::CellPatch> cells{{190, 150, 100}, {200, 150, 240}, {120, 200, 160}};
+  const auto predictions = model->predict_cells(image, cells);
+  ASSERT_EQ(predictions.size(), 3u);
+  for (size_t i = 0; i < cells.size(); ++i) {
+    std::vector<cv::Mat> views;
+    for (int k = 0; k < 2; ++k) {
+      cv::Mat part = image(patch_rect(cells[i].u, cells[i].v + k * 300, cells[i].side)), resized;
+      cv::resize(part, resized, {100, 100}, 0, 0, cv::INTER_AREA);
+      views.push_back(resized);
+    }
+    cv::Mat stacked;
+    cv::vconcat(views, stacked);
+    const auto want = model->run_patches({stacked}, false).predictions[0];
+    for (int k = 0; k < kNumClasses; ++k)
+      EXPECT_NEAR(predictions[i].probability[static_cast<size_t>(k)], want.probability[static_cast<size_t>(k)], 1e-6) << i;
+  }
+  // The 100 px square at a heatmap cell's centre is that cell's patch.
+  const Heatmaps h = model->run(image);
+  for (int k = 0; k < kNumClasses; ++k)
+    EXPECT_NEAR(predictions[0].probability[static_cast<size_t>(k)],
+                h.probability[static_cast<size_t>(k)].at<float>(5, 7), 1e-5);
+  EXPECT_THROW(model->predict_cells(image, {{200, 150, 320}}), ModelError);  // leaves the 300-row view
 }
 
 TEST(ModelFile, TwoViewHeatmapCellsEqualTheirStackedPatches) {

@@ -143,6 +143,11 @@ int main(int argc, char** argv) {
                     "1: left patches (the paper); 2: each with the right image warped onto the ground plane below it")
       ->check(CLI::IsMember({1, 2}))
       ->capture_default_str();
+  build->add_option("--patch-scale", options.patch_scale,
+                    "0: fixed --patch-size squares (the paper); k > 0: squares of k footprint-disc widths (at least "
+                    "--patch-size) resized to --patch-size, so near cells show their whole disc")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
       ->capture_default_str();
   build->add_option("logs", logs, "LCM log files, in order")->required()->check(CLI::ExistingFile);

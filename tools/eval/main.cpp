@@ -47,6 +47,11 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
                 introspection::IntrospectionModel& model, Progress& progress, double& done) {
   constexpr size_t kBatch = 256;
   const auto& info = session.info();
+  if (info.patch_scale != model.info().patch_scale)
+    throw dataset::DatasetError("session " + info.session + " has patch scale " + std::to_string(info.patch_scale) +
+                                ", model " + model.info().id + " was trained on " +
+                                std::to_string(model.info().patch_scale) + " (build the dataset with --patch-scale " +
+                                std::to_string(model.info().patch_scale) + ")");
   if (info.views != model.info().views)
     throw dataset::DatasetError("session " + info.session + " has " + std::to_string(info.views) + " view(s) per patch, model " +
                                 model.info().id + " takes " + std::to_string(model.info().views) +
@@ -80,6 +85,25 @@ std::string session_of_log(const std::string& path) {
   return name;
 }
 
+// The prediction for each labelled cell, as ivoa-introspection makes it:
+// from the heatmaps, or from the cell's own patch for a footprint-scaled
+// model (the side the dataset recorded).
+void predict_cells(introspection::IntrospectionModel& model, const introspection::Heatmaps& h, const cv::Mat& input,
+                   std::vector<tools::LabelledCell>& cells) {
+  std::vector<introspection::Prediction> predictions;
+  if (model.info().patch_scale > 0) {
+    std::vector<introspection::IntrospectionModel::CellPatch> patches;
+    for (const auto& c : cells) patches.push_back({c.u, c.v, c.patch_side});
+    predictions = model.predict_cells(input, patches);
+  } else {
+    for (const auto& c : cells) predictions.push_back(model.predict_at(h, c.u, c.v));
+  }
+  for (size_t i = 0; i < cells.size(); ++i) {
+    cells[i].predicted = predictions[i].predicted;
+    cells[i].announced = predictions[i].announced;
+  }
+}
+
 int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
   fs::create_directories(o.out + "/overlays");
   int written = 0;
@@ -92,7 +116,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
     }
     const dataset::SessionReader reader(dir);
     std::map<int64_t, std::vector<tools::LabelledCell>> frames;
-    for (const auto& s : reader.samples()) frames[s.utime].push_back({s.u, s.v, s.label, -1, true});
+    for (const auto& s : reader.samples()) frames[s.utime].push_back({s.u, s.v, s.label, -1, true, s.patch_side});
     logio::LogReader in(log);
     logio::LogEvent e;
     int64_t index = 0;
@@ -115,11 +139,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
         input = warp->stack(left, decode_image(msg.right));
       }
       const introspection::Heatmaps h = model.run(input);
-      for (auto& cell : it->second) {
-        const auto p = model.predict_at(h, cell.u, cell.v);
-        cell.predicted = p.predicted;
-        cell.announced = p.announced;
-      }
+      predict_cells(model, h, input, it->second);
       cv::Mat figure = tools::compose_frame_figure(left, h, it->second);
       cv::resize(figure, figure, cv::Size(), o.overlay_scale, o.overlay_scale, cv::INTER_AREA);
       cv::imwrite(o.out + "/overlays/" + session + "_" + std::to_string(msg.utime) + ".png", figure);

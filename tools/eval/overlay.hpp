@@ -16,6 +16,7 @@ struct LabelledCell {
   int label = -1;      // 0 TP, 1 TN, 2 FP, 3 FN; -1 none
   int predicted = -1;  // idem; -1 not predicted
   bool announced = true;
+  int patch_side = 0;  // the square the model sees around (u, v), pixels
 };
 
 // Colours of the four classes (BGR), as in the reference code's figures:

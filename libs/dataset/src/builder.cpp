@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/camera_model.hpp"
+#include "ivoa/core/footprint_patch.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/ground_warp.hpp"
 #include "ivoa/core/image_convert.hpp"
@@ -74,6 +75,7 @@ struct SessionBuilder::Impl {
   void take(std::vector<monitor::PipelineOutcome> outcomes);
   void emit_ready(bool all);
   void emit(const introspection_labels_t& labels);
+  std::vector<int> patch_sides(const introspection_labels_t& labels, const cv::Mat& views) const;
   void open_writer();
 };
 
@@ -87,6 +89,7 @@ void SessionBuilder::Impl::open_writer() {
   if (writer) return;
   info.patch_size = rerun() ? options.grid.patch_size : info.patch_size;
   info.views = options.views;
+  info.patch_scale = options.patch_scale;
   // The user's word first, then the simulator's, then the scene name's.
   if (!options.environment.empty())
     info.environment = options.environment;
@@ -204,6 +207,15 @@ void SessionBuilder::Impl::emit_ready(bool all) {
   }
 }
 
+// The side of the square cut around each cell of `labels` in `views` (the
+// stacked model input): info.patch_size, or footprint-scaled.
+std::vector<int> SessionBuilder::Impl::patch_sides(const introspection_labels_t& labels, const cv::Mat& views) const {
+  QueryGridConfig grid = geometry_of(labels);
+  grid.patch_size = info.patch_size;
+  const cv::Size image(views.cols, views.rows / info.views);
+  return footprint_patch_sides(grid, labels.num_x, labels.num_y, labels.u, labels.v, image, options.patch_scale);
+}
+
 void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
   const auto image = left_images.find(labels.utime);
   if (image == left_images.end()) {
@@ -215,9 +227,10 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
   for (int8_t l : labels.label) labelled += l != introspection_labels_t::LABEL_NONE;
   const int64_t frame = writer->add_frame(labels.utime, labels.depth_utime, labelled);
   int64_t samples = 0;
+  const std::vector<int> sides = patch_sides(labels, image->second);
   for (size_t i = 0; i < labels.label.size(); ++i) {
     if (labels.label[i] == introspection_labels_t::LABEL_NONE) continue;
-    const cv::Mat patch = extract_views(image->second, info.views, labels.u[i], labels.v[i], info.patch_size);
+    const cv::Mat patch = cut_patch(image->second, info.views, labels.u[i], labels.v[i], sides[i], info.patch_size);
     if (patch.empty()) continue;  // the patch would leave the image
     SampleRecord s;
     s.frame = frame;
@@ -231,8 +244,9 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
     s.y = labels.y[i];
     s.u = labels.u[i];
     s.v = labels.v[i];
+    s.patch_side = sides[i];
     if (truth != truths.end()) {
-      const PatchTruth t = summarize_truth(truth->second.phenomena, truth->second.surface, s.u, s.v, info.patch_size);
+      const PatchTruth t = summarize_truth(truth->second.phenomena, truth->second.surface, s.u, s.v, sides[i]);
       s.phenomena = t.phenomena;
       s.phenomenon = t.phenomenon;
       s.surface = t.surface;
@@ -261,6 +275,9 @@ SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::strin
   if (impl_->options.recorded_patch_size < 0 || (impl_->rerun() && impl_->options.recorded_patch_size > 0))
     throw std::invalid_argument("recorded_patch_size must be > 0 and is for recorded labels (re-run labels cut "
                                 "grid.patch_size)");
+  if (!(impl_->options.patch_scale >= 0))
+    throw std::invalid_argument("patch_scale must be >= 0 (0: fixed patches), not " +
+                                std::to_string(impl_->options.patch_scale));
   if (impl_->options.views != 1 && impl_->options.views != 2)
     throw std::invalid_argument("views must be 1 or 2, not " + std::to_string(impl_->options.views));
   impl_->info.session = session;

@@ -21,8 +21,11 @@ namespace fs = std::filesystem;
 namespace ivoa::dataset {
 namespace {
 
-constexpr const char* kSamplesHeader =
+constexpr const char* kSamplesHeaderV1 =
     "sample,frame,utime,depth_utime,cell,label,stereo_state,depth_state,x,y,u,v,phenomena,phenomenon,surface";
+constexpr const char* kSamplesHeader =
+    "sample,frame,utime,depth_utime,cell,label,stereo_state,depth_state,x,y,u,v,phenomena,phenomenon,surface,"
+    "patch_side";
 
 std::string session_json(const SessionInfo& i) {
   std::ostringstream o;
@@ -32,7 +35,8 @@ std::string session_json(const SessionInfo& i) {
   for (size_t k = 0; k < i.logs.size(); ++k) o << (k ? ", " : "") << json_quote(i.logs[k]);
   o << "],\n  \"scene\": " << json_quote(i.scene) << ",\n  \"seed\": " << i.seed
     << ",\n  \"environment\": " << json_quote(i.environment) << ",\n  \"rig_name\": " << json_quote(i.rig_name)
-    << ",\n  \"patch_size\": " << i.patch_size << ",\n  \"views\": " << i.views << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples
+    << ",\n  \"patch_size\": " << i.patch_size << ",\n  \"views\": " << i.views
+    << ",\n  \"patch_scale\": " << i.patch_scale << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples
     << ",\n  \"class_counts\": {";
   for (int c = 0; c < kNumClasses; ++c) o << (c ? ", " : "") << json_quote(kLabelNames[c]) << ": " << i.class_counts[c];
   const QueryGridConfig& g = i.grid;
@@ -71,6 +75,8 @@ SessionInfo parse_session_json(const std::string& path) {
   i.patch_size = get<int>(root, "patch_size", path);
   i.views = root["views"] ? get<int>(root, "views", path) : 1;  // datasets written before views existed
   if (i.views != 1 && i.views != 2) throw DatasetError(path + ": views must be 1 or 2, not " + std::to_string(i.views));
+  i.patch_scale = root["patch_scale"] ? get<double>(root, "patch_scale", path) : 0.0;  // written before scaling existed
+  if (i.patch_scale < 0) throw DatasetError(path + ": patch_scale must be >= 0");
   i.frames = get<int64_t>(root, "frames", path);
   i.samples = get<int64_t>(root, "samples", path);
   const YAML::Node counts = root["class_counts"];
@@ -86,13 +92,14 @@ SessionInfo parse_session_json(const std::string& path) {
   return i;
 }
 
-SampleRecord parse_sample_row(const std::string& line, const std::string& where) {
+// `columns`: 15 (before patch_side was recorded) or 16.
+SampleRecord parse_sample_row(const std::string& line, int columns, const std::string& where) {
   SampleRecord s;
   long long sample = 0, frame = 0, utime = 0, depth_utime = 0;
-  int n = std::sscanf(line.c_str(), "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%f,%f,%f,%f,%d,%d,%d", &sample, &frame, &utime,
+  int n = std::sscanf(line.c_str(), "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%f,%f,%f,%f,%d,%d,%d,%d", &sample, &frame, &utime,
                       &depth_utime, &s.cell, &s.label, &s.stereo_state, &s.depth_state, &s.x, &s.y, &s.u, &s.v,
-                      &s.phenomena, &s.phenomenon, &s.surface);
-  if (n != 15) throw DatasetError(where + ": malformed row '" + line + "'");
+                      &s.phenomena, &s.phenomenon, &s.surface, &s.patch_side);
+  if (n != columns) throw DatasetError(where + ": malformed row '" + line + "'");
   if (s.label < 0 || s.label >= kNumClasses) throw DatasetError(where + ": label " + std::to_string(s.label) + " out of range");
   s.frame = frame;
   s.utime = utime;
@@ -150,10 +157,11 @@ void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch) {
   const size_t bytes = static_cast<size_t>(p) * p * 3 * info_.views;
   if (std::fwrite(contiguous.data, 1, bytes, files_->patches) != bytes)
     throw DatasetError(dir_ + "/patches.bin: write failed (disk full?)");
-  std::fprintf(files_->samples, "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%.4f,%.4f,%.2f,%.2f,%d,%d,%d\n",
+  if (s.patch_side == 0) s.patch_side = p;
+  std::fprintf(files_->samples, "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%.4f,%.4f,%.2f,%.2f,%d,%d,%d,%d\n",
                static_cast<long long>(info_.samples), static_cast<long long>(s.frame),
                static_cast<long long>(s.utime), static_cast<long long>(s.depth_utime), s.cell, s.label,
-               s.stereo_state, s.depth_state, s.x, s.y, s.u, s.v, s.phenomena, s.phenomenon, s.surface);
+               s.stereo_state, s.depth_state, s.x, s.y, s.u, s.v, s.phenomena, s.phenomenon, s.surface, s.patch_side);
   ++info_.samples;
   ++info_.class_counts[static_cast<size_t>(s.label)];
   ++frames_[static_cast<size_t>(s.frame)].samples;
@@ -183,11 +191,16 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
   if (!in) throw DatasetError(dir_ + "/samples.csv: cannot open");
   std::string line;
   std::getline(in, line);
-  if (line != kSamplesHeader) throw DatasetError(dir_ + "/samples.csv: unexpected header '" + line + "'");
+  const bool has_side = line == kSamplesHeader;
+  if (!has_side && line != kSamplesHeaderV1)
+    throw DatasetError(dir_ + "/samples.csv: unexpected header '" + line + "'");
   size_t row = 1;
   while (std::getline(in, line)) {
     ++row;
-    if (!line.empty()) samples_.push_back(parse_sample_row(line, dir_ + "/samples.csv line " + std::to_string(row)));
+    if (line.empty()) continue;
+    SampleRecord s = parse_sample_row(line, has_side ? 16 : 15, dir_ + "/samples.csv line " + std::to_string(row));
+    if (!has_side) s.patch_side = info_.patch_size;
+    samples_.push_back(s);
   }
   const size_t patch_bytes = this->patch_bytes();
   const std::string patches = dir_ + "/patches.bin";

@@ -4,28 +4,17 @@
 #include <array>
 #include <vector>
 
+#include "ivoa/core/footprint_patch.hpp"
 #include "ivoa/core/query_grid.hpp"
 
 namespace ivoa::dataset {
 
 cv::Mat extract_patch(const cv::Mat& image, double u, double v, int patch_size) {
-  const cv::Rect rect = patch_rect(u, v, patch_size);
-  if ((rect & cv::Rect(0, 0, image.cols, image.rows)) != rect) return {};
-  return image(rect).clone();
+  return cut_patch(image, 1, u, v, patch_size, patch_size);
 }
 
 cv::Mat extract_views(const cv::Mat& stacked, int views, double u, double v, int patch_size) {
-  if (views == 1) return extract_patch(stacked, u, v, patch_size);
-  const int height = stacked.rows / views;
-  std::vector<cv::Mat> parts;
-  for (int k = 0; k < views; ++k) {
-    cv::Mat part = extract_patch(stacked.rowRange(k * height, (k + 1) * height), u, v, patch_size);
-    if (part.empty()) return {};
-    parts.push_back(std::move(part));
-  }
-  cv::Mat out;
-  cv::vconcat(parts, out);
-  return out;
+  return cut_patch(stacked, views, u, v, patch_size, patch_size);
 }
 
 PatchTruth summarize_truth(const cv::Mat& phenomena, const cv::Mat& surface, double u, double v, int patch_size) {

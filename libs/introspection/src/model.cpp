@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 #include <torch/script.h>
 
+#include "ivoa/core/footprint_patch.hpp"
 #include "ivoa/core/time.hpp"
 #include "mc_dropout.hpp"
 #include "model_file.hpp"
@@ -278,6 +279,20 @@ std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& 
 
 double IntrospectionModel::threshold() const {
   return config_.uncertainty_threshold >= 0 ? config_.uncertainty_threshold : info().uncertainty_threshold;
+}
+
+std::vector<Prediction> IntrospectionModel::predict_cells(const cv::Mat& image, const std::vector<CellPatch>& cells) {
+  check_image(image, info());
+  std::vector<cv::Mat> patches;
+  patches.reserve(cells.size());
+  for (const auto& c : cells) {
+    patches.push_back(cut_patch(image, info().views, c.u, c.v, c.side, info().patch_size));
+    if (patches.back().empty())
+      throw ModelError("the " + std::to_string(c.side) + " px patch around (" + std::to_string(c.u) + ", " +
+                       std::to_string(c.v) + ") leaves the image");
+  }
+  if (patches.empty()) return {};
+  return run_patches(patches, false).predictions;
 }
 
 Prediction IntrospectionModel::predict_at(const Heatmaps& h, double u, double v) const {

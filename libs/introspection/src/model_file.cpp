@@ -41,7 +41,8 @@ std::string info_to_json(const ModelInfo& i) {
   o.precision(8);
   o << "{\"format\": " << json_quote(kFormat) << ", \"version\": 1, \"architecture\": " << json_quote(i.architecture)
     << ", \"detector\": " << json_quote(i.detector) << ", \"patch_size\": " << i.patch_size << ", \"stride\": " << i.stride
-    << ", \"input_size\": " << i.input_size << ", \"views\": " << i.views << ", \"dropout\": " << i.dropout << ", \"color\": \"RGB\""
+    << ", \"input_size\": " << i.input_size << ", \"views\": " << i.views
+    << ", \"patch_scale\": " << i.patch_scale << ", \"dropout\": " << i.dropout << ", \"color\": \"RGB\""
     << ", \"mean\": [" << i.mean[0] << ", " << i.mean[1] << ", " << i.mean[2] << "], \"std\": [" << i.std[0] << ", "
     << i.std[1] << ", " << i.std[2] << "], \"classes\": [";
   for (size_t k = 0; k < i.classes.size(); ++k) o << (k ? ", " : "") << json_quote(i.classes[k]);
@@ -62,6 +63,7 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
     i.stride = n["stride"].as<int>();
     i.input_size = n["input_size"].as<int>();
     i.views = n["views"].as<int>(1);  // models written before views existed see the left image only
+    i.patch_scale = n["patch_scale"].as<double>(0.0);  // models written before scaling existed: fixed patches
     i.dropout = n["dropout"].as<double>();
     for (int c = 0; c < 3; ++c) {
       i.mean[static_cast<size_t>(c)] = n["mean"][c].as<float>();
@@ -82,6 +84,7 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
   if (i.patch_size <= 0 || i.stride <= 0 || i.input_size <= 0 || !(i.dropout > 0 && i.dropout < 1))
     throw ModelError(where + ": patch_size, stride, input_size must be positive and dropout in (0, 1)");
   if (i.views != 1 && i.views != 2) throw ModelError(where + ": views must be 1 or 2, not " + std::to_string(i.views));
+  if (!(i.patch_scale >= 0)) throw ModelError(where + ": patch_scale must be >= 0");
   return i;
 }
 

@@ -28,6 +28,9 @@ struct BuildOptions {
   // recorded cell instead of the recording grid's; cells whose patch would
   // leave the image are skipped. Re-run labels use grid.patch_size.
   int recorded_patch_size = 0;
+  // > 0: footprint-scaled patches (SessionInfo::patch_scale), for either
+  // kind of labels; 0: fixed squares.
+  double patch_scale = 0;
   monitor::DepthMonitorConfig monitor;
   monitor::PairingConfig pairing;
   std::string environment;  // "" = the simulator's truth messages, else the scene name (indoor_*/outdoor_*)

@@ -38,6 +38,10 @@ struct SampleRecord {
   int32_t phenomena = 0;
   int32_t phenomenon = 0;
   int32_t surface = kUnknownSurface;
+  // Side in pixels of the square cut around (u, v) before it was resized to
+  // the session's patch_size (SessionInfo::patch_scale); 0 in datasets
+  // written before it was recorded, which means patch_size.
+  int32_t patch_side = 0;
 };
 
 struct FrameRecord {
@@ -62,6 +66,11 @@ struct SessionInfo {
   // (core's GroundWarp). A stored patch is (views x patch_size) rows by
   // patch_size columns, 8-bit BGR.
   int views = 1;
+  // 0: every patch is the patch_size square around its cell (the paper).
+  // > 0: footprint-scaled patches (core's footprint_patch.hpp): squares of
+  // this many footprint-disc widths, at least patch_size, resized to
+  // patch_size; each sample records the side it was cut at.
+  double patch_scale = 0;
   QueryGridConfig grid;
   // Filled by the writer / reader:
   int64_t frames = 0;

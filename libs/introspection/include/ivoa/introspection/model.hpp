@@ -40,6 +40,11 @@ struct ModelInfo {
   // the right image warped onto the ground plane (core's GroundWarp), so
   // the network sees what the stereo matcher compares.
   int views = 1;
+  // 0: fixed patch_size squares. > 0: trained on footprint-scaled patches
+  // (core's footprint_patch.hpp): query cells must be predicted from squares
+  // cut the same way (predict_cells); the heatmaps still use fixed squares,
+  // which equal the scaled ones wherever the disc fits in patch_size.
+  double patch_scale = 0;
   double dropout = 0.5;
   std::array<float, 3> mean{0.485f, 0.456f, 0.406f};  // RGB, on [0, 1]
   std::array<float, 3> std{0.229f, 0.224f, 0.225f};
@@ -119,6 +124,17 @@ class IntrospectionModel {
   // Patches (patch_size square, 8-bit BGR; views stacked for a two-view
   // model, as the dataset stores them); MC dropout when mc_passes > 1.
   virtual PatchOutputs run_patches(const std::vector<cv::Mat>& patches, bool with_embeddings) = 0;
+
+  // Predictions at query cells from their own patches: the side x side
+  // square around (u, v) of the model input (views stacked, as for run()),
+  // resized to patch_size. What a footprint-scaled model needs; side =
+  // patch_size gives the heatmap's patch at that point without the mean
+  // filter. Throws ModelError for a square that leaves the image.
+  struct CellPatch {
+    double u = 0, v = 0;
+    int side = 0;
+  };
+  std::vector<Prediction> predict_cells(const cv::Mat& image, const std::vector<CellPatch>& cells);
 
  protected:
   explicit IntrospectionModel(InferenceConfig config) : config_(config) {}
