@@ -1,5 +1,6 @@
 // Model files round-trip exactly with their metadata; bad files are refused
 // with the reason; full-frame heatmaps agree with patch-by-patch inference.
+#include <cstdio>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -196,6 +197,23 @@ TEST(ModelFile, BadFilesAreRefusedWithTheReason) {
     b.save_to(dir.file("mismatch.pt"));
   }
   expect_refusal(dir.file("mismatch.pt"), "do not fit architecture 'alexnet'");
+}
+
+// The main job evaluates the shipped model on datasets it builds: they must
+// be cut the way the model was trained, which the script states.
+TEST(ShippedModel, MetadataMatchesWhatTheMainJobAssumes) {
+  const auto model = IntrospectionModel::load(IVOA_SHIPPED_MODEL);
+  std::ifstream script(IVOA_MAIN_JOB_SCRIPT);
+  std::string line;
+  while (std::getline(script, line) && line.rfind("SHIPPED_VIEWS=", 0) != 0) {
+  }
+  ASSERT_EQ(line.rfind("SHIPPED_VIEWS=", 0), 0u) << "no SHIPPED_VIEWS= line in " << IVOA_MAIN_JOB_SCRIPT;
+  int views = 0;
+  double scale = -1;
+  ASSERT_EQ(std::sscanf(line.c_str(), "SHIPPED_VIEWS=%d SHIPPED_PATCH_SCALE=%lf", &views, &scale), 2) << line;
+  EXPECT_EQ(model->info().views, views);
+  EXPECT_DOUBLE_EQ(model->info().patch_scale, scale);
+  EXPECT_EQ(model->info().detector, "jppc");
 }
 
 }  // namespace

@@ -416,6 +416,31 @@ class DegenerateAndBadInputTest(unittest.TestCase):
         self.assertIn("Clustering not possible", report)
         self.assertIn("absent from the truth: FN", report)
 
+    def test_footprint_scaled_dataset_reports_the_cut_sides(self):
+        """A dataset that records patch_side per sample (ivoa-dataset --patch-scale):
+        the distance table gives the row's median side and names the scale."""
+        d = os.path.join(self.root, "data_scaled")
+        shutil.copytree(self.f.data, d)
+        for name in os.listdir(d):
+            session = os.path.join(d, name)
+            if not os.path.isdir(session):
+                continue
+            info = json.loads(read_text(os.path.join(session, "session.json")))
+            info["patch_scale"] = 1.6
+            with open(os.path.join(session, "session.json"), "w") as fh:
+                json.dump(info, fh)
+            path = os.path.join(session, "samples.csv")
+            lines = read_text(path).splitlines()
+            with open(path, "w") as fh:
+                fh.write("\n".join([lines[0] + ",patch_side"] + [l + ",196" for l in lines[1:]]) + "\n")
+        out = os.path.join(self.root, "report_scaled")
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", d, "--out", out])
+        self.assertEqual(code, 0, stderr)
+        m = next(iter(json.loads(read_text(os.path.join(out, "metrics.json")))["models"].values()))
+        self.assertEqual(m["patch_scale"], 1.6)
+        self.assertEqual([g["patch_px"] for g in m["distances"]], [196.0])
+        self.assertIn("Footprint-scaled patches (x1.6)", read_text(os.path.join(out, "report.md")))
+
     def assert_bad_input(self, argv, *fragments):
         code, _, stderr = run_main(argv + ["--out", os.path.join(self.root, "report_bad")])
         self.assertEqual(code, 3, stderr)
@@ -551,6 +576,21 @@ class MetricUnitTest(unittest.TestCase):
             self.assertAlmostEqual(r["disc_px"], disc)
             self.assertEqual(r["per_class_accuracy"][:3], [0.5, 1.0, 1.0])
         self.assertIsNone(by_distance(run)[0]["disc_px"])  # no safety radius known
+        self.assertIsNone(rows[0]["patch_px"])  # no per-sample sides given
+
+        # Footprint-scaled patches: each row reports its median side, and the
+        # table says the near row's disc (160 px) now fits in its 256 px square.
+        sides = np.where(xs == 1.0, 256, 100)
+        sides[0] = 250
+        scaled = by_distance(run, 0.1, sides)
+        self.assertEqual([r["patch_px"] for r in scaled], [256.0, 100.0])
+        from report_markdown import distance_table
+        text = distance_table({"distances": scaled, "patch_size": 100, "patch_scale": 1.6})
+        self.assertIn("Footprint-scaled patches (x1.6)", text)
+        self.assertIn("| 256 |", text)
+        self.assertNotIn("wider than the patch", text)
+        self.assertIn("1 m the safety disc is wider than the patch",
+                      distance_table({"distances": rows, "patch_size": 100, "patch_scale": 0}))
 
     def test_auroc_undefined_without_failures(self):
         load_tool()

@@ -48,10 +48,10 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
   constexpr size_t kBatch = 256;
   const auto& info = session.info();
   if (info.patch_scale != model.info().patch_scale)
-    throw dataset::DatasetError("session " + info.session + " has patch scale " + std::to_string(info.patch_scale) +
-                                ", model " + model.info().id + " was trained on " +
-                                std::to_string(model.info().patch_scale) + " (build the dataset with --patch-scale " +
-                                std::to_string(model.info().patch_scale) + ")");
+    throw dataset::DatasetError(fmt::format("session {} has patch scale {}, model {} was trained on {} (build the dataset "
+                                            "with --patch-scale {})",
+                                            info.session, info.patch_scale, model.info().id, model.info().patch_scale,
+                                            model.info().patch_scale));
   if (info.views != model.info().views)
     throw dataset::DatasetError("session " + info.session + " has " + std::to_string(info.views) + " view(s) per patch, model " +
                                 model.info().id + " takes " + std::to_string(model.info().views) +

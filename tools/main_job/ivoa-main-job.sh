@@ -13,11 +13,13 @@
 #      scenes generated from seeds never used in training;
 #   5. write the report (metrics, uncertainty, failure clusters, figures).
 #
-# Usage: ivoa-main-job.sh [--scale default|smoke|full] [--views 1|2] [--out DIR] [--live]
+# Usage: ivoa-main-job.sh [--scale default|smoke|full] [--views 1|2] [--patch-scale K] [--out DIR] [--live]
 #   --scale full   more sessions and training: the recipe of the shipped model
 #   --scale smoke  a few frames per session: checks the whole chain (a test)
 #   --views 1      the paper's input, the left image only (default 2: the
 #                  left image and the right one warped onto the ground)
+#   --patch-scale K  footprint-scaled patches, K disc widths per square
+#                  (default 1.6); 0: the paper's fixed 100 px squares
 #   --live         the short variant: run the shipped model live on the
 #                  simulator (sim.pmd with introspection and the viewer)
 set -euo pipefail
@@ -28,17 +30,20 @@ BIN=$BUILD/bin
 PY=/usr/bin/python3          # Debian's, with numpy/matplotlib/sklearn
 SCENES=$ROOT/libs/sim/scenes
 SHIPPED=$ROOT/libs/introspection/models/introspection_jppc.pt
+SHIPPED_VIEWS=2 SHIPPED_PATCH_SCALE=1.6  # its metadata (checked by the test shipped_model_metadata)
 scale=default
 views=2
+patch_scale=1.6
 out=""
 live=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --scale) scale=$2; shift 2 ;;
     --views) views=$2; shift 2 ;;
+    --patch-scale) patch_scale=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --live) live=1; shift ;;
-    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
     *) echo "ivoa-main-job: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -169,9 +174,11 @@ logs=()
 for s in "${train[@]}" "${val[@]}" "${test[@]}"; do logs+=("$out/logs/$s.lcmlog"); done
 rm -rf "$out/data_jppc" "$out/data_dense"
 echo "  JPP-C: the labels the live stereo detector and depth monitor published"
-"$BIN/ivoa-dataset" --log-level warn build --out "$out/data_jppc" --labels recorded --views "$views" "${logs[@]}" | tee "$out/dataset_jppc.txt"
+"$BIN/ivoa-dataset" --log-level warn build --out "$out/data_jppc" --labels recorded --views "$views" \
+  --patch-scale "$patch_scale" "${logs[@]}" | tee "$out/dataset_jppc.txt"
 echo "  dense (SGBM): the detector and the monitor re-run offline on the same raw frames"
-"$BIN/ivoa-dataset" --log-level warn build --out "$out/data_dense" --labels dense --views "$views" "${logs[@]}" | tee "$out/dataset_dense.txt"
+"$BIN/ivoa-dataset" --log-level warn build --out "$out/data_dense" --labels dense --views "$views" \
+  --patch-scale "$patch_scale" "${logs[@]}" | tee "$out/dataset_dense.txt"
 
 for detector in jppc dense; do
   step "Training introspection for $detector ($STEPS steps, batch $BATCH)"
@@ -190,7 +197,7 @@ for detector in jppc dense; do
     --split "$split_file" --splits test --out "$out/eval_$detector" --logs "${overlay_logs[@]}" --max-overlays 6
   evals+=(--eval "$out/eval_$detector"); datasets+=(--dataset "$out/data_$detector")
 done
-if [ -f "$SHIPPED" ] && [ "$views" = 2 ]; then  # the shipped model takes two views
+if [ -f "$SHIPPED" ] && [ "$views" = "$SHIPPED_VIEWS" ] && [ "$patch_scale" = "$SHIPPED_PATCH_SCALE" ]; then
   echo "  and the shipped JPP-C model (trained with --scale full) on the same test sessions"
   "$BIN/ivoa-eval" --log-level warn --model "$SHIPPED" --dataset "$out/data_jppc" --split "$split_file" --splits test \
     --out "$out/eval_shipped_jppc" --logs "${overlay_logs[@]}" --max-overlays 6

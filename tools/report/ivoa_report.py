@@ -73,7 +73,7 @@ import report_markdown as md  # noqa: E402
 import report_metrics as metrics  # noqa: E402
 from report_clustering import ClusterOptions, cluster_failures  # noqa: E402
 from report_inputs import (Dataset, EvalRun, InputError, attach_dataset, load_eval, make_names,  # noqa: E402
-                           patch_size, query_grid)
+                           patch_scale, patch_sides, patch_size, query_grid)
 
 
 def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
@@ -147,8 +147,9 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "overall": metrics.class_metrics(run.label, run.predicted),
         "environments": metrics.grouped_metrics(run, run.environment),
         "sessions": metrics.grouped_metrics(run, run.session, describe_sessions=True),
-        "distances": metrics.by_distance(run, grid.get("safety_radius")),
+        "distances": metrics.by_distance(run, grid.get("safety_radius"), patch_sides(run)),
         "patch_size": patch_size(run),
+        "patch_scale": patch_scale(run),
         "failure": metrics.failure_detection(run.label, run.predicted, run.probs),
         "sweep": metrics.uncertainty_sweep(run),
         "per_phenomenon": metrics.per_phenomenon(run),

@@ -113,6 +113,7 @@ class DatasetSession:
     utime: np.ndarray
     cell: np.ndarray
     label: np.ndarray
+    patch_side: Optional[np.ndarray] = None  # square cut around each cell, px (datasets that record it)
     _patches: Optional[np.memmap] = None
 
     @property
@@ -175,11 +176,13 @@ class Dataset:
             utime = np.array([int(s) for s in cols["utime"]], dtype=np.int64)
             cell = np.array([int(s) for s in cols["cell"]], dtype=np.int64)
             label = np.array([int(s) for s in cols["label"]], dtype=np.int64)
+            side = (np.array([int(s) for s in cols["patch_side"]], dtype=np.int64)
+                    if "patch_side" in cols else None)
         except ValueError as e:
-            raise InputError(f"{samples_path}: a non-integer value in sample/utime/cell/label ({e})") from None
+            raise InputError(f"{samples_path}: a non-integer value in sample/utime/cell/label/patch_side ({e})") from None
         if len(sample) and not np.array_equal(sample, np.arange(len(sample))):
             raise InputError(f"{samples_path}: column 'sample' must equal the row number (0, 1, 2, ...)")
-        return DatasetSession(name, d, patch_size, info, utime, cell, label)
+        return DatasetSession(name, d, patch_size, info, utime, cell, label, side)
 
 
 # --------------------------------------------------------------------------- eval runs
@@ -358,6 +361,27 @@ def load_eval(path: str) -> EvalRun:
 def patch_size(run: EvalRun) -> Optional[int]:
     """Side in pixels of the patches the run's model saw (its first session's)."""
     return run.dataset.session(str(run.session[0])).patch_size if run.dataset is not None and run.size else None
+
+
+def patch_sides(run: EvalRun) -> Optional[np.ndarray]:
+    """Per prediction row, the side in pixels of the square its patch was cut
+    from (footprint-scaled datasets record it per sample; otherwise every
+    patch is patch_size); None without a dataset."""
+    if run.dataset is None or not run.size:
+        return None
+    out = np.zeros(run.size, dtype=np.int64)
+    for name in dict.fromkeys(run.session.tolist()):
+        s = run.dataset.session(name)
+        rows = np.flatnonzero(run.session == name)
+        out[rows] = s.patch_side[run.sample[rows]] if s.patch_side is not None else s.patch_size
+    return out
+
+
+def patch_scale(run: EvalRun) -> float:
+    """The footprint patch scale of the run's dataset (0: fixed squares)."""
+    if run.dataset is None or not run.size:
+        return 0.0
+    return float(run.dataset.session(str(run.session[0])).info.get("patch_scale", 0) or 0)
 
 
 def query_grid(run: EvalRun) -> dict:

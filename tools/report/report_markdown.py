@@ -90,17 +90,22 @@ def distance_table(rm: dict) -> str:
     """Accuracy per query-grid row, with how wide the safety disc appears
     against the patch: a label about a disc wider than the patch depends on
     things the patch does not show."""
-    rows, patch = rm["distances"], rm.get("patch_size")
+    rows, patch, scale = rm["distances"], rm.get("patch_size"), rm.get("patch_scale") or 0
     out = ["\n**Per distance ahead** (query-grid rows)\n\n"]
-    headers = ["x", "n"] + [f"{n} acc." for n in LABEL_NAMES] + ["mean per-class", "overall",
-                                                                f"safety disc across (px; patch {patch or '?'})"]
+    headers = ["x", "n"] + [f"{n} acc." for n in LABEL_NAMES] + ["mean per-class", "overall", "safety disc across (px)",
+                                                                "patch cut (px)"]
     out.append(table(headers, [[g["group"], g["n"]] + _class_cells(g)
                                + [fmt(g["mean_per_class_accuracy"]), fmt(g["overall_accuracy"]),
-                                  fmt(g["disc_px"], 0)] for g in rows]))
-    wide = [g for g in rows if patch and g["disc_px"] is not None and g["disc_px"] > patch]
+                                  fmt(g["disc_px"], 0), fmt(g.get("patch_px") or patch, 0)] for g in rows]))
+    if scale > 0:
+        out.append(f"\nFootprint-scaled patches (x{scale:g}): the square cut around a cell is {scale:g} disc widths "
+                   f"(at least {patch} px, shrunk to stay in the image), resized to {patch} px; 'patch cut' is the "
+                   f"row's median side.\n")
+    wide = [g for g in rows if g["disc_px"] is not None and (g.get("patch_px") or patch)
+            and g["disc_px"] > (g.get("patch_px") or patch)]
     if wide:
         share = sum(g["n"] for g in wide) / max(1, sum(g["n"] for g in rows))
-        out.append(f"\nAt {', '.join(g['group'] for g in wide)} the safety disc is wider than the {patch} px patch "
+        out.append(f"\nAt {', '.join(g['group'] for g in wide)} the safety disc is wider than the patch "
                    f"({pct(share)} of the samples): the patch cannot show all of what the label is about there.\n")
     return "".join(out)
 

@@ -81,13 +81,15 @@ def grouped_metrics(run: EvalRun, key: np.ndarray, describe_sessions: bool = Fal
     return out
 
 
-def by_distance(run: EvalRun, safety_radius_m: Optional[float] = None) -> List[dict]:
+def by_distance(run: EvalRun, safety_radius_m: Optional[float] = None,
+                patch_sides: Optional[np.ndarray] = None) -> List[dict]:
     """class_metrics per query-grid row (distance ahead, x), nearest first.
 
     With the safety radius, each row also gives the width in pixels of the
     disc its labels are about, measured from the image spacing of neighbouring
     cells of one frame and row: where the disc is wider than the patch, the
-    patch cannot show everything its label depends on."""
+    patch cannot show everything its label depends on. With the per-row
+    patch sides (footprint-scaled datasets), the row's median side too."""
     xs = np.round(run.x, 3)
     scale = _pixels_per_metre_across(run, xs)
     out = []
@@ -98,6 +100,7 @@ def by_distance(run: EvalRun, safety_radius_m: Optional[float] = None) -> List[d
         entry["x"] = value
         ppm = scale.get(value)
         entry["disc_px"] = 2 * safety_radius_m * ppm if ppm and safety_radius_m else None
+        entry["patch_px"] = float(np.median(patch_sides[m])) if patch_sides is not None else None
         out.append(entry)
     return out
 

@@ -57,8 +57,8 @@ SplitData load_split_data(const TrainConfig& c, const std::string& split) {
                                std::to_string(d.views));
     if (d.patch_scale < 0) d.patch_scale = reader->info().patch_scale;
     if (reader->info().patch_scale != d.patch_scale)
-      throw std::runtime_error(name + ": patch scale " + std::to_string(reader->info().patch_scale) +
-                               ", the other sessions " + std::to_string(d.patch_scale));
+      throw std::runtime_error(fmt::format("{}: patch scale {}, the other sessions {}", name,
+                                           reader->info().patch_scale, d.patch_scale));
     const auto session = static_cast<uint32_t>(d.sessions.size());
     for (size_t i = 0; i < reader->size(); ++i)
       d.by_class[static_cast<size_t>(reader->samples()[i].label)].push_back({session, static_cast<uint32_t>(i)});
@@ -219,9 +219,9 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     throw std::runtime_error("the validation sessions have " + std::to_string(val.views) + " view(s), the training ones " +
                              std::to_string(train.views));
   if (val.patch_scale != train.patch_scale || val.patch_size != train.patch_size)
-    throw std::runtime_error("the validation sessions' patches (size " + std::to_string(val.patch_size) + ", scale " +
-                             std::to_string(val.patch_scale) + ") differ from the training ones' (size " +
-                             std::to_string(train.patch_size) + ", scale " + std::to_string(train.patch_scale) + ")");
+    throw std::runtime_error(fmt::format("the validation sessions' patches (size {}, scale {}) differ from the "
+                                         "training ones' (size {}, scale {})",
+                                         val.patch_size, val.patch_scale, train.patch_size, train.patch_scale));
   info.input_size = input_size_of(c.architecture);
   info.dropout = c.dropout;
   info.detector = train.sessions[0]->info().detector;
@@ -235,8 +235,8 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     if (start_from.info.architecture != c.architecture)
       throw std::runtime_error(start_from.info.id + ": architecture is not " + c.architecture);
     if (start_from.info.patch_scale != train.patch_scale)
-      throw std::runtime_error(start_from.info.id + ": patch scale " + std::to_string(start_from.info.patch_scale) +
-                               ", the dataset " + std::to_string(train.patch_scale));
+      throw std::runtime_error(fmt::format("{}: patch scale {}, the dataset {}", start_from.info.id,
+                                           start_from.info.patch_scale, train.patch_scale));
     if (start_from.info.views != train.views)
       throw std::runtime_error(start_from.info.id + ": " + std::to_string(start_from.info.views) +
                                " view(s), the dataset " + std::to_string(train.views));

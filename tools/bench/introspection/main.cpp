@@ -16,6 +16,9 @@
 
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/time.hpp"
+#include "ivoa/core/camera_model.hpp"
+#include "ivoa/core/footprint_patch.hpp"
+#include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/ground_warp.hpp"
 #include "ivoa/introspection/model.hpp"
 #include "ivoa/sim/sim_rig.hpp"
@@ -59,13 +62,15 @@ double time_ms(F f, int runs) {
   return median(t);
 }
 
-std::string write_model(const std::string& architecture, const std::string& dir, int views = 1) {
+std::string write_model(const std::string& architecture, const std::string& dir, int views = 1, double patch_scale = 0) {
   auto net = make_network(architecture, 0.5, views);
   ModelInfo info;
   info.architecture = architecture;
   info.input_size = input_size_of(architecture);
   info.views = views;
-  const std::string path = dir + "/bench_" + architecture + std::to_string(views) + ".pt";
+  info.patch_scale = patch_scale;
+  const std::string path =
+      dir + "/bench_" + architecture + std::to_string(views) + (patch_scale > 0 ? "_scaled" : "") + ".pt";
   save_model(*net, info, path);
   return path;
 }
@@ -152,6 +157,22 @@ int main(int argc, char** argv) {
   const double two_view_ms = time_ms(
       [&] { h = two_view->run(warp.stack(frame, frame)); },
       runs);
+  // A footprint-scaled two-view model: the heatmaps as above, plus each
+  // in-image query cell of the default grid from its own scaled square.
+  const QueryGrid grid(QueryGridConfig{}, RigGeometry(sim::make_sim_rig()).left);
+  obstacle_grid_t grid_msg = make_obstacle_grid(grid, "jppc", 0);
+  const auto sides = footprint_patch_sides(grid_msg, frame.size(), 1.6);
+  std::vector<IntrospectionModel::CellPatch> query_cells;
+  for (int i = 0; i < grid.size(); ++i)
+    if (grid.cell(i).in_image) query_cells.push_back({grid.cell(i).u, grid.cell(i).v, sides[static_cast<size_t>(i)]});
+  const auto scaled = IntrospectionModel::load(write_model("slidenet", dir, 2, 1.6), config);
+  const double scaled_ms = time_ms(
+      [&] {
+        const cv::Mat input = warp.stack(frame, frame);
+        h = scaled->run(input);
+        scaled->predict_cells(input, query_cells);
+      },
+      runs);
 
   // Reference: per patch, resize to 224 and run the whole AlexNet T times.
   auto alexnet = make_network("alexnet", 0.5);
@@ -189,11 +210,14 @@ int main(int argc, char** argv) {
               ours_ms, 1000.0 / ours_ms);
   std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours, two views: ground warp + slidenet on 6 channels",
               two_view_ms, 1000.0 / two_view_ms);
+  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n",
+              ("ours, two views, footprint-scaled: + " + std::to_string(query_cells.size()) + " query-cell squares").c_str(),
+              scaled_ms, 1000.0 / scaled_ms);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "alexnet-224, trunk once per patch, head x T batched",
               alex_ms, reference_patches);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "reference: alexnet-224, whole network x T per patch",
               reference_ms, reference_patches);
-  const double worst_ms = std::max(ours_ms, two_view_ms);
+  const double worst_ms = std::max({ours_ms, two_view_ms, scaled_ms});
   std::printf("  speed-up over the reference: %.0fx (one view), %.0fx (two views); budget 100 ms: %s (%.2f of budget)\n",
               reference_ms / ours_ms, reference_ms / two_view_ms, worst_ms <= 100.0 ? "met" : "NOT met", worst_ms / 100.0);
 
