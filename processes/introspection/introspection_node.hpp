@@ -33,8 +33,9 @@ struct IntrospectionNodeOptions {
 };
 
 // The predictions at the grid's in-image cells, in cell order: looked up in
-// the heatmaps, or, for a footprint-scaled model (ModelInfo::patch_scale),
-// from each cell's own scaled patch of `input` (the model's input image).
+// the heatmaps, except that a footprint-scaled model (ModelInfo::patch_scale)
+// predicts each cell whose square is larger than the patch (the rows near
+// the robot) from its own square of `input` (the model's input image).
 std::vector<introspection::Prediction> query_predictions(introspection::IntrospectionModel& model,
                                                          const introspection::Heatmaps& heatmaps, const cv::Mat& input,
                                                          const obstacle_grid_t& query_grid);
