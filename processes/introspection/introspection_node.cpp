@@ -178,7 +178,7 @@ void IntrospectionNode::process(const Frame& frame) {
   try {
     h = model_->run(input);
     if (grid) predictions = query_predictions(*model_, h, input, *grid);
-  } catch (const introspection::ModelError& e) {
+  } catch (const std::exception& e) {  // ModelError, or a grid whose arrays do not match its size
     heartbeat_.bad_input(where + ": " + e.what());
     return;
   }
