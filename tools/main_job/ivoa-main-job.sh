@@ -67,7 +67,7 @@ case "$scale" in
     TRAIN_SEEDS=(11 12 13 14 15 16 17 18); TRAIN_FRAMES=120
     VAL_SEEDS=(21); VAL_SCENES=("${SCENE_NAMES[@]}"); VAL_FRAMES=60
     TEST_SEEDS=(31); TEST_FRAMES=60
-    STEPS=24000; BATCH=128 ;;
+    STEPS=14000; BATCH=128 ;;
   *) echo "ivoa-main-job: --scale must be default, full or smoke" >&2; exit 2 ;;
 esac
 RATE=2  # frames per second of session time: consecutive frames 0.5 s of driving apart
