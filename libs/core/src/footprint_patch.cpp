@@ -9,15 +9,17 @@
 namespace ivoa {
 namespace {
 
-// Mean pixel distance from cell i to its projecting lateral neighbours; 0 if none.
-double lateral_step_px(int num_y, int i, const std::vector<float>& u, const std::vector<float>& v) {
-  const int iy = i % num_y;
+// Mean pixel distance from cell i to its projecting lateral neighbours (same
+// grid row, y +- spacing); 0 if none.
+double lateral_step_px(int num_y, size_t i, const std::vector<float>& u, const std::vector<float>& v) {
+  const int iy = static_cast<int>(i % static_cast<size_t>(num_y));
   double sum = 0;
   int n = 0;
-  for (const int j : {i - 1, i + 1}) {
-    const int jy = iy + (j - i);
-    if (jy < 0 || jy >= num_y || std::isnan(u[static_cast<size_t>(j)])) continue;
-    sum += std::hypot(u[static_cast<size_t>(j)] - u[static_cast<size_t>(i)], v[static_cast<size_t>(j)] - v[static_cast<size_t>(i)]);
+  for (const int step : {-1, 1}) {
+    if (iy + step < 0 || iy + step >= num_y) continue;
+    const size_t j = static_cast<size_t>(static_cast<long>(i) + step);
+    if (std::isnan(u[j])) continue;
+    sum += std::hypot(u[j] - u[i], v[j] - v[i]);
     ++n;
   }
   return n ? sum / n : 0.0;
@@ -25,8 +27,8 @@ double lateral_step_px(int num_y, int i, const std::vector<float>& u, const std:
 
 // Largest even side whose patch_rect around (u, v) stays inside the image.
 int largest_inside(double u, double v, cv::Size image) {
-  const long cu = std::lround(u), cv_ = std::lround(v);
-  const long half = std::min({cu, image.width - cu, cv_, image.height - cv_});
+  const long column = std::lround(u), row = std::lround(v);
+  const long half = std::min({column, image.width - column, row, image.height - row});
   return static_cast<int>(std::max(0L, 2 * half));
 }
 
@@ -42,7 +44,7 @@ std::vector<int> footprint_patch_sides(const QueryGridConfig& grid, int num_x, i
   if (!(scale > 0)) return sides;
   for (size_t i = 0; i < n; ++i) {
     if (std::isnan(u[i])) continue;
-    const double disc_px = lateral_step_px(num_y, static_cast<int>(i), u, v) * 2 * grid.safety_radius / grid.spacing;
+    const double disc_px = lateral_step_px(num_y, i, u, v) * 2 * grid.safety_radius / grid.spacing;
     const int wanted = 2 * static_cast<int>(std::lround(scale * disc_px / 2));
     const int side = std::min(wanted, largest_inside(u[i], v[i], image));
     sides[i] = std::max(side, grid.patch_size);
