@@ -20,32 +20,13 @@ std::vector<float> flatten(const cv::Mat& m) { return std::vector<float>(m.begin
 std::vector<introspection::Prediction> query_predictions(introspection::IntrospectionModel& model,
                                                          const introspection::Heatmaps& h, const cv::Mat& input,
                                                          const obstacle_grid_t& grid) {
-  const double scale = model.info().patch_scale;
-  std::vector<int> sides(grid.state.size(), model.info().patch_size);
-  if (scale > 0) {
-    QueryGridConfig geometry = geometry_of(grid);
-    geometry.patch_size = model.info().patch_size;
-    sides = footprint_patch_sides(geometry, grid.num_x, grid.num_y, grid.u, grid.v,
-                                  cv::Size(input.cols, input.rows / model.info().views), scale);
-  }
-  // Cells whose square is the fixed patch read the heatmaps (as for any
-  // model); only the scaled ones cost a network pass each.
-  std::vector<introspection::Prediction> out;
-  std::vector<size_t> scaled_slots;
-  std::vector<introspection::IntrospectionModel::CellPatch> scaled_cells;
-  for (size_t i = 0; i < grid.state.size(); ++i) {
-    if (!grid.in_image[i]) continue;
-    if (sides[i] > model.info().patch_size) {
-      scaled_slots.push_back(out.size());
-      scaled_cells.push_back({grid.u[i], grid.v[i], sides[i]});
-      out.emplace_back();
-    } else {
-      out.push_back(model.predict_at(h, grid.u[i], grid.v[i]));
-    }
-  }
-  const auto scaled = model.predict_cells(input, scaled_cells);
-  for (size_t k = 0; k < scaled.size(); ++k) out[scaled_slots[k]] = scaled[k];
-  return out;
+  const auto& info = model.info();
+  const std::vector<int> sides =
+      footprint_patch_sides(grid, info.patch_size, cv::Size(input.cols, input.rows / info.views), info.patch_scale);
+  std::vector<introspection::IntrospectionModel::CellPatch> cells;
+  for (size_t i = 0; i < grid.state.size(); ++i)
+    if (grid.in_image[i]) cells.push_back({grid.u[i], grid.v[i], sides[i]});
+  return model.predict_query_cells(input, h, cells);
 }
 
 introspection_t make_introspection_message(const introspection::IntrospectionModel& model,

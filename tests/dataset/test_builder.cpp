@@ -194,7 +194,7 @@ TEST(DatasetBuilder, ScaledPatchesShowTheWholeFootprintNearTheRobot) {
   for (size_t i = 0; i < session.size(); ++i) {
     const auto& s = session.samples()[i];
     const auto& labels = recorded.at(s.utime);
-    const int side = footprint_patch_sides(labels, {960, 600}, 1.6)[static_cast<size_t>(s.cell)];
+    const int side = footprint_patch_sides(labels, 100, {960, 600}, 1.6)[static_cast<size_t>(s.cell)];
     ASSERT_EQ(s.patch_side, side) << "sample " << i;
     scaled += side > 100;
     // The stored patch is the side x side square, shrunk to 100 px; near cells (x < 2 m) are scaled.

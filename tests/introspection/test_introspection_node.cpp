@@ -93,7 +93,7 @@ TEST(IntrospectionNode, ScaledModelPredictsQueryCellsFromTheirOwnPatches) {
   cv::Mat image(rig.left.height, rig.left.width, CV_8UC3);
   cv::randu(image, 0, 255);
   std::vector<introspection::IntrospectionModel::CellPatch> cells;
-  const auto sides = footprint_patch_sides(grid, image.size(), 1.6);
+  const auto sides = footprint_patch_sides(grid, 100, image.size(), 1.6);
   for (size_t i = 0; i < grid.state.size(); ++i)
     if (grid.in_image[i]) cells.push_back({grid.u[i], grid.v[i], sides[i]});
   ASSERT_GT(cells.size(), 10u);

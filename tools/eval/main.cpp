@@ -85,28 +85,17 @@ std::string session_of_log(const std::string& path) {
   return name;
 }
 
-// The prediction for each labelled cell, as ivoa-introspection makes it:
-// from the heatmaps, except that a footprint-scaled model predicts the cells
-// whose square is larger than the patch (the side the dataset recorded)
-// from their own squares.
+// The prediction for each labelled cell, as ivoa-introspection makes it
+// (a footprint-scaled model's near cells from the squares the dataset recorded).
 void predict_cells(introspection::IntrospectionModel& model, const introspection::Heatmaps& h, const cv::Mat& input,
                    std::vector<tools::LabelledCell>& cells) {
-  std::vector<size_t> scaled;
+  const bool scaled = model.info().patch_scale > 0;
   std::vector<introspection::IntrospectionModel::CellPatch> squares;
+  for (const auto& c : cells) squares.push_back({c.u, c.v, scaled ? c.patch_side : model.info().patch_size});
+  const auto predictions = model.predict_query_cells(input, h, squares);
   for (size_t i = 0; i < cells.size(); ++i) {
-    if (model.info().patch_scale > 0 && cells[i].patch_side > model.info().patch_size) {
-      scaled.push_back(i);
-      squares.push_back({cells[i].u, cells[i].v, cells[i].patch_side});
-      continue;
-    }
-    const auto p = model.predict_at(h, cells[i].u, cells[i].v);
-    cells[i].predicted = p.predicted;
-    cells[i].announced = p.announced;
-  }
-  const auto predictions = model.predict_cells(input, squares);
-  for (size_t k = 0; k < scaled.size(); ++k) {
-    cells[scaled[k]].predicted = predictions[k].predicted;
-    cells[scaled[k]].announced = predictions[k].announced;
+    cells[i].predicted = predictions[i].predicted;
+    cells[i].announced = predictions[i].announced;
   }
 }
 

@@ -210,10 +210,8 @@ void SessionBuilder::Impl::emit_ready(bool all) {
 // The side of the square cut around each cell of `labels` in `views` (the
 // stacked model input): info.patch_size, or footprint-scaled.
 std::vector<int> SessionBuilder::Impl::patch_sides(const introspection_labels_t& labels, const cv::Mat& views) const {
-  QueryGridConfig grid = geometry_of(labels);
-  grid.patch_size = info.patch_size;
   const cv::Size image(views.cols, views.rows / info.views);
-  return footprint_patch_sides(grid, labels.num_x, labels.num_y, labels.u, labels.v, image, options.patch_scale);
+  return footprint_patch_sides(labels, info.patch_size, image, options.patch_scale);
 }
 
 void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {

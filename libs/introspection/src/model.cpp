@@ -295,6 +295,24 @@ std::vector<Prediction> IntrospectionModel::predict_cells(const cv::Mat& image, 
   return run_patches(patches, false).predictions;
 }
 
+std::vector<Prediction> IntrospectionModel::predict_query_cells(const cv::Mat& image, const Heatmaps& h,
+                                                                const std::vector<CellPatch>& cells) {
+  std::vector<Prediction> out(cells.size());
+  std::vector<size_t> scaled;
+  std::vector<CellPatch> squares;
+  for (size_t i = 0; i < cells.size(); ++i) {
+    if (cells[i].side > info().patch_size) {
+      scaled.push_back(i);
+      squares.push_back(cells[i]);
+    } else {
+      out[i] = predict_at(h, cells[i].u, cells[i].v);
+    }
+  }
+  const auto own = predict_cells(image, squares);
+  for (size_t k = 0; k < scaled.size(); ++k) out[scaled[k]] = own[k];
+  return out;
+}
+
 Prediction IntrospectionModel::predict_at(const Heatmaps& h, double u, double v) const {
   const double fc = (u - h.patch_size / 2.0) / h.stride, fr = (v - h.patch_size / 2.0) / h.stride;
   std::array<float, kNumClasses> mean{}, var{};

@@ -157,21 +157,24 @@ int main(int argc, char** argv) {
   const double two_view_ms = time_ms(
       [&] { h = two_view->run(warp.stack(frame, frame)); },
       runs);
-  // A footprint-scaled two-view model: the heatmaps as above, plus each
-  // in-image query cell of the default grid whose square is scaled up (the
-  // near rows) from its own square, as ivoa-introspection runs it.
+  // A footprint-scaled two-view model: the heatmaps as above, then the
+  // in-image query cells of the default grid as ivoa-introspection predicts
+  // them (near cells from their own squares, the rest from the heatmaps).
   const QueryGrid grid(QueryGridConfig{}, RigGeometry(sim::make_sim_rig()).left);
-  obstacle_grid_t grid_msg = make_obstacle_grid(grid, "jppc", 0);
-  const auto sides = footprint_patch_sides(grid_msg, frame.size(), 1.6);
+  const auto sides = footprint_patch_sides(make_obstacle_grid(grid, "jppc", 0), 100, frame.size(), 1.6);
   std::vector<IntrospectionModel::CellPatch> query_cells;
-  for (int i = 0; i < grid.size(); ++i)
-    if (grid.cell(i).in_image && sides[static_cast<size_t>(i)] > 100) query_cells.push_back({grid.cell(i).u, grid.cell(i).v, sides[static_cast<size_t>(i)]});
+  int near_cells = 0;
+  for (int i = 0; i < grid.size(); ++i) {
+    if (!grid.cell(i).in_image) continue;
+    query_cells.push_back({grid.cell(i).u, grid.cell(i).v, sides[static_cast<size_t>(i)]});
+    near_cells += query_cells.back().side > 100;
+  }
   const auto scaled = IntrospectionModel::load(write_model("slidenet", dir, 2, 1.6), config);
   const double scaled_ms = time_ms(
       [&] {
         const cv::Mat input = warp.stack(frame, frame);
         h = scaled->run(input);
-        scaled->predict_cells(input, query_cells);
+        scaled->predict_query_cells(input, h, query_cells);
       },
       runs);
 
@@ -212,7 +215,7 @@ int main(int argc, char** argv) {
   std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours, two views: ground warp + slidenet on 6 channels",
               two_view_ms, 1000.0 / two_view_ms);
   std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n",
-              ("ours, two views, scaled: + " + std::to_string(query_cells.size()) + " near cells' own squares").c_str(),
+              ("ours, two views, scaled: + " + std::to_string(near_cells) + " near cells' own squares").c_str(),
               scaled_ms, 1000.0 / scaled_ms);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "alexnet-224, trunk once per patch, head x T batched",
               alex_ms, reference_patches);

@@ -27,10 +27,14 @@ namespace ivoa {
 std::vector<int> footprint_patch_sides(const QueryGridConfig& grid, int num_x, int num_y, const std::vector<float>& u,
                                        const std::vector<float>& v, cv::Size image, double scale);
 
-// The same for a grid message (obstacle_grid_t, introspection_labels_t).
+// The same for a grid message (obstacle_grid_t, introspection_labels_t),
+// with squares of at least `patch_size` (the dataset's or the model's, not
+// necessarily the grid's).
 template <class Msg>
-std::vector<int> footprint_patch_sides(const Msg& msg, cv::Size image, double scale) {
-  return footprint_patch_sides(geometry_of(msg), msg.num_x, msg.num_y, msg.u, msg.v, image, scale);
+std::vector<int> footprint_patch_sides(const Msg& msg, int patch_size, cv::Size image, double scale) {
+  QueryGridConfig grid = geometry_of(msg);
+  grid.patch_size = patch_size;
+  return footprint_patch_sides(grid, msg.num_x, msg.num_y, msg.u, msg.v, image, scale);
 }
 
 // The side x side square centred on (u, v) (patch_rect) from each of

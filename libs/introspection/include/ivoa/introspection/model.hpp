@@ -135,6 +135,12 @@ class IntrospectionModel {
     int side = 0;
   };
   std::vector<Prediction> predict_cells(const cv::Mat& image, const std::vector<CellPatch>& cells);
+  // Query cells as ivoa-introspection predicts them: a cell whose square is
+  // larger than patch_size (a footprint-scaled model's near cells) from its
+  // own square (predict_cells), every other cell from the heatmaps
+  // (predict_at), so only the scaled cells cost a network pass.
+  std::vector<Prediction> predict_query_cells(const cv::Mat& image, const Heatmaps& heatmaps,
+                                              const std::vector<CellPatch>& cells);
 
  protected:
   explicit IntrospectionModel(InferenceConfig config) : config_(config) {}
