@@ -26,6 +26,7 @@ std::string write_random_model(const test::TempDir& dir, const std::string& arch
   info.input_size = input_size_of(architecture);
   info.detector = "jppc";
   info.uncertainty_threshold = 0.0123;
+  info.verdict_uncertainty_threshold = 0.0045;
   info.training_summary = "{\"steps\": 7}";
   const std::string path = dir.file(architecture + std::to_string(views) + (patch_scale > 0 ? "_scaled" : "") + ".pt");
   save_model(*net, info, path);
@@ -48,6 +49,8 @@ TEST(ModelFile, SavedAndLoadedModelGivesIdenticalOutputsAndMetadata) {
   EXPECT_EQ(a->info().architecture, "slidenet");
   EXPECT_EQ(a->info().detector, "jppc");
   EXPECT_DOUBLE_EQ(a->info().uncertainty_threshold, 0.0123);
+  EXPECT_DOUBLE_EQ(a->info().verdict_uncertainty_threshold, 0.0045);
+  EXPECT_DOUBLE_EQ(a->verdict_threshold(), 0.0045);
   EXPECT_NE(a->info().training_summary.find("steps"), std::string::npos);
   EXPECT_NE(a->info().id.find("slidenet1.pt#"), std::string::npos);
   EXPECT_EQ(a->info().views, 1);
@@ -111,6 +114,55 @@ TEST(ModelFile, CellPredictionsComeFromTheirOwnResizedSquares) {
     EXPECT_NEAR(predictions[0].probability[static_cast<size_t>(k)],
                 h.probability[static_cast<size_t>(k)].at<float>(5, 7), 1e-5);
   EXPECT_THROW(model->predict_cells(image, {{200, 150, 320}}), ModelError);  // leaves the 300-row view
+}
+
+TEST(ModelFile, VerdictErrorsAreTheConditionalsAndTheHeatmapsCarryThem) {
+  test::TempDir dir;
+  InferenceConfig c;
+  c.mc_passes = 1;
+  c.mean_filter = 1;
+  const auto model = IntrospectionModel::load(write_random_model(dir), c);
+  const cv::Mat image = random_image(300, 220);
+  const Heatmaps h = model->run(image);
+  const auto p = model->run_patches({image(cv::Rect(5 * 20, 3 * 20, 100, 100)).clone()}, false).predictions[0];
+  const auto& q = p.probability;
+  EXPECT_NEAR(p.verdict_error[0], q[2] / (q[0] + q[2]), 1e-6);  // P(FP | obstacle)
+  EXPECT_NEAR(p.verdict_error[1], q[3] / (q[1] + q[3]), 1e-6);  // P(FN | free)
+  EXPECT_NEAR(h.verdict_error[0].at<float>(3, 5), p.verdict_error[0], 1e-5);
+  EXPECT_NEAR(h.verdict_error[1].at<float>(3, 5), p.verdict_error[1], 1e-5);
+  const Prediction at = model->predict_at(h, 150, 110);  // the same cell
+  EXPECT_NEAR(at.verdict_error[1], p.verdict_error[1], 1e-5);
+}
+
+TEST(ModelFile, GivenTheVerdictOnlyItsTwoClassesArePossible) {
+  Prediction p;
+  p.probability = {0.1f, 0.6f, 0.2f, 0.1f};  // on its own: TN
+  p.verdict_error = {0.2f / 0.3f, 0.1f / 0.7f};
+  p.verdict_error_variance = {0.002f, 0.0001f};
+  const VerdictPrediction obstacle = given_verdict(p, true, 0.001);
+  EXPECT_EQ(obstacle.predicted, 2);  // FP: the detector's obstacle is more likely false
+  EXPECT_FLOAT_EQ(obstacle.p_wrong, 0.2f / 0.3f);
+  EXPECT_FLOAT_EQ(obstacle.variance, 0.002f);
+  EXPECT_FALSE(obstacle.announced);  // above the gate
+  const VerdictPrediction free_cell = given_verdict(p, false, 0.001);
+  EXPECT_EQ(free_cell.predicted, 1);  // TN
+  EXPECT_TRUE(free_cell.announced);
+  p.verdict_error = {0.1f, 0.9f};
+  EXPECT_EQ(given_verdict(p, true, 1).predicted, 0);   // TP
+  EXPECT_EQ(given_verdict(p, false, 1).predicted, 3);  // FN
+}
+
+TEST(ModelFile, VerdictGateFallsBackToTheModelGate) {
+  test::TempDir dir;
+  const std::string path = write_random_model(dir);
+  auto net = load_native_model(path);
+  net.info.verdict_uncertainty_threshold = -1;  // a model calibrated before the verdict gate existed
+  save_model(*net.net, net.info, dir.file("old.pt"));
+  InferenceConfig c;
+  c.mc_passes = 1;
+  EXPECT_DOUBLE_EQ(IntrospectionModel::load(dir.file("old.pt"), c)->verdict_threshold(), 0.0123);
+  c.verdict_uncertainty_threshold = 0.5;  // configured: wins
+  EXPECT_DOUBLE_EQ(IntrospectionModel::load(dir.file("old.pt"), c)->verdict_threshold(), 0.5);
 }
 
 TEST(ModelFile, TwoViewHeatmapCellsEqualTheirStackedPatches) {

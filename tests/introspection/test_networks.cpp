@@ -87,6 +87,29 @@ TEST(McDropout, EachPassIsADropoutForwardAndStatsAreRight) {
   EXPECT_LT((s.mean.to(torch::kDouble) - mean).abs().max().item<double>(), 1e-6);
   EXPECT_LT((s.variance.to(torch::kDouble) - var).abs().max().item<double>(), 1e-6);
   EXPECT_LT((s.mean.sum(1) - 1).abs().max().item<double>(), 1e-5);
+  // Given the verdict: per pass P(FP | obstacle) and P(FN | free), then mean and variance.
+  const auto fp_obstacle = p.select(2, 2) / (p.select(2, 0) + p.select(2, 2));
+  const auto fn_free = p.select(2, 3) / (p.select(2, 1) + p.select(2, 3));
+  const auto errors = torch::stack({fp_obstacle, fn_free}, -1);  // [T, N, 2]
+  const auto e_mean = errors.sum(0) / 20.0;
+  const auto e_var = (errors - e_mean).pow(2).sum(0) / 19.0;
+  EXPECT_LT((s.verdict_mean.to(torch::kDouble) - e_mean).abs().max().item<double>(), 1e-5);
+  EXPECT_LT((s.verdict_variance.to(torch::kDouble) - e_var).abs().max().item<double>(), 1e-5);
+  // Not the ratio of the means: that is what "pass by pass" is about.
+  const auto ratio_of_means = mean.select(1, 2) / (mean.select(1, 0) + mean.select(1, 2));
+  EXPECT_GT((e_mean.select(1, 0) - ratio_of_means).abs().max().item<double>(), 1e-4);
+}
+
+TEST(McDropout, OnePassHasZeroVariance) {
+  torch::manual_seed(6);
+  SlideNet net;
+  net->eval();
+  const McStats s = deterministic_head(*net, torch::rand({5, 256}));
+  EXPECT_EQ(s.variance.abs().max().item<double>(), 0.0);
+  EXPECT_EQ(s.verdict_variance.abs().max().item<double>(), 0.0);
+  const auto m = s.mean;
+  const auto want = m.select(1, 3) / (m.select(1, 1) + m.select(1, 3));
+  EXPECT_LT((s.verdict_mean.select(1, 1) - want).abs().max().item<double>(), 1e-6);
 }
 
 TEST(McDropout, SameSeedSamePassesOtherSeedOtherPasses) {

@@ -43,6 +43,7 @@ void write_session(const std::string& root, const std::string& name, int per_cla
       dataset::SampleRecord s;
       s.frame = frame;
       s.label = label;
+      s.stereo_state = label == 0 || label == 2 ? 1 : 0;  // TP / FP: the detector said obstacle
       w.add_sample(s, pattern(label, rng));
     }
 }
@@ -79,6 +80,9 @@ TEST(Training, LossFallsAndHeldOutSessionsBeatChance) {
   ic.mc_passes = 1;
   const auto model = IntrospectionModel::load(c.output, ic);
   EXPECT_NEAR(model->info().uncertainty_threshold, r.uncertainty_threshold, 1e-9);
+  EXPECT_GT(r.verdict_uncertainty_threshold, 0.0);
+  EXPECT_NEAR(model->info().verdict_uncertainty_threshold, r.verdict_uncertainty_threshold, 1e-9);
+  EXPECT_GE(r.val_verdict_accuracy_retained, r.val_accuracy_retained - 1e-9) << "the verdict leaves fewer ways to err";
   EXPECT_EQ(model->info().training_summary.find("held_out"), std::string::npos) << "test sessions must not be listed";
   EXPECT_NE(model->info().training_summary.find("\"a\""), std::string::npos);
   const dataset::SessionReader test((dir.path() / "data" / "held_out").string());
@@ -114,6 +118,41 @@ TEST(Training, ResumesFromTheCheckpoint) {
     if (first < 0) first = s.step;
   });
   EXPECT_EQ(first, 11);  // continued after step 10, not from scratch
+}
+
+TEST(Training, CalibrationOnlyRewritesTheGatesNotTheWeights) {
+  test::TempDir dir;
+  const std::string root = dir.file("data");
+  write_session(root, "a", 10, 1);
+  write_session(root, "v", 20, 3);
+  std::ofstream(dir.file("split.yaml")) << "train: [a]\nval: [v]\n";
+  TrainConfig c;
+  c.dataset = root;
+  c.split_file = dir.file("split.yaml");
+  c.output = dir.file("model.pt");
+  c.steps = 20;
+  c.batch_size = 8;
+  c.validate_every = 10;
+  c.threshold_passes = 5;
+  train_model(c);
+  c.init = c.output;
+  c.output = dir.file("recalibrated.pt");
+  c.threshold_retain = 0.5;  // a stricter gate
+  const TrainReport r = calibrate_model(c);
+  EXPECT_EQ(r.val_samples, 80);
+  InferenceConfig ic;
+  ic.mc_passes = 1;
+  const auto before = IntrospectionModel::load(c.init, ic), after = IntrospectionModel::load(c.output, ic);
+  EXPECT_NEAR(after->info().uncertainty_threshold, r.uncertainty_threshold, 1e-9);
+  EXPECT_NEAR(after->info().verdict_uncertainty_threshold, r.verdict_uncertainty_threshold, 1e-9);
+  EXPECT_LE(r.uncertainty_threshold, before->info().uncertainty_threshold);  // 50 % retained instead of 70 %
+  EXPECT_EQ(after->info().training_summary, before->info().training_summary);
+  const dataset::SessionReader val((dir.path() / "data" / "v").string());
+  const auto a = before->run_patches({val.patch(0).clone()}, false).predictions[0];
+  const auto b = after->run_patches({val.patch(0).clone()}, false).predictions[0];
+  for (size_t k = 0; k < 4; ++k) EXPECT_EQ(a.probability[k], b.probability[k]);
+  c.init.clear();
+  EXPECT_THROW(calibrate_model(c), std::runtime_error);
 }
 
 TEST(Training, MissingSplitIsNamed) {

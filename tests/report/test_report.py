@@ -48,6 +48,7 @@ FLOOR, WALL = 1, 2
 
 PRED_HEADER = ("session,environment,split,sample,utime,cell,x,y,u,v,label,predicted,p_tp,p_tn,p_fp,p_fn,"
                "var_predicted,uncertainty,var_tp,var_tn,var_fp,var_fn,phenomena,phenomenon,surface")
+VERDICT_HEADER = ",stereo_state,verdict_predicted,p_wrong,var_wrong"
 
 
 # ----------------------------------------------------------------------------- fabrication
@@ -93,24 +94,33 @@ def write_dataset(root, sessions, detector="jppc"):
 
 
 def write_eval(out, sessions, predicted, probs, var, embeddings, detector="jppc", threshold=0.03,
-               overlay=False):
-    """An ivoa-eval output folder (tools/eval/README.md) for the given rows."""
+               overlay=False, verdict=None):
+    """An ivoa-eval output folder (tools/eval/README.md) for the given rows;
+    with `verdict` (predicted, p_wrong, var_wrong arrays), the columns of the
+    predictions given the detector's verdict too (stereo_state from the label)."""
     os.makedirs(out, exist_ok=True)
     k = 0
     with open(os.path.join(out, "predictions.csv"), "w") as f:
-        f.write(PRED_HEADER + "\n")
+        f.write(PRED_HEADER + (VERDICT_HEADER if verdict else "") + "\n")
         for name, env, rows in sessions:
             split = "train" if env == "indoor" else "val"
             for i, r in enumerate(rows):
                 p = probs[k]
                 f.write(f"{name},{env},{split},{i},{r['utime']},{r['cell']},1.0,0.0,480.0,400.0,{r['label']},"
                         f"{predicted[k]},{p[0]:.6f},{p[1]:.6f},{p[2]:.6f},{p[3]:.6f},{var[k]:.8f},{var[k] / 2:.8f},"
-                        f"0,0,0,0,{r['phenomenon']},{r['phenomenon']},{r['surface']}\n")
+                        f"0,0,0,0,{r['phenomenon']},{r['phenomenon']},{r['surface']}")
+                if verdict:
+                    state = 1 if r["label"] in (TP, FP) else 0
+                    f.write(f",{state},{verdict['predicted'][k]},{verdict['p_wrong'][k]:.5f},{verdict['var'][k]:.8f}")
+                f.write("\n")
                 k += 1
     np.asarray(embeddings, np.float32).tofile(os.path.join(out, "embeddings.f32"))
+    meta = {"model": f"{detector}.pt#0000", "mc_passes": 20, "uncertainty_threshold": threshold,
+            "samples": k, "metadata": {"detector": detector, "architecture": "slidenet", "training": {}}}
+    if verdict:
+        meta["verdict_uncertainty_threshold"] = threshold
     with open(os.path.join(out, "eval.json"), "w") as f:
-        json.dump({"model": f"{detector}.pt#0000", "mc_passes": 20, "uncertainty_threshold": threshold,
-                   "samples": k, "metadata": {"detector": detector, "architecture": "slidenet", "training": {}}}, f)
+        json.dump(meta, f)
     if overlay:
         import matplotlib
         matplotlib.use("Agg")
@@ -131,6 +141,10 @@ COUNTS = (20, 40, 25, 15)
 # Wrong predictions per session and what they become: totals 10 / 8 / 15 / 12.
 WRONG = {TP: (5, FN), TN: (4, FP), FP: (8, TN), FN: (6, TP)}
 WRONG_TOTAL = {TP: (5 + 5), TN: (4 + 4), FP: (8 + 7), FN: (6 + 6)}
+# Given the detector's verdict only the other class of its pair is possible:
+# wrong predictions per session (TP <-> FP, TN <-> FN).
+VERDICT_WRONG = {TP: 2, TN: 3, FP: 1, FN: 4}
+VERDICT_OTHER = {TP: FP, FP: TP, TN: FN, FN: TN}
 
 
 def fabricate(root):
@@ -179,9 +193,22 @@ def fabricate(root):
                 wrong[i] = True
         k += len(rs)
     var = np.where(wrong, rng.uniform(0.05, 0.1, n), rng.uniform(0.001, 0.02, n))
+    # Given the verdict: the first VERDICT_WRONG[c] samples of each class per
+    # session take the other class of the pair, with a high variance.
+    v_pred = label.copy()
+    v_wrong = np.zeros(n, bool)
+    k = 0
+    for _, _, rs in sessions:
+        for cls in range(4):
+            for i in [k + i for i, r in enumerate(rs) if r["label"] == cls][:VERDICT_WRONG[cls]]:
+                v_pred[i], v_wrong[i] = VERDICT_OTHER[cls], True
+        k += len(rs)
+    v_failure = (v_pred == FP) | (v_pred == FN)
+    verdict = {"predicted": v_pred, "p_wrong": np.where(v_failure, 0.8, 0.2),
+               "var": np.where(v_wrong, rng.uniform(0.05, 0.1, n), rng.uniform(0.001, 0.02, n))}
     known = os.path.join(root, "known")
     write_eval(known, sessions, predicted, one_hot_probs(predicted), var, np.abs(rng.normal(0, 1, (n, DIM))),
-               detector="dense")
+               detector="dense", verdict=verdict)
 
     # degenerate: a dataset without FN, one predicted failure.
     d_sessions = [("lab_s3", "indoor", session_rows((10, 15, 5, 0), phen, surf))]
@@ -263,8 +290,9 @@ class ReportTest(unittest.TestCase):
         self.assertIn("mean per-class accuracy 1.000", self.proc.stdout)
         report = read_text(os.path.join(self.out, "report.md"))
         for heading in ("# Fabricated report", "## Summary", "### 1. Classification metrics",
-                        "### 2. Failure detection", "### 3. Uncertainty", "### 4. Failure clustering",
-                        "### 5. Per-frame overlays", "## Comparison of the perception models",
+                        "### 2. Failure detection", "### 3. Uncertainty", "### 4. Given the detector's verdict",
+                        "### 5. Failure clustering", "### 6. Per-frame overlays",
+                        "## Comparison of the perception models",
                         "## Method notes"):
             self.assertIn(heading, report)
         # every linked figure exists, is a PNG, and lies inside the report folder
@@ -279,7 +307,8 @@ class ReportTest(unittest.TestCase):
                 self.assertEqual(fh.read(8), b"\x89PNG\r\n\x1a\n", rel)
         for must in ("confusion.png", "failure_roc.png", "accuracy_vs_threshold.png", "retained_vs_threshold.png",
                      "accuracy_vs_retained.png", "accuracy_by_distance.png", "clusters_tsne.png", "cluster_0_mosaic.png",
-                     "cluster_1_mosaic.png", "phenomena_fn_fp.png", "office_s1_1000000.png"):
+                     "cluster_1_mosaic.png", "phenomena_fn_fp.png", "office_s1_1000000.png",
+                     "verdict_accuracy_vs_retained.png"):
             self.assertTrue(any(l.endswith(must) for l in links), must)
         self.assertLess(self.seconds, 60, "the report on 400 samples should take seconds")
 
@@ -353,6 +382,31 @@ class ReportTest(unittest.TestCase):
         # the curve runs from high to low threshold with non-increasing retained fraction
         retained = [p["retained"] for p in s["curve"]]
         self.assertTrue(all(a >= b for a, b in zip(retained, retained[1:])))
+
+    def test_known_model_given_the_verdict(self):
+        v = self.model("dense")["given_verdict"]
+        expected = [1 - VERDICT_WRONG[c] / COUNTS[c] for c in range(4)]  # 0.9, 0.925, 0.96, 0.733
+        for got, want in zip(v["overall"]["per_class_accuracy"], expected):
+            self.assertAlmostEqual(got, want)
+        self.assertAlmostEqual(v["overall"]["mean_per_class_accuracy"], float(np.mean(expected)))
+        # only the verdict's pair is ever predicted
+        cm = np.array(v["overall"]["confusion"])
+        for t, p in ((TP, TN), (TP, FN), (FP, TN), (FP, FN), (TN, TP), (TN, FP), (FN, TP), (FN, FP)):
+            self.assertEqual(cm[t][p], 0)
+        self.assertEqual(cm[TP][FP], 2 * VERDICT_WRONG[TP])
+        # failures are flagged where P(wrong) > 0.5: true FP/FN flagged unless wrong, TP/TN flagged if wrong
+        f = v["failure"]
+        flagged_right = 2 * (COUNTS[FP] - VERDICT_WRONG[FP] + COUNTS[FN] - VERDICT_WRONG[FN])
+        flagged = flagged_right + 2 * (VERDICT_WRONG[TP] + VERDICT_WRONG[TN])
+        self.assertEqual(f["flagged"], flagged)
+        self.assertAlmostEqual(f["precision"], flagged_right / flagged)
+        # the variance is high exactly on the wrong ones: the gate at 70 % keeps only right ones
+        self.assertAlmostEqual(v["sweep"]["at_70"]["mean_per_class_accuracy"], 1.0)
+        self.assertTrue(v["sweep"]["accuracy_rises_as_threshold_falls"])
+        self.assertEqual(len(v["sessions"]), 2)
+        # an eval folder without the columns is reported as such
+        self.assertIsNone(self.model("jppc")["given_verdict"])
+        self.assertIn("Not in this eval folder", read_text(os.path.join(self.out, "report.md")))
 
     def test_comparison_per_phenomenon(self):
         perfect = {e["phenomenon"]: e for e in self.model("jppc")["per_phenomenon"]}
@@ -473,6 +527,19 @@ class DegenerateAndBadInputTest(unittest.TestCase):
         with open(path, "w") as fh:
             fh.write("\n".join(lines) + "\n")
         self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "row 5", "label")
+
+    def test_verdict_contradicting_the_label(self):
+        d = self.copy_eval(self.f.known, "bad_verdict")
+        path = os.path.join(d, "predictions.csv")
+        lines = read_text(path).splitlines()
+        fields = lines[3].split(",")  # a TP row: the detector said obstacle (1)
+        self.assertEqual(fields[10], str(TP))
+        fields[-4] = "0"
+        lines[3] = ",".join(fields)
+        with open(path, "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "row 3",
+                              "contradicts label TP")
 
     def test_empty_predictions(self):
         d = self.copy_eval(self.f.perfect, "empty")

@@ -20,6 +20,7 @@
 #include "ivoa/dataset/dataset_format.hpp"
 #include "ivoa/introspection/model.hpp"
 #include "ivoa/logio/log_reader.hpp"
+#include "ivoa/obstacle_grid_t.hpp"
 #include "ivoa/rig_calibration_t.hpp"
 #include "ivoa/stereo_image_t.hpp"
 #include "overlay.hpp"
@@ -41,7 +42,8 @@ struct Options {
 
 constexpr const char* kHeader =
     "session,environment,split,sample,utime,cell,x,y,u,v,label,predicted,p_tp,p_tn,p_fp,p_fn,var_predicted,"
-    "uncertainty,var_tp,var_tn,var_fp,var_fn,phenomena,phenomenon,surface";
+    "uncertainty,var_tp,var_tn,var_fp,var_fn,phenomena,phenomenon,surface,stereo_state,verdict_predicted,p_wrong,"
+    "var_wrong";
 
 void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& session, const std::string& split,
                 introspection::IntrospectionModel& model, Progress& progress, double& done) {
@@ -64,11 +66,17 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
     for (size_t i = begin; i < end; ++i) {
       const auto& s = session.samples()[i];
       const auto& p = out.predictions[i - begin];
-      std::fprintf(csv, "%s,%s,%s,%zu,%lld,%d,%.3f,%.3f,%.1f,%.1f,%d,%d,%.5f,%.5f,%.5f,%.5f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d\n",
+      // Given the verdict the detector recorded for this cell, as the live process sees it.
+      const auto v = introspection::given_verdict(p, s.stereo_state == obstacle_grid_t::STATE_OBSTACLE,
+                                                  model.verdict_threshold());
+      std::fprintf(csv,
+                   "%s,%s,%s,%zu,%lld,%d,%.3f,%.3f,%.1f,%.1f,%d,%d,%.5f,%.5f,%.5f,%.5f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,"
+                   "%d,%d,%.5f,%.6g\n",
                    info.session.c_str(), info.environment.c_str(), split.c_str(), i, static_cast<long long>(s.utime),
                    s.cell, s.x, s.y, s.u, s.v, s.label, p.predicted, p.probability[0], p.probability[1],
                    p.probability[2], p.probability[3], p.variance, p.uncertainty, p.class_variance[0],
-                   p.class_variance[1], p.class_variance[2], p.class_variance[3], s.phenomena, s.phenomenon, s.surface);
+                   p.class_variance[1], p.class_variance[2], p.class_variance[3], s.phenomena, s.phenomenon, s.surface,
+                   s.stereo_state, v.predicted, v.p_wrong, v.variance);
       const auto& e = out.embeddings[i - begin];
       std::fwrite(e.data(), sizeof(float), e.size(), emb);
     }
@@ -199,6 +207,7 @@ int main(int argc, char** argv) {
       evaluated += std::string(evaluated.empty() ? "" : ", ") + "{\"split\": \"" + split + "\", \"session\": \"" + name + "\"}";
     std::ofstream(o.out + "/eval.json") << "{\"model\": \"" << model->info().id << "\", \"mc_passes\": "
                                         << o.inference.mc_passes << ", \"uncertainty_threshold\": " << model->threshold()
+                                        << ", \"verdict_uncertainty_threshold\": " << model->verdict_threshold()
                                         << ", \"samples\": " << done << ", \"sessions\": [" << evaluated << "]"
                                         << ", \"metadata\": {\"detector\": \"" << model->info().detector
                                         << "\", \"architecture\": \"" << model->info().architecture << "\", \"training\": "

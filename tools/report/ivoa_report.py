@@ -153,6 +153,7 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "failure": metrics.failure_detection(run.label, run.predicted, run.probs),
         "sweep": metrics.uncertainty_sweep(run),
         "per_phenomenon": metrics.per_phenomenon(run),
+        "given_verdict": metrics.given_verdict(run),
     }
     figs = {
         "confusion": figures.plot_confusion(rm["overall"], run.name, os.path.join(d, "confusion.png")),
@@ -168,6 +169,10 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "accuracy_vs_retained": figures.plot_accuracy_vs_retained(
             [(run.name, rm["sweep"])], run.name, os.path.join(d, "accuracy_vs_retained.png")),
     }
+    if rm["given_verdict"] is not None:
+        figs["verdict_accuracy_vs_retained"] = figures.plot_accuracy_vs_retained(
+            [("image alone", rm["sweep"]), ("given the detector's verdict", rm["given_verdict"]["sweep"])],
+            run.name, os.path.join(d, "verdict_accuracy_vs_retained.png"))
     if rm["failure"]["roc"]:
         figs["roc"] = figures.plot_roc([(run.name, rm["failure"])], run.name, os.path.join(d, "failure_roc.png"))
 
@@ -226,12 +231,15 @@ def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
     for r in runs:
         h = metrics.headline(numbers[r.slug])
         c = numbers[r.slug]["clustering"]
+        given = (f"{md.fmt(h['verdict_mean_per_class_accuracy'])}; {md.pct(h['verdict_retained_at_70'])} → "
+                 f"{md.fmt(h['verdict_mpca_at_70'])}" if h["verdict_mean_per_class_accuracy"] is not None else "n/a")
         rows.append([r.name, r.detector, h["samples"], md.fmt(h["mean_per_class_accuracy"]),
                      md.fmt(h["overall_accuracy"]), md.fmt(h["failure_auroc"]),
-                     f"{md.pct(h['retained_at_70'])} → {md.fmt(h['mpca_at_70'])}",
+                     f"{md.pct(h['retained_at_70'])} → {md.fmt(h['mpca_at_70'])}", given,
                      md.pct(c["purity"]) if c["ok"] and c["purity"] is not None else "n/a"])
     return md.table(["model", "detector", "samples", "mean per-class acc.", "overall acc.", "failure AUROC",
-                     "≥70 % retained → mean per-class acc.", "cluster purity"], rows)
+                     "≥70 % retained → mean per-class acc.", "given the detector's verdict: mean per-class acc.; "
+                     "≥70 % retained →", "cluster purity"], rows)
 
 
 def inputs_section(runs: List[EvalRun]) -> str:
@@ -279,7 +287,7 @@ def run_report(args: argparse.Namespace, argv: List[str]) -> int:
             f"Eval folder `{run.path}`, dataset `{rm['dataset']}`, detector **{run.detector}**, "
             f"model `{rm['model']}`, T = {rm['mc_passes']} MC-dropout passes.\n",
             md.metrics_section(run, rm, figs), md.failure_section(rm, figs), md.uncertainty_section(rm, figs),
-            md.clustering_section(run, res, opt, figs), md.overlays_section(overlays)]))
+            md.verdict_section(rm, figs), md.clustering_section(run, res, opt, figs), md.overlays_section(overlays)]))
     comparison = compare(runs, numbers, out_dir) if len(runs) > 1 else ""
 
     cmd = "python3 tools/report/ivoa_report.py " + " ".join(shlex.quote(a) for a in argv)
@@ -308,6 +316,9 @@ def run_report(args: argparse.Namespace, argv: List[str]) -> int:
         print(f"{run.name}: {h['samples']} samples, mean per-class accuracy {md.fmt(h['mean_per_class_accuracy'])}, "
               f"overall {md.fmt(h['overall_accuracy'])}, failure AUROC {md.fmt(h['failure_auroc'])}, "
               f"at {md.pct(h['retained_at_70'])} retained {md.fmt(h['mpca_at_70'])}, "
+              + (f"given the detector's verdict {md.fmt(h['verdict_mean_per_class_accuracy'])} "
+                 f"({md.fmt(h['verdict_mpca_at_70'])} at {md.pct(h['verdict_retained_at_70'])}), "
+                 if h["verdict_mean_per_class_accuracy"] is not None else "")
               + (f"cluster purity {md.pct(c['purity'])}" if c["ok"] and c["purity"] is not None
                  else "clustering: " + (c["message"] or "no phenomenon ground truth")))
     print(f"report: {report_path}")

@@ -33,6 +33,10 @@ REQUIRED_COLUMNS = (
     "label", "predicted", "p_tp", "p_tn", "p_fp", "p_fn", "var_predicted",
     "uncertainty", "phenomena", "phenomenon", "surface",
 )
+# Written by ivoa-eval since the predictions given the detector's verdict
+# (introspection::given_verdict); older eval folders lack them.
+VERDICT_COLUMNS = ("stereo_state", "verdict_predicted", "p_wrong", "var_wrong")
+STATE_FREE, STATE_OBSTACLE = 0, 1   # obstacle_grid_t.STATE_*
 
 # Fallback names when lcmtypes/sim_ground_truth_t.lcm cannot be found next to the
 # tool (e.g. the tool was copied elsewhere). The .lcm file is the source of truth.
@@ -189,6 +193,16 @@ class Dataset:
 
 
 @dataclass
+class VerdictColumns:
+    """Predictions given the detector's verdict: TP/FP where it said obstacle,
+    TN/FN where it said free (ivoa-eval's last four columns)."""
+    stereo_state: np.ndarray        # the detector's verdict, obstacle_grid_t.STATE_*
+    predicted: np.ndarray           # class index
+    p_wrong: np.ndarray             # P(FP | obstacle) or P(FN | free)
+    var_wrong: np.ndarray           # its variance over the MC passes (the gate)
+
+
+@dataclass
 class EvalRun:
     """One ivoa-eval output folder: per-sample predictions, embeddings, metadata.
 
@@ -220,6 +234,8 @@ class EvalRun:
     phenomenon: np.ndarray
     surface: np.ndarray
     embeddings: np.ndarray          # (N, 256) float32, memory-mapped
+    # Given the verdict the detector recorded (None for older eval folders):
+    verdict: Optional["VerdictColumns"] = None
     overlays: List[str] = field(default_factory=list)
     dataset: Optional[Dataset] = None
     label_detector: str = ""        # the detector the dataset's labels are about (session.json), if one
@@ -232,6 +248,15 @@ class EvalRun:
     def model_threshold(self) -> Optional[float]:
         """The model's own run-time uncertainty gate from eval.json, if any."""
         t = self.meta.get("uncertainty_threshold")
+        try:
+            return float(t) if t is not None else None
+        except (TypeError, ValueError):
+            return None
+
+    @property
+    def verdict_threshold(self) -> Optional[float]:
+        """The gate of the predictions given the verdict from eval.json, if any."""
+        t = self.meta.get("verdict_uncertainty_threshold")
         try:
             return float(t) if t is not None else None
         except (TypeError, ValueError):
@@ -339,6 +364,7 @@ def load_eval(path: str) -> EvalRun:
     if os.path.isdir(overlay_dir):
         overlays = sorted(os.path.join(overlay_dir, f) for f in os.listdir(overlay_dir) if f.lower().endswith(".png"))
 
+    verdict = _verdict_columns(pred_path, cols, label) if all(c in cols for c in VERDICT_COLUMNS) else None
     md = meta.get("metadata") if isinstance(meta.get("metadata"), dict) else {}
     detector = str(md.get("detector") or "unknown")
     return EvalRun(
@@ -354,8 +380,34 @@ def load_eval(path: str) -> EvalRun:
         phenomena=_numeric(pred_path, cols, "phenomena", int),
         phenomenon=_numeric(pred_path, cols, "phenomenon", int),
         surface=_numeric(pred_path, cols, "surface", int),
-        embeddings=embeddings, overlays=overlays,
+        embeddings=embeddings, verdict=verdict, overlays=overlays,
     )
+
+
+def _verdict_columns(pred_path: str, cols: Dict[str, List[str]], label: np.ndarray) -> VerdictColumns:
+    """The verdict columns, checked against the labels: a TP or FP label means
+    the detector said obstacle, a TN or FN label that it said free."""
+    v = VerdictColumns(
+        stereo_state=_numeric(pred_path, cols, "stereo_state", int),
+        predicted=_numeric(pred_path, cols, "verdict_predicted", int),
+        p_wrong=_numeric(pred_path, cols, "p_wrong", float),
+        var_wrong=_numeric(pred_path, cols, "var_wrong", float))
+    said_obstacle = (label == TP) | (label == FP)
+    expected = np.where(said_obstacle, STATE_OBSTACLE, STATE_FREE)
+    bad = np.flatnonzero(v.stereo_state != expected)
+    if len(bad):
+        r = bad[0]
+        raise InputError(f"{pred_path}: row {r + 1}: stereo_state {v.stereo_state[r]} contradicts label "
+                         f"{LABEL_NAMES[label[r]]} (TP/FP need {STATE_OBSTACLE} = obstacle, TN/FN {STATE_FREE} = free)")
+    possible = np.where(said_obstacle[:, None], [TP, FP], [TN, FN])
+    bad = np.flatnonzero((v.predicted != possible[:, 0]) & (v.predicted != possible[:, 1]))
+    if len(bad):
+        r = bad[0]
+        raise InputError(f"{pred_path}: row {r + 1}: verdict_predicted {v.predicted[r]} is impossible for "
+                         f"stereo_state {v.stereo_state[r]}")
+    if not (np.all(np.isfinite(v.p_wrong)) and np.all(np.isfinite(v.var_wrong)) and np.all(v.var_wrong >= 0)):
+        raise InputError(f"{pred_path}: non-finite p_wrong or negative/non-finite var_wrong")
+    return v
 
 
 def patch_size(run: EvalRun) -> Optional[int]:

@@ -177,6 +177,50 @@ def uncertainty_section(rm: dict, figs: Dict[str, str]) -> str:
     return "\n".join(out)
 
 
+def verdict_section(rm: dict, figs: Dict[str, str]) -> str:
+    """§4: the predictions given the detector's verdict."""
+    v = rm.get("given_verdict")
+    out = ["### 4. Given the detector's verdict\n"]
+    if v is None:
+        out.append("Not in this eval folder (written by an ivoa-eval older than the `stereo_state`, "
+                   "`verdict_predicted`, `p_wrong` and `var_wrong` columns).\n")
+        return "\n".join(out)
+    m, f, s = v["overall"], v["failure"], v["sweep"]
+    out.append(
+        "Wherever the model runs, the detector's verdict for the cell is known too (the live process reads it from "
+        "the obstacle grid; the dataset records it), and it rules out two of the four classes: a cell the detector "
+        "called an obstacle is TP or FP, one it called free is TN or FN. What is left to predict is whether that "
+        "verdict is wrong: P(FP | obstacle) = p_FP / (p_TP + p_FP) and P(FN | free) = p_FN / (p_TN + p_FN), taken "
+        "pass by pass over the MC-dropout passes of the same network; the gate is the variance of that "
+        "probability. The paper's measure above asks the network for all four classes from the image alone; this "
+        "one is what a planner holding both outputs can use.\n")
+    out.append(f"Mean per-class accuracy given the verdict: **{fmt(m['mean_per_class_accuracy'])}** "
+               f"(image alone: {fmt(rm['overall']['mean_per_class_accuracy'])}); overall "
+               f"**{fmt(m['overall_accuracy'])}**; at ≥ {int(100 * RETAIN_TARGET)} % retained "
+               f"({pct(s['at_70']['retained'])}) **{fmt(s['at_70']['mean_per_class_accuracy'])}**; "
+               f"accuracy rises as the threshold falls: **{s['verdict']}** "
+               f"(Spearman {fmt(s['spearman_threshold_vs_mpca'], 2)}).\n")
+    out.append(table(["true \\ predicted"] + list(LABEL_NAMES) + ["accuracy"],
+                     [[f"{LABEL_NAMES[r]} (n={m['support'][r]})"] + [fmt(x) for x in m["confusion_normalised"][r]]
+                      + [fmt(m["per_class_accuracy"][r])] for r in range(4)]))
+    out.append("\nFailure detection with P(wrong | verdict) as the score: precision "
+               f"{fmt(f['precision'])}, recall {fmt(f['recall'])}, AUROC {fmt(f['auroc'])} (FP among the cells called "
+               f"obstacles: {fmt(f['auroc_fp'])}; FN among those called free: {fmt(f['auroc_fn'])}).\n")
+    headers = ["operating point", "τ", "retained", "retained n", "mean per-class acc.", "overall acc."] + \
+        [f"{n} kept" for n in LABEL_NAMES]
+    rows = [_point_row(f"≥ {pct(p['retained'], 0)}", p) for p in s["retained_table"]]
+    if s["at_model_threshold"] is not None:
+        rows.append(_point_row("model's run-time τ (eval.json)", s["at_model_threshold"]))
+    out.append(table(headers, rows))
+    headers = ["n"] + [f"{n} acc." for n in LABEL_NAMES] + ["mean per-class", "overall"]
+    out.append("\n**Per session, given the verdict**\n\n")
+    out.append(table(["session"] + headers,
+                     [[g["group"], g["n"]] + _class_cells(g) + [fmt(g["mean_per_class_accuracy"]),
+                                                               fmt(g["overall_accuracy"])] for g in v["sessions"]]))
+    out.append("\n" + image(figs["verdict_accuracy_vs_retained"], "accuracy vs retained, image alone and given the verdict"))
+    return "\n".join(out)
+
+
 def _counts_text(d: Dict[int, int], namer, total: int, top: int = 4) -> str:
     """'reflection 120 (80 %), none 30 (20 %)' for a composition dict."""
     items = list(d.items())
@@ -196,7 +240,7 @@ def _present_text(present, min_share: float = 0.1, top: int = 4) -> str:
 
 def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, str]) -> str:
     """§4: clustering of confident predicted failures, composition and purity."""
-    out = ["### 4. Failure clustering\n"]
+    out = ["### 5. Failure clustering\n"]
     rule = (f"the top 50 % by confidence (predicted-class probability ≥ {fmt(res.confidence_cut)}, median split; "
             f"the paper's rule)" if opt.select == "confidence"
             else f"var_predicted ≤ {REFERENCE_VAR_CUT} (the reference script's rule)")
@@ -255,7 +299,7 @@ def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, s
 
 def overlays_section(overlays: List[str]) -> str:
     """§5: ivoa-eval's per-frame figures, copied next to the report."""
-    out = ["### 5. Per-frame overlays\n"]
+    out = ["### 6. Per-frame overlays\n"]
     if not overlays:
         out.append("No overlay figures in this eval folder (run ivoa-eval with `--logs`).\n")
         return "\n".join(out)

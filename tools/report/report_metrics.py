@@ -23,7 +23,7 @@ from typing import Dict, List, Optional
 import numpy as np
 from sklearn.metrics import roc_auc_score, roc_curve
 
-from report_inputs import FN, FP, LABEL_NAMES, EvalRun
+from report_inputs import FN, FP, LABEL_NAMES, STATE_OBSTACLE, EvalRun
 
 N_CLASSES = 4
 # The reference code's threshold sweep (analyze_results.py).
@@ -199,6 +199,12 @@ def threshold_for_retained(var: np.ndarray, fraction: float) -> float:
 
 
 def uncertainty_sweep(run: EvalRun, quantiles: int = 101) -> dict:
+    """gate_sweep of the model's own predictions, gated by var_predicted."""
+    return gate_sweep(run.label, run.predicted, run.var_predicted, run.model_threshold, quantiles)
+
+
+def gate_sweep(label: np.ndarray, predicted: np.ndarray, var: np.ndarray, model_thr: Optional[float],
+               quantiles: int = 101) -> dict:
     """Accuracy of the retained predictions as the uncertainty gate tightens.
 
     Thresholds are the union of quantiles of var_predicted (so that retained
@@ -207,14 +213,12 @@ def uncertainty_sweep(run: EvalRun, quantiles: int = 101) -> dict:
     at the strictest threshold keeping >= 70 % (the paper's operating point) and
     at the model's own run-time threshold, whether accuracy rises as the
     threshold falls, and the mean variance of correct vs wrong predictions."""
-    label, predicted, var = run.label, run.predicted, run.var_predicted
     qs = np.quantile(var, np.linspace(0.0, 1.0, quantiles))
     taus = np.unique(np.concatenate([qs, REFERENCE_SWEEP, [var.max()]]))[::-1]  # high -> low
     curve = [_point(label, predicted, var, t) for t in taus]
 
     unfiltered = _point(label, predicted, var, float(var.max()))
     at70 = _point(label, predicted, var, threshold_for_retained(var, RETAIN_TARGET))
-    model_thr = run.model_threshold
     at_model = _point(label, predicted, var, model_thr) if model_thr is not None else None
     table = [_point(label, predicted, var, threshold_for_retained(var, f))
              for f in (1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2)]
@@ -260,6 +264,35 @@ def uncertainty_sweep(run: EvalRun, quantiles: int = 101) -> dict:
     }
 
 
+def given_verdict(run: EvalRun) -> Optional[dict]:
+    """The same metrics for the predictions given the detector's verdict (the
+    detector's output is known wherever the model runs, and it rules out two
+    of the four classes): per class, the failure detection with P(wrong) as
+    the score, and the sweep gated by P(wrong)'s variance. None for eval
+    folders written before ivoa-eval recorded them."""
+    v = run.verdict
+    if v is None:
+        return None
+    said_obstacle = v.stereo_state == STATE_OBSTACLE
+    failure = failure_detection(run.label, v.predicted, np.zeros((len(run.label), N_CLASSES)))
+    truth = (run.label == FP) | (run.label == FN)
+    if failure["message"] is None:
+        failure["auroc"] = float(roc_auc_score(truth, v.p_wrong))
+        fpr, tpr, _ = roc_curve(truth, v.p_wrong)
+        failure["roc"] = {"fpr": fpr.tolist(), "tpr": tpr.tolist()}
+    # Per verdict: FP among the cells called obstacles, FN among those called free.
+    for cls, where, key in ((FP, said_obstacle, "auroc_fp"), (FN, ~said_obstacle, "auroc_fn")):
+        t = run.label[where] == cls
+        failure[key] = float(roc_auc_score(t, v.p_wrong[where])) if t.any() and not t.all() else None
+    return {
+        "overall": class_metrics(run.label, v.predicted),
+        "sessions": [dict(class_metrics(run.label[run.session == s], v.predicted[run.session == s]), group=str(s))
+                     for s in sorted(set(run.session.tolist()))],
+        "failure": failure,
+        "sweep": gate_sweep(run.label, v.predicted, v.var_wrong, run.verdict_threshold),
+    }
+
+
 def per_phenomenon(run: EvalRun) -> List[dict]:
     """For each phenomenon under the patch centre: how many samples, how often the
     detector truly failed (true FP / FN) and how often the model predicts a
@@ -280,7 +313,11 @@ def per_phenomenon(run: EvalRun) -> List[dict]:
 def headline(run_metrics: dict) -> Dict[str, Optional[float]]:
     """The few numbers quoted per model in the summary and comparison tables."""
     m, f, s = run_metrics["overall"], run_metrics["failure"], run_metrics["sweep"]
+    v = run_metrics.get("given_verdict")
     return {
+        "verdict_mean_per_class_accuracy": v["overall"]["mean_per_class_accuracy"] if v else None,
+        "verdict_mpca_at_70": v["sweep"]["at_70"]["mean_per_class_accuracy"] if v else None,
+        "verdict_retained_at_70": v["sweep"]["at_70"]["retained"] if v else None,
         "samples": m["n"],
         "mean_per_class_accuracy": m["mean_per_class_accuracy"],
         "overall_accuracy": m["overall_accuracy"],

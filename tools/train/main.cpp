@@ -13,6 +13,17 @@
 
 using namespace ivoa;
 
+namespace {
+
+void print_gates(const introspection::TrainReport& r, const introspection::TrainConfig& c) {
+  std::printf("uncertainty gate %.5f keeps %.0f%% of validation at mean per-class accuracy %.3f\n",
+              r.uncertainty_threshold, 100 * c.threshold_retain, r.val_accuracy_retained);
+  std::printf("given the detector's verdict: gate %.5f keeps %.0f%% of validation at mean per-class accuracy %.3f\n",
+              r.verdict_uncertainty_threshold, 100 * c.threshold_retain, r.val_verdict_accuracy_retained);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   ivoa::introspection::prefer_passive_openmp_wait(argv);
   CLI::App app{"Train an introspection model on a dataset, validating on held-out sessions"};
@@ -47,11 +58,23 @@ int main(int argc, char** argv) {
   app.add_option("--max-val-samples", c.max_val_samples)->capture_default_str();
   app.add_option("--threshold-retain", c.threshold_retain,
                  "the stored uncertainty gate keeps this fraction of validation samples")->capture_default_str();
+  bool calibrate_only = false;
+  app.add_flag("--calibrate-only", calibrate_only,
+               "no training: re-calibrate the uncertainty gates of the --init model on the validation split and "
+               "write it to --out");
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   c.augment = !no_augment;
   init_logging("train", common.log_level);
 
   try {
+    if (calibrate_only) {
+      if (c.init.empty()) throw std::runtime_error("--calibrate-only needs --init MODEL");
+      const auto r = introspection::calibrate_model(c);
+      std::printf("model: %s (weights of %s, gates calibrated on %lld validation samples in %.0f s)\n",
+                  c.output.c_str(), c.init.c_str(), static_cast<long long>(r.val_samples), r.seconds);
+      print_gates(r, c);
+      return kExitOk;
+    }
     Progress progress("training", static_cast<double>(c.steps), "steps", 10.0);
     const auto r = introspection::train_model(c, [&](const introspection::TrainStatus& s) {
       char detail[200];
@@ -66,8 +89,7 @@ int main(int argc, char** argv) {
                 static_cast<long long>(r.best_step), r.best_val_mean_class_accuracy, r.best_val_accuracy,
                 r.best_val_class_accuracy[0], r.best_val_class_accuracy[1], r.best_val_class_accuracy[2],
                 r.best_val_class_accuracy[3]);
-    std::printf("uncertainty gate %.5f keeps %.0f%% of validation at mean per-class accuracy %.3f\n",
-                r.uncertainty_threshold, 100 * c.threshold_retain, r.val_accuracy_retained);
+    print_gates(r, c);
     std::printf("training: %lld steps in %.0f s, %.0f patches/s; train samples TP %lld TN %lld FP %lld FN %lld\n",
                 static_cast<long long>(r.last.step), r.seconds, r.last.patches_per_s,
                 static_cast<long long>(r.train_class_counts[0]), static_cast<long long>(r.train_class_counts[1]),

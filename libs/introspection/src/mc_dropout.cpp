@@ -14,7 +14,31 @@ torch::Tensor sample_masks(int passes, int64_t width, double p, torch::Generator
   return (keep.to(torch::kFloat) * static_cast<float>(1.0 / (1.0 - p))).to(options.device());
 }
 
+torch::Tensor variance_over_passes(const torch::Tensor& x) {
+  return x.size(0) > 1 ? x.var(0, /*unbiased=*/true) : torch::zeros_like(x[0]);
+}
+
 }  // namespace
+
+torch::Tensor verdict_errors(const torch::Tensor& probs) {
+  using torch::indexing::Ellipsis;
+  const auto tp = probs.index({Ellipsis, 0}), tn = probs.index({Ellipsis, 1});
+  const auto fp = probs.index({Ellipsis, 2}), fn = probs.index({Ellipsis, 3});
+  // Softmax outputs are never both zero in exact arithmetic; the floor only
+  // guards against underflow.
+  return torch::stack({fp / (tp + fp).clamp_min(1e-30), fn / (tn + fn).clamp_min(1e-30)}, -1);
+}
+
+McStats summarise_passes(const torch::Tensor& passes) {
+  McStats s;
+  s.passes = passes;
+  s.mean = passes.mean(0);
+  s.variance = variance_over_passes(passes);
+  const auto errors = verdict_errors(passes);
+  s.verdict_mean = errors.mean(0);
+  s.verdict_variance = variance_over_passes(errors);
+  return s;
+}
 
 McStats mc_dropout_head(IntrospectionNetImpl& net, const torch::Tensor& features, int passes,
                         torch::Generator& generator) {
@@ -47,13 +71,16 @@ McStats mc_dropout_head(IntrospectionNetImpl& net, const torch::Tensor& features
   const auto probs = torch::softmax(torch::addmm(net.fc3->bias, h2, net.fc3->weight.t()), -1)
                          .view({n, passes, 4})
                          .permute({1, 0, 2});  // [T, N, 4]
-  return {probs.mean(0), probs.var(0, /*unbiased=*/true), probs, m1, m2};
+  McStats s = summarise_passes(probs);
+  s.fc1_masks = m1;
+  s.fc2_masks = m2;
+  return s;
 }
 
 McStats deterministic_head(IntrospectionNetImpl& net, const torch::Tensor& features) {
   torch::NoGradGuard no_grad;
   const auto probs = torch::softmax(net.fc3(torch::relu(net.fc2(torch::relu(net.fc1(features))))), -1);
-  return {probs, torch::zeros_like(probs), probs.unsqueeze(0), {}, {}};
+  return summarise_passes(probs.unsqueeze(0));
 }
 
 }  // namespace ivoa::introspection

@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 
 #include <ATen/CPUGeneratorImpl.h>
 #include <opencv2/imgproc.hpp>
@@ -64,20 +65,39 @@ Heatmaps make_heatmaps(const McStats& stats, int rows, int cols, const ModelInfo
       h.predicted.at<uint8_t>(r, c) = static_cast<uint8_t>(best);
       h.predicted_variance.at<float>(r, c) = h.variance[static_cast<size_t>(best)].at<float>(r, c);
     }
+  const auto vmean = stats.verdict_mean.to(torch::kCPU), vvar = stats.verdict_variance.to(torch::kCPU);
+  for (int k = 0; k < 2; ++k) {
+    h.verdict_error[static_cast<size_t>(k)] = filtered(to_mat(vmean.select(1, k), rows, cols), window);
+    h.verdict_error_variance[static_cast<size_t>(k)] = filtered(to_mat(vvar.select(1, k), rows, cols), window);
+  }
   return h;
 }
 
-Prediction prediction_of(const float* mean, const float* var, double threshold) {
+// mean, var: 4 classes; vmean, vvar: the 2 verdict errors.
+Prediction prediction_of(const float* mean, const float* var, const float* vmean, const float* vvar,
+                         double threshold) {
   Prediction p;
   for (int k = 0; k < kNumClasses; ++k) {
     p.probability[static_cast<size_t>(k)] = mean[k];
     p.class_variance[static_cast<size_t>(k)] = var[k];
+  }
+  for (size_t k = 0; k < 2; ++k) {
+    p.verdict_error[k] = vmean[k];
+    p.verdict_error_variance[k] = vvar[k];
   }
   p.predicted = static_cast<int>(std::max_element(mean, mean + kNumClasses) - mean);
   p.variance = var[p.predicted];
   p.uncertainty = (var[0] + var[1] + var[2] + var[3]) / 4.0f;
   p.announced = p.variance <= threshold;
   return p;
+}
+
+void append_predictions(const McStats& s, double threshold, std::vector<Prediction>& out) {
+  const auto cpu = [](const torch::Tensor& t) { return t.to(torch::kCPU).contiguous(); };
+  const auto mean = cpu(s.mean), var = cpu(s.variance), vmean = cpu(s.verdict_mean), vvar = cpu(s.verdict_variance);
+  for (int64_t i = 0; i < mean.size(0); ++i)
+    out.push_back(prediction_of(mean[i].data_ptr<float>(), var[i].data_ptr<float>(), vmean[i].data_ptr<float>(),
+                                vvar[i].data_ptr<float>(), threshold));
 }
 
 // All patches of the heatmap grid (views stacked), for models that run patch by patch.
@@ -147,10 +167,7 @@ class NativeIntrospectionModel : public IntrospectionModel {
                                        patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
       const auto features = patch_features(batch);
       const McStats s = head(features);
-      const auto mean = s.mean.to(torch::kCPU).contiguous(), var = s.variance.to(torch::kCPU).contiguous();
-      for (int64_t i = 0; i < mean.size(0); ++i)
-        out.predictions.push_back(
-            prediction_of(mean[i].data_ptr<float>(), var[i].data_ptr<float>(), threshold()));
+      append_predictions(s, threshold(), out.predictions);
       if (with_embeddings) {
         const auto e = model_.net->embedding(features).to(torch::kCPU).contiguous();
         for (int64_t i = 0; i < e.size(0); ++i)
@@ -208,9 +225,7 @@ class ScriptedIntrospectionModel : public IntrospectionModel {
     if (with_embeddings) throw ModelError(info_.id + ": scripted models do not provide embeddings");
     const McStats s = stats(patches);
     PatchOutputs out;
-    const auto mean = s.mean.contiguous(), var = s.variance.contiguous();
-    for (int64_t i = 0; i < mean.size(0); ++i)
-      out.predictions.push_back(prediction_of(mean[i].data_ptr<float>(), var[i].data_ptr<float>(), threshold()));
+    append_predictions(s, threshold(), out.predictions);
     return out;
   }
 
@@ -227,8 +242,7 @@ class ScriptedIntrospectionModel : public IntrospectionModel {
       for (int t = 0; t < passes; ++t) runs.push_back(torch::softmax(module_.forward({x}).toTensor(), -1));
       all.push_back(torch::stack(runs));  // [T, B, 4]
     }
-    const auto probs = torch::cat(all, 1);
-    return {probs.mean(0), passes > 1 ? probs.var(0, true) : torch::zeros_like(probs[0]), probs, {}, {}};
+    return summarise_passes(torch::cat(all, 1));
   }
 
   torch::jit::Module module_;
@@ -281,6 +295,12 @@ double IntrospectionModel::threshold() const {
   return config_.uncertainty_threshold >= 0 ? config_.uncertainty_threshold : info().uncertainty_threshold;
 }
 
+double IntrospectionModel::verdict_threshold() const {
+  if (config_.verdict_uncertainty_threshold >= 0) return config_.verdict_uncertainty_threshold;
+  return info().verdict_uncertainty_threshold >= 0 ? info().verdict_uncertainty_threshold
+                                                   : info().uncertainty_threshold;
+}
+
 std::vector<Prediction> IntrospectionModel::predict_cells(const cv::Mat& image, const std::vector<CellPatch>& cells) {
   check_image(image, info());
   std::vector<cv::Mat> patches;
@@ -315,25 +335,42 @@ std::vector<Prediction> IntrospectionModel::predict_query_cells(const cv::Mat& i
 
 Prediction IntrospectionModel::predict_at(const Heatmaps& h, double u, double v) const {
   const double fc = (u - h.patch_size / 2.0) / h.stride, fr = (v - h.patch_size / 2.0) / h.stride;
-  std::array<float, kNumClasses> mean{}, var{};
+  std::function<float(const cv::Mat&)> read;
   if (config_.lookup == QueryLookup::kNearest) {
     const int c = std::clamp(static_cast<int>(std::lround(fc)), 0, h.cols - 1);
     const int r = std::clamp(static_cast<int>(std::lround(fr)), 0, h.rows - 1);
-    for (int k = 0; k < kNumClasses; ++k) {
-      mean[static_cast<size_t>(k)] = h.probability[static_cast<size_t>(k)].at<float>(r, c);
-      var[static_cast<size_t>(k)] = h.variance[static_cast<size_t>(k)].at<float>(r, c);
-    }
+    read = [r, c](const cv::Mat& m) { return m.at<float>(r, c); };
   } else {
-    const double cc = std::clamp(fc, 0.0, h.cols - 1.0), rr = std::clamp(fr, 0.0, h.rows - 1.0);
-    cv::Mat patch;
-    for (int k = 0; k < kNumClasses; ++k) {
-      cv::getRectSubPix(h.probability[static_cast<size_t>(k)], {1, 1}, cv::Point2f(float(cc), float(rr)), patch);
-      mean[static_cast<size_t>(k)] = patch.at<float>(0, 0);
-      cv::getRectSubPix(h.variance[static_cast<size_t>(k)], {1, 1}, cv::Point2f(float(cc), float(rr)), patch);
-      var[static_cast<size_t>(k)] = patch.at<float>(0, 0);
-    }
+    const cv::Point2f at(static_cast<float>(std::clamp(fc, 0.0, h.cols - 1.0)),
+                         static_cast<float>(std::clamp(fr, 0.0, h.rows - 1.0)));
+    read = [at](const cv::Mat& m) {
+      cv::Mat patch;
+      cv::getRectSubPix(m, {1, 1}, at, patch);
+      return patch.at<float>(0, 0);
+    };
   }
-  return prediction_of(mean.data(), var.data(), threshold());
+  std::array<float, kNumClasses> mean{}, var{};
+  for (size_t k = 0; k < kNumClasses; ++k) {
+    mean[k] = read(h.probability[k]);
+    var[k] = read(h.variance[k]);
+  }
+  std::array<float, 2> vmean{}, vvar{};
+  for (size_t k = 0; k < 2; ++k) {
+    vmean[k] = read(h.verdict_error[k]);
+    vvar[k] = read(h.verdict_error_variance[k]);
+  }
+  return prediction_of(mean.data(), var.data(), vmean.data(), vvar.data(), threshold());
+}
+
+VerdictPrediction given_verdict(const Prediction& p, bool said_obstacle, double threshold) {
+  const size_t k = said_obstacle ? 0 : 1;
+  VerdictPrediction v;
+  v.p_wrong = p.verdict_error[k];
+  v.variance = p.verdict_error_variance[k];
+  const bool wrong = v.p_wrong > 0.5f;
+  v.predicted = said_obstacle ? (wrong ? 2 : 0) : (wrong ? 3 : 1);  // FP / TP, FN / TN
+  v.announced = v.variance <= threshold;
+  return v;
 }
 
 }  // namespace ivoa::introspection

@@ -47,6 +47,7 @@ std::string info_to_json(const ModelInfo& i) {
     << i.std[1] << ", " << i.std[2] << "], \"classes\": [";
   for (size_t k = 0; k < i.classes.size(); ++k) o << (k ? ", " : "") << json_quote(i.classes[k]);
   o << "], \"uncertainty_threshold\": " << i.uncertainty_threshold
+    << ", \"verdict_uncertainty_threshold\": " << i.verdict_uncertainty_threshold
     << ", \"training\": " << (i.training_summary.empty() ? "{}" : i.training_summary) << "}";
   return o.str();
 }
@@ -71,6 +72,7 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
     }
     i.classes = n["classes"].as<std::vector<std::string>>();
     i.uncertainty_threshold = n["uncertainty_threshold"].as<double>(0.01);
+    i.verdict_uncertainty_threshold = n["verdict_uncertainty_threshold"].as<double>(-1.0);  // older models: none
     if (n["training"]) {
       YAML::Emitter e;
       e << YAML::Flow << YAML::DoubleQuoted << n["training"];

@@ -12,6 +12,7 @@
 
 #include "ivoa/core/time.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
+#include "ivoa/obstacle_grid_t.hpp"
 #include "augmentation.hpp"
 #include "mc_dropout.hpp"
 #include "model_file.hpp"
@@ -76,7 +77,8 @@ std::vector<const uint8_t*> patch_pointers(const SplitData& d, const std::vector
   return out;
 }
 
-int label_of(const SplitData& d, const SampleRef& r) { return d.sessions[r.session]->samples()[r.index].label; }
+const dataset::SampleRecord& sample_of(const SplitData& d, const SampleRef& r) { return d.sessions[r.session]->samples()[r.index]; }
+int label_of(const SplitData& d, const SampleRef& r) { return sample_of(d, r).label; }
 
 struct Confusion {
   std::array<std::array<int64_t, kNumClasses>, kNumClasses> m{};  // [true][predicted]
@@ -123,6 +125,9 @@ struct ValOutputs {
   Confusion confusion;
   std::vector<int> truth, predicted;
   std::vector<float> variance;  // predicted-class variance (MC only)
+  // Given the recorded verdict (the truth's TP/FP vs TN/FN): given_verdict().
+  std::vector<int> verdict_predicted;
+  std::vector<float> verdict_variance;
 };
 
 ValOutputs run_validation(IntrospectionNetImpl& net, const SplitData& d, const std::vector<SampleRef>& refs,
@@ -139,12 +144,23 @@ ValOutputs run_validation(IntrospectionNetImpl& net, const SplitData& d, const s
     const McStats s = passes > 1 ? mc_dropout_head(net, features, passes, g) : deterministic_head(net, features);
     const auto predicted = s.mean.argmax(1).to(torch::kCPU);
     const auto variance = s.variance.gather(1, s.mean.argmax(1, true)).squeeze(1).to(torch::kCPU);
+    const auto vmean = s.verdict_mean.to(torch::kCPU), vvar = s.verdict_variance.to(torch::kCPU);
     for (size_t i = 0; i < batch.size(); ++i) {
-      const int t = label_of(d, batch[i]), p = static_cast<int>(predicted[static_cast<int64_t>(i)].item<int64_t>());
+      const auto row = static_cast<int64_t>(i);
+      const int t = label_of(d, batch[i]), p = static_cast<int>(predicted[row].item<int64_t>());
       out.confusion.add(t, p);
       out.truth.push_back(t);
       out.predicted.push_back(p);
-      out.variance.push_back(variance[static_cast<int64_t>(i)].item<float>());
+      out.variance.push_back(variance[row].item<float>());
+      Prediction pred;
+      for (int64_t k = 0; k < 2; ++k) {
+        pred.verdict_error[static_cast<size_t>(k)] = vmean[row][k].item<float>();
+        pred.verdict_error_variance[static_cast<size_t>(k)] = vvar[row][k].item<float>();
+      }
+      const bool said_obstacle = sample_of(d, batch[i]).stereo_state == obstacle_grid_t::STATE_OBSTACLE;
+      const VerdictPrediction v = given_verdict(pred, said_obstacle, 0);
+      out.verdict_predicted.push_back(v.predicted);
+      out.verdict_variance.push_back(v.variance);
     }
   }
   return out;
@@ -180,18 +196,54 @@ std::string training_summary(const TrainConfig& c, const SplitData& train, const
 
 // The predicted-class variance below which `retain` of the samples lie, and
 // the mean per-class accuracy of those samples.
-std::pair<double, double> calibrate_threshold(const ValOutputs& v, double retain) {
-  std::vector<float> sorted = v.variance;
+std::pair<double, double> calibrate_threshold(const std::vector<int>& truth, const std::vector<int>& predicted,
+                                              const std::vector<float>& variance, double retain) {
+  std::vector<float> sorted = variance;
   std::sort(sorted.begin(), sorted.end());
   if (sorted.empty()) return {0.01, 0};
   const double threshold = sorted[std::min(sorted.size() - 1, static_cast<size_t>(retain * static_cast<double>(sorted.size())))];
   Confusion kept;
-  for (size_t i = 0; i < v.truth.size(); ++i)
-    if (v.variance[i] <= threshold) kept.add(v.truth[i], v.predicted[i]);
+  for (size_t i = 0; i < truth.size(); ++i)
+    if (variance[i] <= threshold) kept.add(truth[i], predicted[i]);
   return {threshold, kept.mean_class_accuracy()};
 }
 
+// Both gates (the model's own prediction, and the prediction given the
+// detector's verdict) from one MC-dropout pass over the validation subset.
+void calibrate_gates(NativeModel& model, const SplitData& val, const std::vector<SampleRef>& refs,
+                     const TrainConfig& c, torch::Device device, torch::Generator& generator, TrainReport& report) {
+  const ValOutputs mc = run_validation(*model.net, val, refs, model.info, device, c.threshold_passes, generator);
+  std::tie(report.uncertainty_threshold, report.val_accuracy_retained) =
+      calibrate_threshold(mc.truth, mc.predicted, mc.variance, c.threshold_retain);
+  std::tie(report.verdict_uncertainty_threshold, report.val_verdict_accuracy_retained) =
+      calibrate_threshold(mc.truth, mc.verdict_predicted, mc.verdict_variance, c.threshold_retain);
+  model.info.uncertainty_threshold = report.uncertainty_threshold;
+  model.info.verdict_uncertainty_threshold = report.verdict_uncertainty_threshold;
+}
+
 }  // namespace
+
+TrainReport calibrate_model(const TrainConfig& c) {
+  const double start = monotonic_ms();
+  torch::set_num_threads(std::max(c.threads, 1));
+  if (c.init.empty() || c.output.empty()) throw std::runtime_error("calibration needs a model (--init) and --out");
+  const torch::Device device = c.device == "cuda" ? torch::kCUDA : torch::kCPU;
+  const SplitData val = load_split_data(c, c.val_split);
+  NativeModel model = load_native_model(c.init);
+  if (model.info.views != val.views || model.info.patch_scale != val.patch_scale || model.info.patch_size != val.patch_size)
+    throw std::runtime_error(fmt::format("{}: {} view(s), patch size {}, scale {}; the validation sessions: {}, {}, {}",
+                                         model.info.id, model.info.views, model.info.patch_size, model.info.patch_scale,
+                                         val.views, val.patch_size, val.patch_scale));
+  model.net->to(device);
+  auto generator = at::detail::createCPUGenerator(c.seed);
+  const std::vector<SampleRef> refs = validation_subset(val, c.max_val_samples);
+  TrainReport report;
+  report.val_samples = static_cast<int64_t>(refs.size());
+  calibrate_gates(model, val, refs, c, device, generator, report);
+  save_model(*model.net, model.info, c.output);  // weights and training summary unchanged
+  report.seconds = (monotonic_ms() - start) / 1000.0;
+  return report;
+}
 
 TrainReport train_model(const TrainConfig& c, const std::function<void(const TrainStatus&)>& progress) {
   const double start = monotonic_ms();
@@ -321,12 +373,10 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     if (progress) progress(status);
   }
 
-  // Calibrate the uncertainty gate of the best model on validation data.
+  // Calibrate the uncertainty gates of the best model on validation data.
   NativeModel best = load_native_model(c.output);
   best.net->to(device);
-  const ValOutputs mc = run_validation(*best.net, val, val_refs, best.info, device, c.threshold_passes, generator);
-  std::tie(report.uncertainty_threshold, report.val_accuracy_retained) = calibrate_threshold(mc, c.threshold_retain);
-  best.info.uncertainty_threshold = report.uncertainty_threshold;
+  calibrate_gates(best, val, val_refs, c, device, generator, report);
   best.info.training_summary = training_summary(c, train, val, report, report.best_step);
   save_model(*best.net, best.info, c.output);
   report.last = status;

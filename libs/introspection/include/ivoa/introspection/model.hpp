@@ -50,6 +50,10 @@ struct ModelInfo {
   std::array<float, 3> std{0.229f, 0.224f, 0.225f};
   std::vector<std::string> classes{"TP", "TN", "FP", "FN"};
   double uncertainty_threshold = 0.01;  // recommended gate (predicted-class variance)
+  // Gate of the predictions given the detector's verdict (given_verdict):
+  // the variance of P(wrong | verdict) calibrated like uncertainty_threshold;
+  // < 0 for models calibrated before it existed (uncertainty_threshold is used).
+  double verdict_uncertainty_threshold = -1;
   std::string training_summary;         // JSON: data, steps, validation metrics
   std::string id;                       // file name and content hash
 };
@@ -61,6 +65,7 @@ struct InferenceConfig {
   int threads = 2;          // LibTorch intra-op threads (it defaults to 1 on this kind of machine)
   int mean_filter = 3;      // odd window of the mean filter over each heatmap; 1 = off
   double uncertainty_threshold = -1;  // < 0: the model's recommended value
+  double verdict_uncertainty_threshold = -1;  // gate given the verdict; < 0: the model's (verdict_threshold())
   QueryLookup lookup = QueryLookup::kNearest;
   uint64_t seed = 0;        // dropout masks; 0 = from the clock
   std::string device = "cpu";  // "cpu" or "cuda" (LibTorch built with CUDA)
@@ -75,6 +80,8 @@ struct Heatmaps {
   cv::Mat uncertainty;   // mean over classes of the variance (the paper's heatmap)
   cv::Mat predicted;     // CV_8U, argmax class
   cv::Mat predicted_variance;  // variance of the predicted class's probability (the gate)
+  // Prediction::verdict_error and its variance: [0] P(FP | obstacle), [1] P(FN | free).
+  std::array<cv::Mat, 2> verdict_error, verdict_error_variance;
   double compute_ms = 0;
   cv::Point2d cell_centre(int r, int c) const {
     return {c * stride + patch_size / 2.0, r * stride + patch_size / 2.0};
@@ -88,7 +95,24 @@ struct Prediction {
   float variance = 0;      // of the predicted class (the gate)
   float uncertainty = 0;   // mean over classes
   bool announced = false;  // variance <= threshold
+  // The detector's verdict at the cell is known at run time, and it leaves
+  // two of the four classes possible: the question a planner asks is whether
+  // that verdict is wrong. Mean and variance over the passes of
+  // [0] P(FP | it said obstacle) = p_FP / (p_TP + p_FP) and
+  // [1] P(FN | it said free) = p_FN / (p_TN + p_FN), taken pass by pass.
+  std::array<float, 2> verdict_error{};
+  std::array<float, 2> verdict_error_variance{};
 };
+
+// A prediction given the detector's verdict: TP or FP where it said
+// obstacle, TN or FN where it said free.
+struct VerdictPrediction {
+  int predicted = 0;      // class index
+  float p_wrong = 0;      // P(FP | obstacle) or P(FN | free)
+  float variance = 0;     // of p_wrong over the passes (the gate)
+  bool announced = false; // variance <= threshold
+};
+VerdictPrediction given_verdict(const Prediction& p, bool said_obstacle, double threshold);
 
 // Per-patch outputs (evaluation, clustering).
 struct PatchOutputs {
@@ -114,6 +138,9 @@ class IntrospectionModel {
 
   virtual const ModelInfo& info() const = 0;
   double threshold() const;
+  // The gate of given_verdict(): the configured threshold if set, else the
+  // model's verdict_uncertainty_threshold, else its uncertainty_threshold.
+  double verdict_threshold() const;
 
   // Full-frame heatmaps of a left image (8-bit BGR); for a two-view model,
   // the left image stacked over the ground-warped right one (2 x height rows).

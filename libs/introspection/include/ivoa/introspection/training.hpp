@@ -64,6 +64,9 @@ struct TrainReport {
   std::array<double, 4> best_val_class_accuracy{};
   double uncertainty_threshold = 0;
   double val_accuracy_retained = 0;       // mean per-class accuracy of the retained val samples
+  // The same for the predictions given the detector's verdict (given_verdict).
+  double verdict_uncertainty_threshold = 0;
+  double val_verdict_accuracy_retained = 0;
   std::array<int64_t, 4> train_class_counts{};
   int64_t val_samples = 0;
   double seconds = 0;
@@ -72,5 +75,11 @@ struct TrainReport {
 // Trains and writes config.output. Throws std::runtime_error naming the
 // problem (missing split, empty class, unreadable dataset).
 TrainReport train_model(const TrainConfig& config, const std::function<void(const TrainStatus&)>& progress = {});
+
+// Re-calibrates the uncertainty gates of an existing model (config.init) on
+// the validation split, at config.threshold_retain, and writes it to
+// config.output with its weights and training summary unchanged. Fills the
+// report's thresholds, val_accuracy_retained fields, val_samples, seconds.
+TrainReport calibrate_model(const TrainConfig& config);
 
 }  // namespace ivoa::introspection
