@@ -1,5 +1,6 @@
 #include "introspection_node.hpp"
 
+#include <limits>
 #include <utility>
 
 #include <opencv2/core.hpp>
@@ -9,13 +10,62 @@
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/core/time.hpp"
+#include "ivoa/introspection_labels_t.hpp"
 
 namespace ivoa {
 namespace {
 
 std::vector<float> flatten(const cv::Mat& m) { return std::vector<float>(m.begin<float>(), m.end<float>()); }
 
+// The query cell's prediction given the detector's verdict there (unknown:
+// the verdict fields say so).
+void add_verdict(introspection_t& msg, const introspection::Prediction& p, int8_t state, double threshold) {
+  msg.query_verdict.push_back(state);
+  if (state != obstacle_grid_t::STATE_OBSTACLE && state != obstacle_grid_t::STATE_FREE) {
+    msg.query_verdict_class.push_back(introspection_labels_t::LABEL_NONE);
+    msg.query_p_wrong.push_back(std::numeric_limits<float>::quiet_NaN());
+    msg.query_p_wrong_variance.push_back(std::numeric_limits<float>::quiet_NaN());
+    msg.query_verdict_announced.push_back(0);
+    return;
+  }
+  const auto v = introspection::given_verdict(p, state == obstacle_grid_t::STATE_OBSTACLE, threshold);
+  msg.query_verdict_class.push_back(static_cast<int8_t>(v.predicted));
+  msg.query_p_wrong.push_back(v.p_wrong);
+  msg.query_p_wrong_variance.push_back(v.variance);
+  msg.query_verdict_announced.push_back(v.announced ? 1 : 0);
+}
+
 }  // namespace
+
+void RecentGrids::put(const obstacle_grid_t& grid) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    grids_.push_back(grid);
+    if (grids_.size() > kKept) grids_.pop_front();
+  }
+  arrived_.notify_all();
+}
+
+std::optional<obstacle_grid_t> RecentGrids::latest() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (grids_.empty()) return std::nullopt;
+  return grids_.back();
+}
+
+std::optional<obstacle_grid_t> RecentGrids::of_frame(int64_t utime, std::chrono::milliseconds wait) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  std::optional<obstacle_grid_t> found;
+  arrived_.wait_for(lock, wait, [&] {
+    for (auto it = grids_.rbegin(); it != grids_.rend(); ++it)
+      if (it->utime == utime) {
+        found = *it;
+        return true;
+      }
+    // A newer frame's grid: this frame's will not come any more.
+    return !grids_.empty() && grids_.back().utime > utime;
+  });
+  return found;
+}
 
 std::vector<introspection::Prediction> query_predictions(introspection::IntrospectionModel& model,
                                                          const introspection::Heatmaps& h, const cv::Mat& input,
@@ -32,12 +82,14 @@ std::vector<introspection::Prediction> query_predictions(introspection::Introspe
 introspection_t make_introspection_message(const introspection::IntrospectionModel& model,
                                            const introspection::Heatmaps& h, int64_t utime, int image_width,
                                            int image_height, const obstacle_grid_t* grid,
-                                           const std::vector<introspection::Prediction>& predictions, int mc_passes) {
+                                           const std::vector<introspection::Prediction>& predictions, int mc_passes,
+                                           bool grid_is_this_frames) {
   introspection_t msg;
   msg.utime = utime;
   msg.model_id = model.info().id;
   msg.mc_passes = mc_passes;
   msg.uncertainty_threshold = static_cast<float>(model.threshold());
+  msg.verdict_uncertainty_threshold = static_cast<float>(model.verdict_threshold());
   msg.image_width = image_width;
   msg.image_height = image_height;
   msg.patch_size = h.patch_size;
@@ -63,6 +115,8 @@ introspection_t make_introspection_message(const introspection::IntrospectionMod
       msg.query_probability.push_back(p.probability[static_cast<size_t>(p.predicted)]);
       msg.query_uncertainty.push_back(p.variance);
       msg.query_announced.push_back(p.announced ? 1 : 0);
+      add_verdict(msg, p, grid_is_this_frames ? grid->state[i] : obstacle_grid_t::STATE_UNKNOWN,
+                  model.verdict_threshold());
     }
   }
   msg.compute_ms = h.compute_ms;
@@ -82,10 +136,8 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
     bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
                                       [this](const rig_calibration_t& m, const ReceiveInfo&) { on_calibration(m); });
   if (!options_.grid_channel.empty())
-    bus_.subscribe<obstacle_grid_t>(options_.grid_channel, [this](const obstacle_grid_t& m, const ReceiveInfo&) {
-      std::lock_guard<std::mutex> lock(grid_mutex_);
-      latest_grid_ = m;
-    });
+    bus_.subscribe<obstacle_grid_t>(options_.grid_channel,
+                                    [this](const obstacle_grid_t& m, const ReceiveInfo&) { grids_.put(m); });
   heartbeat_.set_state("running");
   worker_ = std::thread([this] { work(); });
 }
@@ -149,22 +201,28 @@ void IntrospectionNode::process(const Frame& frame) {
   cv::Mat left;
   const cv::Mat input = model_input(frame, where, left);
   if (input.empty()) return;
-  std::optional<obstacle_grid_t> grid;
-  {
-    std::lock_guard<std::mutex> lock(grid_mutex_);
-    grid = latest_grid_;
-  }
   introspection::Heatmaps h;
   std::vector<introspection::Prediction> predictions;
+  std::optional<obstacle_grid_t> grid;
+  bool grid_is_this_frames = false;
   try {
     h = model_->run(input);
+    if (!options_.grid_channel.empty()) {
+      grid = grids_.of_frame(frame.msg.utime, options_.grid_wait);
+      grid_is_this_frames = grid.has_value();
+      if (!grid) {
+        grid = grids_.latest();  // the query cells' geometry; no verdicts
+        heartbeat_.set_counter("grids_missing", ++grids_missing_);
+      }
+    }
     if (grid) predictions = query_predictions(*model_, h, input, *grid);
   } catch (const std::exception& e) {  // ModelError, or a grid whose arrays do not match its size
     heartbeat_.bad_input(where + ": " + e.what());
     return;
   }
   introspection_t msg = make_introspection_message(*model_, h, frame.msg.utime, left.cols, left.rows,
-                                                   grid ? &*grid : nullptr, predictions, mc_passes_);
+                                                   grid ? &*grid : nullptr, predictions, mc_passes_,
+                                                   grid_is_this_frames);
   msg.compute_ms = monotonic_ms() - frame.received_ms;
   bus_.publish(options_.out_channel, msg);
   heartbeat_.count_out();

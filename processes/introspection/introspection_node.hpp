@@ -3,10 +3,17 @@
 // per-query-cell predictions out. A receive handler drops each stereo frame
 // into a latest-value mailbox; a worker thread runs the CNN on the newest
 // one, so a slow CPU skips frames (counted) instead of falling behind.
+// The query cells' predictions are also given the detector's verdict of the
+// same frame, from its obstacle grid; the CNN is slower than the detector,
+// so that grid is normally in by the time the CNN is done, and the worker
+// waits a bounded time for it otherwise (then the verdict is unknown, counted).
 // A two-view model also needs the rig calibration, to warp the right image
 // onto the ground plane; frames before the first calibration are skipped
 // (counted as bad input).
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -30,6 +37,24 @@ struct IntrospectionNodeOptions {
   std::string grid_channel{channels::kObstaclesStereo};  // "" = no query cells
   std::string out_channel{channels::kIntrospection};
   std::string calibration_channel{channels::kRigCalibration};  // two-view models only
+  // After the CNN, how long to wait for the detector's grid of the frame
+  // (its verdicts); the query cells' geometry comes from any recent grid.
+  std::chrono::milliseconds grid_wait{200};
+};
+
+// The detector's most recent obstacle grids, by utime (thread-safe).
+class RecentGrids {
+ public:
+  void put(const obstacle_grid_t& grid);
+  std::optional<obstacle_grid_t> latest() const;
+  // The grid of the frame `utime`, waiting up to `wait` for it to arrive.
+  std::optional<obstacle_grid_t> of_frame(int64_t utime, std::chrono::milliseconds wait);
+
+ private:
+  static constexpr size_t kKept = 16;  // about a second of frames
+  mutable std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::deque<obstacle_grid_t> grids_;  // oldest first
 };
 
 // The predictions at the grid's in-image cells, in cell order: looked up in
@@ -41,11 +66,14 @@ std::vector<introspection::Prediction> query_predictions(introspection::Introspe
                                                          const obstacle_grid_t& query_grid);
 
 // Builds the message for one frame (exposed for tests); `predictions` are
-// query_predictions() of `query_grid`.
+// query_predictions() of `query_grid`. With `grid_is_this_frames`, its
+// states are the detector's verdicts for this frame and the predictions are
+// also given those verdicts; otherwise the verdicts are unknown.
 introspection_t make_introspection_message(const introspection::IntrospectionModel& model,
                                            const introspection::Heatmaps& heatmaps, int64_t utime, int image_width,
                                            int image_height, const obstacle_grid_t* query_grid,
-                                           const std::vector<introspection::Prediction>& predictions, int mc_passes);
+                                           const std::vector<introspection::Prediction>& predictions, int mc_passes,
+                                           bool grid_is_this_frames);
 
 class IntrospectionNode {
  public:
@@ -73,8 +101,8 @@ class IntrospectionNode {
   IntrospectionNodeOptions options_;
   int mc_passes_;
   LatestMailbox<Frame> frames_;
-  std::mutex grid_mutex_;
-  std::optional<obstacle_grid_t> latest_grid_;  // query cells: fixed geometry, from the newest grid
+  RecentGrids grids_;
+  int64_t grids_missing_ = 0;                    // frames published without their verdicts (worker thread)
   std::mutex calibration_mutex_;
   std::vector<uint8_t> calibration_bytes_;       // the newest calibration's content (utime zeroed)
   std::optional<RigCalibration> new_rig_;        // handed to the worker, which builds the warp

@@ -26,6 +26,13 @@ int main(int argc, char** argv) {
   app.add_option("--threshold", config.uncertainty_threshold,
                  "announce a prediction when its class variance is at most this (< 0: the model's value)")
       ->capture_default_str();
+  app.add_option("--verdict-threshold", config.verdict_uncertainty_threshold,
+                 "gate of the predictions given the detector's verdict (variance of P(wrong)); < 0: the model's")
+      ->capture_default_str();
+  int grid_wait_ms = static_cast<int>(options.grid_wait.count());
+  app.add_option("--grid-wait-ms", grid_wait_ms,
+                 "after the CNN, how long to wait for the detector's grid of the frame (its verdicts)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   app.add_option("--mean-filter", config.mean_filter, "odd window of the heatmap mean filter (1 = off)")
       ->capture_default_str();
   app.add_option("--lookup", lookup, "query cell -> heatmap: nearest cell or bilinear")
@@ -41,6 +48,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->group("Channels");
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  options.grid_wait = std::chrono::milliseconds(grid_wait_ms);
   config.lookup = lookup == "bilinear" ? ivoa::introspection::QueryLookup::kBilinear
                                        : ivoa::introspection::QueryLookup::kNearest;
   ivoa::init_logging("introspection", common.log_level);

@@ -130,10 +130,15 @@ TEST(Messages, GridLabelsIntrospectionStatusRoundTrip) {
   intro.query_class = {3};
   intro.query_probability = intro.query_uncertainty = {0.9f};
   intro.query_announced = {1};
+  intro.query_verdict = {1};
+  intro.query_verdict_class = {2};
+  intro.query_p_wrong = intro.query_p_wrong_variance = {0.7f};
+  intro.query_verdict_announced = {0};
   const auto i = round_trip(intro);
   EXPECT_EQ(i.num_cells, 2);
   EXPECT_EQ(i.num_queries, 1);
   EXPECT_EQ(i.prob_fn, intro.prob_fn);
+  EXPECT_EQ(i.query_verdict_class, intro.query_verdict_class);
 
   process_status_t status{};
   status.name = "p";

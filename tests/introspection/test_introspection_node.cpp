@@ -1,7 +1,9 @@
 // The introspection process logic on memq:// with a two-view model: frames
 // before the rig calibration are counted and skipped; after it, each frame
 // gives heatmaps of the left image's size.
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -12,6 +14,7 @@
 #include "ivoa/core/footprint_patch.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/image_convert.hpp"
+#include "ivoa/introspection_labels_t.hpp"
 #include "model_file.hpp"
 #include "networks.hpp"
 #include "test_rig.hpp"
@@ -123,8 +126,95 @@ TEST(IntrospectionNode, ScaledModelPredictsQueryCellsFromTheirOwnPatches) {
   ASSERT_EQ(from_heatmap.size(), cells.size());
   for (size_t i = 0; i < cells.size(); ++i)
     EXPECT_EQ(from_heatmap[i].probability, fixed->predict_at(hf, cells[i].u, cells[i].v).probability) << "cell " << i;
-  const introspection_t msg = make_introspection_message(*fixed, hf, 1000, image.cols, image.rows, &grid, from_heatmap, 1);
+  const introspection_t msg =
+      make_introspection_message(*fixed, hf, 1000, image.cols, image.rows, &grid, from_heatmap, 1, false);
   EXPECT_EQ(msg.query_class.size(), cells.size());
+  EXPECT_EQ(msg.query_verdict.size(), cells.size());
+}
+
+TEST(IntrospectionNode, QueryCellsAreGivenTheVerdictsOfTheirOwnFrame) {
+  test::TempDir dir;
+  Bus bus("memq://");
+  Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
+  introspection::InferenceConfig config;
+  config.mc_passes = 4;
+  config.seed = 2;
+  config.verdict_uncertainty_threshold = 1.0;  // every verdict prediction announced
+  IntrospectionNodeOptions options;
+  options.grid_wait = std::chrono::milliseconds(50);
+  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 1), config), options, 4);
+  std::vector<introspection_t> out;
+  bus.subscribe<introspection_t>(channels::kIntrospection, [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
+  auto wait_for = [&](auto done) {
+    for (int i = 0; i < 600 && !done(); ++i) {
+      bus.handle(5);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return done();
+  };
+  const RigCalibration rig = test::make_test_rig();
+  const QueryGrid query_grid(QueryGridConfig{}, RigGeometry(rig).left);
+  obstacle_grid_t grid = make_obstacle_grid(query_grid, "jppc", 2000);
+  std::vector<int8_t> verdicts;  // of the in-image cells, in order
+  for (size_t i = 0; i < grid.state.size(); ++i) {
+    grid.state[i] = static_cast<int8_t>(i % 3);  // free, obstacle, unknown
+    if (grid.in_image[i]) verdicts.push_back(grid.state[i]);
+  }
+  bus.publish(channels::kObstaclesStereo, grid);
+  bus.handle(5);
+  stereo_image_t frame = stereo_frame(rig, 2000);
+  bus.publish(channels::kStereoImages, frame);
+  ASSERT_TRUE(wait_for([&] { return out.size() == 1; }));
+  const introspection_t& m = out[0];
+  ASSERT_EQ(m.query_verdict, verdicts);
+  for (size_t q = 0; q < verdicts.size(); ++q) {
+    const int8_t c = m.query_verdict_class[q];
+    if (verdicts[q] == obstacle_grid_t::STATE_UNKNOWN) {
+      EXPECT_EQ(c, introspection_labels_t::LABEL_NONE);
+      EXPECT_TRUE(std::isnan(m.query_p_wrong[q]));
+      continue;
+    }
+    const bool obstacle = verdicts[q] == obstacle_grid_t::STATE_OBSTACLE;
+    const bool wrong = m.query_p_wrong[q] > 0.5f;
+    EXPECT_EQ(c, obstacle ? (wrong ? introspection_labels_t::LABEL_FP : introspection_labels_t::LABEL_TP)
+                          : (wrong ? introspection_labels_t::LABEL_FN : introspection_labels_t::LABEL_TN));
+    EXPECT_GE(m.query_p_wrong_variance[q], 0.0f);
+    EXPECT_EQ(m.query_verdict_announced[q], 1);
+  }
+  EXPECT_FLOAT_EQ(m.verdict_uncertainty_threshold, 1.0f);
+
+  // A frame whose grid never comes: the geometry of the last grid, no verdicts, counted.
+  stereo_image_t next = stereo_frame(rig, 3000);
+  bus.publish(channels::kStereoImages, next);
+  ASSERT_TRUE(wait_for([&] { return out.size() == 2; }));
+  ASSERT_EQ(out[1].query_verdict.size(), verdicts.size());
+  for (size_t q = 0; q < verdicts.size(); ++q) EXPECT_EQ(out[1].query_verdict[q], obstacle_grid_t::STATE_UNKNOWN);
+  const process_status_t status = heartbeat.snapshot();
+  const auto name = std::find(status.counter_names.begin(), status.counter_names.end(), "grids_missing");
+  ASSERT_NE(name, status.counter_names.end());
+  EXPECT_EQ(status.counter_values[static_cast<size_t>(name - status.counter_names.begin())], 1);
+}
+
+TEST(RecentGrids, FindsTheFrameOrStopsWaitingOnceANewerOneIsIn) {
+  RecentGrids grids;
+  obstacle_grid_t g;
+  g.utime = 100;
+  grids.put(g);
+  g.utime = 300;
+  grids.put(g);
+  EXPECT_EQ(grids.of_frame(100, std::chrono::milliseconds(0))->utime, 100);
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_FALSE(grids.of_frame(200, std::chrono::seconds(30)).has_value());  // 300 is in: 200's will not come
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  EXPECT_EQ(grids.latest()->utime, 300);
+  std::thread late([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    obstacle_grid_t next;
+    next.utime = 400;
+    grids.put(next);
+  });
+  EXPECT_EQ(grids.of_frame(400, std::chrono::seconds(30))->utime, 400);  // woken by its arrival
+  late.join();
 }
 
 }  // namespace

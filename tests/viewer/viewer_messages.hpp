@@ -2,6 +2,7 @@
 // Small hand-made messages for the viewer tests: a 4-cell grid whose cells
 // sit at known pixels of a 320x200 image.
 #include <cmath>
+#include <limits>
 
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/image_t.hpp"
@@ -87,6 +88,11 @@ inline introspection_t introspection(int64_t utime, std::vector<int8_t> predicte
     h.query_probability.push_back(0.9f);
     h.query_uncertainty.push_back(0.001f);
     h.query_announced.push_back(i % 2 == 0);
+    h.query_verdict.push_back(obstacle_grid_t::STATE_UNKNOWN);
+    h.query_verdict_class.push_back(introspection_labels_t::LABEL_NONE);
+    h.query_p_wrong.push_back(std::numeric_limits<float>::quiet_NaN());
+    h.query_p_wrong_variance.push_back(std::numeric_limits<float>::quiet_NaN());
+    h.query_verdict_announced.push_back(0);
   }
   h.num_queries = static_cast<int32_t>(predicted.size());
   return h;
