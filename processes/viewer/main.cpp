@@ -26,6 +26,8 @@ void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
       ->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--scale", o.figure.scale, "figure panel size relative to the image")
       ->capture_default_str()->check(CLI::Range(0.05, 4.0));
+  app.add_flag("--dots-given-verdict", o.figure.dots_given_verdict,
+               "dots: the prediction given the detector's verdict (default: from the image alone, as the paper)");
   app.add_flag("--every-frame,!--newest-only", o.every_frame,
                "draw every frame in order, reading waits for the drawing (default for file:// logs)");
   app.add_option("--max-figures", o.max_figures, "exit after this many figures (0: run until stopped)")

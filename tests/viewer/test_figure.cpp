@@ -45,6 +45,33 @@ TEST(ViewerFigure, RingsShowLabelsAndDotsShowPredictions) {
   EXPECT_TRUE(has_colour(fig, c1.x + 8, c1.y, class_colour(2))) << "withheld: its outline";
 }
 
+TEST(ViewerFigure, DotsCanShowThePredictionGivenTheVerdict) {
+  FrameSet f;
+  f.utime = 100;
+  f.labels = labels(100, {0, 1, 2, 3});
+  f.introspection = introspection(100, {3, 2, 1, 0});
+  auto& h = *f.introspection;
+  h.query_verdict = {obstacle_grid_t::STATE_OBSTACLE, obstacle_grid_t::STATE_FREE, obstacle_grid_t::STATE_OBSTACLE,
+                     obstacle_grid_t::STATE_UNKNOWN};
+  h.query_verdict_class = {introspection_labels_t::LABEL_TP, introspection_labels_t::LABEL_TN,
+                           introspection_labels_t::LABEL_FP, introspection_labels_t::LABEL_NONE};
+  h.query_verdict_announced = {1, 1, 0, 0};
+  const auto marks = prediction_marks(f, true);
+  ASSERT_EQ(marks.size(), 4u);
+  EXPECT_EQ(marks[0].predicted, 0);
+  EXPECT_EQ(marks[1].predicted, 1);
+  EXPECT_TRUE(marks[1].announced);
+  EXPECT_EQ(marks[2].predicted, 2);
+  EXPECT_FALSE(marks[2].announced);
+  EXPECT_EQ(marks[3].predicted, 0) << "verdict unknown: the image-alone prediction";
+  EXPECT_EQ(prediction_marks(f, false)[0].predicted, 3) << "default: the image-alone prediction";
+  FigureOptions options = full_size();
+  options.dots_given_verdict = true;
+  const cv::Mat fig = draw_frame_figure(background(), f, options);
+  const cv::Point c0(static_cast<int>(kCellU[0]), static_cast<int>(kCellV[0]));
+  EXPECT_TRUE(has_colour(fig, c0.x, c0.y, class_colour(0))) << "announced: a filled TP dot";
+}
+
 TEST(ViewerFigure, WithoutLabelsTheTwoGridsAreLabelledByAlgorithm1) {
   FrameSet f;
   f.utime = 100;

@@ -39,11 +39,11 @@ void draw_marks(cv::Mat& out, const std::vector<CellMark>& cells, const std::vec
   }
 }
 
-void draw_legend(cv::Mat& out, bool verdict_rings) {
-  banner(out, 0, 44,
-         verdict_rings ? "ring: stereo verdict (white free, magenta obstacle)   dot: prediction (hollow: withheld)"
-                       : "ring: label (stereo vs depth)   dot: prediction (hollow: withheld)",
-         0.7);
+void draw_legend(cv::Mat& out, bool verdict_rings, bool dots_given_verdict) {
+  const std::string rings = verdict_rings ? "ring: stereo verdict (white free, magenta obstacle)" : "ring: label (stereo vs depth)";
+  const std::string dots = dots_given_verdict ? "dot: prediction given the verdict (hollow: withheld)"
+                                              : "dot: prediction (hollow: withheld)";
+  banner(out, 0, 44, rings + "   " + dots, 0.7);
   banner(out, 44, 36, "");
   int x = 12;
   for (int k = 0; k < 4; ++k) {
@@ -153,12 +153,16 @@ std::vector<CellMark> cell_marks(const FrameSet& f) {
   return out;
 }
 
-std::vector<PredictionMark> prediction_marks(const FrameSet& f) {
+std::vector<PredictionMark> prediction_marks(const FrameSet& f, bool given_verdict) {
   std::vector<PredictionMark> out;
   if (!f.introspection) return out;
   const auto& h = *f.introspection;
-  for (size_t i = 0; i < static_cast<size_t>(h.num_queries); ++i)
-    out.push_back({h.query_u[i], h.query_v[i], h.query_class[i], h.query_announced[i] != 0});
+  for (size_t i = 0; i < static_cast<size_t>(h.num_queries); ++i) {
+    if (given_verdict && h.query_verdict_class[i] >= 0)
+      out.push_back({h.query_u[i], h.query_v[i], h.query_verdict_class[i], h.query_verdict_announced[i] != 0});
+    else
+      out.push_back({h.query_u[i], h.query_v[i], h.query_class[i], h.query_announced[i] != 0});
+  }
   return out;
 }
 
@@ -175,9 +179,9 @@ std::string check_introspection(const introspection_t& h) {
 cv::Mat draw_frame_figure(const cv::Mat& left, const FrameSet& f, const FigureOptions& options) {
   const auto cells = cell_marks(f);
   cv::Mat grid = left.clone();
-  draw_marks(grid, cells, prediction_marks(f));
+  draw_marks(grid, cells, prediction_marks(f, options.dots_given_verdict));
   const bool verdict_rings = !cells.empty() && cells.front().ring_verdict >= 0;
-  draw_legend(grid, verdict_rings);
+  draw_legend(grid, verdict_rings, options.dots_given_verdict);
   banner(grid, grid.rows - 40, 40, status_line(f), 0.7);
 
   cv::Mat failure, uncertainty;

@@ -4,7 +4,8 @@
 //   1. the left image with the ground query grid: outer ring = the label
 //      (stereo verdict vs depth verdict, Algorithm 1) or, without depth, the
 //      stereo verdict; inner dot = the introspection prediction (hollow when
-//      withheld for its uncertainty). TP green, TN blue, FP orange, FN red.
+//      withheld for its uncertainty), from the image alone (the paper's) or
+//      given the detector's verdict. TP green, TN blue, FP orange, FN red.
 //   2. the failure heatmap P(FP) + P(FN), 0 blue .. 1 red;
 //   3. the uncertainty heatmap.
 // Whatever the frame lacks is left out and said so on the figure.
@@ -19,6 +20,10 @@ namespace ivoa::viewer {
 
 struct FigureOptions {
   double scale = 0.5;  // figure panels relative to the image size
+  // Dots: the prediction given the detector's verdict of the frame where
+  // the message has it (else the image-alone one), instead of the paper's
+  // image-alone prediction.
+  bool dots_given_verdict = false;
 };
 
 // What the grid panel draws at one cell.
@@ -37,7 +42,7 @@ struct PredictionMark {
 // Rings from the labels if the frame has them, else Algorithm 1 on the
 // frame's stereo and depth grids, else the one grid's verdicts.
 std::vector<CellMark> cell_marks(const FrameSet& frame);
-std::vector<PredictionMark> prediction_marks(const FrameSet& frame);
+std::vector<PredictionMark> prediction_marks(const FrameSet& frame, bool given_verdict = false);
 
 // Empty if the message can be drawn, else what is wrong with it.
 std::string check_introspection(const introspection_t& msg);
