@@ -35,6 +35,16 @@ std::string write_model(const test::TempDir& dir, int views, double patch_scale 
   return path;
 }
 
+// The worker runs asynchronously: deliver messages until `done` (bounded, ~6 s).
+template <typename Done>
+bool deliver_until(Bus& bus, Done done) {
+  for (int i = 0; i < 600 && !done(); ++i) {
+    bus.handle(5);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return done();
+}
+
 stereo_image_t stereo_frame(const RigCalibration& rig, int64_t utime) {
   cv::Mat left(rig.left.height, rig.left.width, CV_8UC3), right(rig.right.height, rig.right.width, CV_8UC3);
   cv::randu(left, 0, 255);
@@ -58,14 +68,7 @@ TEST(IntrospectionNode, TwoViewModelWaitsForTheCalibrationThenRuns) {
   IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 2), config), options, 2);
   std::vector<introspection_t> out;
   bus.subscribe<introspection_t>(channels::kIntrospection, [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
-  // The worker runs asynchronously: deliver, then wait (bounded) for `done`.
-  auto wait_for = [&](auto done) {
-    for (int i = 0; i < 600 && !done(); ++i) {
-      bus.handle(5);
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    return done();
-  };
+  auto wait_for = [&](auto done) { return deliver_until(bus, done); };
   const RigCalibration rig = test::make_test_rig();
   stereo_image_t early = stereo_frame(rig, 1000), frame = stereo_frame(rig, 2000);
   rig_calibration_t calibration = to_message(rig, 1);
@@ -145,13 +148,7 @@ TEST(IntrospectionNode, QueryCellsAreGivenTheVerdictsOfTheirOwnFrame) {
   IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 1), config), options, 4);
   std::vector<introspection_t> out;
   bus.subscribe<introspection_t>(channels::kIntrospection, [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
-  auto wait_for = [&](auto done) {
-    for (int i = 0; i < 600 && !done(); ++i) {
-      bus.handle(5);
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    return done();
-  };
+  auto wait_for = [&](auto done) { return deliver_until(bus, done); };
   const RigCalibration rig = test::make_test_rig();
   const QueryGrid query_grid(QueryGridConfig{}, RigGeometry(rig).left);
   obstacle_grid_t grid = make_obstacle_grid(query_grid, "jppc", 2000);

@@ -94,22 +94,28 @@ TEST(Training, LossFallsAndHeldOutSessionsBeatChance) {
   EXPECT_GT(static_cast<double>(right) / static_cast<double>(test.size()), 0.6);  // chance is 0.25
 }
 
-TEST(Training, ResumesFromTheCheckpoint) {
-  test::TempDir dir;
-  const std::string root = dir.file("data");
-  write_session(root, "a", 10, 1);
-  write_session(root, "v", 5, 3);
+// A train session "a" of 10 samples per class and a validation session "v"
+// of `val_per_class`, and a short training run on them.
+TrainConfig tiny_run(const test::TempDir& dir, int val_per_class, int64_t steps) {
+  write_session(dir.file("data"), "a", 10, 1);
+  write_session(dir.file("data"), "v", val_per_class, 3);
   std::ofstream(dir.file("split.yaml")) << "train: [a]\nval: [v]\n";
   TrainConfig c;
-  c.dataset = root;
+  c.dataset = dir.file("data");
   c.split_file = dir.file("split.yaml");
   c.output = dir.file("model.pt");
-  c.steps = 10;
+  c.steps = steps;
   c.batch_size = 8;
   c.warmup_steps = 2;
   c.validate_every = 5;
   c.checkpoint_every = 5;
-  c.threshold_passes = 2;
+  c.threshold_passes = 3;
+  return c;
+}
+
+TEST(Training, ResumesFromTheCheckpoint) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 10);
   train_model(c);
   c.steps = 14;
   c.resume = true;
@@ -122,18 +128,7 @@ TEST(Training, ResumesFromTheCheckpoint) {
 
 TEST(Training, CalibrationOnlyRewritesTheGatesNotTheWeights) {
   test::TempDir dir;
-  const std::string root = dir.file("data");
-  write_session(root, "a", 10, 1);
-  write_session(root, "v", 20, 3);
-  std::ofstream(dir.file("split.yaml")) << "train: [a]\nval: [v]\n";
-  TrainConfig c;
-  c.dataset = root;
-  c.split_file = dir.file("split.yaml");
-  c.output = dir.file("model.pt");
-  c.steps = 20;
-  c.batch_size = 8;
-  c.validate_every = 10;
-  c.threshold_passes = 5;
+  TrainConfig c = tiny_run(dir, 20, 20);
   train_model(c);
   c.init = c.output;
   c.output = dir.file("recalibrated.pt");
