@@ -116,14 +116,21 @@ TrainConfig tiny_run(const test::TempDir& dir, int val_per_class, int64_t steps)
 TEST(Training, ResumesFromTheCheckpoint) {
   test::TempDir dir;
   TrainConfig c = tiny_run(dir, 5, 10);
-  train_model(c);
+  const TrainReport before = train_model(c);
   c.steps = 14;
   c.resume = true;
   int64_t first = -1;
-  train_model(c, [&](const TrainStatus& s) {
+  const TrainReport r = train_model(c, [&](const TrainStatus& s) {
     if (first < 0) first = s.step;
   });
   EXPECT_EQ(first, 11);  // continued after step 10, not from scratch
+  if (r.best_before_resume) {  // the checkpoint's best stands: its numbers, nothing invented
+    EXPECT_EQ(r.best_step, before.best_step);
+    EXPECT_NEAR(r.best_val_mean_class_accuracy, before.best_val_mean_class_accuracy, 1e-5);
+  } else {
+    EXPECT_GT(r.best_step, 10);
+    EXPECT_GT(r.best_val_accuracy, 0.0);
+  }
 }
 
 TEST(Training, CalibrationOnlyRewritesTheGatesNotTheWeights) {

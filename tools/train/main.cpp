@@ -85,10 +85,15 @@ int main(int argc, char** argv) {
     });
     progress.finish();
     std::printf("model: %s\n", c.output.c_str());
-    std::printf("best validation (step %lld): mean per-class accuracy %.3f, overall %.3f, per class TP %.3f TN %.3f FP %.3f FN %.3f\n",
-                static_cast<long long>(r.best_step), r.best_val_mean_class_accuracy, r.best_val_accuracy,
-                r.best_val_class_accuracy[0], r.best_val_class_accuracy[1], r.best_val_class_accuracy[2],
-                r.best_val_class_accuracy[3]);
+    if (r.best_before_resume)
+      std::printf("best validation (step %lld, before the resume; not beaten since): mean per-class accuracy %.3f\n",
+                  static_cast<long long>(r.best_step), r.best_val_mean_class_accuracy);
+    else
+      std::printf("best validation (step %lld): mean per-class accuracy %.3f, overall %.3f, per class TP %.3f TN %.3f "
+                  "FP %.3f FN %.3f\n",
+                  static_cast<long long>(r.best_step), r.best_val_mean_class_accuracy, r.best_val_accuracy,
+                  r.best_val_class_accuracy[0], r.best_val_class_accuracy[1], r.best_val_class_accuracy[2],
+                  r.best_val_class_accuracy[3]);
     print_gates(r, c);
     std::printf("training: %lld steps in %.0f s, %.0f patches/s; train samples TP %lld TN %lld FP %lld FN %lld\n",
                 static_cast<long long>(r.last.step), r.seconds, r.last.patches_per_s,

@@ -304,6 +304,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     torch::load(optimizer, checkpoint + ".optimizer");
     std::ifstream(checkpoint + ".step") >> first_step >> report.best_val_mean_class_accuracy >> report.best_step;
     spdlog::info("resuming from {} at step {}", checkpoint, first_step);
+    report.best_before_resume = true;  // until a validation of this run beats it
   }
 
   // Class-balanced sampling with replacement: pick a class, then a sample.
@@ -359,6 +360,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
         report.best_val_accuracy = v.confusion.accuracy();
         for (int k = 0; k < kNumClasses; ++k) report.best_val_class_accuracy[static_cast<size_t>(k)] = v.confusion.class_accuracy(k);
         report.best_step = step + 1;
+        report.best_before_resume = false;
         info.training_summary = training_summary(c, train, val, report, step + 1);
         save_model(*net, info, c.output);  // the best so far, complete at every moment
       }

@@ -62,6 +62,9 @@ struct TrainReport {
   double best_val_mean_class_accuracy = 0;
   double best_val_accuracy = 0;
   std::array<double, 4> best_val_class_accuracy{};
+  // The best model is from before a --resume (this run never beat it): only
+  // its step and mean per-class accuracy are known (the checkpoint's).
+  bool best_before_resume = false;
   double uncertainty_threshold = 0;
   double val_accuracy_retained = 0;       // mean per-class accuracy of the retained val samples
   // The same for the predictions given the detector's verdict (given_verdict).
