@@ -212,7 +212,7 @@ void IntrospectionNode::process(const Frame& frame) {
       grid_is_this_frames = grid.has_value();
       if (!grid) {
         grid = grids_.latest();  // the query cells' geometry; no verdicts
-        heartbeat_.set_counter("grids_missing", ++grids_missing_);
+        heartbeat_.add_to_counter("grids_missing", 1);
       }
     }
     if (grid) predictions = query_predictions(*model_, h, input, *grid);

@@ -102,7 +102,6 @@ class IntrospectionNode {
   int mc_passes_;
   LatestMailbox<Frame> frames_;
   RecentGrids grids_;
-  int64_t grids_missing_ = 0;                    // frames published without their verdicts (worker thread)
   std::mutex calibration_mutex_;
   std::vector<uint8_t> calibration_bytes_;       // the newest calibration's content (utime zeroed)
   std::optional<RigCalibration> new_rig_;        // handed to the worker, which builds the warp

@@ -121,11 +121,20 @@ def failure_detection(label: np.ndarray, predicted: np.ndarray, probs: np.ndarra
     """Failure detection as a binary problem: positive = the detector failed
     (true FP or FN), predicted positive = the model predicts FP or FN.
 
-    AUROC uses the score P(FP) + P(FN) (the paper's failure heatmap). With only
-    one class in the truth AUROC is undefined and the entry says why."""
+    AUROC uses the score P(FP) + P(FN) (the paper's failure heatmap), and each
+    failure type one-vs-rest its own probability. With only one class in the
+    truth AUROC is undefined and the entry says why."""
+    everywhere = np.ones(len(label), bool)
+    return scored_failure_detection(label, predicted, probs[:, FP] + probs[:, FN],
+                                    {FP: (probs[:, FP], everywhere), FN: (probs[:, FN], everywhere)})
+
+
+def scored_failure_detection(label: np.ndarray, predicted: np.ndarray, score: np.ndarray, type_scores: dict) -> dict:
+    """failure_detection with the ranking given: `score` for FP ∪ FN, and per
+    failure type (FP, FN) a (score, mask) pair: its one-vs-rest AUROC over the
+    masked samples."""
     truth = (label == FP) | (label == FN)
     flag = (predicted == FP) | (predicted == FN)
-    score = probs[:, FP] + probs[:, FN]
     tp = int(np.sum(truth & flag))
     fp = int(np.sum(~truth & flag))
     fn = int(np.sum(truth & ~flag))
@@ -145,11 +154,11 @@ def failure_detection(label: np.ndarray, predicted: np.ndarray, probs: np.ndarra
     out["auroc"] = float(roc_auc_score(truth, score))
     fpr, tpr, _ = roc_curve(truth, score)
     out["roc"] = {"fpr": fpr.tolist(), "tpr": tpr.tolist()}
-    # One-vs-rest AUROC for each failure type, using its own probability.
     for cls, key in ((FP, "auroc_fp"), (FN, "auroc_fn")):
-        t = label == cls
+        cls_score, mask = type_scores[cls]
+        t = label[mask] == cls
         if t.any() and not t.all():
-            out[key] = float(roc_auc_score(t, probs[:, cls]))
+            out[key] = float(roc_auc_score(t, cls_score[mask]))
     return out
 
 
@@ -274,16 +283,9 @@ def given_verdict(run: EvalRun) -> Optional[dict]:
     if v is None:
         return None
     said_obstacle = v.stereo_state == STATE_OBSTACLE
-    failure = failure_detection(run.label, v.predicted, np.zeros((len(run.label), N_CLASSES)))
-    truth = (run.label == FP) | (run.label == FN)
-    if failure["message"] is None:
-        failure["auroc"] = float(roc_auc_score(truth, v.p_wrong))
-        fpr, tpr, _ = roc_curve(truth, v.p_wrong)
-        failure["roc"] = {"fpr": fpr.tolist(), "tpr": tpr.tolist()}
     # Per verdict: FP among the cells called obstacles, FN among those called free.
-    for cls, where, key in ((FP, said_obstacle, "auroc_fp"), (FN, ~said_obstacle, "auroc_fn")):
-        t = run.label[where] == cls
-        failure[key] = float(roc_auc_score(t, v.p_wrong[where])) if t.any() and not t.all() else None
+    failure = scored_failure_detection(run.label, v.predicted, v.p_wrong,
+                                       {FP: (v.p_wrong, said_obstacle), FN: (v.p_wrong, ~said_obstacle)})
     return {
         "overall": class_metrics(run.label, v.predicted),
         "sessions": [dict(class_metrics(run.label[run.session == s], v.predicted[run.session == s]), group=str(s))

@@ -68,7 +68,6 @@ int main(int argc, char** argv) {
 
   try {
     if (calibrate_only) {
-      if (c.init.empty()) throw std::runtime_error("--calibrate-only needs --init MODEL");
       const auto r = introspection::calibrate_model(c);
       std::printf("model: %s (weights of %s, gates calibrated on %lld validation samples in %.0f s)\n",
                   c.output.c_str(), c.init.c_str(), static_cast<long long>(r.val_samples), r.seconds);

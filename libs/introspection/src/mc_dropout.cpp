@@ -21,9 +21,7 @@ torch::Tensor variance_over_passes(const torch::Tensor& x) {
 }  // namespace
 
 torch::Tensor verdict_errors(const torch::Tensor& probs) {
-  using torch::indexing::Ellipsis;
-  const auto tp = probs.index({Ellipsis, 0}), tn = probs.index({Ellipsis, 1});
-  const auto fp = probs.index({Ellipsis, 2}), fn = probs.index({Ellipsis, 3});
+  const auto tp = probs.select(-1, 0), tn = probs.select(-1, 1), fp = probs.select(-1, 2), fn = probs.select(-1, 3);
   // Softmax outputs are never both zero in exact arithmetic; the floor only
   // guards against underflow.
   return torch::stack({fp / (tp + fp).clamp_min(1e-30), fn / (tn + fn).clamp_min(1e-30)}, -1);

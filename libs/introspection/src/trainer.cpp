@@ -125,7 +125,7 @@ struct ValOutputs {
   Confusion confusion;
   std::vector<int> truth, predicted;
   std::vector<float> variance;  // predicted-class variance (MC only)
-  // Given the recorded verdict (the truth's TP/FP vs TN/FN): given_verdict().
+  // given_verdict() of the detector's verdict the sample recorded (stereo_state).
   std::vector<int> verdict_predicted;
   std::vector<float> verdict_variance;
 };
