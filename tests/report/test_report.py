@@ -94,7 +94,7 @@ def write_dataset(root, sessions, detector="jppc"):
 
 
 def write_eval(out, sessions, predicted, probs, var, embeddings, detector="jppc", threshold=0.03,
-               overlay=False, verdict=None):
+               overlay=False, verdict=None, overlay_dots=None):
     """An ivoa-eval output folder (tools/eval/README.md) for the given rows;
     with `verdict` (predicted, p_wrong, var_wrong arrays), the columns of the
     predictions given the detector's verdict too (stereo_state from the label)."""
@@ -119,6 +119,8 @@ def write_eval(out, sessions, predicted, probs, var, embeddings, detector="jppc"
             "samples": k, "metadata": {"detector": detector, "architecture": "slidenet", "training": {}}}
     if verdict:
         meta["verdict_uncertainty_threshold"] = threshold
+    if overlay_dots:
+        meta["overlay_dots"] = overlay_dots
     with open(os.path.join(out, "eval.json"), "w") as f:
         json.dump(meta, f)
     if overlay:
@@ -177,7 +179,8 @@ def fabricate(root):
         perfect_probs[i] = (1 - p_top[i]) / 3
         perfect_probs[i, label[i]] = p_top[i]
     perfect = os.path.join(root, "perfect")
-    write_eval(perfect, sessions, label, perfect_probs, rng.uniform(0.001, 0.01, n), emb, overlay=True)
+    write_eval(perfect, sessions, label, perfect_probs, rng.uniform(0.001, 0.01, n), emb, overlay=True,
+               overlay_dots="given_verdict")
 
     # known model: the first WRONG[c][0] (session 1) / WRONG_TOTAL-that (session 2) samples of each class are wrong.
     predicted = label.copy()
@@ -310,6 +313,8 @@ class ReportTest(unittest.TestCase):
                      "cluster_1_mosaic.png", "phenomena_fn_fp.png", "office_s1_1000000.png",
                      "verdict_accuracy_vs_retained.png"):
             self.assertTrue(any(l.endswith(must) for l in links), must)
+        # eval.json says which predictions the overlay dots show
+        self.assertIn("inner dot = prediction given the detector's recorded verdict", report)
         self.assertLess(self.seconds, 60, "the report on 400 samples should take seconds")
 
     def test_perfect_model(self):

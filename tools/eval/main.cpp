@@ -37,6 +37,7 @@ struct Options {
   int overlay_every = 10;
   int max_overlays = 12;
   double overlay_scale = 0.6;
+  bool dots_given_verdict = false;  // overlay dots: predictions given the recorded verdict
   introspection::InferenceConfig inference;
 };
 
@@ -94,17 +95,16 @@ std::string session_of_log(const std::string& path) {
 }
 
 // The prediction for each labelled cell, as ivoa-introspection makes it
-// (a footprint-scaled model's near cells from the squares the dataset recorded).
+// (a footprint-scaled model's near cells from the squares the dataset
+// recorded); given_verdict: conditioned on the cell's recorded verdict where
+// it has one, as the live process does with the detector's grid.
 void predict_cells(introspection::IntrospectionModel& model, const introspection::Heatmaps& h, const cv::Mat& input,
-                   std::vector<tools::LabelledCell>& cells) {
+                   std::vector<tools::LabelledCell>& cells, bool given_verdict) {
   const bool scaled = model.info().patch_scale > 0;
   std::vector<introspection::IntrospectionModel::CellPatch> squares;
   for (const auto& c : cells) squares.push_back({c.u, c.v, scaled ? c.patch_side : model.info().patch_size});
   const auto predictions = model.predict_query_cells(input, h, squares);
-  for (size_t i = 0; i < cells.size(); ++i) {
-    cells[i].predicted = predictions[i].predicted;
-    cells[i].announced = predictions[i].announced;
-  }
+  tools::set_predictions(cells, predictions, given_verdict, model.verdict_threshold());
 }
 
 int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
@@ -119,7 +119,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
     }
     const dataset::SessionReader reader(dir);
     std::map<int64_t, std::vector<tools::LabelledCell>> frames;
-    for (const auto& s : reader.samples()) frames[s.utime].push_back({s.u, s.v, s.label, -1, true, s.patch_side});
+    for (const auto& s : reader.samples()) frames[s.utime].push_back({s.u, s.v, s.label, -1, true, s.patch_side, s.stereo_state});
     logio::LogReader in(log);
     logio::LogEvent e;
     int64_t index = 0;
@@ -142,8 +142,8 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
         input = warp->stack(left, decode_image(msg.right));
       }
       const introspection::Heatmaps h = model.run(input);
-      predict_cells(model, h, input, it->second);
-      cv::Mat figure = tools::compose_frame_figure(left, h, it->second);
+      predict_cells(model, h, input, it->second, o.dots_given_verdict);
+      cv::Mat figure = tools::compose_frame_figure(left, h, it->second, o.dots_given_verdict);
       cv::resize(figure, figure, cv::Size(), o.overlay_scale, o.overlay_scale, cv::INTER_AREA);
       cv::imwrite(o.out + "/overlays/" + session + "_" + std::to_string(msg.utime) + ".png", figure);
       ++written;
@@ -170,6 +170,9 @@ int main(int argc, char** argv) {
   app.add_option("--logs", o.logs, "logs of evaluated sessions, for overlay figures")->check(CLI::ExistingFile);
   app.add_option("--overlay-every", o.overlay_every, "one overlay per this many labelled frames")->capture_default_str();
   app.add_option("--max-overlays", o.max_overlays)->capture_default_str();
+  app.add_flag("--dots-given-verdict", o.dots_given_verdict,
+               "overlay dots: predictions given the detector's recorded verdict (default: from the image alone, as the "
+               "paper)");
   app.add_option("--mc-passes", o.inference.mc_passes, "T")->capture_default_str();
   app.add_option("--threads", o.inference.threads)->capture_default_str();
   app.add_option("--seed", o.inference.seed, "dropout masks")->capture_default_str();
@@ -208,7 +211,8 @@ int main(int argc, char** argv) {
     std::ofstream(o.out + "/eval.json") << "{\"model\": \"" << model->info().id << "\", \"mc_passes\": "
                                         << o.inference.mc_passes << ", \"uncertainty_threshold\": " << model->threshold()
                                         << ", \"verdict_uncertainty_threshold\": " << model->verdict_threshold()
-                                        << ", \"samples\": " << done << ", \"sessions\": [" << evaluated << "]"
+                                        << ", \"overlay_dots\": \"" << (o.dots_given_verdict ? "given_verdict" : "image")
+                                        << "\", \"samples\": " << done << ", \"sessions\": [" << evaluated << "]"
                                         << ", \"metadata\": {\"detector\": \"" << model->info().detector
                                         << "\", \"architecture\": \"" << model->info().architecture << "\", \"training\": "
                                         << (model->info().training_summary.empty() ? "{}" : model->info().training_summary)

@@ -1,6 +1,12 @@
 #include "overlay.hpp"
 
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
 #include <opencv2/imgproc.hpp>
+
+#include "ivoa/obstacle_grid_t.hpp"
 
 namespace ivoa::tools {
 
@@ -14,18 +20,39 @@ cv::Scalar class_colour(int label) {
   }
 }
 
+void set_predictions(std::vector<LabelledCell>& cells, const std::vector<introspection::Prediction>& predictions,
+                     bool given_verdict, double verdict_threshold) {
+  if (predictions.size() != cells.size())
+    throw std::invalid_argument("set_predictions: " + std::to_string(predictions.size()) + " predictions for " +
+                                std::to_string(cells.size()) + " cells");
+  for (size_t i = 0; i < cells.size(); ++i) {
+    LabelledCell& cell = cells[i];
+    cell.predicted = predictions[i].predicted;
+    cell.announced = predictions[i].announced;
+    const bool obstacle = cell.stereo_state == obstacle_grid_t::STATE_OBSTACLE;
+    if (!given_verdict || (!obstacle && cell.stereo_state != obstacle_grid_t::STATE_FREE)) continue;
+    const auto v = introspection::given_verdict(predictions[i], obstacle, verdict_threshold);
+    cell.predicted = v.predicted;
+    cell.announced = v.announced;
+  }
+}
+
 namespace {
 
-// A dark band across the top so titles stay readable on any image.
+// A dark band across the top so titles stay readable on any image; long
+// titles are set smaller to fit the width.
 void banner(cv::Mat& image, const std::string& text) {
   cv::Mat band = image(cv::Rect(0, 0, image.cols, 44));
   band *= 0.35;
-  cv::putText(image, text, {12, 31}, cv::FONT_HERSHEY_SIMPLEX, 0.95, {255, 255, 255}, 2, cv::LINE_AA);
+  int baseline = 0;
+  const double width = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.95, 2, &baseline).width;
+  const double scale = std::min(0.95, 0.95 * (image.cols - 24) / std::max(width, 1.0));
+  cv::putText(image, text, {12, 31}, cv::FONT_HERSHEY_SIMPLEX, scale, {255, 255, 255}, 2, cv::LINE_AA);
 }
 
 }  // namespace
 
-cv::Mat draw_grid(const cv::Mat& left, const std::vector<LabelledCell>& cells) {
+cv::Mat draw_grid(const cv::Mat& left, const std::vector<LabelledCell>& cells, bool dots_given_verdict) {
   cv::Mat out = left.clone();
   for (const auto& c : cells) {
     const cv::Point p(cvRound(c.u), cvRound(c.v));
@@ -35,7 +62,8 @@ cv::Mat draw_grid(const cv::Mat& left, const std::vector<LabelledCell>& cells) {
       else cv::circle(out, p, 8, class_colour(c.predicted), 2, cv::LINE_AA);  // withheld: hollow
     }
   }
-  banner(out, "ring: label   dot: prediction (hollow: withheld)");
+  banner(out, dots_given_verdict ? "ring: label   dot: prediction given the verdict (hollow: withheld)"
+                                 : "ring: label   dot: prediction (hollow: withheld)");
   int x = 12;
   cv::Mat legend = out(cv::Rect(0, 44, out.cols, 36));
   legend *= 0.35;
@@ -68,11 +96,11 @@ cv::Mat draw_heatmap(const cv::Mat& left, const introspection::Heatmaps& h, cons
 }
 
 cv::Mat compose_frame_figure(const cv::Mat& left, const introspection::Heatmaps& h,
-                             const std::vector<LabelledCell>& cells) {
+                             const std::vector<LabelledCell>& cells, bool dots_given_verdict) {
   const cv::Mat failure = h.probability[2] + h.probability[3];
   double max_unc = 0;
   cv::minMaxLoc(h.uncertainty, nullptr, &max_unc);
-  const cv::Mat a = draw_grid(left, cells);
+  const cv::Mat a = draw_grid(left, cells, dots_given_verdict);
   const cv::Mat b = draw_heatmap(left, h, failure, 1.0, "P(FP) + P(FN): 0 blue .. 1 red");
   char title[96];
   std::snprintf(title, sizeof(title), "uncertainty (class variance): 0 .. %.3f", std::max(max_unc, 0.01));

@@ -17,17 +17,27 @@ struct LabelledCell {
   int predicted = -1;  // idem; -1 not predicted
   bool announced = true;
   int patch_side = 0;  // the square the model sees around (u, v), pixels
+  int stereo_state = -1;  // the detector's verdict recorded for the cell (obstacle_grid_t.STATE_*)
 };
 
 // Colours of the four classes (BGR), as in the reference code's figures:
 // TP green, TN blue, FP orange, FN red.
 cv::Scalar class_colour(int label);
 
-cv::Mat draw_grid(const cv::Mat& left_bgr, const std::vector<LabelledCell>& cells);
+// Sets each cell's dot from its prediction (cells and predictions in the
+// same order). given_verdict: where the cell has a recorded verdict (free or
+// obstacle), the prediction given it, gated at verdict_threshold, as the live
+// process makes it; cells without one keep the prediction from the image.
+void set_predictions(std::vector<LabelledCell>& cells, const std::vector<introspection::Prediction>& predictions,
+                     bool given_verdict, double verdict_threshold);
+
+// dots_given_verdict: the dots are predictions given the detector's verdict
+// (which only changes the caption; the caller fills `predicted` so).
+cv::Mat draw_grid(const cv::Mat& left_bgr, const std::vector<LabelledCell>& cells, bool dots_given_verdict = false);
 // A heatmap (rows x cols, CV_32F) upsampled to the image and blended over it.
 cv::Mat draw_heatmap(const cv::Mat& left_bgr, const introspection::Heatmaps& h, const cv::Mat& values, double max_value,
                      const char* title);
 cv::Mat compose_frame_figure(const cv::Mat& left_bgr, const introspection::Heatmaps& h,
-                             const std::vector<LabelledCell>& cells);
+                             const std::vector<LabelledCell>& cells, bool dots_given_verdict = false);
 
 }  // namespace ivoa::tools

@@ -287,7 +287,8 @@ def run_report(args: argparse.Namespace, argv: List[str]) -> int:
             f"Eval folder `{run.path}`, dataset `{rm['dataset']}`, detector **{run.detector}**, "
             f"model `{rm['model']}`, T = {rm['mc_passes']} MC-dropout passes.\n",
             md.metrics_section(run, rm, figs), md.failure_section(rm, figs), md.uncertainty_section(rm, figs),
-            md.verdict_section(rm, figs), md.clustering_section(run, res, opt, figs), md.overlays_section(overlays)]))
+            md.verdict_section(rm, figs), md.clustering_section(run, res, opt, figs),
+            md.overlays_section(overlays, str(run.meta.get("overlay_dots", "image")))]))
     comparison = compare(runs, numbers, out_dir) if len(runs) > 1 else ""
 
     cmd = "python3 tools/report/ivoa_report.py " + " ".join(shlex.quote(a) for a in argv)

@@ -297,14 +297,17 @@ def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, s
     return "\n".join(out)
 
 
-def overlays_section(overlays: List[str]) -> str:
-    """§5: ivoa-eval's per-frame figures, copied next to the report."""
+def overlays_section(overlays: List[str], dots: str = "image") -> str:
+    """§6: ivoa-eval's per-frame figures, copied next to the report; dots is
+    eval.json's overlay_dots ("image" or "given_verdict")."""
     out = ["### 6. Per-frame overlays\n"]
     if not overlays:
         out.append("No overlay figures in this eval folder (run ivoa-eval with `--logs`).\n")
         return "\n".join(out)
-    out.append("From ivoa-eval: left image with the ground grid (outer ring = label, inner dot = prediction), the "
-               "P(FP)+P(FN) heatmap and the uncertainty heatmap.\n")
+    what = ("prediction given the detector's recorded verdict (`--dots-given-verdict`)" if dots == "given_verdict"
+            else "prediction from the image alone")
+    out.append(f"From ivoa-eval: left image with the ground grid (outer ring = label, inner dot = {what}; hollow = "
+               "withheld by the uncertainty gate), the P(FP)+P(FN) heatmap and the uncertainty heatmap.\n")
     for rel in overlays:
         out.append(f"**{os.path.basename(rel)}**\n\n" + image(rel, os.path.basename(rel)))
     return "\n".join(out)
