@@ -346,6 +346,14 @@ class ReportTest(unittest.TestCase):
         self.assertGreaterEqual(c["purity"], 0.99)
         dominant = sorted(e["dominant_phenomenon"] for e in c["clusters"])
         self.assertEqual(dominant, [REFLECTION, TEXTURELESS])
+        # purity at other k: the same k-means at k = 2, never above what k clusters could reach
+        scan = c["purity_by_k"]
+        self.assertEqual([e["k"] for e in scan], [2, 3, 4, 6, 8])
+        self.assertAlmostEqual(scan[0]["purity"], c["purity"])
+        self.assertAlmostEqual(scan[0]["best_possible"], 1.0)  # two phenomena among the selected failures
+        for e in scan:
+            self.assertLessEqual(e["purity"], e["best_possible"] + 1e-12)
+        self.assertIn("Would more clusters separate the phenomena?", read_text(os.path.join(self.out, "report.md")))
 
     def test_known_model_metrics(self):
         m = self.model("dense")["overall"]

@@ -189,7 +189,7 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "n_reference_rule": res.n_reference_rule, "pca_components": res.pca_components,
         "pca_explained": res.pca_explained, "tsne_points": int(len(res.tsne_index)), "clusters": res.clusters,
         "purity": res.purity if res.has_truth else None, "nmi": res.nmi, "ari": res.ari,
-        "has_ground_truth": res.has_truth,
+        "purity_by_k": res.k_scan if res.has_truth else [], "has_ground_truth": res.has_truth,
     }
 
     overlays = run.overlays[: args.max_overlays] if args.max_overlays > 0 else run.overlays

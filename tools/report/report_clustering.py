@@ -35,7 +35,7 @@ import inspect
 import warnings
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 from sklearn.cluster import KMeans
@@ -66,6 +66,7 @@ class ClusterOptions:
     tsne_iterations: int = 500
     seed: int = 0
     threads: int = 1                    # OpenMP threads for t-SNE / k-means
+    k_scan: Tuple[int, ...] = (2, 3, 4, 6, 8)  # other k to report purity for (simulated data)
 
 
 @dataclass
@@ -91,6 +92,8 @@ class ClusterResult:
     purity: Optional[float] = None
     nmi: Optional[float] = None
     ari: Optional[float] = None
+    # Purity at other k (k, purity, nmi, best possible purity with k clusters).
+    k_scan: List[dict] = field(default_factory=list)
     mosaic_rows: Dict[int, np.ndarray] = field(default_factory=dict)
     has_truth: bool = False
 
@@ -157,6 +160,30 @@ def _phenomena_present(bits: np.ndarray, overall: Dict[int, float]) -> List[dict
         if share > 0:
             out.append({"phenomenon": code, "share": share, "lift": share / base if base > 0 else None})
     return sorted(out, key=lambda e: -(e["lift"] or 0))
+
+
+def _purity(phen: np.ndarray, cluster: np.ndarray) -> float:
+    """Share of samples in their cluster's most common phenomenon."""
+    return sum(Counter(phen[cluster == c].tolist()).most_common(1)[0][1] for c in np.unique(cluster)) / len(phen)
+
+
+def _purity_by_k(space: np.ndarray, phen: np.ndarray, opt: ClusterOptions) -> List[dict]:
+    """Purity and NMI of k-means at each k of opt.k_scan, beside the best any
+    partition into k clusters could score (the k most common phenomena each
+    alone in a cluster): whether more clusters find more phenomena, and how
+    far the embedding is from separating them."""
+    counts = sorted(Counter(phen.tolist()).values(), reverse=True)
+    out = []
+    for k in sorted(set(opt.k_scan)):
+        if k < 2 or k > len(phen):
+            continue
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            cluster = KMeans(n_clusters=k, n_init=10, random_state=opt.seed).fit(space).labels_
+        out.append({"k": k, "purity": _purity(phen, cluster),
+                    "nmi": float(normalized_mutual_info_score(phen, cluster)),
+                    "best_possible": sum(counts[:k]) / len(phen)})
+    return out
 
 
 def _thread_limit(threads: int):
@@ -263,6 +290,7 @@ def _cluster_failures(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
     if len(set(phen.tolist())) > 1:
         res.nmi = float(normalized_mutual_info_score(phen, res.cluster))
         res.ari = float(adjusted_rand_score(phen, res.cluster))
+        res.k_scan = _purity_by_k(space, phen, opt)
     empty = [e["cluster"] for e in res.clusters if e["n"] == 0]
     if empty:
         res.message = f"k-means left cluster(s) {empty} empty (fewer distinct embeddings than clusters)."

@@ -288,6 +288,7 @@ def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, s
             f"gives the share of a cluster's patches showing each one anywhere under the patch centre, and in "
             f"brackets how over-represented that is against all clustered failures (×1 = no more than anywhere "
             f"else): what sets the cluster apart.\n")
+        out.append(_purity_by_k_text(res))
     else:
         out.append("\nNo simulator ground truth in these sessions (surface = unknown everywhere): cluster composition by "
                    "phenomenon and purity are not available; judge the clusters by their mosaics.\n")
@@ -295,6 +296,18 @@ def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, s
     for c in sorted(res.mosaic_rows):
         out.append(image(figs[f"mosaic_{c}"], f"cluster {c} mosaic"))
     return "\n".join(out)
+
+
+def _purity_by_k_text(res) -> str:
+    """The k-scan: purity at other k beside the best a partition into k could score."""
+    if not res.k_scan:
+        return ""
+    rows = [[e["k"], pct(e["purity"]), fmt(e["nmi"]), pct(e["best_possible"])] for e in res.k_scan]
+    return ("\nWould more clusters separate the phenomena? k-means at other k on the same embeddings, beside the "
+            "best purity any partition into k clusters could reach (each of the k most common phenomena alone in "
+            "its cluster). Purity that stays flat as k grows, far under that bound, means the embedding does not "
+            "tell those phenomena apart: to the network they are one kind of failure.\n\n"
+            + table(["k", "purity", "NMI", "best possible with k clusters"], rows))
 
 
 def overlays_section(overlays: List[str], dots: str = "image") -> str:
