@@ -35,8 +35,8 @@ int main(int argc, char** argv) {
   app.add_option("--out", c.output, "model file to write")->required();
   app.add_option("--train-split", c.train_split)->capture_default_str();
   app.add_option("--val-split", c.val_split)->capture_default_str();
-  app.add_option("--architecture", c.architecture, "slidenet (fast, default), slidenet_diff (two views: adds their per-pixel difference) or alexnet (reference, 224x224)")
-      ->capture_default_str()->check(CLI::IsMember({"slidenet", "slidenet_diff", "alexnet"}));
+  app.add_option("--architecture", c.architecture, "slidenet (fast, default) or alexnet (reference, 224x224)")
+      ->capture_default_str()->check(CLI::IsMember({"slidenet", "alexnet"}));
   app.add_option("--init", c.init, "start from this model (fine-tuning)")->check(CLI::ExistingFile);
   app.add_flag("--resume", c.resume, "continue from OUT.checkpoint.* if present");
   app.add_option("--steps", c.steps, "optimiser steps")->capture_default_str();

@@ -33,12 +33,9 @@ torch::Tensor IntrospectionNetImpl::embedding(const torch::Tensor& f) {
   return torch::relu(fc2(torch::relu(fc1(f))));
 }
 
-SlideNetImpl::SlideNetImpl(double dropout, int64_t in_channels, bool view_difference)
-    : IntrospectionNetImpl(64 * 2 * 2, kFc1Width, dropout), view_difference_(view_difference) {
-  if (view_difference && in_channels != 6)
-    throw std::invalid_argument("slidenet_diff needs two views (6 channels), not " + std::to_string(in_channels));
+SlideNetImpl::SlideNetImpl(double dropout, int64_t in_channels) : IntrospectionNetImpl(64 * 2 * 2, kFc1Width, dropout) {
   nn::Sequential t;
-  t = conv_bn_relu(t, view_difference ? in_channels + 3 : in_channels, 32, 5, 5);
+  t = conv_bn_relu(t, in_channels, 32, 5, 5);
   t = conv_bn_relu(t, 32, 64, 3);
   t->push_back(nn::MaxPool2d(nn::MaxPool2dOptions(2).stride(2)));
   t = conv_bn_relu(t, 64, 96, 3);
@@ -48,17 +45,12 @@ SlideNetImpl::SlideNetImpl(double dropout, int64_t in_channels, bool view_differ
   trunk = register_module("trunk", t);
 }
 
-torch::Tensor SlideNetImpl::with_difference(const torch::Tensor& x) const {
-  if (!view_difference_) return x;
-  return torch::cat({x, (x.narrow(1, 0, 3) - x.narrow(1, 3, 3)).abs()}, 1);
-}
-
 torch::Tensor SlideNetImpl::features(const torch::Tensor& patches) {
-  return trunk->forward(with_difference(patches)).flatten(1);  // [B, 64, 2, 2] -> [B, 256]
+  return trunk->forward(patches).flatten(1);  // [B, 64, 2, 2] -> [B, 256]
 }
 
 torch::Tensor SlideNetImpl::cell_features(const torch::Tensor& image, int64_t& rows, int64_t& cols) {
-  const auto map = trunk->forward(with_difference(image));  // [1, 64, h, w]
+  const auto map = trunk->forward(image);  // [1, 64, h, w]
   // unfold flattens each 2x2 block channel-major, like flatten() of a
   // patch's [64, 2, 2] output, so FC1 sees the same feature order.
   const auto blocks = nn::functional::unfold(
@@ -86,12 +78,8 @@ torch::Tensor AlexNet224Impl::features(const torch::Tensor& patches) { return tr
 std::shared_ptr<IntrospectionNetImpl> make_network(const std::string& architecture, double dropout, int views) {
   if (views != 1 && views != 2) throw std::invalid_argument("views must be 1 or 2, not " + std::to_string(views));
   if (architecture == "slidenet") return SlideNet(dropout, 3 * views).ptr();
-  if (architecture == "slidenet_diff") {
-    if (views != 2) throw std::invalid_argument("slidenet_diff compares two views; it cannot take " + std::to_string(views));
-    return SlideNet(dropout, 6, true).ptr();
-  }
   if (architecture == "alexnet") return AlexNet224(dropout, 3 * views).ptr();
-  throw std::invalid_argument("unknown architecture '" + architecture + "' (slidenet, slidenet_diff, alexnet)");
+  throw std::invalid_argument("unknown architecture '" + architecture + "' (slidenet, alexnet)");
 }
 
 int input_size_of(const std::string& architecture) {

@@ -18,15 +18,6 @@
 // dropout passes recompute FC1 and FC2 for every cell, and at 256 that
 // alone took longer than the 100 ms frame budget on two cores.
 //
-// "slidenet_diff" (two views only): slidenet with three more input
-// channels, |left - warped right| per pixel and colour. Where the scene is
-// the ground the two views agree; where they disagree the stereo matcher's
-// ground check fails. conv1 sums over 5x5 blocks, and a sum of signed
-// differences cancels where a sum of absolute ones does not: the absolute
-// difference gives it the mismatch energy the matcher's window cost sees.
-// It is computed per pixel, so the whole-image pass still equals the
-// patch-by-patch one.
-//
 // "alexnet": the reference model (torchvision AlexNet trunk at 224x224,
 // head 9216 -> 2048 -> 256 -> 4), for parity and for users with GPUs and
 // pretrained weights. Patches are resized to 224 and run one by one.
@@ -56,17 +47,12 @@ class IntrospectionNetImpl : public torch::nn::Module {
 class SlideNetImpl : public IntrospectionNetImpl {
  public:
   static constexpr int kPatch = 100, kStride = 20, kTrunkStride = 10, kFc1Width = 128;
-  // view_difference: append |view 0 - view 1| to a two-view input (slidenet_diff).
-  explicit SlideNetImpl(double dropout = 0.5, int64_t in_channels = 3, bool view_difference = false);
+  explicit SlideNetImpl(double dropout = 0.5, int64_t in_channels = 3);
   torch::Tensor features(const torch::Tensor& patches) override;
   // Normalised image [1, 3 x views, H, W] -> FC1 inputs of every cell [rows * cols, F],
   // row-major; rows/cols are set to the heatmap size.
   torch::Tensor cell_features(const torch::Tensor& image, int64_t& rows, int64_t& cols);
   torch::nn::Sequential trunk{nullptr};
-
- private:
-  torch::Tensor with_difference(const torch::Tensor& x) const;
-  bool view_difference_;
 };
 TORCH_MODULE(SlideNet);
 
@@ -79,8 +65,8 @@ class AlexNet224Impl : public IntrospectionNetImpl {
 };
 TORCH_MODULE(AlexNet224);
 
-// "slidenet" or "alexnet" for 1 or 2 views (3 or 6 input channels), or
-// "slidenet_diff" for 2; throws std::invalid_argument otherwise.
+// "slidenet" or "alexnet" for 1 or 2 views (3 or 6 input channels); throws
+// std::invalid_argument otherwise.
 std::shared_ptr<IntrospectionNetImpl> make_network(const std::string& architecture, double dropout, int views = 1);
 int input_size_of(const std::string& architecture);
 
