@@ -119,7 +119,8 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
     }
     const dataset::SessionReader reader(dir);
     std::map<int64_t, std::vector<tools::LabelledCell>> frames;
-    for (const auto& s : reader.samples()) frames[s.utime].push_back({s.u, s.v, s.label, -1, true, s.patch_side, s.stereo_state});
+    for (const auto& s : reader.samples())
+      frames[s.utime].push_back({s.u, s.v, s.label, -1, true, s.patch_side, s.stereo_state});
     logio::LogReader in(log);
     logio::LogEvent e;
     int64_t index = 0;

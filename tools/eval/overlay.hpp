@@ -31,8 +31,8 @@ cv::Scalar class_colour(int label);
 void set_predictions(std::vector<LabelledCell>& cells, const std::vector<introspection::Prediction>& predictions,
                      bool given_verdict, double verdict_threshold);
 
-// dots_given_verdict: the dots are predictions given the detector's verdict
-// (which only changes the caption; the caller fills `predicted` so).
+// The left image with each cell's ring (label) and dot (prediction);
+// dots_given_verdict only changes the caption (set_predictions fills the dots).
 cv::Mat draw_grid(const cv::Mat& left_bgr, const std::vector<LabelledCell>& cells, bool dots_given_verdict = false);
 // A heatmap (rows x cols, CV_32F) upsampled to the image and blended over it.
 cv::Mat draw_heatmap(const cv::Mat& left_bgr, const introspection::Heatmaps& h, const cv::Mat& values, double max_value,
