@@ -133,6 +133,23 @@ TEST(Training, ResumesFromTheCheckpoint) {
   }
 }
 
+TEST(Training, StaleCheckpointIsRefusedWithTheWayOut) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 5);  // a checkpoint at step 5
+  train_model(c);
+  c.resume = true;
+  c.architecture = "alexnet";  // another setup in the same --out
+  try {
+    train_model(c);
+    FAIL() << "resumed from a checkpoint of another architecture";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("cannot resume"), std::string::npos) << what;
+    EXPECT_NE(what.find("architecture slidenet, not alexnet"), std::string::npos) << what;
+    EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
+  }
+}
+
 TEST(Training, CalibrationOnlyRewritesTheGatesNotTheWeights) {
   test::TempDir dir;
   TrainConfig c = tiny_run(dir, 20, 20);

@@ -180,8 +180,18 @@ echo "  dense (SGBM): the detector and the monitor re-run offline on the same ra
 "$BIN/ivoa-dataset" --log-level warn build --out "$out/data_dense" --labels dense --views "$views" \
   --patch-scale "$patch_scale" "${logs[@]}" | tee "$out/dataset_dense.txt"
 
+# --resume continues an interrupted run; a checkpoint left by a run with
+# other settings in the same --out cannot be continued, so start over.
+training_setup="views $views, patch scale $patch_scale, $STEPS steps, batch $BATCH"
 for detector in jppc dense; do
   step "Training introspection for $detector ($STEPS steps, batch $BATCH)"
+  setup_file="$out/model_$detector.pt.setup"
+  if compgen -G "$out/model_$detector.pt.checkpoint.*" > /dev/null &&
+    [ "$(cat "$setup_file" 2>/dev/null)" != "$training_setup" ]; then
+    echo "  the checkpoint in $out is from another setup ($(cat "$setup_file" 2>/dev/null || echo "not recorded")): training from scratch"
+    rm -f "$out/model_$detector.pt.checkpoint."*
+  fi
+  echo "$training_setup" > "$setup_file"
   "$BIN/ivoa-train" --dataset "$out/data_$detector" --split "$split_file" --out "$out/model_$detector.pt" \
     --steps "$STEPS" --batch-size "$BATCH" --validate-every $((STEPS / 6)) --checkpoint-every $((STEPS / 3)) \
     --resume | tee "$out/train_$detector.txt"

@@ -221,6 +221,26 @@ void calibrate_gates(NativeModel& model, const SplitData& val, const std::vector
   model.info.verdict_uncertainty_threshold = report.verdict_uncertainty_threshold;
 }
 
+// A model to resume or fine-tune from must take the patches this dataset
+// has; a stale checkpoint (another --views or --patch-scale in the same
+// --out) is the usual way to get here, so say how to get out.
+void check_can_start_from(const ModelInfo& from, const ModelInfo& wanted, const std::string& how,
+                          const std::string& output) {
+  std::string why;
+  if (from.architecture != wanted.architecture)
+    why = "architecture " + from.architecture + ", not " + wanted.architecture;
+  else if (from.patch_scale != wanted.patch_scale)
+    why = fmt::format("patch scale {}, the dataset's {}", from.patch_scale, wanted.patch_scale);
+  else if (from.views != wanted.views)
+    why = fmt::format("{} view(s), the dataset's {}", from.views, wanted.views);
+  if (why.empty()) return;
+  const std::string remedy = how == "--resume"
+                                 ? "delete " + output + ".checkpoint.* to train from scratch, or choose another --out"
+                                 : "fine-tune from a model trained on patches cut the same way";
+  throw std::runtime_error(fmt::format("cannot {} from {}: {} ({})", how == "--resume" ? "resume" : "start",
+                                       from.id, why, remedy));
+}
+
 }  // namespace
 
 TrainReport calibrate_model(const TrainConfig& c) {
@@ -284,14 +304,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   std::shared_ptr<IntrospectionNetImpl> net;
   if (resuming || !c.init.empty()) {
     NativeModel start_from = load_native_model(resuming ? checkpoint + ".model" : c.init);
-    if (start_from.info.architecture != c.architecture)
-      throw std::runtime_error(start_from.info.id + ": architecture is not " + c.architecture);
-    if (start_from.info.patch_scale != train.patch_scale)
-      throw std::runtime_error(fmt::format("{}: patch scale {}, the dataset {}", start_from.info.id,
-                                           start_from.info.patch_scale, train.patch_scale));
-    if (start_from.info.views != train.views)
-      throw std::runtime_error(start_from.info.id + ": " + std::to_string(start_from.info.views) +
-                               " view(s), the dataset " + std::to_string(train.views));
+    check_can_start_from(start_from.info, info, resuming ? "--resume" : "--init", c.output);
     net = start_from.net;
   } else {
     net = make_network(c.architecture, c.dropout, train.views);
