@@ -33,6 +33,14 @@ std::string write_random_model(const test::TempDir& dir, const std::string& arch
   return path;
 }
 
+// One deterministic pass and no mean filter: heatmap cells equal their patches.
+InferenceConfig one_pass_unfiltered() {
+  InferenceConfig c;
+  c.mc_passes = 1;
+  c.mean_filter = 1;
+  return c;
+}
+
 cv::Mat random_image(int w, int h) {
   cv::Mat m(h, w, CV_8UC3);
   cv::randu(m, 0, 255);
@@ -62,9 +70,7 @@ TEST(ModelFile, SavedAndLoadedModelGivesIdenticalOutputsAndMetadata) {
 
 TEST(ModelFile, HeatmapCellsEqualTheirPatches) {
   test::TempDir dir;
-  InferenceConfig c;
-  c.mc_passes = 1;
-  c.mean_filter = 1;
+  const InferenceConfig c = one_pass_unfiltered();
   const auto model = IntrospectionModel::load(write_random_model(dir), c);
   const cv::Mat image = random_image(340, 260);
   const Heatmaps h = model->run(image);
@@ -86,9 +92,7 @@ TEST(ModelFile, HeatmapCellsEqualTheirPatches) {
 
 TEST(ModelFile, CellPredictionsComeFromTheirOwnResizedSquares) {
   test::TempDir dir;
-  InferenceConfig c;
-  c.mc_passes = 1;
-  c.mean_filter = 1;
+  const InferenceConfig c = one_pass_unfiltered();
   const auto model = IntrospectionModel::load(write_random_model(dir, "slidenet", 2, 1.6), c);
   EXPECT_DOUBLE_EQ(model->info().patch_scale, 1.6);
   const cv::Mat image = random_image(400, 2 * 300);  // two stacked 400 x 300 views
@@ -118,9 +122,7 @@ TEST(ModelFile, CellPredictionsComeFromTheirOwnResizedSquares) {
 
 TEST(ModelFile, VerdictErrorsAreTheConditionalsAndTheHeatmapsCarryThem) {
   test::TempDir dir;
-  InferenceConfig c;
-  c.mc_passes = 1;
-  c.mean_filter = 1;
+  const InferenceConfig c = one_pass_unfiltered();
   const auto model = IntrospectionModel::load(write_random_model(dir), c);
   const cv::Mat image = random_image(300, 220);
   const Heatmaps h = model->run(image);
@@ -169,9 +171,7 @@ TEST(ModelFile, TwoViewHeatmapCellsEqualTheirStackedPatches) {
   // The image is the left view stacked over the warped right one; each
   // cell's prediction is that of its two squares stacked, as datasets store them.
   test::TempDir dir;
-  InferenceConfig c;
-  c.mc_passes = 1;
-  c.mean_filter = 1;
+  const InferenceConfig c = one_pass_unfiltered();
   const auto model = IntrospectionModel::load(write_random_model(dir, "slidenet", 2), c);
   EXPECT_EQ(model->info().views, 2);
   const cv::Mat image = random_image(300, 2 * 180);

@@ -244,23 +244,23 @@ class EvalRun:
     def size(self) -> int:
         return len(self.label)
 
-    @property
-    def model_threshold(self) -> Optional[float]:
-        """The model's own run-time uncertainty gate from eval.json, if any."""
-        t = self.meta.get("uncertainty_threshold")
+    def _meta_number(self, key: str) -> Optional[float]:
+        """A number from eval.json, or None where it is missing or not a number."""
+        t = self.meta.get(key)
         try:
             return float(t) if t is not None else None
         except (TypeError, ValueError):
             return None
 
     @property
+    def model_threshold(self) -> Optional[float]:
+        """The model's own run-time uncertainty gate from eval.json, if any."""
+        return self._meta_number("uncertainty_threshold")
+
+    @property
     def verdict_threshold(self) -> Optional[float]:
         """The gate of the predictions given the verdict from eval.json, if any."""
-        t = self.meta.get("verdict_uncertainty_threshold")
-        try:
-            return float(t) if t is not None else None
-        except (TypeError, ValueError):
-            return None
+        return self._meta_number("verdict_uncertainty_threshold")
 
     @property
     def has_ground_truth_phenomena(self) -> bool:
