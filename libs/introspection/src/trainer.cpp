@@ -224,8 +224,7 @@ void calibrate_gates(NativeModel& model, const SplitData& val, const std::vector
 // A model to resume or fine-tune from must take the patches this dataset
 // has; a stale checkpoint (another --views or --patch-scale in the same
 // --out) is the usual way to get here, so say how to get out.
-void check_can_start_from(const ModelInfo& from, const ModelInfo& wanted, const std::string& how,
-                          const std::string& output) {
+void check_can_start_from(const ModelInfo& from, const ModelInfo& wanted, bool resuming, const std::string& output) {
   std::string why;
   if (from.architecture != wanted.architecture)
     why = "architecture " + from.architecture + ", not " + wanted.architecture;
@@ -234,11 +233,11 @@ void check_can_start_from(const ModelInfo& from, const ModelInfo& wanted, const 
   else if (from.views != wanted.views)
     why = fmt::format("{} view(s), the dataset's {}", from.views, wanted.views);
   if (why.empty()) return;
-  const std::string remedy = how == "--resume"
+  const std::string remedy = resuming
                                  ? "delete " + output + ".checkpoint.* to train from scratch, or choose another --out"
                                  : "fine-tune from a model trained on patches cut the same way";
-  throw std::runtime_error(fmt::format("cannot {} from {}: {} ({})", how == "--resume" ? "resume" : "start",
-                                       from.id, why, remedy));
+  throw std::runtime_error(
+      fmt::format("cannot {} from {}: {} ({})", resuming ? "resume" : "start", from.id, why, remedy));
 }
 
 }  // namespace
@@ -304,7 +303,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   std::shared_ptr<IntrospectionNetImpl> net;
   if (resuming || !c.init.empty()) {
     NativeModel start_from = load_native_model(resuming ? checkpoint + ".model" : c.init);
-    check_can_start_from(start_from.info, info, resuming ? "--resume" : "--init", c.output);
+    check_can_start_from(start_from.info, info, resuming, c.output);
     net = start_from.net;
   } else {
     net = make_network(c.architecture, c.dropout, train.views);
