@@ -3,11 +3,14 @@
 // heatmaps placed by patch geometry; missing parts said so; figure size.
 #include <gtest/gtest.h>
 
+#include "ivoa/figures/paper_figure.hpp"
 #include "ivoa/viewer/figure.hpp"
 #include "viewer_messages.hpp"
 
 namespace ivoa::viewer {
 namespace {
+
+using figures::class_colour;
 
 using namespace test;
 

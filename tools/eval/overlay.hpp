@@ -20,10 +20,6 @@ struct LabelledCell {
   int stereo_state = -1;  // the detector's verdict recorded for the cell (obstacle_grid_t.STATE_*)
 };
 
-// Colours of the four classes (BGR), as in the reference code's figures:
-// TP green, TN blue, FP orange, FN red.
-cv::Scalar class_colour(int label);
-
 // Sets each cell's dot from its prediction (cells and predictions in the
 // same order). given_verdict: where the cell has a recorded verdict (free or
 // obstacle), the prediction given it, gated at verdict_threshold, as the live
@@ -34,9 +30,6 @@ void set_predictions(std::vector<LabelledCell>& cells, const std::vector<introsp
 // The left image with each cell's ring (label) and dot (prediction);
 // dots_given_verdict only changes the caption (set_predictions fills the dots).
 cv::Mat draw_grid(const cv::Mat& left_bgr, const std::vector<LabelledCell>& cells, bool dots_given_verdict = false);
-// A heatmap (rows x cols, CV_32F) upsampled to the image and blended over it.
-cv::Mat draw_heatmap(const cv::Mat& left_bgr, const introspection::Heatmaps& h, const cv::Mat& values, double max_value,
-                     const char* title);
 cv::Mat compose_frame_figure(const cv::Mat& left_bgr, const introspection::Heatmaps& h,
                              const std::vector<LabelledCell>& cells, bool dots_given_verdict = false);
 

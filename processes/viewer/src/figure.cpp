@@ -5,52 +5,34 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "ivoa/figures/paper_figure.hpp"
 #include "ivoa/monitor/labeler.hpp"
 
 namespace ivoa::viewer {
 namespace {
 
-constexpr int kRingRadius = 15, kDotRadius = 8;
-const char* kClassNames[] = {"TP", "TN", "FP", "FN"};
-
 bool drawable(float u, float v, const cv::Size& size) {
   return std::isfinite(u) && std::isfinite(v) && u >= 0 && v >= 0 && u < size.width && v < size.height;
-}
-
-// A dark band with white text, so titles stay readable on any image.
-void banner(cv::Mat& image, int y, int height, const std::string& text, double font_scale = 0.8) {
-  cv::Mat band = image(cv::Rect(0, y, image.cols, height) & cv::Rect(0, 0, image.cols, image.rows));
-  band *= 0.3;
-  cv::putText(image, text, {12, y + height - 12}, cv::FONT_HERSHEY_SIMPLEX, font_scale, {255, 255, 255}, 2, cv::LINE_AA);
 }
 
 void draw_marks(cv::Mat& out, const std::vector<CellMark>& cells, const std::vector<PredictionMark>& predictions) {
   for (const auto& c : cells) {
     if (!drawable(c.u, c.v, out.size())) continue;
     const cv::Point p(cvRound(c.u), cvRound(c.v));
-    if (c.ring_label >= 0) cv::circle(out, p, kRingRadius, class_colour(c.ring_label), 4, cv::LINE_AA);
-    else if (c.ring_verdict >= 0) cv::circle(out, p, kRingRadius, verdict_colour(c.ring_verdict), 3, cv::LINE_AA);
-    else if (c.none_label) cv::circle(out, p, kRingRadius, verdict_colour(obstacle_grid_t::STATE_UNKNOWN), 1, cv::LINE_AA);
+    if (c.ring_label >= 0) figures::draw_ring(out, p, figures::class_colour(c.ring_label), 4);
+    else if (c.ring_verdict >= 0) figures::draw_ring(out, p, verdict_colour(c.ring_verdict), 3);
+    else if (c.none_label) figures::draw_ring(out, p, verdict_colour(obstacle_grid_t::STATE_UNKNOWN), 1);
   }
-  for (const auto& d : predictions) {
-    if (!drawable(d.u, d.v, out.size()) || d.predicted < 0) continue;
-    const cv::Point p(cvRound(d.u), cvRound(d.v));
-    cv::circle(out, p, kDotRadius, class_colour(d.predicted), d.announced ? cv::FILLED : 2, cv::LINE_AA);
-  }
+  for (const auto& d : predictions)
+    if (drawable(d.u, d.v, out.size()) && d.predicted >= 0)
+      figures::draw_dot(out, {cvRound(d.u), cvRound(d.v)}, d.predicted, d.announced);
 }
 
-void draw_legend(cv::Mat& out, bool verdict_rings, bool dots_given_verdict) {
+std::string legend_caption(bool verdict_rings, bool dots_given_verdict) {
   const std::string rings = verdict_rings ? "ring: stereo verdict (white free, magenta obstacle)" : "ring: label (stereo vs depth)";
   const std::string dots = dots_given_verdict ? "dot: prediction given the verdict (hollow: withheld)"
                                               : "dot: prediction (hollow: withheld)";
-  banner(out, 0, 44, rings + "   " + dots, 0.7);
-  banner(out, 44, 36, "");
-  int x = 12;
-  for (int k = 0; k < 4; ++k) {
-    cv::circle(out, {x + 10, 62}, 9, class_colour(k), cv::FILLED, cv::LINE_AA);
-    cv::putText(out, kClassNames[k], {x + 26, 72}, cv::FONT_HERSHEY_SIMPLEX, 0.8, {255, 255, 255}, 2, cv::LINE_AA);
-    x += 100;
-  }
+  return rings + "   " + dots;
 }
 
 std::string status_line(const FrameSet& f) {
@@ -72,28 +54,9 @@ std::string status_line(const FrameSet& f) {
   return text;
 }
 
-// Heatmap cell (r, c) covers the patch at (c * stride, r * stride): each value
-// sits at its patch centre, interpolated between centres, blended over the image.
-cv::Mat draw_heatmap(const cv::Mat& left, const introspection_t& h, const cv::Mat& values, double max_value,
-                     const std::string& title) {
-  cv::Mat scaled, colour, up;
-  values.convertTo(scaled, CV_8U, 255.0 / std::max(max_value, 1e-9));
-  cv::applyColorMap(scaled, colour, cv::COLORMAP_JET);
-  const cv::Rect inner(h.patch_size / 2 - h.stride / 2, h.patch_size / 2 - h.stride / 2, h.cols * h.stride,
-                       h.rows * h.stride);
-  cv::resize(colour, up, inner.size(), 0, 0, cv::INTER_LINEAR);
-  cv::Mat full(left.size(), CV_8UC3, cv::Scalar(0, 0, 0));
-  const cv::Rect visible = inner & cv::Rect(0, 0, left.cols, left.rows);
-  up(cv::Rect(visible.tl() - inner.tl(), visible.size())).copyTo(full(visible));
-  cv::Mat out;
-  cv::addWeighted(left, 0.45, full, 0.55, 0, out);
-  banner(out, 0, 44, title);
-  return out;
-}
-
 cv::Mat missing_panel(const cv::Mat& left, const std::string& title, const std::string& why) {
   cv::Mat out = left * 0.25;
-  banner(out, 0, 44, title);
+  figures::draw_caption(out, 0, figures::kCaptionHeight, title);
   cv::putText(out, why, {24, out.rows / 2}, cv::FONT_HERSHEY_SIMPLEX, 1.0, {255, 255, 255}, 2, cv::LINE_AA);
   return out;
 }
@@ -106,16 +69,6 @@ cv::Mat heatmap_of(const introspection_t& h, const std::vector<float>& a, const 
 }
 
 }  // namespace
-
-cv::Scalar class_colour(int label) {
-  switch (label) {
-    case introspection_labels_t::LABEL_TP: return {60, 180, 60};    // green
-    case introspection_labels_t::LABEL_TN: return {200, 120, 30};   // blue
-    case introspection_labels_t::LABEL_FP: return {0, 150, 255};    // orange
-    case introspection_labels_t::LABEL_FN: return {40, 40, 220};    // red
-    default: return {160, 160, 160};
-  }
-}
 
 cv::Scalar verdict_colour(int state) {
   switch (state) {
@@ -181,8 +134,8 @@ cv::Mat draw_frame_figure(const cv::Mat& left, const FrameSet& f, const FigureOp
   cv::Mat grid = left.clone();
   draw_marks(grid, cells, prediction_marks(f, options.dots_given_verdict));
   const bool verdict_rings = !cells.empty() && cells.front().ring_verdict >= 0;
-  draw_legend(grid, verdict_rings, options.dots_given_verdict);
-  banner(grid, grid.rows - 40, 40, status_line(f), 0.7);
+  figures::draw_caption_and_legend(grid, legend_caption(verdict_rings, options.dots_given_verdict));
+  figures::draw_caption(grid, grid.rows - 40, 40, status_line(f), 0.7);
 
   cv::Mat failure, uncertainty;
   const std::string failure_title = "P(FP) + P(FN): 0 blue .. 1 red";
@@ -198,8 +151,9 @@ cv::Mat draw_frame_figure(const cv::Mat& left, const FrameSet& f, const FigureOp
     max_u = std::max(max_u, 0.01);
     char title[96];
     std::snprintf(title, sizeof(title), "uncertainty (class variance): 0 .. %.3f", max_u);
-    failure = draw_heatmap(left, h, heatmap_of(h, h.prob_fp, &h.prob_fn), 1.0, failure_title);
-    uncertainty = draw_heatmap(left, h, u, max_u, title);
+    const figures::HeatmapGrid cells_at{h.rows, h.cols, h.stride, h.patch_size};
+    failure = figures::blend_heatmap(left, cells_at, heatmap_of(h, h.prob_fp, &h.prob_fn), 1.0, failure_title);
+    uncertainty = figures::blend_heatmap(left, cells_at, u, max_u, title);
   } else {
     failure = missing_panel(left, failure_title, problem);
     uncertainty = missing_panel(left, "uncertainty", problem);

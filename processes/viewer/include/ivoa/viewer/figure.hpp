@@ -47,8 +47,8 @@ std::vector<PredictionMark> prediction_marks(const FrameSet& frame, bool given_v
 // Empty if the message can be drawn, else what is wrong with it.
 std::string check_introspection(const introspection_t& msg);
 
-// BGR colours: the four classes, and verdicts (free, obstacle, unknown).
-cv::Scalar class_colour(int label);
+// BGR colours of verdicts (free, obstacle, unknown); the classes' are
+// figures::class_colour.
 cv::Scalar verdict_colour(int state);
 
 // The three-panel figure; its size depends only on the image size and scale.
