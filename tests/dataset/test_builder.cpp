@@ -4,7 +4,9 @@
 // pipeline), and recorded labels are taken as they are.
 #include <filesystem>
 #include <fstream>
+#include <algorithm>
 #include <map>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -28,6 +30,7 @@ namespace ivoa::dataset {
 namespace {
 
 const std::string kScene = std::string(IVOA_SCENES_DIR) + "/indoor_office.yaml";
+constexpr int kTN = introspection_labels_t::LABEL_TN;
 
 // Labels of one frame computed directly, cell by cell.
 introspection_labels_t recompute_labels(const RigCalibration& rig, const sim::SimFrame& frame, int64_t utime,
@@ -42,6 +45,23 @@ introspection_labels_t recompute_labels(const RigCalibration& rig, const sim::Si
   depth.depth_utime = depth_utime;
   monitor::DepthMonitor(rig).evaluate(frame.depth_mm, grid, depth);
   return monitor::label_frame(stereo, depth);
+}
+
+// A 5-frame log whose recorded labels are a recognisable pattern (cell
+// index mod 4 where the cell is in the image), so a builder that relabels
+// shows; returns (utime, cell) -> label.
+std::map<std::pair<int64_t, int>, int> write_patterned_labels_log(const std::string& log_path) {
+  std::map<std::pair<int64_t, int>, int> recorded;
+  test::write_sim_log(log_path, kScene, 5, 4, [&](Bus& bus, const test::SimLogFrame& f, const sim::SimFrame& frame) {
+    const QueryGrid grid(QueryGridConfig{}, RigGeometry(sim::make_sim_rig()).left);
+    introspection_labels_t labels = recompute_labels(sim::make_sim_rig(), frame, f.utime, f.depth_utime);
+    for (size_t i = 0; i < labels.label.size(); ++i) {
+      labels.label[i] = static_cast<int8_t>(grid.cell(static_cast<int>(i)).in_image ? i % 4 : -1);
+      if (labels.label[i] >= 0) recorded[{f.utime, static_cast<int>(i)}] = labels.label[i];
+    }
+    bus.publish(channels::kIntrospectionLabels, labels);
+  });
+  return recorded;
 }
 
 // Builds session `name` under `root` from one log and opens it.
@@ -127,22 +147,45 @@ TEST(DatasetBuilder, TwoViewPatchesStackTheGroundWarpedRightView) {
 TEST(DatasetBuilder, RecordedLabelsAreUsedAsRecorded) {
   test::TempDir dir;
   const std::string log_path = dir.file("rec.lcmlog");
-  std::map<std::pair<int64_t, int>, int> recorded;
-  test::write_sim_log(log_path, kScene, 5, 4, [&](Bus& bus, const test::SimLogFrame& f, const sim::SimFrame& frame) {
-    const QueryGrid grid(QueryGridConfig{}, RigGeometry(sim::make_sim_rig()).left);
-    introspection_labels_t labels = recompute_labels(sim::make_sim_rig(), frame, f.utime, f.depth_utime);
-    // Overwrite with a recognisable pattern: the builder must not relabel.
-    for (size_t i = 0; i < labels.label.size(); ++i) {
-      labels.label[i] = static_cast<int8_t>(grid.cell(static_cast<int>(i)).in_image ? i % 4 : -1);
-      if (labels.label[i] >= 0) recorded[{f.utime, static_cast<int>(i)}] = labels.label[i];
-    }
-    bus.publish(channels::kIntrospectionLabels, labels);
-  });
+  const auto recorded = write_patterned_labels_log(log_path);
   const BuildOptions recorded_options;  // labels: recorded
   const SessionReader session = build_session(dir.file("data"), "rec", log_path, recorded_options);
   EXPECT_EQ(session.info().labels_from, "recorded");
   ASSERT_EQ(session.size(), recorded.size());
   for (const auto& s : session.samples()) EXPECT_EQ(s.label, (recorded.at({s.utime, s.cell})));
+}
+
+TEST(DatasetBuilder, KeepTnStoresAFractionOfTnCellsTheSameOnesEveryBuild) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("thin.lcmlog");
+  const auto recorded = write_patterned_labels_log(log_path);
+  int64_t tn = 0;
+  for (const auto& [cell, label] : recorded) tn += label == kTN;
+  BuildOptions thin;
+  thin.keep_tn = 0.5;
+  const auto cells_of = [](const SessionReader& r, bool want_tn) {
+    std::set<std::pair<int64_t, int>> cells;
+    for (const auto& s : r.samples())
+      if ((s.label == kTN) == want_tn) cells.insert({s.utime, s.cell});
+    return cells;
+  };
+  const SessionReader all = build_session(dir.file("data"), "all", log_path, BuildOptions{});
+  const SessionReader a = build_session(dir.file("data"), "a", log_path, thin);
+  const SessionReader b = build_session(dir.file("data"), "b", log_path, thin);
+  EXPECT_EQ(cells_of(a, false), cells_of(all, false)) << "the other classes are all kept";
+  EXPECT_EQ(cells_of(a, true), cells_of(b, true)) << "a rebuild keeps the same TN cells";
+  const auto kept = cells_of(a, true), every = cells_of(all, true);
+  EXPECT_TRUE(std::includes(every.begin(), every.end(), kept.begin(), kept.end()));
+  EXPECT_EQ(static_cast<int64_t>(every.size()), tn);
+  EXPECT_GT(kept.size(), tn * 3 / 10);
+  EXPECT_LT(kept.size(), tn * 7 / 10);
+  EXPECT_DOUBLE_EQ(a.info().tn_kept, 0.5);
+  EXPECT_EQ(a.info().tn_dropped + static_cast<int64_t>(kept.size()), tn);
+  EXPECT_EQ(a.info().class_counts[kTN], static_cast<int64_t>(kept.size()));
+  EXPECT_EQ(all.info().tn_dropped, 0);
+  BuildOptions none;
+  none.keep_tn = 0;
+  EXPECT_THROW(SessionBuilder(dir.file("data"), "none", none), std::invalid_argument);
 }
 
 TEST(DatasetBuilder, RecordedLabelsCanBeCutWithAnotherPatchSize) {

@@ -77,6 +77,7 @@ TEST(DatasetFormat, PatchScaleAndSidesRoundTripAndOldSessionsReadAsFixed) {
   test::TempDir dir;
   SessionInfo scaled = info("s1");
   scaled.patch_scale = 1.6;
+  scaled.tn_kept = 0.25;
   {
     SessionWriter w(dir.path().string(), scaled);
     const int64_t f = w.add_frame(1000, 1004, 2);
@@ -91,6 +92,7 @@ TEST(DatasetFormat, PatchScaleAndSidesRoundTripAndOldSessionsReadAsFixed) {
   {
     const SessionReader r(session);
     EXPECT_DOUBLE_EQ(r.info().patch_scale, 1.6);
+    EXPECT_DOUBLE_EQ(r.info().tn_kept, 0.25);
     EXPECT_EQ(r.samples()[0].patch_side, 252);
     EXPECT_EQ(r.samples()[1].patch_side, r.info().patch_size);
   }
@@ -107,12 +109,16 @@ TEST(DatasetFormat, PatchScaleAndSidesRoundTripAndOldSessionsReadAsFixed) {
     std::ifstream j(session + "/session.json");
     json.assign(std::istreambuf_iterator<char>(j), {});
   }
-  const size_t key = json.find("  \"patch_scale\"");
-  ASSERT_NE(key, std::string::npos);
-  json.erase(key, json.find('\n', key) - key + 1);
+  for (const char* name : {"  \"patch_scale\"", "  \"tn_kept\"", "  \"tn_dropped\""}) {
+    const size_t key = json.find(name);
+    ASSERT_NE(key, std::string::npos) << name;
+    json.erase(key, json.find('\n', key) - key + 1);
+  }
   std::ofstream(session + "/session.json") << json;
   const SessionReader old(session);
   EXPECT_EQ(old.info().patch_scale, 0.0);
+  EXPECT_EQ(old.info().tn_kept, 1.0) << "sessions written before thinning kept every TN cell";
+  EXPECT_EQ(old.info().tn_dropped, 0);
   EXPECT_EQ(old.samples()[0].patch_side, old.info().patch_size);
 }
 

@@ -5,6 +5,7 @@
 //   ivoa-dataset build --out data/ --labels recorded --session s7 s7.lcmlog.00 s7.lcmlog.01
 //   ivoa-dataset info data/ [--split split.yaml]
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 #include <CLI/CLI.hpp>
@@ -71,6 +72,9 @@ int build_session(const std::string& out, const std::string& session, const std:
               static_cast<long long>(r.stereo_frames), static_cast<long long>(r.frames_labelled),
               static_cast<long long>(r.frames_unmatched), static_cast<long long>(r.samples),
               class_counts(r.class_counts).c_str());
+  if (r.tn_dropped > 0)
+    std::printf("%-28s %lld TN cells left out (--keep-tn %g)\n", "", static_cast<long long>(r.tn_dropped),
+                options.keep_tn);
   for (const auto& p : r.problems) spdlog::warn("{}: {}", session, p);
   return r.problems.empty() ? kExitOk : kExitBadInput;
 }
@@ -112,6 +116,8 @@ int run_info(const std::string& root, const std::string& split_path) {
                 split_of.count(name) ? split_of[name].c_str() : "-", i.environment.c_str(), i.detector.c_str(),
                 static_cast<long long>(i.frames), static_cast<long long>(i.samples),
                 class_counts(i.class_counts).c_str());
+    if (i.tn_kept < 1)
+      std::printf("%-28s TN thinned to %g: %lld TN cells left out\n", "", i.tn_kept, static_cast<long long>(i.tn_dropped));
     for (int k = 0; k < dataset::kNumClasses; ++k) total[static_cast<size_t>(k)] += i.class_counts[static_cast<size_t>(k)];
   }
   std::printf("total: %s\n", class_counts(total).c_str());
@@ -147,6 +153,19 @@ int main(int argc, char** argv) {
                     "0: fixed --patch-size squares (the paper); k > 0: squares of k footprint-disc widths (at least "
                     "--patch-size) resized to --patch-size, so near cells show their whole disc")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  build->add_option("--keep-tn", options.keep_tn,
+                    "store this fraction of the TN cells, the same ones on every rebuild (TN is about two thirds of "
+                    "the cells; 0.25 saves about 45 % of the disk); keep 1 for test sessions, whose overall accuracy it "
+                    "would skew")
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            const bool number = !text.empty() && *end == '\0';
+            return number && v > 0 && v <= 1 ? std::string() : "must be a number in (0, 1], not '" + text + "'";
+          },
+          "in (0, 1]"))
       ->capture_default_str();
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
       ->capture_default_str();

@@ -59,6 +59,10 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
     throw dataset::DatasetError("session " + info.session + " has " + std::to_string(info.views) + " view(s) per patch, model " +
                                 model.info().id + " takes " + std::to_string(model.info().views) +
                                 " (build the dataset with --views " + std::to_string(model.info().views) + ")");
+  if (info.tn_kept < 1)
+    spdlog::warn("session {} stores {:.0f} % of its TN cells (ivoa-dataset --keep-tn): its per-class accuracies stand, "
+                 "but overall accuracy and failure precision count too few TN; rebuild it with every TN to report those",
+                 info.session, 100 * info.tn_kept);
   for (size_t begin = 0; begin < session.size(); begin += kBatch) {
     const size_t end = std::min(session.size(), begin + kBatch);
     std::vector<cv::Mat> patches;

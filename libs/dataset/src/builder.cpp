@@ -35,6 +35,18 @@ bool decode(const logio::LogEvent& e, Msg& msg) {
   return msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) >= 0;
 }
 
+// Whether the TN cell `cell` of the frame at `utime` is stored when a
+// fraction `keep` of TN cells is: a hash (splitmix64) of both, so the same
+// log always keeps the same cells.
+bool keeps_tn(int64_t utime, size_t cell, double keep) {
+  if (keep >= 1) return true;
+  uint64_t z = static_cast<uint64_t>(utime) * 0x9E3779B97F4A7C15ull + cell + 1;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53 < keep;
+}
+
 std::string environment_of(const std::string& scene) {
   if (scene.rfind("indoor", 0) == 0) return "indoor";
   if (scene.rfind("outdoor", 0) == 0) return "outdoor";
@@ -90,6 +102,7 @@ void SessionBuilder::Impl::open_writer() {
   info.patch_size = rerun() ? options.grid.patch_size : info.patch_size;
   info.views = options.views;
   info.patch_scale = options.patch_scale;
+  info.tn_kept = options.keep_tn;
   // The user's word first, then the simulator's, then the scene name's.
   if (!options.environment.empty())
     info.environment = options.environment;
@@ -228,6 +241,11 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
   const std::vector<int> sides = patch_sides(labels, image->second);
   for (size_t i = 0; i < labels.label.size(); ++i) {
     if (labels.label[i] == introspection_labels_t::LABEL_NONE) continue;
+    if (labels.label[i] == introspection_labels_t::LABEL_TN && !keeps_tn(labels.utime, i, options.keep_tn)) {
+      writer->count_dropped_tn();
+      ++report.tn_dropped;
+      continue;
+    }
     const cv::Mat patch = cut_patch(image->second, info.views, labels.u[i], labels.v[i], sides[i], info.patch_size);
     if (patch.empty()) continue;  // the patch would leave the image
     SampleRecord s;
@@ -276,6 +294,8 @@ SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::strin
   if (!(impl_->options.patch_scale >= 0))
     throw std::invalid_argument("patch_scale must be >= 0 (0: fixed patches), not " +
                                 std::to_string(impl_->options.patch_scale));
+  if (!(impl_->options.keep_tn > 0 && impl_->options.keep_tn <= 1))
+    throw std::invalid_argument("keep_tn must be in (0, 1], not " + std::to_string(impl_->options.keep_tn));
   if (impl_->options.views != 1 && impl_->options.views != 2)
     throw std::invalid_argument("views must be 1 or 2, not " + std::to_string(impl_->options.views));
   impl_->info.session = session;

@@ -36,7 +36,8 @@ std::string session_json(const SessionInfo& i) {
   o << "],\n  \"scene\": " << json_quote(i.scene) << ",\n  \"seed\": " << i.seed
     << ",\n  \"environment\": " << json_quote(i.environment) << ",\n  \"rig_name\": " << json_quote(i.rig_name)
     << ",\n  \"patch_size\": " << i.patch_size << ",\n  \"views\": " << i.views
-    << ",\n  \"patch_scale\": " << i.patch_scale << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples
+    << ",\n  \"patch_scale\": " << i.patch_scale << ",\n  \"tn_kept\": " << i.tn_kept
+    << ",\n  \"tn_dropped\": " << i.tn_dropped << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples
     << ",\n  \"class_counts\": {";
   for (int c = 0; c < kNumClasses; ++c) o << (c ? ", " : "") << json_quote(kLabelNames[c]) << ": " << i.class_counts[c];
   const QueryGridConfig& g = i.grid;
@@ -77,6 +78,9 @@ SessionInfo parse_session_json(const std::string& path) {
   if (i.views != 1 && i.views != 2) throw DatasetError(path + ": views must be 1 or 2, not " + std::to_string(i.views));
   i.patch_scale = root["patch_scale"] ? get<double>(root, "patch_scale", path) : 0.0;  // written before scaling existed
   if (i.patch_scale < 0) throw DatasetError(path + ": patch_scale must be >= 0");
+  i.tn_kept = root["tn_kept"] ? get<double>(root, "tn_kept", path) : 1.0;  // written before TN could be thinned
+  if (!(i.tn_kept > 0 && i.tn_kept <= 1)) throw DatasetError(path + ": tn_kept must be in (0, 1]");
+  i.tn_dropped = root["tn_dropped"] ? get<int64_t>(root, "tn_dropped", path) : 0;
   i.frames = get<int64_t>(root, "frames", path);
   i.samples = get<int64_t>(root, "samples", path);
   const YAML::Node counts = root["class_counts"];
@@ -129,7 +133,7 @@ SessionWriter::SessionWriter(const std::string& dataset_root, SessionInfo info)
   files_->samples = std::fopen((dir_ + "/samples.csv").c_str(), "w");
   if (!files_->patches || !files_->samples) throw DatasetError(dir_ + ": cannot write session files");
   std::fprintf(files_->samples, "%s\n", kSamplesHeader);
-  info_.frames = info_.samples = 0;
+  info_.frames = info_.samples = info_.tn_dropped = 0;
   info_.class_counts = {};
 }
 

@@ -71,11 +71,15 @@ struct SessionInfo {
   // this many footprint-disc widths, at least patch_size, resized to
   // patch_size; each sample records the side it was cut at.
   double patch_scale = 0;
+  // < 1: only this fraction of the TN cells was stored, to save disk
+  // (BuildOptions::keep_tn); class_counts count what was stored.
+  double tn_kept = 1;
   QueryGridConfig grid;
   // Filled by the writer / reader:
   int64_t frames = 0;
   int64_t samples = 0;
   std::array<int64_t, kNumClasses> class_counts{};
+  int64_t tn_dropped = 0;  // TN cells left out (tn_kept < 1)
 };
 
 // Writes one session folder. Patches are appended as they come; close()
@@ -91,6 +95,8 @@ class SessionWriter {
   int64_t add_frame(int64_t utime, int64_t depth_utime, int32_t cells_labelled);
   // `patch` must be (views x patch_size) x patch_size CV_8UC3.
   void add_sample(SampleRecord sample, const cv::Mat& patch);
+  // A TN cell of the current frame left out (SessionInfo::tn_kept < 1).
+  void count_dropped_tn() { ++info_.tn_dropped; }
   void close();
   const SessionInfo& info() const { return info_; }
 
