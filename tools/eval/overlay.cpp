@@ -4,8 +4,6 @@
 #include <stdexcept>
 #include <string>
 
-#include <opencv2/imgproc.hpp>
-
 #include "ivoa/figures/paper_figure.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
 
