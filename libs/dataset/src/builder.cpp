@@ -241,13 +241,13 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
   const std::vector<int> sides = patch_sides(labels, image->second);
   for (size_t i = 0; i < labels.label.size(); ++i) {
     if (labels.label[i] == introspection_labels_t::LABEL_NONE) continue;
+    const cv::Mat patch = cut_patch(image->second, info.views, labels.u[i], labels.v[i], sides[i], info.patch_size);
+    if (patch.empty()) continue;  // the patch would leave the image
     if (labels.label[i] == introspection_labels_t::LABEL_TN && !keeps_tn(labels.utime, i, options.keep_tn)) {
-      writer->count_dropped_tn();
+      writer->count_dropped_tn();  // only cells that would have been stored count as left out
       ++report.tn_dropped;
       continue;
     }
-    const cv::Mat patch = cut_patch(image->second, info.views, labels.u[i], labels.v[i], sides[i], info.patch_size);
-    if (patch.empty()) continue;  // the patch would leave the image
     SampleRecord s;
     s.frame = frame;
     s.utime = labels.utime;
