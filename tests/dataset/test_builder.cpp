@@ -2,15 +2,13 @@
 // of the frames they came from, labels equal an independent recomputation
 // (detector + monitor + Algorithm 1 per frame, without the pairing
 // pipeline), and recorded labels are taken as they are.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
-#include <algorithm>
 #include <map>
 #include <set>
 
 #include <gtest/gtest.h>
-
-#include "ivoa/core/footprint_patch.hpp"
 
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/camera_model.hpp"
