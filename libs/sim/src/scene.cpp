@@ -243,16 +243,24 @@ std::optional<Scene::Hit> Scene::raycast(const Eigen::Vector3d& origin, const Ei
   return best;
 }
 
-Scene generate_scene(const SceneSpec& spec, uint64_t seed) {
+namespace detail {
+
+std::shared_ptr<SceneData> build_scene(const SceneSpec& spec, uint64_t seed,
+                                       const std::function<void(SceneBuilder&)>& before_finish) {
   validate(spec);
-  detail::SceneBuilder b(spec, seed);
-  detail::build_layout(b);
+  SceneBuilder b(spec, seed);
+  build_layout(b);
   for (const ElementSpec& e : spec.elements) b.add_element(e);
-  detail::place_obstacles(b);
-  detail::place_floor_details(b);
-  detail::place_lights(b);
-  detail::choose_start(b);
-  return Scene(b.finish());
+  place_obstacles(b);
+  place_floor_details(b);
+  place_lights(b);
+  choose_start(b);
+  if (before_finish) before_finish(b);
+  return b.finish();
 }
+
+}  // namespace detail
+
+Scene generate_scene(const SceneSpec& spec, uint64_t seed) { return Scene(detail::build_scene(spec, seed)); }
 
 }  // namespace ivoa::sim

@@ -29,6 +29,21 @@ std::shared_ptr<const Texture> cached_texture(const Material& m) {
   return slot;
 }
 
+// Smooth random field for puddle outlines.
+float lattice_noise(const std::vector<float>& lattice, int n, double x, double y) {
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const double tx = x - x0, ty = y - y0;
+  const double sx = tx * tx * (3 - 2 * tx), sy = ty * ty * (3 - 2 * ty);
+  auto v = [&](int i, int j) {
+    return lattice[static_cast<size_t>(((j % n) + n) % n) * n + static_cast<size_t>(((i % n) + n) % n)];
+  };
+  const double a = v(x0, y0) + (v(x0 + 1, y0) - v(x0, y0)) * sx;
+  const double b = v(x0, y0 + 1) + (v(x0 + 1, y0 + 1) - v(x0, y0 + 1)) * sx;
+  return static_cast<float>(a + (b - a) * sy);
+}
+
+}  // namespace
+
 MaterialData make_material_data(const Material& m) {
   MaterialData d;
   d.spec = m;
@@ -45,21 +60,6 @@ MaterialData make_material_data(const Material& m) {
   if (lum < 0.02f) d.phenomena |= GT::PHENOMENON_DARK_STRIPE;  // only used where it is a baseboard
   return d;
 }
-
-// Smooth random field for puddle outlines.
-float lattice_noise(const std::vector<float>& lattice, int n, double x, double y) {
-  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
-  const double tx = x - x0, ty = y - y0;
-  const double sx = tx * tx * (3 - 2 * tx), sy = ty * ty * (3 - 2 * ty);
-  auto v = [&](int i, int j) {
-    return lattice[static_cast<size_t>(((j % n) + n) % n) * n + static_cast<size_t>(((i % n) + n) % n)];
-  };
-  const double a = v(x0, y0) + (v(x0 + 1, y0) - v(x0, y0)) * sx;
-  const double b = v(x0, y0 + 1) + (v(x0 + 1, y0 + 1) - v(x0, y0 + 1)) * sx;
-  return static_cast<float>(a + (b - a) * sy);
-}
-
-}  // namespace
 
 SceneBuilder::SceneBuilder(const SceneSpec& spec, uint64_t seed)
     : spec_(spec), rng_(hash_combine(seed, hash_string(spec.name.c_str()))), data_(std::make_shared<SceneData>()) {

@@ -13,6 +13,10 @@
 
 namespace ivoa::sim::detail {
 
+// The renderer's form of a material: its texture (synthesised once per
+// process and shared), linear colours and the phenomena it carries.
+MaterialData make_material_data(const Material& m);
+
 class SceneBuilder {
  public:
   SceneBuilder(const SceneSpec& spec, uint64_t seed);
@@ -90,5 +94,11 @@ void place_floor_details(SceneBuilder& b);  // patches, wet patches, puddles, pi
 void place_lights(SceneBuilder& b);
 void choose_start(SceneBuilder& b);
 void build_ceiling(SceneBuilder& b);
+
+// generate_scene's steps (validate, layout, elements, obstacles, floor,
+// lights, start, finish); `before_finish` may adjust the scene before its
+// light maps are computed (counterfactual scenes).
+std::shared_ptr<SceneData> build_scene(const SceneSpec& spec, uint64_t seed,
+                                       const std::function<void(SceneBuilder&)>& before_finish = {});
 
 }  // namespace ivoa::sim::detail
