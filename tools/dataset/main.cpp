@@ -16,26 +16,13 @@
 #include "ivoa/core/progress.hpp"
 #include "ivoa/dataset/builder.hpp"
 #include "ivoa/logio/log_reader.hpp"
+#include "ivoa/logio/session_name.hpp"
 #include "ivoa/stereo/options.hpp"
 
 namespace fs = std::filesystem;
 using namespace ivoa;
 
 namespace {
-
-// "run-3.lcmlog.02" -> "run-3": the session a (split) log file belongs to.
-std::string session_name_of(const std::string& path) {
-  std::string name = fs::path(path).filename().string();
-  const auto dot = name.rfind('.');
-  if (dot != std::string::npos && name.size() - dot == 3 && std::isdigit(name[dot + 1]) && std::isdigit(name[dot + 2]))
-    name = name.substr(0, dot);
-  for (const char* ext : {".lcmlog", ".lcm", ".log"}) {
-    const std::string e(ext);
-    if (name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0)
-      name = name.substr(0, name.size() - e.size());
-  }
-  return name;
-}
 
 // Recorded labels come with the grid and detector the live processes used:
 // only the patch cut around their cells can change. Applies --patch-size and
@@ -84,7 +71,7 @@ int run_build(const std::string& out, const std::string& session, const std::vec
   // Logs of one session (explicit --session, or split files name.NN) go together.
   std::vector<std::pair<std::string, std::vector<std::string>>> sessions;
   for (const auto& log : logs) {
-    const std::string name = session.empty() ? session_name_of(log) : session;
+    const std::string name = session.empty() ? logio::session_name_of(log) : session;
     if (sessions.empty() || sessions.back().first != name) sessions.push_back({name, {}});
     sessions.back().second.push_back(log);
   }

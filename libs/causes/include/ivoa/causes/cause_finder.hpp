@@ -1,0 +1,71 @@
+#pragma once
+// Why did the stereo detector fail on a simulated frame? For each failure
+// cell (FP, FN) of a frame's recorded labels, CauseFinder renders the frame
+// again exactly as the simulator driver did, and once more per removable
+// phenomenon with that phenomenon taken out of the scene, and re-runs the
+// detector on the cell. A phenomenon *causes* the failure when taking it
+// away turns the detector's verdict into the right one.
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ivoa/core/calibration.hpp"
+#include "ivoa/introspection_labels_t.hpp"
+#include "ivoa/sim/pose.hpp"
+#include "ivoa/sim/scene_spec.hpp"
+#include "ivoa/stereo/config.hpp"
+
+namespace ivoa::causes {
+
+// Thrown when a frame cannot be reproduced (its pose is not the trajectory's
+// at the time the session's rate gives): what() names the frame.
+class ReplayError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// How the simulator driver recorded the session (its defaults are the driver's).
+struct SessionTiming {
+  int64_t start_utime = 0;  // utime of frame 0
+  double rate_hz = 2.0;     // frames per second of session time (the main job's)
+  uint64_t noise_seed = 0;  // the driver's --noise-seed
+};
+
+struct CellCause {
+  int32_t cell = 0;            // index into the labels message
+  int8_t label = 0;            // LABEL_FP or LABEL_FN
+  int8_t stereo_state = 0;     // recorded obstacle_grid_t::STATE_*
+  int8_t replayed_state = 0;   // the detector on the re-rendered frame
+  uint8_t tested = 0;          // PHENOMENON_* bits the scene carries (a twin was rendered)
+  uint8_t causes = 0;          // PHENOMENON_* bits whose removal makes the verdict right
+  bool reproduced() const { return replayed_state == stereo_state; }
+};
+
+class CauseFinder {
+ public:
+  // Generates the scene and its twins once. Throws SceneSpecError or
+  // std::invalid_argument (detector name or config).
+  CauseFinder(const sim::SceneSpec& spec, uint64_t seed, const RigCalibration& rig, SessionTiming timing,
+              const std::string& detector, const stereo::DetectorConfig& detector_config);
+  ~CauseFinder();
+
+  // The failure cells of one frame's labels, in cell order (none: nothing
+  // rendered). `pose` is the pose recorded with the frame: a mismatch with
+  // the trajectory throws ReplayError. `pixelformat` is the recorded
+  // stereo pair's, so the detector sees the same demosaiced image.
+  std::vector<CellCause> explain(const introspection_labels_t& labels, const sim::Pose2D& pose, int32_t pixelformat);
+
+  // The PHENOMENON_* bits this scene carries and twins exist for.
+  uint8_t testable() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// "reflection+dark stripe", "none found" for 0: names of PHENOMENON_* bits.
+std::string phenomena_names(uint8_t bits);
+
+}  // namespace ivoa::causes

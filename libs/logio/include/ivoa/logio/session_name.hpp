@@ -1,0 +1,12 @@
+#pragma once
+// The session a log file belongs to, from its name: "run-3.lcmlog.02" ->
+// "run-3" (lcm-logger's split files .NN, and the .lcmlog/.lcm/.log
+// extensions, dropped). Dataset sessions and the tools that join per-session
+// outputs name sessions this way.
+#include <string>
+
+namespace ivoa::logio {
+
+std::string session_name_of(const std::string& log_path);
+
+}  // namespace ivoa::logio

@@ -1,0 +1,126 @@
+// CauseFinder replays a frame exactly (its verdicts are the recorded ones)
+// and blames a mirroring floor for the obstacles JPP-C sees in it.
+#include <gtest/gtest.h>
+
+#include "ivoa/causes/cause_finder.hpp"
+#include "ivoa/core/camera_model.hpp"
+#include "ivoa/core/image_convert.hpp"
+#include "ivoa/core/query_grid.hpp"
+#include "ivoa/obstacle_grid_t.hpp"
+#include "ivoa/sim/elements.hpp"
+#include "ivoa/sim/messages.hpp"
+#include "ivoa/sim/simulator.hpp"
+#include "ivoa/sim/trajectory.hpp"
+#include "ivoa/sim_ground_truth_t.hpp"
+#include "ivoa/stereo/detector.hpp"
+#include "ivoa/stereo_image_t.hpp"
+
+namespace ivoa::causes {
+namespace {
+
+using GT = sim_ground_truth_t;
+using Labels = introspection_labels_t;
+constexpr int64_t kStart = 1'700'000'000'000'000;
+
+// A polished stone floor mirrors a poster wall: stereo sees the mirror
+// image below the floor (sim tests: ReflectiveFloorMisleadsStereo...).
+sim::SceneSpec mirroring_floor() {
+  sim::SceneSpec spec = sim::make_bare_spec(sim::Environment::kIndoor, "polished_stone");
+  spec.elements.push_back(sim::elements::wall({4.0, -4}, {4.0, 4}, "poster_wall"));
+  return spec;
+}
+
+// The frame as the driver renders it at session time 0, and labels for it:
+// the floor is free everywhere, so every cell JPP-C calls an obstacle is an FP.
+struct LabelledFrame {
+  Labels labels;
+  sim::Pose2D pose;
+  int fp = 0;
+};
+
+LabelledFrame label_frame(const sim::SceneSpec& spec) {
+  const sim::Scene scene = sim::generate_scene(spec, 1);
+  const sim::Simulator simulator(scene, sim::SimulatorConfig{sim::make_sim_rig(), {}, {}, false});
+  sim::Trajectory trajectory(scene, 1);
+  sim::RenderRequest request;
+  request.stereo_pose = request.depth_pose = trajectory.pose_at(0);
+  request.motion = trajectory.twist_at(0);
+  const stereo_image_t msg =
+      sim::make_stereo_message(simulator.render(request), kStart, 0, image_t::PIXEL_FORMAT_BAYER_RGGB);
+  auto detector = stereo::make_detector("jppc", simulator.rig(), {});
+  detector->set_frame(decode_image(msg.left), decode_image(msg.right));
+  QueryGridConfig grid_config;
+  grid_config.x_max = 2.5;
+  const QueryGrid grid(grid_config, CameraModel(simulator.rig().left, simulator.rig().left_to_robot));
+  LabelledFrame out;
+  out.pose = request.stereo_pose;
+  Labels& l = out.labels;
+  l.utime = kStart;
+  l.detector = "jppc";
+  l.safety_radius = grid_config.safety_radius;
+  for (int i = 0; i < grid.size(); ++i) {
+    const QueryCell& c = grid.cell(i);
+    if (!c.in_image) continue;
+    const int8_t state = stereo::to_state(detector->check(c.x, c.y, l.safety_radius));
+    const bool fp = state == obstacle_grid_t::STATE_OBSTACLE;
+    out.fp += fp;
+    l.label.push_back(fp ? Labels::LABEL_FP : Labels::LABEL_TN);
+    l.stereo_state.push_back(state);
+    l.depth_state.push_back(obstacle_grid_t::STATE_FREE);
+    l.x.push_back(static_cast<float>(c.x));
+    l.y.push_back(static_cast<float>(c.y));
+    l.u.push_back(static_cast<float>(c.u));
+    l.v.push_back(static_cast<float>(c.v));
+  }
+  l.num_cells = static_cast<int32_t>(l.label.size());
+  return out;
+}
+
+CauseFinder make_finder(const sim::SceneSpec& spec) {
+  SessionTiming timing;
+  timing.start_utime = kStart;
+  return CauseFinder(spec, 1, sim::make_sim_rig(), timing, "jppc", {});
+}
+
+TEST(CauseFinder, ReplaysTheFrameAndBlamesTheReflection) {
+  const sim::SceneSpec spec = mirroring_floor();
+  const LabelledFrame frame = label_frame(spec);
+  ASSERT_GE(frame.fp, 5) << "JPP-C should see obstacles in the mirror image";
+  CauseFinder finder = make_finder(spec);
+  EXPECT_TRUE(finder.testable() & GT::PHENOMENON_REFLECTION);
+  const std::vector<CellCause> cells = finder.explain(frame.labels, frame.pose, image_t::PIXEL_FORMAT_BAYER_RGGB);
+  ASSERT_EQ(static_cast<int>(cells.size()), frame.fp) << "one entry per failure cell";
+  int reflection = 0;
+  for (const CellCause& c : cells) {
+    EXPECT_EQ(c.label, Labels::LABEL_FP);
+    EXPECT_TRUE(c.reproduced()) << "cell " << c.cell;
+    EXPECT_EQ(c.tested, finder.testable());
+    EXPECT_EQ(c.causes & ~c.tested, 0);
+    reflection += (c.causes & GT::PHENOMENON_REFLECTION) != 0;
+  }
+  EXPECT_GE(reflection, 0.8 * frame.fp) << "without the mirror image the floor is free";
+}
+
+TEST(CauseFinder, RefusesAFrameItCannotReproduce) {
+  const sim::SceneSpec spec = mirroring_floor();
+  LabelledFrame frame = label_frame(spec);
+  CauseFinder finder = make_finder(spec);
+  frame.pose.x += 0.05;  // not where the trajectory was
+  EXPECT_THROW(finder.explain(frame.labels, frame.pose, image_t::PIXEL_FORMAT_BAYER_RGGB), ReplayError);
+}
+
+TEST(CauseFinder, FrameWithoutFailuresRendersNothing) {
+  const sim::SceneSpec spec = mirroring_floor();
+  LabelledFrame frame = label_frame(spec);
+  for (auto& label : frame.labels.label) label = Labels::LABEL_TN;
+  frame.pose.x += 1.0;  // would be refused if it were rendered
+  EXPECT_TRUE(make_finder(spec).explain(frame.labels, frame.pose, image_t::PIXEL_FORMAT_BAYER_RGGB).empty());
+}
+
+TEST(CauseFinder, NamesCombinationsOfPhenomena) {
+  EXPECT_EQ(phenomena_names(0), "none found");
+  EXPECT_EQ(phenomena_names(GT::PHENOMENON_REFLECTION | GT::PHENOMENON_DARK_STRIPE), "reflection+dark stripe");
+}
+
+}  // namespace
+}  // namespace ivoa::causes

@@ -1,0 +1,230 @@
+// ivoa-sim-causes: why did the stereo detector fail? For simulated session
+// logs with recorded labels, re-renders each frame with failures once as it
+// was and once per stereo-failure phenomenon taken out of the scene, re-runs
+// the detector on the failure cells, and writes which phenomena's removal
+// makes each verdict right (causes.csv, joined by ivoa_report.py --causes).
+//
+//   ivoa-sim-causes --out causes.csv out/main-job-default/logs/*_s31.lcmlog
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/causes/cause_finder.hpp"
+#include "ivoa/core/channels.hpp"
+#include "ivoa/core/process.hpp"
+#include "ivoa/core/progress.hpp"
+#include "ivoa/logio/log_reader.hpp"
+#include "ivoa/logio/session_name.hpp"
+#include "ivoa/rig_calibration_t.hpp"
+#include "ivoa/sim/scene_spec.hpp"
+#include "ivoa/sim_ground_truth_t.hpp"
+#include "ivoa/stereo/options.hpp"
+#include "ivoa/stereo_image_t.hpp"
+
+namespace fs = std::filesystem;
+using namespace ivoa;
+
+namespace {
+
+using GT = sim_ground_truth_t;
+using Labels = introspection_labels_t;
+
+struct Options {
+  std::string out;
+  std::string scene_file;  // empty: <scene_dir>/<logged scene name>.yaml
+  std::string scene_dir = IVOA_SIM_SCENES_DIR;
+  causes::SessionTiming timing;
+  int64_t start_utime = -1;  // < 0: the utime of the logged frame with seq 0
+  stereo::DetectorConfig detector;
+};
+
+struct TruthFrame {
+  std::string scene;
+  int64_t seed = 0, seq = 0;
+  sim::Pose2D pose;
+};
+
+// What the tool needs of one log: small messages only (no images kept).
+struct SessionLog {
+  std::optional<RigCalibration> rig;
+  std::map<int64_t, TruthFrame> truth;  // by stereo utime
+  std::vector<Labels> labels;
+  int32_t pixelformat = -1;
+  int64_t bad_messages = 0;
+};
+
+template <class Msg>
+bool decode(const logio::LogEvent& e, Msg& msg) {
+  return msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) >= 0;
+}
+
+void read_event(const logio::LogEvent& e, SessionLog& log) {
+  bool ok = true;
+  if (e.channel == channels::kRigCalibration && !log.rig) {
+    rig_calibration_t msg;
+    if ((ok = decode(e, msg))) log.rig = from_message(msg);
+  } else if (e.channel == channels::kSimGroundTruth) {
+    sim_ground_truth_t msg;
+    if ((ok = decode(e, msg))) log.truth[msg.utime] = {msg.scene, msg.seed, msg.seq, {msg.robot_x, msg.robot_y, msg.robot_yaw}};
+  } else if (e.channel == channels::kIntrospectionLabels) {
+    Labels msg;
+    if ((ok = decode(e, msg))) log.labels.push_back(std::move(msg));
+  } else if (e.channel == channels::kStereoImages && log.pixelformat < 0) {
+    stereo_image_t msg;
+    if ((ok = decode(e, msg))) log.pixelformat = msg.left.pixelformat;
+  }
+  if (!ok) {
+    ++log.bad_messages;
+    spdlog::warn("{} at byte {}: undecodable message, skipped", e.channel, e.offset);
+  }
+}
+
+SessionLog read_log(const std::string& path) {
+  logio::LogReader reader(path);
+  SessionLog log;
+  logio::LogEvent event;
+  while (reader.next(event)) {
+    try {
+      read_event(event, log);
+    } catch (const std::exception& e) {  // e.g. an invalid calibration
+      ++log.bad_messages;
+      spdlog::warn("{}: {} at byte {}: {}", path, event.channel, event.offset, e.what());
+    }
+  }
+  for (const auto& p : reader.problems()) spdlog::warn("{}: byte {}: {}", path, p.offset, p.what);
+  if (!log.rig) throw std::runtime_error(path + ": no " + std::string(channels::kRigCalibration) + " message");
+  if (log.truth.empty())
+    throw std::runtime_error(path + ": no " + std::string(channels::kSimGroundTruth) +
+                             " messages (causes need a simulated session)");
+  if (log.labels.empty()) throw std::runtime_error(path + ": no " + std::string(channels::kIntrospectionLabels) + " messages");
+  return log;
+}
+
+int64_t session_start(const SessionLog& log, const Options& opt, const std::string& path) {
+  if (opt.start_utime >= 0) return opt.start_utime;
+  for (const auto& [utime, t] : log.truth)
+    if (t.seq == 0) return utime;
+  throw std::runtime_error(path + ": the log does not start at the session's first frame (no seq 0); give --start-utime");
+}
+
+struct Tally {
+  std::map<std::pair<int, uint8_t>, int64_t> by_label_and_causes;
+  int64_t failures = 0, reproduced = 0, frames = 0, skipped_frames = 0;
+};
+
+void write_rows(std::ofstream& csv, const std::string& session, const Labels& labels,
+                const std::vector<causes::CellCause>& cells, Tally& tally) {
+  for (const auto& c : cells) {
+    const auto i = static_cast<size_t>(c.cell);
+    csv << session << ',' << labels.detector << ',' << labels.utime << ',' << c.cell << ',' << (c.label == Labels::LABEL_FP ? "FP" : "FN") << ','
+        << labels.x[i] << ',' << labels.y[i] << ',' << int{c.stereo_state} << ',' << int{c.replayed_state} << ','
+        << int{c.tested} << ',' << int{c.causes} << ",\"" << causes::phenomena_names(c.causes) << "\"\n";
+    ++tally.failures;
+    if (c.reproduced()) {
+      ++tally.reproduced;
+      ++tally.by_label_and_causes[{c.label, c.causes}];
+    }
+  }
+}
+
+void explain_session(const std::string& path, const Options& opt, std::ofstream& csv, Tally& tally) {
+  const SessionLog log = read_log(path);
+  const std::string session = logio::session_name_of(path);
+  const TruthFrame& first = log.truth.begin()->second;
+  const std::string scene_file = opt.scene_file.empty() ? opt.scene_dir + "/" + first.scene + ".yaml" : opt.scene_file;
+  causes::SessionTiming timing = opt.timing;
+  timing.start_utime = session_start(log, opt, path);
+  causes::CauseFinder finder(sim::load_scene_spec(scene_file), static_cast<uint64_t>(first.seed), *log.rig, timing,
+                             log.labels.front().detector, opt.detector);
+  Progress progress(session + " (" + causes::phenomena_names(finder.testable()) + ")",
+                    static_cast<double>(log.labels.size()), "frames");
+  for (size_t f = 0; f < log.labels.size(); ++f) {
+    const Labels& labels = log.labels[f];
+    const auto truth = log.truth.find(labels.utime);
+    if (truth == log.truth.end()) {
+      ++tally.skipped_frames;
+      spdlog::warn("{}: labels at {} have no ground-truth frame, skipped", session, labels.utime);
+      continue;
+    }
+    try {
+      write_rows(csv, session, labels, finder.explain(labels, truth->second.pose, log.pixelformat), tally);
+      ++tally.frames;
+    } catch (const causes::ReplayError& e) {
+      ++tally.skipped_frames;
+      spdlog::warn("{}: {}", session, e.what());
+    }
+    progress.update(static_cast<double>(f + 1));
+  }
+  progress.finish();
+}
+
+void print_summary(const Tally& t) {
+  std::printf("%lld failure cells in %lld frames (%lld frames skipped); re-rendered verdict matches the recorded one "
+              "for %lld (%.1f %%)\n",
+              static_cast<long long>(t.failures), static_cast<long long>(t.frames),
+              static_cast<long long>(t.skipped_frames), static_cast<long long>(t.reproduced),
+              t.failures ? 100.0 * static_cast<double>(t.reproduced) / static_cast<double>(t.failures) : 0.0);
+  for (const int label : {Labels::LABEL_FP, Labels::LABEL_FN}) {
+    int64_t n = 0;
+    for (const auto& [key, count] : t.by_label_and_causes) n += key.first == label ? count : 0;
+    std::printf("%s (%lld reproduced), fixed by removing:\n", label == Labels::LABEL_FP ? "FP" : "FN", static_cast<long long>(n));
+    for (const auto& [key, count] : t.by_label_and_causes)
+      if (key.first == label)
+        std::printf("  %-40s %7lld  %5.1f %%\n", causes::phenomena_names(key.second).c_str(), static_cast<long long>(count),
+                    100.0 * static_cast<double>(count) / static_cast<double>(n));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Failure causes on simulated logs: re-render each failure without each phenomenon and re-run the detector"};
+  CommonOptions common;
+  add_common_options(app, common);
+  Options opt;
+  std::vector<std::string> logs;
+  app.add_option("--out", opt.out, "CSV to write: one row per FP/FN cell (session, utime, cell, ..., causes)")->required();
+  app.add_option("--scene", opt.scene_file, "scene file (default: <scene-dir>/<the logged scene name>.yaml)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--scene-dir", opt.scene_dir, "where the logged scenes' files are")->capture_default_str();
+  app.add_option("--rate", opt.timing.rate_hz, "the simulator driver's --rate (frames per second of session time)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--noise-seed", opt.timing.noise_seed, "the simulator driver's --noise-seed")->capture_default_str();
+  app.add_option("--start-utime", opt.start_utime, "utime of the session's frame 0 (default: the logged frame with seq 0)");
+  app.add_option("logs", logs, "simulated session logs with recorded INTROSPECTION_LABELS, one session each")
+      ->required()
+      ->check(CLI::ExistingFile);
+  stereo::add_detector_options(app, opt.detector);
+  if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
+  init_logging("sim-causes", common.log_level);
+
+  std::ofstream csv(opt.out);
+  if (!csv) {
+    spdlog::error("cannot write {}", opt.out);
+    return kExitIoError;
+  }
+  csv << "session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,cause_names\n";
+  Tally tally;
+  int worst = kExitOk;
+  for (const auto& path : logs) {
+    try {
+      explain_session(path, opt, csv, tally);
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      worst = kExitBadInput;
+    }
+  }
+  csv.flush();
+  if (!csv) {
+    spdlog::error("writing {} failed", opt.out);
+    return kExitIoError;
+  }
+  print_summary(tally);
+  return worst;
+}
