@@ -120,6 +120,17 @@ TEST(CauseFinder, FrameWithoutFailuresRendersNothing) {
 TEST(CauseFinder, NamesCombinationsOfPhenomena) {
   EXPECT_EQ(phenomena_names(0), "none found");
   EXPECT_EQ(phenomena_names(GT::PHENOMENON_REFLECTION | GT::PHENOMENON_DARK_STRIPE), "reflection+dark stripe");
+  CellCause c;
+  c.label = Labels::LABEL_FN;
+  c.stereo_state = c.replayed_state = obstacle_grid_t::STATE_FREE;
+  c.tested = GT::PHENOMENON_TEXTURELESS | GT::PHENOMENON_DARK_STRIPE;
+  EXPECT_EQ(describe(c), "none found");
+  c.jointly = true;
+  EXPECT_EQ(describe(c), "together: textureless+dark stripe");
+  c.causes = GT::PHENOMENON_DARK_STRIPE;
+  EXPECT_EQ(describe(c), "dark stripe");
+  c.replayed_state = obstacle_grid_t::STATE_OBSTACLE;
+  EXPECT_EQ(describe(c), "not reproduced");
 }
 
 }  // namespace

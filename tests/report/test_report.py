@@ -590,6 +590,104 @@ class DegenerateAndBadInputTest(unittest.TestCase):
         self.assertEqual(code, 2)
 
 
+def write_causes(path, sessions, detector="jppc", cause_of=None, not_reproduced=0, relabel=None):
+    """An ivoa-sim-causes CSV for the true FP/FN rows of `sessions`: causes
+    bits from cause_of[label]; the first `not_reproduced` rows replayed to the
+    other state; `relabel` = (row index, label) writes one row with a wrong label."""
+    cause_of = cause_of or {FP: REFLECTION, FN: 0}
+    k = 0
+    with open(path, "w") as f:
+        f.write("session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause\n")
+        for name, _, rows in sessions:
+            for r in rows:
+                if r["label"] not in (FP, FN):
+                    continue
+                label = "FP" if r["label"] == FP else "FN"
+                if relabel and relabel[0] == k:
+                    label = relabel[1]
+                state = 1 if r["label"] == FP else 0
+                replayed = 1 - state if k < not_reproduced else state
+                f.write(f"{name},{detector},{r['utime']},{r['cell']},{label},1.0,0.0,{state},{replayed},11,"
+                        f"{cause_of[r['label']]},0,x\n")
+                k += 1
+
+
+class CausesTest(unittest.TestCase):
+    """--causes: the clusters' composition and purity by cause."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.root = tempfile.mkdtemp(prefix="ivoa_report_causes_")  # removed in tearDownClass
+        cls.f = fabricate(cls.root)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.root, ignore_errors=True)
+
+    def report(self, causes_path, name):
+        out = os.path.join(self.root, name)
+        code, stdout, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--causes", causes_path,
+                                         "--out", out, "--tsne-iterations", "250"])
+        metrics = json.loads(read_text(os.path.join(out, "metrics.json"))) if code == 0 else None
+        return code, stdout, stderr, metrics, out
+
+    def test_purity_by_cause(self):
+        path = os.path.join(self.root, "causes.csv")
+        write_causes(path, self.f.sessions, not_reproduced=4)
+        code, stdout, stderr, metrics, out = self.report(path, "report_causes")
+        self.assertEqual(code, 0, stderr)
+        c = next(iter(metrics["models"].values()))["clustering"]
+        # The perfect model's clusters are its FP (reflection) and FN (none found) samples.
+        self.assertAlmostEqual(c["purity_by_cause"], 1.0)
+        self.assertAlmostEqual(c["best_possible_by_cause"], 1.0)
+        # Every selected sample is a true failure; those whose replay differed have no cause.
+        self.assertLessEqual(c["n_with_cause"], c["n_selected"])
+        self.assertGreaterEqual(c["n_with_cause"], c["n_selected"] - 4)
+        self.assertEqual({int(k) for e in c["clusters"] for k in e["causes"]}, {0, REFLECTION})
+        report = read_text(os.path.join(out, "report.md"))
+        self.assertIn("**By cause.**", report)
+        self.assertIn("none found", report)
+        self.assertIn("by cause 100.0 %", stdout)
+
+    def test_mixed_causes_lower_the_purity(self):
+        # Half of the FP rows (by cell parity) are caused by something else: purity by cause drops, the
+        # presence-based purity does not.
+        path = os.path.join(self.root, "causes_mixed.csv")
+        sessions = [(n, e, [dict(r) for r in rows]) for n, e, rows in self.f.sessions]
+        write_causes(path, sessions, cause_of={FP: REFLECTION, FN: 0})
+        with open(path) as fh:
+            lines = fh.read().splitlines()
+        for i in range(1, len(lines)):
+            fields = lines[i].split(",")
+            if fields[4] == "FP" and int(fields[3]) % 2 == 0:
+                fields[10] = str(DARK_STRIPE)
+                lines[i] = ",".join(fields)
+        with open(path, "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+        code, _, stderr, metrics, _ = self.report(path, "report_causes_mixed")
+        self.assertEqual(code, 0, stderr)
+        c = next(iter(metrics["models"].values()))["clustering"]
+        self.assertGreaterEqual(c["purity"], 0.99)
+        self.assertLess(c["purity_by_cause"], 0.9)
+        self.assertGreater(c["best_possible_by_cause"], c["purity_by_cause"])
+
+    def test_causes_of_another_detector_are_not_used(self):
+        path = os.path.join(self.root, "causes_dense.csv")
+        write_causes(path, self.f.sessions, detector="dense")
+        code, _, stderr, metrics, _ = self.report(path, "report_causes_dense")
+        self.assertEqual(code, 0, stderr)
+        self.assertIn("no causes for it", stderr)
+        self.assertIsNone(next(iter(metrics["models"].values()))["clustering"]["purity_by_cause"])
+
+    def test_causes_from_other_logs_are_refused(self):
+        path = os.path.join(self.root, "causes_wrong.csv")
+        write_causes(path, self.f.sessions, relabel=(0, "FN"))
+        code, _, stderr, _, _ = self.report(path, "report_causes_wrong")
+        self.assertEqual(code, 3, stderr)
+        self.assertIn("causes_wrong.csv", stderr)
+        self.assertIn("are the causes from the logs this dataset was built from?", stderr)
+
+
 class MetricUnitTest(unittest.TestCase):
     """The metric functions against scikit-learn and a negative control."""
 

@@ -72,8 +72,8 @@ import report_figures as figures  # noqa: E402
 import report_markdown as md  # noqa: E402
 import report_metrics as metrics  # noqa: E402
 from report_clustering import ClusterOptions, cluster_failures  # noqa: E402
-from report_inputs import (Dataset, EvalRun, InputError, attach_dataset, load_eval, make_names,  # noqa: E402
-                           patch_scale, patch_sides, patch_size, query_grid)
+from report_inputs import (Dataset, EvalRun, InputError, attach_causes, attach_dataset, load_causes,  # noqa: E402
+                           load_eval, make_names, patch_scale, patch_sides, patch_size, query_grid)
 
 
 def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
@@ -101,6 +101,9 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     p.add_argument("--seed", type=int, default=0, help="k-means, t-SNE, subsampling and mosaic seed")
     p.add_argument("--threads", type=int, default=1,
                    help="OpenMP threads for t-SNE and k-means (1 is fastest on a busy shared machine)")
+    p.add_argument("--causes", metavar="CAUSES_CSV",
+                   help="ivoa-sim-causes output for the test sessions' logs: composition and purity of the "
+                        "clusters by what causes each failure (simulated sessions only)")
     p.add_argument("--max-overlays", type=int, default=0,
                    help="copy at most this many overlay figures per model into the report (0 = all)")
     a = p.parse_args(argv)
@@ -128,6 +131,10 @@ def load_inputs(args: argparse.Namespace):
         if key not in datasets:
             datasets[key] = Dataset(path)
         warnings += attach_dataset(run, datasets[key])
+    if args.causes:
+        causes = load_causes(args.causes)
+        for run in runs:
+            warnings += attach_causes(run, causes)
     return runs, warnings
 
 
@@ -190,6 +197,8 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "pca_explained": res.pca_explained, "tsne_points": int(len(res.tsne_index)), "clusters": res.clusters,
         "purity": res.purity if res.has_truth else None, "nmi": res.nmi, "ari": res.ari,
         "purity_by_k": res.k_scan if res.has_truth else [], "has_ground_truth": res.has_truth,
+        "n_with_cause": res.n_with_cause, "purity_by_cause": res.cause_purity, "nmi_by_cause": res.cause_nmi,
+        "best_possible_by_cause": res.cause_best_possible,
     }
 
     overlays = run.overlays[: args.max_overlays] if args.max_overlays > 0 else run.overlays
@@ -236,10 +245,11 @@ def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
         rows.append([r.name, r.detector, h["samples"], md.fmt(h["mean_per_class_accuracy"]),
                      md.fmt(h["overall_accuracy"]), md.fmt(h["failure_auroc"]),
                      f"{md.pct(h['retained_at_70'])} → {md.fmt(h['mpca_at_70'])}", given,
-                     md.pct(c["purity"]) if c["ok"] and c["purity"] is not None else "n/a"])
+                     md.pct(c["purity"]) if c["ok"] and c["purity"] is not None else "n/a",
+                     md.pct(c.get("purity_by_cause")) if c["ok"] and c.get("purity_by_cause") is not None else "n/a"])
     return md.table(["model", "detector", "samples", "mean per-class acc.", "overall acc.", "failure AUROC",
                      "≥70 % retained → mean per-class acc.", "given the detector's verdict: mean per-class acc.; "
-                     "≥70 % retained →", "cluster purity"], rows)
+                     "≥70 % retained →", "cluster purity (by phenomenon present)", "cluster purity by cause"], rows)
 
 
 def inputs_section(runs: List[EvalRun]) -> str:
@@ -321,7 +331,9 @@ def run_report(args: argparse.Namespace, argv: List[str]) -> int:
                  f"({md.fmt(h['verdict_mpca_at_70'])} at {md.pct(h['verdict_retained_at_70'])}), "
                  if h["verdict_mean_per_class_accuracy"] is not None else "")
               + (f"cluster purity {md.pct(c['purity'])}" if c["ok"] and c["purity"] is not None
-                 else "clustering: " + (c["message"] or "no phenomenon ground truth")))
+                 else "clustering: " + (c["message"] or "no phenomenon ground truth"))
+              + (f", by cause {md.pct(c['purity_by_cause'])}" if c["ok"] and c.get("purity_by_cause") is not None
+                 else ""))
     print(f"report: {report_path}")
     return EXIT_OK
 

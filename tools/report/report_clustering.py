@@ -43,7 +43,7 @@ from sklearn.decomposition import PCA
 from sklearn.manifold import TSNE
 from sklearn.metrics import adjusted_rand_score, normalized_mutual_info_score
 
-from report_inputs import FN, FP, EvalRun
+from report_inputs import FN, FP, NO_CAUSE, EvalRun
 
 try:
     from threadpoolctl import threadpool_limits  # a scikit-learn dependency
@@ -96,6 +96,12 @@ class ClusterResult:
     k_scan: List[dict] = field(default_factory=list)
     mosaic_rows: Dict[int, np.ndarray] = field(default_factory=dict)
     has_truth: bool = False
+    # By cause (ivoa-sim-causes): over the clustered samples that are true
+    # failures with a known cause; None without causes.
+    n_with_cause: int = 0
+    cause_purity: Optional[float] = None
+    cause_nmi: Optional[float] = None
+    cause_best_possible: Optional[float] = None
 
 
 def normalise_embeddings(x: np.ndarray, how: str) -> np.ndarray:
@@ -165,6 +171,31 @@ def _phenomena_present(bits: np.ndarray, overall: Dict[int, float]) -> List[dict
 def _purity(phen: np.ndarray, cluster: np.ndarray) -> float:
     """Share of samples in their cluster's most common phenomenon."""
     return sum(Counter(phen[cluster == c].tolist()).most_common(1)[0][1] for c in np.unique(cluster)) / len(phen)
+
+
+def _cause_composition(res: ClusterResult, cause: np.ndarray, k: int) -> None:
+    """Composition and purity of the clusters by what ivoa-sim-causes found
+    causes each failure (its set of phenomena whose removal fixes it, 0 =
+    none of them), over the clustered samples that are true failures with a
+    known cause. The presence-based purity asks which phenomenon covers most
+    of the patch; this asks which one made the detector fail."""
+    known = cause != NO_CAUSE
+    res.n_with_cause = int(known.sum())
+    if res.n_with_cause == 0:
+        return
+    dominant = 0
+    for c in range(k):
+        m = known & (res.cluster == c)
+        comp = _composition(cause[m])
+        res.clusters[c]["causes"] = comp
+        res.clusters[c]["n_with_cause"] = int(m.sum())
+        res.clusters[c]["cause_purity"] = next(iter(comp.values())) / int(m.sum()) if m.any() else None
+        dominant += next(iter(comp.values())) if m.any() else 0
+    res.cause_purity = dominant / res.n_with_cause
+    counts = sorted(Counter(cause[known].tolist()).values(), reverse=True)
+    res.cause_best_possible = sum(counts[:k]) / res.n_with_cause
+    if len(counts) > 1:
+        res.cause_nmi = float(normalized_mutual_info_score(cause[known], res.cluster[known]))
 
 
 def _purity_by_k(space: np.ndarray, phen: np.ndarray, opt: ClusterOptions) -> List[dict]:
@@ -291,6 +322,8 @@ def _cluster_failures(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
         res.nmi = float(normalized_mutual_info_score(phen, res.cluster))
         res.ari = float(adjusted_rand_score(phen, res.cluster))
         res.k_scan = _purity_by_k(space, phen, opt)
+    if run.cause is not None:
+        _cause_composition(res, run.cause[rows], opt.k)
     empty = [e["cluster"] for e in res.clusters if e["n"] == 0]
     if empty:
         res.message = f"k-means left cluster(s) {empty} empty (fewer distinct embeddings than clusters)."

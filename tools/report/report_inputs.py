@@ -96,6 +96,17 @@ def phenomenon_name(code: int, names: Optional[Dict[int, str]] = None) -> str:
     return names.get(int(code), f"code {int(code)}")
 
 
+def cause_name(bits: int, names: Optional[Dict[int, str]] = None) -> str:
+    """'reflection+glare' for a set of PHENOMENON_* bits found to cause a
+    failure (ivoa-sim-causes); 'none found' for 0, 'only together' for ONLY_TOGETHER."""
+    names = names if names is not None else phenomenon_names()
+    if bits == 0:
+        return "none found"
+    if bits == ONLY_TOGETHER:
+        return "only together"
+    return "+".join(phenomenon_name(1 << b, names) for b in range(8) if bits & (1 << b))
+
+
 def surface_name(code: int, names: Optional[Dict[int, str]] = None) -> str:
     """Readable name of one surface code; unknown codes keep their number."""
     names = names if names is not None else surface_names()
@@ -239,6 +250,9 @@ class EvalRun:
     overlays: List[str] = field(default_factory=list)
     dataset: Optional[Dataset] = None
     label_detector: str = ""        # the detector the dataset's labels are about (session.json), if one
+    # What ivoa-sim-causes found causes each true FP/FN row (PHENOMENON_* bits,
+    # 0 = none of the removable phenomena); NO_CAUSE where not known. None: no --causes.
+    cause: Optional[np.ndarray] = None
 
     @property
     def size(self) -> int:
@@ -490,6 +504,68 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
     run.dataset = dataset
     run.label_detector = label_detectors.pop() if len(label_detectors) == 1 else run.detector
     return warnings
+
+
+NO_CAUSE = -1
+ONLY_TOGETHER = 1 << 7  # no single removal fixes the failure, removing all the scene's phenomena does
+# causes.csv columns (ivoa-sim-causes) the report uses.
+CAUSE_COLUMNS = ("session", "detector", "utime", "cell", "label", "stereo_state", "replayed_state", "causes",
+                 "jointly")
+
+
+@dataclass
+class Causes:
+    """One causes.csv: per (session, detector, utime, cell) of a failure cell,
+    its label and the causes bits, or NO_CAUSE where the re-rendered verdict
+    differed from the recorded one (the frame was not reproduced)."""
+    path: str
+    rows: Dict[tuple, tuple]
+    detectors: set
+
+
+def load_causes(path: str) -> Causes:
+    """Reads ivoa-sim-causes' CSV; bad content is an InputError naming the row."""
+    cols = _read_csv_columns(path, CAUSE_COLUMNS)
+    utime, cell = _numeric(path, cols, "utime", int), _numeric(path, cols, "cell", int)
+    stereo, replayed = _numeric(path, cols, "stereo_state", int), _numeric(path, cols, "replayed_state", int)
+    bits = _numeric(path, cols, "causes", int)
+    bits = np.where((bits == 0) & (_numeric(path, cols, "jointly", int) != 0), ONLY_TOGETHER, bits)
+    rows = {}
+    for i, (session, detector, label) in enumerate(zip(cols["session"], cols["detector"], cols["label"])):
+        if label not in ("FP", "FN"):
+            raise InputError(f"{path}: row {i + 1}: label '{label}' (causes are for FP and FN cells)")
+        cause = int(bits[i]) if stereo[i] == replayed[i] else NO_CAUSE
+        rows[(session, detector, int(utime[i]), int(cell[i]))] = (LABEL_NAMES.index(label), cause)
+    return Causes(path=path, rows=rows, detectors=set(cols["detector"]))
+
+
+def attach_causes(run: EvalRun, causes: Causes) -> List[str]:
+    """Sets run.cause for the true FP/FN rows that causes.csv covers (same
+    session, utime and cell, causes about the detector of the run's labels).
+    A row there with another label means the CSV is from other logs: InputError.
+    Returns warnings (no rows for this run's detector, failures not covered)."""
+    detector = run.label_detector or run.detector
+    if detector not in causes.detectors:
+        return [f"{run.name}: {causes.path} explains failures of {', '.join(sorted(causes.detectors))}, "
+                f"this model's labels are about '{detector}': no causes for it"]
+    run.cause = np.full(run.size, NO_CAUSE, dtype=np.int64)
+    failures = np.flatnonzero((run.label == FP) | (run.label == FN))
+    missing = 0
+    for r in failures:
+        hit = causes.rows.get((run.session[r], detector, int(run.utime[r]), int(run.cell[r])))
+        if hit is None:
+            missing += 1
+            continue
+        if hit[0] != run.label[r]:
+            raise InputError(
+                f"{causes.path}: session {run.session[r]}, utime {run.utime[r]}, cell {run.cell[r]} is "
+                f"{LABEL_NAMES[hit[0]]} there but {LABEL_NAMES[run.label[r]]} in {run.path}/predictions.csv: "
+                f"are the causes from the logs this dataset was built from?")
+        run.cause[r] = hit[1]
+    if missing:
+        return [f"{run.name}: {missing} of {len(failures)} true FP/FN samples are not in {causes.path} "
+                f"(sessions it was not run on): no cause for them"]
+    return []
 
 
 def make_names(runs: List[EvalRun]) -> None:

@@ -7,7 +7,7 @@ import os
 from typing import Dict, List, Optional, Sequence
 
 from report_clustering import REFERENCE_VAR_CUT, ClusterOptions
-from report_inputs import LABEL_NAMES, EvalRun, phenomenon_name, surface_name
+from report_inputs import LABEL_NAMES, EvalRun, cause_name, phenomenon_name, surface_name
 from report_metrics import PAPER_MPCA_AT_70, RETAIN_TARGET
 
 PURITY_TARGET = 0.80
@@ -289,6 +289,7 @@ def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, s
             f"brackets how over-represented that is against all clustered failures (×1 = no more than anywhere "
             f"else): what sets the cluster apart.\n")
         out.append(_purity_by_k_text(res))
+        out.append(_cause_text(res))
     else:
         out.append("\nNo simulator ground truth in these sessions (surface = unknown everywhere): cluster composition by "
                    "phenomenon and purity are not available; judge the clusters by their mosaics.\n")
@@ -296,6 +297,24 @@ def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, s
     for c in sorted(res.mosaic_rows):
         out.append(image(figs[f"mosaic_{c}"], f"cluster {c} mosaic"))
     return "\n".join(out)
+
+
+def _cause_text(res) -> str:
+    """Composition and purity by cause (ivoa-sim-causes), when the report has them."""
+    if res.cause_purity is None:
+        return ""
+    rows = [[e["cluster"], e.get("n_with_cause", 0), pct(e.get("cause_purity")),
+             _counts_text(e.get("causes", {}), cause_name, max(e.get("n_with_cause", 0), 1))] for e in res.clusters]
+    met = res.cause_purity >= PURITY_TARGET
+    return ("\n**By cause.** `ivoa-sim-causes` re-rendered each failure frame once per phenomenon taken out of the "
+            "scene and re-ran the detector: a failure's cause is the set of phenomena whose removal makes the "
+            "verdict right ('only together': only removing all of the scene's phenomena at once does; 'none found': "
+            "not even that, so geometry or the detector's own limits). Over the "
+            f"{res.n_with_cause} clustered samples that are true failures with a known cause, purity by cause is "
+            f"**{pct(res.cause_purity)}** (target ≥ {int(100 * PURITY_TARGET)} %: {'met' if met else 'not met'}; "
+            f"the best any partition into {len(res.clusters)} clusters could reach: {pct(res.cause_best_possible)}; "
+            f"NMI {fmt(res.cause_nmi)}).\n\n"
+            + table(["cluster", "true failures with a cause", "purity by cause", "causes"], rows))
 
 
 def _purity_by_k_text(res) -> str:

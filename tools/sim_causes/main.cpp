@@ -5,11 +5,15 @@
 // makes each verdict right (causes.csv, joined by ivoa_report.py --causes).
 //
 //   ivoa-sim-causes --out causes.csv out/main-job-default/logs/*_s31.lcmlog
+#include <algorithm>
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
+#include <sstream>
+#include <thread>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -113,26 +117,37 @@ int64_t session_start(const SessionLog& log, const Options& opt, const std::stri
 }
 
 struct Tally {
-  std::map<std::pair<int, uint8_t>, int64_t> by_label_and_causes;
+  std::map<std::pair<int, std::string>, int64_t> by_label_and_cause;
   int64_t failures = 0, reproduced = 0, frames = 0, skipped_frames = 0;
+
+  void add(const Tally& o) {
+    for (const auto& [key, count] : o.by_label_and_cause) by_label_and_cause[key] += count;
+    failures += o.failures, reproduced += o.reproduced, frames += o.frames, skipped_frames += o.skipped_frames;
+  }
 };
 
-void write_rows(std::ofstream& csv, const std::string& session, const Labels& labels,
+// One session's CSV rows (written in the logs' order once all are done) and counts.
+struct SessionResult {
+  std::ostringstream rows;
+  Tally tally;
+  std::string error;  // the session could not be explained at all
+};
+
+void write_rows(std::ostream& csv, const std::string& session, const Labels& labels,
                 const std::vector<causes::CellCause>& cells, Tally& tally) {
   for (const auto& c : cells) {
     const auto i = static_cast<size_t>(c.cell);
-    csv << session << ',' << labels.detector << ',' << labels.utime << ',' << c.cell << ',' << (c.label == Labels::LABEL_FP ? "FP" : "FN") << ','
-        << labels.x[i] << ',' << labels.y[i] << ',' << int{c.stereo_state} << ',' << int{c.replayed_state} << ','
-        << int{c.tested} << ',' << int{c.causes} << ",\"" << causes::phenomena_names(c.causes) << "\"\n";
+    csv << session << ',' << labels.detector << ',' << labels.utime << ',' << c.cell << ','
+        << (c.label == Labels::LABEL_FP ? "FP" : "FN") << ',' << labels.x[i] << ',' << labels.y[i] << ','
+        << int{c.stereo_state} << ',' << int{c.replayed_state} << ',' << int{c.tested} << ',' << int{c.causes} << ','
+        << int{c.jointly} << ",\"" << causes::describe(c) << "\"\n";
     ++tally.failures;
-    if (c.reproduced()) {
-      ++tally.reproduced;
-      ++tally.by_label_and_causes[{c.label, c.causes}];
-    }
+    tally.reproduced += c.reproduced();
+    ++tally.by_label_and_cause[{c.label, causes::describe(c)}];
   }
 }
 
-void explain_session(const std::string& path, const Options& opt, std::ofstream& csv, Tally& tally) {
+void explain_session(const std::string& path, const Options& opt, SessionResult& out) {
   const SessionLog log = read_log(path);
   const std::string session = logio::session_name_of(path);
   const TruthFrame& first = log.truth.begin()->second;
@@ -142,25 +157,44 @@ void explain_session(const std::string& path, const Options& opt, std::ofstream&
   causes::CauseFinder finder(sim::load_scene_spec(scene_file), static_cast<uint64_t>(first.seed), *log.rig, timing,
                              log.labels.front().detector, opt.detector);
   Progress progress(session + " (" + causes::phenomena_names(finder.testable()) + ")",
-                    static_cast<double>(log.labels.size()), "frames");
+                    static_cast<double>(log.labels.size()), "frames", 20.0);
   for (size_t f = 0; f < log.labels.size(); ++f) {
     const Labels& labels = log.labels[f];
     const auto truth = log.truth.find(labels.utime);
     if (truth == log.truth.end()) {
-      ++tally.skipped_frames;
+      ++out.tally.skipped_frames;
       spdlog::warn("{}: labels at {} have no ground-truth frame, skipped", session, labels.utime);
       continue;
     }
     try {
-      write_rows(csv, session, labels, finder.explain(labels, truth->second.pose, log.pixelformat), tally);
-      ++tally.frames;
+      write_rows(out.rows, session, labels, finder.explain(labels, truth->second.pose, log.pixelformat), out.tally);
+      ++out.tally.frames;
     } catch (const causes::ReplayError& e) {
-      ++tally.skipped_frames;
+      ++out.tally.skipped_frames;
       spdlog::warn("{}: {}", session, e.what());
     }
     progress.update(static_cast<double>(f + 1));
   }
   progress.finish();
+}
+
+// Sessions on `jobs` threads (each renders on one core); results by log index.
+std::vector<SessionResult> explain_sessions(const std::vector<std::string>& logs, const Options& opt, int jobs) {
+  std::vector<SessionResult> results(logs.size());
+  std::atomic<size_t> next{0};
+  auto worker = [&] {
+    for (size_t i; (i = next++) < logs.size();) {
+      try {
+        explain_session(logs[i], opt, results[i]);
+      } catch (const std::exception& e) {
+        results[i].error = e.what();
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < std::max(1, std::min<int>(jobs, static_cast<int>(logs.size()))); ++j) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+  return results;
 }
 
 void print_summary(const Tally& t) {
@@ -171,11 +205,11 @@ void print_summary(const Tally& t) {
               t.failures ? 100.0 * static_cast<double>(t.reproduced) / static_cast<double>(t.failures) : 0.0);
   for (const int label : {Labels::LABEL_FP, Labels::LABEL_FN}) {
     int64_t n = 0;
-    for (const auto& [key, count] : t.by_label_and_causes) n += key.first == label ? count : 0;
-    std::printf("%s (%lld reproduced), fixed by removing:\n", label == Labels::LABEL_FP ? "FP" : "FN", static_cast<long long>(n));
-    for (const auto& [key, count] : t.by_label_and_causes)
+    for (const auto& [key, count] : t.by_label_and_cause) n += key.first == label ? count : 0;
+    std::printf("%s (%lld), fixed by removing:\n", label == Labels::LABEL_FP ? "FP" : "FN", static_cast<long long>(n));
+    for (const auto& [key, count] : t.by_label_and_cause)
       if (key.first == label)
-        std::printf("  %-40s %7lld  %5.1f %%\n", causes::phenomena_names(key.second).c_str(), static_cast<long long>(count),
+        std::printf("  %-48s %7lld  %5.1f %%\n", key.second.c_str(), static_cast<long long>(count),
                     100.0 * static_cast<double>(count) / static_cast<double>(n));
   }
 }
@@ -200,6 +234,10 @@ int main(int argc, char** argv) {
   app.add_option("logs", logs, "simulated session logs with recorded INTROSPECTION_LABELS, one session each")
       ->required()
       ->check(CLI::ExistingFile);
+  int jobs = 1;
+  app.add_option("--jobs", jobs, "sessions explained at once (each on one core)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   stereo::add_detector_options(app, opt.detector);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("sim-causes", common.log_level);
@@ -209,14 +247,14 @@ int main(int argc, char** argv) {
     spdlog::error("cannot write {}", opt.out);
     return kExitIoError;
   }
-  csv << "session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,cause_names\n";
+  csv << "session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause\n";
   Tally tally;
   int worst = kExitOk;
-  for (const auto& path : logs) {
-    try {
-      explain_session(path, opt, csv, tally);
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
+  for (const SessionResult& r : explain_sessions(logs, opt, jobs)) {
+    csv << r.rows.str();
+    tally.add(r.tally);
+    if (!r.error.empty()) {
+      spdlog::error("{}", r.error);
       worst = kExitBadInput;
     }
   }

@@ -1,5 +1,6 @@
 #include "ivoa/causes/cause_finder.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <utility>
@@ -58,6 +59,9 @@ struct CauseFinder::Impl {
         twins.push_back({p, sim::Simulator(std::move(*scene), render_config(rig, t.noise_seed))});
         testable |= p;
       }
+    if (twins.size() >= 2)
+      all_removed = std::make_unique<sim::Simulator>(*sim::generate_scene_without(spec, seed, testable),
+                                                     render_config(rig, t.noise_seed));
   }
 
   sim::RenderRequest request_for(const Labels& labels, const sim::Pose2D& recorded_pose);
@@ -70,6 +74,7 @@ struct CauseFinder::Impl {
   sim::Trajectory trajectory;
   std::unique_ptr<stereo::ObstacleDetector> detector;
   std::vector<Twin> twins;
+  std::unique_ptr<sim::Simulator> all_removed;  // every testable phenomenon taken away (two or more)
   uint8_t testable = 0;
 };
 
@@ -130,12 +135,18 @@ std::vector<CellCause> CauseFinder::explain(const introspection_labels_t& labels
   std::vector<CellCause> out(cells.size());
   for (size_t k = 0; k < cells.size(); ++k) {
     const auto i = static_cast<size_t>(cells[k]);
-    out[k] = {cells[k], labels.label[i], labels.stereo_state[i], replayed[k], impl_->testable, 0};
+    out[k] = {cells[k], labels.label[i], labels.stereo_state[i], replayed[k], impl_->testable, 0, false};
   }
   for (const Twin& twin : impl_->twins) {
     const std::vector<int8_t> without = impl_->states(twin.simulator, request, labels, cells, pixelformat);
     for (size_t k = 0; k < cells.size(); ++k)
       if (out[k].reproduced() && without[k] == right_state(out[k].label)) out[k].causes |= twin.phenomenon;
+  }
+  const bool unexplained = std::any_of(out.begin(), out.end(), [](const CellCause& c) { return c.reproduced() && !c.causes; });
+  if (impl_->all_removed && unexplained) {
+    const std::vector<int8_t> without = impl_->states(*impl_->all_removed, request, labels, cells, pixelformat);
+    for (size_t k = 0; k < cells.size(); ++k)
+      out[k].jointly = out[k].reproduced() && !out[k].causes && without[k] == right_state(out[k].label);
   }
   return out;
 }
@@ -151,6 +162,12 @@ std::string phenomena_names(uint8_t bits) {
   for (const auto& [bit, name] : kNames)
     if (bits & bit) out += (out.empty() ? "" : "+") + std::string(name);
   return out;
+}
+
+std::string describe(const CellCause& c) {
+  if (!c.reproduced()) return "not reproduced";
+  if (c.causes) return phenomena_names(c.causes);
+  return c.jointly ? "together: " + phenomena_names(c.tested) : "none found";
 }
 
 }  // namespace ivoa::causes

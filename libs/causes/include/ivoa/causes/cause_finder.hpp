@@ -4,7 +4,9 @@
 // again exactly as the simulator driver did, and once more per removable
 // phenomenon with that phenomenon taken out of the scene, and re-runs the
 // detector on the cell. A phenomenon *causes* the failure when taking it
-// away turns the detector's verdict into the right one.
+// away turns the detector's verdict into the right one. Where no single
+// phenomenon does, a last twin without all of them tells whether they cause
+// it together.
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -39,7 +41,8 @@ struct CellCause {
   int8_t stereo_state = 0;     // recorded obstacle_grid_t::STATE_*
   int8_t replayed_state = 0;   // the detector on the re-rendered frame
   uint8_t tested = 0;          // PHENOMENON_* bits the scene carries (a twin was rendered)
-  uint8_t causes = 0;          // PHENOMENON_* bits whose removal makes the verdict right
+  uint8_t causes = 0;          // PHENOMENON_* bits whose removal (each alone) makes the verdict right
+  bool jointly = false;        // no single removal does, removing all `tested` together does
   bool reproduced() const { return replayed_state == stereo_state; }
 };
 
@@ -67,5 +70,8 @@ class CauseFinder {
 
 // "reflection+dark stripe", "none found" for 0: names of PHENOMENON_* bits.
 std::string phenomena_names(uint8_t bits);
+// What caused a cell's failure: its causes' names, "together: <tested>"
+// when only removing all of them helps, "none found", or "not reproduced".
+std::string describe(const CellCause& cause);
 
 }  // namespace ivoa::causes
