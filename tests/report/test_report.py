@@ -639,7 +639,11 @@ class CausesTest(unittest.TestCase):
         c = next(iter(metrics["models"].values()))["clustering"]
         # The perfect model's clusters are its FP (reflection) and FN (none found) samples.
         self.assertAlmostEqual(c["purity_by_cause"], 1.0)
-        self.assertAlmostEqual(c["best_possible_by_cause"], 1.0)
+        self.assertAlmostEqual(c["purity_by_cause_set"], 1.0)
+        self.assertLess(c["purity_by_cause_one_cluster"], 0.9)  # FP and FN mixed
+        self.assertAlmostEqual(c["purity_by_k"][0]["purity_by_cause"], 1.0)  # k = 2 again
+        self.assertAlmostEqual(c["best_possible_by_cause_set"], 1.0)
+        self.assertEqual(sorted(e["leading_cause"] for e in c["clusters"]), [0, REFLECTION])
         # Every selected sample is a true failure; those whose replay differed have no cause.
         self.assertLessEqual(c["n_with_cause"], c["n_selected"])
         self.assertGreaterEqual(c["n_with_cause"], c["n_selected"] - 4)
@@ -650,8 +654,8 @@ class CausesTest(unittest.TestCase):
         self.assertIn("by cause 100.0 %", stdout)
 
     def test_mixed_causes_lower_the_purity(self):
-        # Half of the FP rows (by cell parity) are caused by something else: purity by cause drops, the
-        # presence-based purity does not.
+        # A third of the FP rows (by cell) are caused by something else: purity by cause drops, the
+        # presence-based purity does not. A second cause beside the leading one keeps a row explained.
         path = os.path.join(self.root, "causes_mixed.csv")
         sessions = [(n, e, [dict(r) for r in rows]) for n, e, rows in self.f.sessions]
         write_causes(path, sessions, cause_of={FP: REFLECTION, FN: 0})
@@ -659,9 +663,11 @@ class CausesTest(unittest.TestCase):
             lines = fh.read().splitlines()
         for i in range(1, len(lines)):
             fields = lines[i].split(",")
-            if fields[4] == "FP" and int(fields[3]) % 2 == 0:
+            if fields[4] == "FP" and int(fields[3]) % 4 == 0:
                 fields[10] = str(DARK_STRIPE)
-                lines[i] = ",".join(fields)
+            elif fields[4] == "FP" and int(fields[3]) % 4 == 1:
+                fields[10] = str(REFLECTION | TEXTURELESS)
+            lines[i] = ",".join(fields)
         with open(path, "w") as fh:
             fh.write("\n".join(lines) + "\n")
         code, _, stderr, metrics, _ = self.report(path, "report_causes_mixed")
@@ -669,7 +675,15 @@ class CausesTest(unittest.TestCase):
         c = next(iter(metrics["models"].values()))["clustering"]
         self.assertGreaterEqual(c["purity"], 0.99)
         self.assertLess(c["purity_by_cause"], 0.9)
-        self.assertGreater(c["best_possible_by_cause"], c["purity_by_cause"])
+        self.assertLess(c["purity_by_cause_set"], c["purity_by_cause"])
+        self.assertLessEqual(c["purity_by_cause_set"], c["best_possible_by_cause_set"] + 1e-12)
+        fp_cluster = next(e for e in c["clusters"] if e["leading_cause"] != 0)
+        self.assertEqual(fp_cluster["leading_cause"], REFLECTION)
+        # the FP cluster's members: reflection alone, reflection+textureless, dark stripe; reflection explains
+        # the first two kinds
+        n = fp_cluster["n_with_cause"]
+        dark = fp_cluster["causes"].get(str(DARK_STRIPE), fp_cluster["causes"].get(DARK_STRIPE, 0))
+        self.assertAlmostEqual(fp_cluster["cause_purity"], (n - dark) / n)
 
     def test_causes_of_another_detector_are_not_used(self):
         path = os.path.join(self.root, "causes_dense.csv")

@@ -11,7 +11,10 @@
 #   3. train an introspection model for each detector;
 #   4. evaluate them (and the shipped model) on the held-out test sessions:
 #      scenes generated from seeds never used in training;
-#   5. write the report (metrics, uncertainty, failure clusters, figures).
+#   5. find what causes each JPP-C failure of the test sessions: re-render
+#      the frame without each phenomenon and re-run the detector;
+#   6. write the report (metrics, uncertainty, failure clusters and their
+#      purity by phenomenon and by cause, figures).
 #
 # Usage: ivoa-main-job.sh [--scale default|smoke|full] [--views 1|2] [--patch-scale K] [--out DIR] [--live]
 #   --scale full   more sessions and training: the recipe of the shipped model
@@ -214,9 +217,16 @@ if [ -f "$SHIPPED" ] && [ "$views" = "$SHIPPED_VIEWS" ] && [ "$patch_scale" = "$
   evals+=(--eval "$out/eval_shipped_jppc"); datasets+=(--dataset "$out/data_jppc")
 fi
 
+step "Finding what causes the JPP-C failures of the test sessions"
+echo "  each failure frame re-rendered without each phenomenon, JPP-C re-run on its FP/FN cells (ivoa-sim-causes)"
+test_logs=()
+for s in "${test[@]}"; do test_logs+=("$out/logs/$s.lcmlog"); done
+"$BIN/ivoa-sim-causes" --log-level warn --jobs 2 --rate "$RATE" --out "$out/causes_jppc.csv" "${test_logs[@]}" |
+  tee "$out/causes_jppc.txt"
+
 step "Writing the report"
-"$PY" "$ROOT/tools/report/ivoa_report.py" "${evals[@]}" "${datasets[@]}" --out "$out/report" \
-  --title "IVOA on the simulated robot ($scale scale)" | tee "$out/report_summary.txt"
+"$PY" "$ROOT/tools/report/ivoa_report.py" "${evals[@]}" "${datasets[@]}" --causes "$out/causes_jppc.csv" \
+  --out "$out/report" --title "IVOA on the simulated robot ($scale scale)" | tee "$out/report_summary.txt"
 
 elapsed=$(($(date +%s) - start_time))
 printf '\n\033[1mMain job done in %dm%02ds.\033[0m\n' $((elapsed / 60)) $((elapsed % 60))

@@ -197,8 +197,10 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "pca_explained": res.pca_explained, "tsne_points": int(len(res.tsne_index)), "clusters": res.clusters,
         "purity": res.purity if res.has_truth else None, "nmi": res.nmi, "ari": res.ari,
         "purity_by_k": res.k_scan if res.has_truth else [], "has_ground_truth": res.has_truth,
-        "n_with_cause": res.n_with_cause, "purity_by_cause": res.cause_purity, "nmi_by_cause": res.cause_nmi,
-        "best_possible_by_cause": res.cause_best_possible,
+        "n_with_cause": res.n_with_cause, "purity_by_cause": res.cause_purity,
+        "purity_by_cause_one_cluster": res.cause_purity_one_cluster,
+        "purity_by_cause_set": res.cause_set_purity, "best_possible_by_cause_set": res.cause_set_best_possible,
+        "nmi_by_cause_set": res.cause_nmi,
     }
 
     overlays = run.overlays[: args.max_overlays] if args.max_overlays > 0 else run.overlays

@@ -43,7 +43,7 @@ from sklearn.decomposition import PCA
 from sklearn.manifold import TSNE
 from sklearn.metrics import adjusted_rand_score, normalized_mutual_info_score
 
-from report_inputs import FN, FP, NO_CAUSE, EvalRun
+from report_inputs import FN, FP, NO_CAUSE, ONLY_TOGETHER, EvalRun
 
 try:
     from threadpoolctl import threadpool_limits  # a scikit-learn dependency
@@ -99,9 +99,11 @@ class ClusterResult:
     # By cause (ivoa-sim-causes): over the clustered samples that are true
     # failures with a known cause; None without causes.
     n_with_cause: int = 0
-    cause_purity: Optional[float] = None
-    cause_nmi: Optional[float] = None
-    cause_best_possible: Optional[float] = None
+    cause_purity: Optional[float] = None           # by each cluster's leading cause
+    cause_purity_one_cluster: Optional[float] = None  # the same with every sample in one cluster (base rate)
+    cause_set_purity: Optional[float] = None       # by exact cause set (strict)
+    cause_set_best_possible: Optional[float] = None
+    cause_nmi: Optional[float] = None              # with the exact cause set
 
 
 def normalise_embeddings(x: np.ndarray, how: str) -> np.ndarray:
@@ -173,32 +175,60 @@ def _purity(phen: np.ndarray, cluster: np.ndarray) -> float:
     return sum(Counter(phen[cluster == c].tolist()).most_common(1)[0][1] for c in np.unique(cluster)) / len(phen)
 
 
+def _explained_by(cause: np.ndarray, code: int) -> np.ndarray:
+    """Which failures `code` explains: a phenomenon bit explains those whose
+    removal of it alone fixes them (it is in their cause set); 'none found' (0)
+    and 'only together' explain only themselves."""
+    if code in (0, ONLY_TOGETHER):
+        return cause == code
+    return (cause != ONLY_TOGETHER) & ((cause & code) != 0)
+
+
+def _leading_cause(cause: np.ndarray):
+    """(code, count) of the cause explaining the most of `cause`."""
+    codes = {0, ONLY_TOGETHER} | {1 << b for b in range(7) if np.any((cause != ONLY_TOGETHER) & ((cause >> b) & 1 == 1))}
+    counts = {c: int(_explained_by(cause, c).sum()) for c in sorted(codes)}
+    return max(counts.items(), key=lambda kv: kv[1])
+
+
 def _cause_composition(res: ClusterResult, cause: np.ndarray, k: int) -> None:
     """Composition and purity of the clusters by what ivoa-sim-causes found
-    causes each failure (its set of phenomena whose removal fixes it, 0 =
-    none of them), over the clustered samples that are true failures with a
-    known cause. The presence-based purity asks which phenomenon covers most
-    of the patch; this asks which one made the detector fail."""
+    causes each failure, over the clustered samples that are true failures
+    with a known cause. The presence-based purity asks which phenomenon covers
+    most of the patch; this asks which one made the detector fail.
+
+    A failure may have several causes (on a polished tiled floor, taking away
+    the reflection or the tiles' pattern each fixes it). Purity by cause: the
+    share of members their cluster's leading cause explains (the phenomenon
+    whose removal alone fixes the most members; 'none found' and 'only
+    together' count as causes of their own). Purity by cause set: the share
+    in their cluster's most common exact set, the strict variant."""
     known = cause != NO_CAUSE
     res.n_with_cause = int(known.sum())
     if res.n_with_cause == 0:
         return
-    dominant = 0
+    explained = exact = 0
     for c in range(k):
         m = known & (res.cluster == c)
-        comp = _composition(cause[m])
-        res.clusters[c]["causes"] = comp
-        res.clusters[c]["n_with_cause"] = int(m.sum())
-        res.clusters[c]["cause_purity"] = next(iter(comp.values())) / int(m.sum()) if m.any() else None
-        dominant += next(iter(comp.values())) if m.any() else 0
-    res.cause_purity = dominant / res.n_with_cause
+        entry = res.clusters[c]
+        entry["causes"], entry["n_with_cause"] = _composition(cause[m]), int(m.sum())
+        entry["leading_cause"], entry["cause_purity"] = None, None
+        if m.any():
+            code, count = _leading_cause(cause[m])
+            entry["leading_cause"], entry["cause_purity"] = code, count / int(m.sum())
+            explained += count
+            exact += next(iter(entry["causes"].values()))
+    res.cause_purity = explained / res.n_with_cause
+    res.cause_purity_one_cluster = _leading_cause(cause[known])[1] / res.n_with_cause
+    res.cause_set_purity = exact / res.n_with_cause
     counts = sorted(Counter(cause[known].tolist()).values(), reverse=True)
-    res.cause_best_possible = sum(counts[:k]) / res.n_with_cause
+    res.cause_set_best_possible = sum(counts[:k]) / res.n_with_cause
     if len(counts) > 1:
         res.cause_nmi = float(normalized_mutual_info_score(cause[known], res.cluster[known]))
 
 
-def _purity_by_k(space: np.ndarray, phen: np.ndarray, opt: ClusterOptions) -> List[dict]:
+def _purity_by_k(space: np.ndarray, phen: np.ndarray, opt: ClusterOptions,
+                 cause: Optional[np.ndarray] = None) -> List[dict]:
     """Purity and NMI of k-means at each k of opt.k_scan, beside the best any
     partition into k clusters could score (the k most common phenomena each
     alone in a cluster): whether more clusters find more phenomena, and how
@@ -211,9 +241,14 @@ def _purity_by_k(space: np.ndarray, phen: np.ndarray, opt: ClusterOptions) -> Li
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             cluster = KMeans(n_clusters=k, n_init=10, random_state=opt.seed).fit(space).labels_
-        out.append({"k": k, "purity": _purity(phen, cluster),
-                    "nmi": float(normalized_mutual_info_score(phen, cluster)),
-                    "best_possible": sum(counts[:k]) / len(phen)})
+        entry = {"k": k, "purity": _purity(phen, cluster),
+                 "nmi": float(normalized_mutual_info_score(phen, cluster)),
+                 "best_possible": sum(counts[:k]) / len(phen)}
+        if cause is not None and np.any(cause != NO_CAUSE):
+            known = cause != NO_CAUSE
+            entry["purity_by_cause"] = sum(_leading_cause(cause[known & (cluster == c)])[1]
+                                           for c in np.unique(cluster[known])) / int(known.sum())
+        out.append(entry)
     return out
 
 
@@ -321,7 +356,7 @@ def _cluster_failures(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
     if len(set(phen.tolist())) > 1:
         res.nmi = float(normalized_mutual_info_score(phen, res.cluster))
         res.ari = float(adjusted_rand_score(phen, res.cluster))
-        res.k_scan = _purity_by_k(space, phen, opt)
+        res.k_scan = _purity_by_k(space, phen, opt, run.cause[rows] if run.cause is not None else None)
     if run.cause is not None:
         _cause_composition(res, run.cause[rows], opt.k)
     empty = [e["cluster"] for e in res.clusters if e["n"] == 0]

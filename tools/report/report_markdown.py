@@ -303,30 +303,39 @@ def _cause_text(res) -> str:
     """Composition and purity by cause (ivoa-sim-causes), when the report has them."""
     if res.cause_purity is None:
         return ""
-    rows = [[e["cluster"], e.get("n_with_cause", 0), pct(e.get("cause_purity")),
+    rows = [[e["cluster"], e.get("n_with_cause", 0),
+             cause_name(e["leading_cause"]) if e.get("leading_cause") is not None else "n/a",
+             pct(e.get("cause_purity")),
              _counts_text(e.get("causes", {}), cause_name, max(e.get("n_with_cause", 0), 1))] for e in res.clusters]
     met = res.cause_purity >= PURITY_TARGET
     return ("\n**By cause.** `ivoa-sim-causes` re-rendered each failure frame once per phenomenon taken out of the "
-            "scene and re-ran the detector: a failure's cause is the set of phenomena whose removal makes the "
+            "scene and re-ran the detector: a failure's causes are the phenomena whose removal alone makes the "
             "verdict right ('only together': only removing all of the scene's phenomena at once does; 'none found': "
-            "not even that, so geometry or the detector's own limits). Over the "
-            f"{res.n_with_cause} clustered samples that are true failures with a known cause, purity by cause is "
-            f"**{pct(res.cause_purity)}** (target ≥ {int(100 * PURITY_TARGET)} %: {'met' if met else 'not met'}; "
-            f"the best any partition into {len(res.clusters)} clusters could reach: {pct(res.cause_best_possible)}; "
-            f"NMI {fmt(res.cause_nmi)}).\n\n"
-            + table(["cluster", "true failures with a cause", "purity by cause", "causes"], rows))
+            "not even that, so geometry or the detector's own limits). A cluster's leading cause is the one that "
+            "explains most of its members; purity by cause is the share of clustered true failures (with a known "
+            f"cause: {res.n_with_cause}) that their cluster's leading cause explains: **{pct(res.cause_purity)}** "
+            f"(target ≥ {int(100 * PURITY_TARGET)} %: {'met' if met else 'not met'}; all of them in one cluster "
+            f"would score {pct(res.cause_purity_one_cluster)}: what the clusters add is that each has a leading "
+            "cause of its own). Counting only the exact "
+            f"set of causes (reflection+repetitive apart from reflection): {pct(res.cause_set_purity)}, where the "
+            f"best any partition into {len(res.clusters)} clusters could reach is "
+            f"{pct(res.cause_set_best_possible)} (NMI {fmt(res.cause_nmi)}).\n\n"
+            + table(["cluster", "true failures with a cause", "leading cause", "purity by cause", "cause sets"], rows))
 
 
 def _purity_by_k_text(res) -> str:
     """The k-scan: purity at other k beside the best a partition into k could score."""
     if not res.k_scan:
         return ""
-    rows = [[e["k"], pct(e["purity"]), fmt(e["nmi"]), pct(e["best_possible"])] for e in res.k_scan]
+    by_cause = any("purity_by_cause" in e for e in res.k_scan)
+    rows = [[e["k"], pct(e["purity"]), fmt(e["nmi"]), pct(e["best_possible"])]
+            + ([pct(e.get("purity_by_cause"))] if by_cause else []) for e in res.k_scan]
     return ("\nWould more clusters separate the phenomena? k-means at other k on the same embeddings, beside the "
             "best purity any partition into k clusters could reach (each of the k most common phenomena alone in "
             "its cluster). Purity that stays flat as k grows, far under that bound, means the embedding does not "
             "tell those phenomena apart: to the network they are one kind of failure.\n\n"
-            + table(["k", "purity", "NMI", "best possible with k clusters"], rows))
+            + table(["k", "purity", "NMI", "best possible with k clusters"]
+                    + (["purity by cause (leading cause)"] if by_cause else []), rows))
 
 
 def overlays_section(overlays: List[str], dots: str = "image") -> str:
