@@ -451,17 +451,23 @@ class ReportTest(unittest.TestCase):
             self.assertEqual(tile[0, 0, 0], 200)  # R came from the file's third (R) byte
 
 
-class DegenerateAndBadInputTest(unittest.TestCase):
-    """Degenerate cases are explained in the report; bad inputs give exit code 3."""
+class FabricatedInputsCase(unittest.TestCase):
+    """Fresh fabricated inputs in a temporary folder for each test class."""
+    prefix = "ivoa_report_"
 
     @classmethod
     def setUpClass(cls):
-        cls.root = tempfile.mkdtemp(prefix="ivoa_report_bad_")  # removed in tearDownClass
+        cls.root = tempfile.mkdtemp(prefix=cls.prefix)  # removed in tearDownClass
         cls.f = fabricate(cls.root)
 
     @classmethod
     def tearDownClass(cls):
         shutil.rmtree(cls.root, ignore_errors=True)
+
+
+class DegenerateAndBadInputTest(FabricatedInputsCase):
+    """Degenerate cases are explained in the report; bad inputs give exit code 3."""
+    prefix = "ivoa_report_bad_"
 
     def copy_eval(self, src, name):
         dst = os.path.join(self.root, name)
@@ -612,17 +618,9 @@ def write_causes(path, sessions, detector="jppc", cause_of=None, not_reproduced=
                 k += 1
 
 
-class CausesTest(unittest.TestCase):
+class CausesTest(FabricatedInputsCase):
     """--causes: the clusters' composition and purity by cause."""
-
-    @classmethod
-    def setUpClass(cls):
-        cls.root = tempfile.mkdtemp(prefix="ivoa_report_causes_")  # removed in tearDownClass
-        cls.f = fabricate(cls.root)
-
-    @classmethod
-    def tearDownClass(cls):
-        shutil.rmtree(cls.root, ignore_errors=True)
+    prefix = "ivoa_report_causes_"
 
     def report(self, causes_path, name):
         out = os.path.join(self.root, name)

@@ -75,6 +75,19 @@ TEST(SimCounterfactual, OtherPhenomenaStay) {
   EXPECT_EQ(pixels_with(no_stripe, GT::PHENOMENON_REPETITIVE), pixels_with(factual, GT::PHENOMENON_REPETITIVE));
 }
 
+TEST(SimCounterfactual, SeveralAtOnce) {
+  const SceneSpec spec = many_phenomena();
+  const SimFrame factual = Simulator(generate_scene(spec, 1)).render(Pose2D{}, 0);
+  const uint8_t removed = GT::PHENOMENON_REFLECTION | GT::PHENOMENON_DARK_STRIPE | GT::PHENOMENON_TEXTURELESS;
+  const SimFrame without = Simulator(*generate_scene_without(spec, 1, removed)).render(Pose2D{}, 0);
+  for (const uint8_t bit : {GT::PHENOMENON_REFLECTION, GT::PHENOMENON_DARK_STRIPE, GT::PHENOMENON_TEXTURELESS})
+    EXPECT_LT(pixels_with(without, bit), 0.02 * pixels_with(factual, bit)) << int{bit};
+  EXPECT_GT(pixels_with(without, GT::PHENOMENON_REPETITIVE), 0.9 * pixels_with(factual, GT::PHENOMENON_REPETITIVE));
+  expect_same_geometry(factual, without);
+  // Removing what a scene lacks together with nothing else still changes nothing.
+  EXPECT_FALSE(generate_scene_without(few_phenomena(), 1, GT::PHENOMENON_DARK_STRIPE | GT::PHENOMENON_LOW_LIGHT));
+}
+
 TEST(SimCounterfactual, LowLightTwinIsTheSameSceneAtFullLight) {
   const SceneSpec spec = dim_room();
   const SimFrame dim = Simulator(generate_scene(spec, 1)).render(Pose2D{}, 0);
@@ -97,6 +110,9 @@ TEST(SimCounterfactual, NoTwinForWhatTheSceneDoesNotCarry) {
 
 TEST(SimCounterfactual, SaturationCannotBeTakenAway) {
   EXPECT_THROW(generate_scene_without(few_phenomena(), 1, GT::PHENOMENON_SATURATED), std::invalid_argument);
+  EXPECT_THROW(generate_scene_without(few_phenomena(), 1, GT::PHENOMENON_SATURATED | GT::PHENOMENON_REFLECTION),
+               std::invalid_argument);
+  EXPECT_THROW(generate_scene_without(few_phenomena(), 1, 0), std::invalid_argument);
 }
 
 }  // namespace

@@ -55,49 +55,48 @@ std::vector<bool> shaded_materials(const SceneData& d) {
   return used;
 }
 
-bool remove_texturelessness(SceneData& d) {
+// Gives the shaded materials that carry `phenomenon` (light-emitting ones
+// excepted) a plaster texture: of `contrast` with 0.3 m features, or of their
+// own contrast and scale where contrast < 0.
+bool replace_with_plaster(SceneData& d, uint8_t phenomenon, double contrast) {
   bool changed = false;
   const std::vector<bool> shaded = shaded_materials(d);
   for (size_t i = 0; i < d.materials.size(); ++i) {
     MaterialData& m = d.materials[i];
-    if (shaded[i] && (m.phenomena & GT::PHENOMENON_TEXTURELESS) && m.spec.emission <= 0) {
-      m = plaster_version(m, 0.3, 0.3);
+    if (shaded[i] && (m.phenomena & phenomenon) && m.spec.emission <= 0) {
+      m = contrast < 0 ? plaster_version(m, m.spec.contrast, m.spec.scale) : plaster_version(m, contrast, 0.3);
       changed = true;
     }
   }
   return changed;
 }
 
-bool remove_repetition(SceneData& d) {
-  bool changed = false;
-  const std::vector<bool> shaded = shaded_materials(d);
-  for (size_t i = 0; i < d.materials.size(); ++i) {
-    MaterialData& m = d.materials[i];
-    if (shaded[i] && (m.phenomena & GT::PHENOMENON_REPETITIVE)) {
-      m = plaster_version(m, m.spec.contrast, m.spec.scale);
-      changed = true;
-    }
-  }
-  return changed;
-}
+bool remove_texturelessness(SceneData& d) { return replace_with_plaster(d, GT::PHENOMENON_TEXTURELESS, 0.3); }
+bool remove_repetition(SceneData& d) { return replace_with_plaster(d, GT::PHENOMENON_REPETITIVE, -1); }
 
 // Glare is the mirror image of a light source: the ceiling panels' bright
 // faces (drawn into the ceiling's radiance map) and the highlight lobes of
 // lamps. The panels still light the room; their faces show ceiling tiles.
 // (Outdoors, the low sun's glare stays: the sun cannot be moved without
 // changing the lighting.)
-std::optional<Scene> without_glare(const SceneSpec& spec, uint64_t seed) {
-  bool changed = false;
-  auto hide_sources = [&changed](detail::SceneBuilder& b) {
-    changed = !b.panels().empty();
-    b.panels().clear();
-    for (detail::PointLight& l : b.data().lights)
-      if (l.glare > 0) l.glare = 0, changed = true;
-  };
-  std::shared_ptr<SceneData> data = detail::build_scene(spec, seed, hide_sources);
-  if (!changed) return std::nullopt;
-  return Scene(std::move(data));
+bool hide_light_sources(detail::SceneBuilder& b) {
+  bool changed = !b.panels().empty();
+  b.panels().clear();
+  for (detail::PointLight& l : b.data().lights)
+    if (l.glare > 0) l.glare = 0, changed = true;
+  return changed;
 }
+
+// The generator draws the low-light factor whenever a session is dim; a
+// factor of 1 keeps every other draw, and so the scene, the same.
+bool light_fully(const SceneSpec& spec, uint64_t seed, SceneSpec& lit) {
+  if (generate_scene(spec, seed).data().light_level >= 1) return false;
+  lit.lighting.low_light_factor = Range(1, 1);
+  return true;
+}
+
+constexpr uint8_t kRemovable = GT::PHENOMENON_REFLECTION | GT::PHENOMENON_TEXTURELESS | GT::PHENOMENON_GLARE |
+                               GT::PHENOMENON_DARK_STRIPE | GT::PHENOMENON_REPETITIVE | GT::PHENOMENON_LOW_LIGHT;
 
 }  // namespace
 
@@ -106,30 +105,22 @@ std::vector<uint8_t> removable_phenomena() {
           GT::PHENOMENON_DARK_STRIPE, GT::PHENOMENON_REPETITIVE,  GT::PHENOMENON_LOW_LIGHT};
 }
 
-std::optional<Scene> generate_scene_without(const SceneSpec& spec, uint64_t seed, uint8_t phenomenon) {
-  if (phenomenon == GT::PHENOMENON_LOW_LIGHT) {
-    // The generator draws the low-light factor whenever a session is dim;
-    // a factor of 1 keeps every other draw, and so the scene, the same.
-    const Scene factual = generate_scene(spec, seed);
-    if (factual.data().light_level >= 1) return std::nullopt;
-    SceneSpec lit = spec;
-    lit.lighting.low_light_factor = Range(1, 1);
-    return generate_scene(lit, seed);
-  }
-  if (phenomenon == GT::PHENOMENON_GLARE) return without_glare(spec, seed);
-  bool (*edit)(SceneData&) = nullptr;
-  switch (phenomenon) {
-    case GT::PHENOMENON_REFLECTION: edit = remove_reflection; break;
-    case GT::PHENOMENON_DARK_STRIPE: edit = remove_dark_stripes; break;
-    case GT::PHENOMENON_TEXTURELESS: edit = remove_texturelessness; break;
-    case GT::PHENOMENON_REPETITIVE: edit = remove_repetition; break;
-    default:
-      throw std::invalid_argument("phenomenon " + std::to_string(phenomenon) +
-                                  " cannot be taken out of a scene (removable: reflection 1, textureless 2, "
-                                  "glare 4, dark stripe 8, repetitive 16, low light 32)");
-  }
-  std::shared_ptr<SceneData> data = detail::build_scene(spec, seed);
-  if (!edit(*data)) return std::nullopt;
+std::optional<Scene> generate_scene_without(const SceneSpec& spec, uint64_t seed, uint8_t phenomena) {
+  if (phenomena == 0 || (phenomena & ~kRemovable) != 0)
+    throw std::invalid_argument("phenomena " + std::to_string(phenomena) +
+                                ": not a set of removable phenomena (reflection 1, textureless 2, glare 4, dark "
+                                "stripe 8, repetitive 16, low light 32; saturation cannot be taken away)");
+  SceneSpec edited = spec;
+  bool changed = (phenomena & GT::PHENOMENON_LOW_LIGHT) && light_fully(spec, seed, edited);
+  std::shared_ptr<SceneData> data = detail::build_scene(edited, seed, [&](detail::SceneBuilder& b) {
+    if (phenomena & GT::PHENOMENON_GLARE) changed |= hide_light_sources(b);
+  });
+  // Material edits after the light maps: they change how surfaces look, not how they are lit.
+  if (phenomena & GT::PHENOMENON_REFLECTION) changed |= remove_reflection(*data);
+  if (phenomena & GT::PHENOMENON_DARK_STRIPE) changed |= remove_dark_stripes(*data);
+  if (phenomena & GT::PHENOMENON_TEXTURELESS) changed |= remove_texturelessness(*data);
+  if (phenomena & GT::PHENOMENON_REPETITIVE) changed |= remove_repetition(*data);
+  if (!changed) return std::nullopt;
   return Scene(std::move(data));
 }
 

@@ -32,10 +32,11 @@ namespace ivoa::sim {
 // SATURATED is an outcome of the exposure, not of the scene: not removable.
 std::vector<uint8_t> removable_phenomena();
 
-// The scene generate_scene(spec, seed) gives, without `phenomenon`; empty
-// when that scene does not carry it (the twin would be identical). Throws
-// std::invalid_argument for a bit removable_phenomena() does not list and
+// The scene generate_scene(spec, seed) gives, without `phenomena` (one
+// PHENOMENON_* bit, or several OR-ed: all of them taken away); empty when
+// that scene carries none of them (the twin would be identical). Throws
+// std::invalid_argument for bits removable_phenomena() does not list and
 // SceneSpecError for an invalid spec.
-std::optional<Scene> generate_scene_without(const SceneSpec& spec, uint64_t seed, uint8_t phenomenon);
+std::optional<Scene> generate_scene_without(const SceneSpec& spec, uint64_t seed, uint8_t phenomena);
 
 }  // namespace ivoa::sim
