@@ -8,6 +8,7 @@ everywhere (TP green, TN blue, FP orange, FN red) so figures read together.
 from __future__ import annotations
 
 import os
+from collections import Counter
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import matplotlib
@@ -17,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
-from report_inputs import FN, FP, LABEL_NAMES, EvalRun, phenomenon_name  # noqa: E402
+from report_inputs import FN, FP, LABEL_NAMES, NO_CAUSE, EvalRun, cause_name, phenomenon_name  # noqa: E402
 
 CLASS_COLOURS = ("#2ca02c", "#1f77b4", "#ff7f0e", "#d62728")   # TP, TN, FP, FN
 # One colour per phenomenon code, the same in every figure and model.
@@ -178,10 +179,24 @@ def _category_colours(n: int):
     return [cmap(i % cmap.N) for i in range(n)]
 
 
+def _cause_panel(cause: np.ndarray, top: int = 6):
+    """The cluster picture's panel by cause (ivoa-sim-causes): the `top` most
+    common cause sets, the rest as 'other causes', and the predicted failures
+    that are no true failure (or were not reproduced) in grey."""
+    known = cause[cause != NO_CAUSE]
+    common = [c for c, _ in Counter(known.tolist()).most_common(top)]
+    names = [cause_name(c) if c in common else "other causes" if c != NO_CAUSE else "no true failure / not replayed"
+             for c in cause.tolist()]
+    greys = {"other causes": (0.45, 0.45, 0.45, 1.0), "no true failure / not replayed": (0.82, 0.82, 0.82, 1.0)}
+    legend = [cause_name(c) for c in common] + [n for n in greys if n in names]
+    colours = _category_colours(len(common)) + [greys[n] for n in legend[len(common):]]
+    return ("what causes the failure (re-rendered without each phenomenon)", names, legend, colours)
+
+
 def plot_cluster_scatter(run: EvalRun, res, title: str, path: str) -> str:
     """t-SNE of the selected predicted failures coloured by k-means cluster, by
-    true phenomenon (simulated data) and by true label: the three panels show
-    whether the clusters follow physical sources of error."""
+    true phenomenon (simulated data), by cause (with causes) and by true label:
+    the panels show whether the clusters follow physical sources of error."""
     xy = res.tsne_xy
     rows = res.rows[res.tsne_index]
     cl = res.cluster[res.tsne_index]
@@ -197,6 +212,8 @@ def plot_cluster_scatter(run: EvalRun, res, title: str, path: str) -> str:
         panels.append(("true phenomenon under the patch centre", [phenomenon_name(p) for p in codes],
                        [phenomenon_name(c) for c in present],
                        [PHENOMENON_COLOURS.get(c) or next(extra, "black") for c in present]))
+    if run.cause is not None:
+        panels.append(_cause_panel(run.cause[rows]))
     present = [c for c in range(4) if np.any(run.label[rows] == c)]
     panels.append(("true label (did the detector fail?)", [LABEL_NAMES[l] for l in run.label[rows]],
                    [LABEL_NAMES[c] for c in present], [CLASS_COLOURS[c] for c in present]))
