@@ -650,6 +650,11 @@ class CausesTest(FabricatedInputsCase):
         self.assertIn("**By cause.**", report)
         self.assertIn("none found", report)
         self.assertIn("by cause 100.0 %", stdout)
+        # every true FP is explained by the reflection, every true FN by nothing; the perfect model predicts them
+        by_label = next(iter(metrics["models"].values()))["causes_of_failures"]
+        self.assertEqual(by_label["FP"]["causes"], [{"cause": REFLECTION, "share": 1.0, "predicted": 1.0}])
+        self.assertEqual(by_label["FN"]["causes"], [{"cause": 0, "share": 1.0, "predicted": 1.0}])
+        self.assertEqual(by_label["FP"]["n"] + by_label["FN"]["n"], 50 + 30 - 4)  # the true failures less the 4 not replayed
 
     def test_mixed_causes_lower_the_purity(self):
         # A third of the FP rows (by cell) are caused by something else: purity by cause drops, the
@@ -690,6 +695,18 @@ class CausesTest(FabricatedInputsCase):
         self.assertEqual(code, 0, stderr)
         self.assertIn("no causes for it", stderr)
         self.assertIsNone(next(iter(metrics["models"].values()))["clustering"]["purity_by_cause"])
+
+    def test_one_causes_file_per_detector(self):
+        dense, jppc = os.path.join(self.root, "causes_d.csv"), os.path.join(self.root, "causes_j.csv")
+        write_causes(dense, self.f.sessions, detector="dense")
+        write_causes(jppc, self.f.sessions)
+        out = os.path.join(self.root, "report_two_causes")
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--causes", dense,
+                                    "--causes", jppc, "--out", out, "--tsne-iterations", "250"])
+        self.assertEqual(code, 0, stderr)
+        self.assertNotIn("no causes for it", stderr)
+        metrics = json.loads(read_text(os.path.join(out, "metrics.json")))
+        self.assertAlmostEqual(next(iter(metrics["models"].values()))["clustering"]["purity_by_cause"], 1.0)
 
     def test_causes_from_other_logs_are_refused(self):
         path = os.path.join(self.root, "causes_wrong.csv")

@@ -11,8 +11,8 @@
 #   3. train an introspection model for each detector;
 #   4. evaluate them (and the shipped model) on the held-out test sessions:
 #      scenes generated from seeds never used in training;
-#   5. find what causes each JPP-C failure of the test sessions: re-render
-#      the frame without each phenomenon and re-run the detector;
+#   5. find what causes each detector's failures in the test sessions:
+#      re-render the frame without each phenomenon and re-run the detector;
 #   6. write the report (metrics, uncertainty, failure clusters and their
 #      purity by phenomenon and by cause, figures).
 #
@@ -217,16 +217,21 @@ if [ -f "$SHIPPED" ] && [ "$views" = "$SHIPPED_VIEWS" ] && [ "$patch_scale" = "$
   evals+=(--eval "$out/eval_shipped_jppc"); datasets+=(--dataset "$out/data_jppc")
 fi
 
-step "Finding what causes the JPP-C failures of the test sessions"
-echo "  each failure frame re-rendered without each phenomenon, JPP-C re-run on its FP/FN cells (ivoa-sim-causes)"
+step "Finding what causes each detector's failures in the test sessions"
+echo "  each failure frame re-rendered without each phenomenon, the detector re-run on its FP/FN cells (ivoa-sim-causes)"
 test_logs=()
 for s in "${test[@]}"; do test_logs+=("$out/logs/$s.lcmlog"); done
+echo "  JPP-C (the labels recorded live):"
 "$BIN/ivoa-sim-causes" --log-level warn --jobs 2 --rate "$RATE" --out "$out/causes_jppc.csv" "${test_logs[@]}" |
   tee "$out/causes_jppc.txt"
+echo "  dense (the labels made offline, from its dataset):"
+"$BIN/ivoa-sim-causes" --log-level warn --jobs 2 --rate "$RATE" --dataset "$out/data_dense" \
+  --out "$out/causes_dense.csv" "${test_logs[@]}" | tee "$out/causes_dense.txt"
 
 step "Writing the report"
 "$PY" "$ROOT/tools/report/ivoa_report.py" "${evals[@]}" "${datasets[@]}" --causes "$out/causes_jppc.csv" \
-  --out "$out/report" --title "IVOA on the simulated robot ($scale scale)" | tee "$out/report_summary.txt"
+  --causes "$out/causes_dense.csv" --out "$out/report" --title "IVOA on the simulated robot ($scale scale)" |
+  tee "$out/report_summary.txt"
 
 elapsed=$(($(date +%s) - start_time))
 printf '\n\033[1mMain job done in %dm%02ds.\033[0m\n' $((elapsed / 60)) $((elapsed % 60))

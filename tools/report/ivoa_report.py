@@ -101,9 +101,9 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     p.add_argument("--seed", type=int, default=0, help="k-means, t-SNE, subsampling and mosaic seed")
     p.add_argument("--threads", type=int, default=1,
                    help="OpenMP threads for t-SNE and k-means (1 is fastest on a busy shared machine)")
-    p.add_argument("--causes", metavar="CAUSES_CSV",
-                   help="ivoa-sim-causes output for the test sessions' logs: composition and purity of the "
-                        "clusters by what causes each failure (simulated sessions only)")
+    p.add_argument("--causes", action="append", metavar="CAUSES_CSV",
+                   help="ivoa-sim-causes output for the test sessions' logs (once per detector): composition and "
+                        "purity of the clusters by what causes each failure (simulated sessions only)")
     p.add_argument("--max-overlays", type=int, default=0,
                    help="copy at most this many overlay figures per model into the report (0 = all)")
     a = p.parse_args(argv)
@@ -132,7 +132,7 @@ def load_inputs(args: argparse.Namespace):
             datasets[key] = Dataset(path)
         warnings += attach_dataset(run, datasets[key])
     if args.causes:
-        causes = load_causes(args.causes)
+        causes = [load_causes(path) for path in args.causes]
         for run in runs:
             warnings += attach_causes(run, causes)
     return runs, warnings
@@ -161,6 +161,7 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "sweep": metrics.uncertainty_sweep(run),
         "per_phenomenon": metrics.per_phenomenon(run),
         "given_verdict": metrics.given_verdict(run),
+        "causes_of_failures": metrics.causes_of_failures(run),
     }
     figs = {
         "confusion": figures.plot_confusion(rm["overall"], run.name, os.path.join(d, "confusion.png")),

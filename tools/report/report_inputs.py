@@ -539,15 +539,19 @@ def load_causes(path: str) -> Causes:
     return Causes(path=path, rows=rows, detectors=set(cols["detector"]))
 
 
-def attach_causes(run: EvalRun, causes: Causes) -> List[str]:
-    """Sets run.cause for the true FP/FN rows that causes.csv covers (same
-    session, utime and cell, causes about the detector of the run's labels).
-    A row there with another label means the CSV is from other logs: InputError.
-    Returns warnings (no rows for this run's detector, failures not covered)."""
+def attach_causes(run: EvalRun, all_causes: List[Causes]) -> List[str]:
+    """Sets run.cause for the true FP/FN rows that the causes CSV about the
+    detector of the run's labels covers (same session, utime and cell). A
+    row there with another label means the CSV is from other logs:
+    InputError. Returns warnings (no CSV for this run's detector, failures
+    not covered)."""
     detector = run.label_detector or run.detector
-    if detector not in causes.detectors:
-        return [f"{run.name}: {causes.path} explains failures of {', '.join(sorted(causes.detectors))}, "
-                f"this model's labels are about '{detector}': no causes for it"]
+    matching = [c for c in all_causes if detector in c.detectors]
+    if not matching:
+        about = sorted(set().union(*(c.detectors for c in all_causes)))
+        return [f"{run.name}: the causes given explain failures of {', '.join(about)}, this model's labels are "
+                f"about '{detector}': no causes for it"]
+    causes = matching[0]
     run.cause = np.full(run.size, NO_CAUSE, dtype=np.int64)
     failures = np.flatnonzero((run.label == FP) | (run.label == FN))
     missing = 0

@@ -403,10 +403,37 @@ def comparison_section(runs: List[EvalRun], metrics: Dict[str, dict], figs: Dict
         out.append("\nNotable differences:\n\n" + "\n".join(f"- {s}" for s in sentences) + "\n")
     else:
         out.append("\nNo phenomenon's predicted FN or FP rate differs by 20 points or more between the models.\n")
+    out.append(_causes_comparison(runs, metrics))
     out.append("\n" + image(figs["phenomena"], "predicted FN/FP per phenomenon"))
     out.append(image(figs["roc"], "ROC, all models"))
     out.append(image(figs["accuracy_vs_retained"], "accuracy vs retained, all models"))
     return "\n".join(out)
+
+
+def _causes_comparison(runs: List[EvalRun], metrics: Dict[str, dict]) -> str:
+    """Per cause, the share of each detector's true FP and FN it explains and
+    how many of those the model predicts: each detector fails for its own
+    reasons, and its model should see them."""
+    have = [r for r in runs if metrics[r.slug].get("causes_of_failures")]
+    if not have:
+        return ""
+    codes = sorted({e["cause"] for r in have for k in ("FP", "FN")
+                    for e in metrics[r.slug]["causes_of_failures"][k]["causes"]},
+                   key=lambda c: (c in (0, 128), c))
+    headers = ["cause"] + [f"{r.name}: {k} (n = {metrics[r.slug]['causes_of_failures'][k]['n']})"
+                           for r in have for k in ("FP", "FN")]
+    rows = []
+    for code in codes:
+        cells = [cause_name(code)]
+        for r in have:
+            for k in ("FP", "FN"):
+                e = next((e for e in metrics[r.slug]["causes_of_failures"][k]["causes"] if e["cause"] == code), None)
+                cells.append(f"{pct(e['share'], 0)} ({pct(e['predicted'], 0)})" if e else "–")
+        rows.append(cells)
+    return ("\n**By cause** (`ivoa-sim-causes`) — share of each detector's true FP and FN (with a known cause) "
+            "that removing the phenomenon alone fixes, and in brackets how many of those the model predicts as "
+            "that failure. A failure can have several causes, so a column can add up to more than 100 %.\n\n"
+            + table(headers, rows))
 
 
 def _rate_extremes(runs: List[EvalRun], metrics: Dict[str, dict], code, key: str, min_samples: int):

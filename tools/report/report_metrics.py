@@ -23,7 +23,7 @@ from typing import Dict, List, Optional
 import numpy as np
 from sklearn.metrics import roc_auc_score, roc_curve
 
-from report_inputs import FN, FP, LABEL_NAMES, STATE_OBSTACLE, EvalRun
+from report_inputs import FN, FP, LABEL_NAMES, NO_CAUSE, ONLY_TOGETHER, STATE_OBSTACLE, EvalRun
 
 N_CLASSES = 4
 # The reference code's threshold sweep (analyze_results.py).
@@ -309,6 +309,26 @@ def per_phenomenon(run: EvalRun) -> List[dict]:
             "true_fp": float(np.mean(run.label[m] == FP)), "true_fn": float(np.mean(run.label[m] == FN)),
             "pred_fp": float(np.mean(run.predicted[m] == FP)), "pred_fn": float(np.mean(run.predicted[m] == FN)),
         })
+    return out
+
+
+def causes_of_failures(run: EvalRun) -> Optional[dict]:
+    """Per true failure class (FP, FN) with a known cause (ivoa-sim-causes):
+    for each cause, the share of those failures it explains (a phenomenon
+    whose removal alone fixes them; 'only together'; 'none found') and how
+    many of them the model predicts as that failure. None without causes."""
+    if run.cause is None:
+        return None
+    out = {}
+    for cls in (FP, FN):
+        rows = np.flatnonzero((run.label == cls) & (run.cause != NO_CAUSE))
+        cause, hit = run.cause[rows], run.predicted[rows] == cls
+        single = cause != ONLY_TOGETHER
+        masks = {1 << b: single & ((cause & (1 << b)) != 0) for b in range(7)}
+        masks.update({ONLY_TOGETHER: ~single, 0: cause == 0})
+        out[LABEL_NAMES[cls]] = {"n": len(rows), "causes": [
+            {"cause": code, "share": float(m.mean()), "predicted": float(hit[m].mean())}
+            for code, m in masks.items() if m.any()]}
     return out
 
 

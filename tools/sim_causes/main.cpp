@@ -22,6 +22,7 @@
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
+#include "ivoa/dataset/dataset_format.hpp"
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/logio/session_name.hpp"
 #include "ivoa/rig_calibration_t.hpp"
@@ -44,6 +45,7 @@ struct Options {
   std::string scene_dir = IVOA_SIM_SCENES_DIR;
   causes::SessionTiming timing;
   int64_t start_utime = -1;  // < 0: the utime of the logged frame with seq 0
+  std::string dataset;       // failure cells from this dataset's sessions instead of the logs' labels
   stereo::DetectorConfig detector;
 };
 
@@ -58,6 +60,9 @@ struct SessionLog {
   std::optional<RigCalibration> rig;
   std::map<int64_t, TruthFrame> truth;  // by stereo utime
   std::vector<Labels> labels;
+  // Per labels message, the grid cell of each entry where they are not the
+  // whole grid in order (labels taken from a dataset); empty: the index.
+  std::vector<std::vector<int32_t>> cell_ids;
   int32_t pixelformat = -1;
   int64_t bad_messages = 0;
 };
@@ -67,7 +72,7 @@ bool decode(const logio::LogEvent& e, Msg& msg) {
   return msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) >= 0;
 }
 
-void read_event(const logio::LogEvent& e, SessionLog& log) {
+void read_event(const logio::LogEvent& e, bool want_labels, SessionLog& log) {
   bool ok = true;
   if (e.channel == channels::kRigCalibration && !log.rig) {
     rig_calibration_t msg;
@@ -75,7 +80,7 @@ void read_event(const logio::LogEvent& e, SessionLog& log) {
   } else if (e.channel == channels::kSimGroundTruth) {
     sim_ground_truth_t msg;
     if ((ok = decode(e, msg))) log.truth[msg.utime] = {msg.scene, msg.seed, msg.seq, {msg.robot_x, msg.robot_y, msg.robot_yaw}};
-  } else if (e.channel == channels::kIntrospectionLabels) {
+  } else if (e.channel == channels::kIntrospectionLabels && want_labels) {
     Labels msg;
     if ((ok = decode(e, msg))) log.labels.push_back(std::move(msg));
   } else if (e.channel == channels::kStereoImages && log.pixelformat < 0) {
@@ -88,13 +93,13 @@ void read_event(const logio::LogEvent& e, SessionLog& log) {
   }
 }
 
-SessionLog read_log(const std::string& path) {
+SessionLog read_log(const std::string& path, bool want_labels) {
   logio::LogReader reader(path);
   SessionLog log;
   logio::LogEvent event;
   while (reader.next(event)) {
     try {
-      read_event(event, log);
+      read_event(event, want_labels, log);
     } catch (const std::exception& e) {  // e.g. an invalid calibration
       ++log.bad_messages;
       spdlog::warn("{}: {} at byte {}: {}", path, event.channel, event.offset, e.what());
@@ -105,8 +110,35 @@ SessionLog read_log(const std::string& path) {
   if (log.truth.empty())
     throw std::runtime_error(path + ": no " + std::string(channels::kSimGroundTruth) +
                              " messages (causes need a simulated session)");
-  if (log.labels.empty()) throw std::runtime_error(path + ": no " + std::string(channels::kIntrospectionLabels) + " messages");
+  if (want_labels && log.labels.empty())
+    throw std::runtime_error(path + ": no " + std::string(channels::kIntrospectionLabels) + " messages");
   return log;
+}
+
+// The FP/FN cells of a dataset session (e.g. the dense detector's labels,
+// made offline by ivoa-dataset), one labels message per frame.
+void labels_from_dataset(const std::string& root, const std::string& session, SessionLog& log) {
+  const dataset::SessionReader reader(root + "/" + session);
+  const dataset::SessionInfo& info = reader.info();
+  for (const dataset::SampleRecord& s : reader.samples()) {
+    if (s.label != Labels::LABEL_FP && s.label != Labels::LABEL_FN) continue;
+    if (log.labels.empty() || log.labels.back().utime != s.utime) {
+      Labels l;
+      l.utime = s.utime;
+      l.detector = info.detector;
+      l.safety_radius = info.grid.safety_radius;
+      log.labels.push_back(std::move(l));
+      log.cell_ids.emplace_back();
+    }
+    Labels& l = log.labels.back();
+    l.label.push_back(static_cast<int8_t>(s.label));
+    l.stereo_state.push_back(static_cast<int8_t>(s.stereo_state));
+    l.depth_state.push_back(static_cast<int8_t>(s.depth_state));
+    l.x.push_back(s.x), l.y.push_back(s.y), l.u.push_back(s.u), l.v.push_back(s.v);
+    l.num_cells = static_cast<int32_t>(l.label.size());
+    log.cell_ids.back().push_back(s.cell);
+  }
+  if (log.labels.empty()) throw std::runtime_error(root + "/" + session + ": no FP or FN samples");
 }
 
 int64_t session_start(const SessionLog& log, const Options& opt, const std::string& path) {
@@ -134,10 +166,11 @@ struct SessionResult {
 };
 
 void write_rows(std::ostream& csv, const std::string& session, const Labels& labels,
-                const std::vector<causes::CellCause>& cells, Tally& tally) {
+                const std::vector<int32_t>& cell_ids, const std::vector<causes::CellCause>& cells, Tally& tally) {
   for (const auto& c : cells) {
     const auto i = static_cast<size_t>(c.cell);
-    csv << session << ',' << labels.detector << ',' << labels.utime << ',' << c.cell << ','
+    csv << session << ',' << labels.detector << ',' << labels.utime << ',' << (cell_ids.empty() ? c.cell : cell_ids[i])
+        << ','
         << (c.label == Labels::LABEL_FP ? "FP" : "FN") << ',' << labels.x[i] << ',' << labels.y[i] << ','
         << int{c.stereo_state} << ',' << int{c.replayed_state} << ',' << int{c.tested} << ',' << int{c.causes} << ','
         << int{c.jointly} << ",\"" << causes::describe(c) << "\"\n";
@@ -148,8 +181,9 @@ void write_rows(std::ostream& csv, const std::string& session, const Labels& lab
 }
 
 void explain_session(const std::string& path, const Options& opt, SessionResult& out) {
-  const SessionLog log = read_log(path);
   const std::string session = logio::session_name_of(path);
+  SessionLog log = read_log(path, opt.dataset.empty());
+  if (!opt.dataset.empty()) labels_from_dataset(opt.dataset, session, log);
   const TruthFrame& first = log.truth.begin()->second;
   const std::string scene_file = opt.scene_file.empty() ? opt.scene_dir + "/" + first.scene + ".yaml" : opt.scene_file;
   causes::SessionTiming timing = opt.timing;
@@ -167,7 +201,9 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
       continue;
     }
     try {
-      write_rows(out.rows, session, labels, finder.explain(labels, truth->second.pose, log.pixelformat), out.tally);
+      const std::vector<int32_t>& cell_ids = log.cell_ids.empty() ? std::vector<int32_t>() : log.cell_ids[f];
+      write_rows(out.rows, session, labels, cell_ids, finder.explain(labels, truth->second.pose, log.pixelformat),
+                 out.tally);
       ++out.tally.frames;
     } catch (const causes::ReplayError& e) {
       ++out.tally.skipped_frames;
@@ -231,6 +267,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--noise-seed", opt.timing.noise_seed, "the simulator driver's --noise-seed")->capture_default_str();
   app.add_option("--start-utime", opt.start_utime, "utime of the session's frame 0 (default: the logged frame with seq 0)");
+  app.add_option("--dataset", opt.dataset,
+                 "take the failure cells from this dataset's sessions (named like the logs) instead of the logs' "
+                 "labels: e.g. the dense detector's, labelled offline by ivoa-dataset")
+      ->check(CLI::ExistingDirectory);
   app.add_option("logs", logs, "simulated session logs with recorded INTROSPECTION_LABELS, one session each")
       ->required()
       ->check(CLI::ExistingFile);

@@ -3,6 +3,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "ivoa/sim_ground_truth_t.hpp"
 #include "scene_builder.hpp"
@@ -33,7 +34,6 @@ bool remove_reflection(SceneData& d) {
     if (m.f0 > 0) m.f0 = 0, changed = true;
   return changed;
 }
-
 
 bool remove_dark_stripes(SceneData& d) {
   bool changed = false;
