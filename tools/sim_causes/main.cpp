@@ -150,11 +150,12 @@ int64_t session_start(const SessionLog& log, const Options& opt, const std::stri
 
 struct Tally {
   std::map<std::pair<int, std::string>, int64_t> by_label_and_cause;
-  int64_t failures = 0, reproduced = 0, frames = 0, skipped_frames = 0;
+  int64_t failures = 0, reproduced = 0, frames = 0, skipped_frames = 0, bad_messages = 0;
 
   void add(const Tally& o) {
     for (const auto& [key, count] : o.by_label_and_cause) by_label_and_cause[key] += count;
     failures += o.failures, reproduced += o.reproduced, frames += o.frames, skipped_frames += o.skipped_frames;
+    bad_messages += o.bad_messages;
   }
 };
 
@@ -184,6 +185,7 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
   const std::string session = logio::session_name_of(path);
   SessionLog log = read_log(path, opt.dataset.empty());
   if (!opt.dataset.empty()) labels_from_dataset(opt.dataset, session, log);
+  out.tally.bad_messages = log.bad_messages;
   const TruthFrame& first = log.truth.begin()->second;
   const std::string scene_file = opt.scene_file.empty() ? opt.scene_dir + "/" + first.scene + ".yaml" : opt.scene_file;
   causes::SessionTiming timing = opt.timing;
@@ -239,6 +241,7 @@ void print_summary(const Tally& t) {
               static_cast<long long>(t.failures), static_cast<long long>(t.frames),
               static_cast<long long>(t.skipped_frames), static_cast<long long>(t.reproduced),
               t.failures ? 100.0 * static_cast<double>(t.reproduced) / static_cast<double>(t.failures) : 0.0);
+  if (t.bad_messages > 0) std::printf("%lld undecodable messages skipped\n", static_cast<long long>(t.bad_messages));
   for (const int label : {Labels::LABEL_FP, Labels::LABEL_FN}) {
     int64_t n = 0;
     for (const auto& [key, count] : t.by_label_and_cause) n += key.first == label ? count : 0;
