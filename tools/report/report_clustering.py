@@ -186,7 +186,8 @@ def _explained_by(cause: np.ndarray, code: int) -> np.ndarray:
 
 def _leading_cause(cause: np.ndarray):
     """(code, count) of the cause explaining the most of `cause`."""
-    codes = {0, ONLY_TOGETHER} | {1 << b for b in range(7) if np.any((cause != ONLY_TOGETHER) & ((cause >> b) & 1 == 1))}
+    single = cause != ONLY_TOGETHER
+    codes = {0, ONLY_TOGETHER} | {1 << b for b in range(7) if np.any(single & (((cause >> b) & 1) == 1))}
     counts = {c: int(_explained_by(cause, c).sum()) for c in sorted(codes)}
     return max(counts.items(), key=lambda kv: kv[1])
 
