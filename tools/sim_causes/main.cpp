@@ -138,7 +138,6 @@ void labels_from_dataset(const std::string& root, const std::string& session, Se
     l.num_cells = static_cast<int32_t>(l.label.size());
     log.cell_ids.back().push_back(s.cell);
   }
-  if (log.labels.empty()) throw std::runtime_error(root + "/" + session + ": no FP or FN samples");
 }
 
 int64_t session_start(const SessionLog& log, const Options& opt, const std::string& path) {
@@ -186,6 +185,10 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
   SessionLog log = read_log(path, opt.dataset.empty());
   if (!opt.dataset.empty()) labels_from_dataset(opt.dataset, session, log);
   out.tally.bad_messages = log.bad_messages;
+  if (log.labels.empty()) {  // a dataset session where the detector never failed: nothing to explain
+    spdlog::info("{}: no FP or FN cells", session);
+    return;
+  }
   const TruthFrame& first = log.truth.begin()->second;
   const std::string scene_file = opt.scene_file.empty() ? opt.scene_dir + "/" + first.scene + ".yaml" : opt.scene_file;
   causes::SessionTiming timing = opt.timing;
