@@ -132,12 +132,12 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
     while (in.next(e) && written < o.max_overlays) {
       if (model.info().views == 2 && !warp && e.channel == channels::kRigCalibration) {
         rig_calibration_t rig;
-        if (rig.decode(e.data.data(), 0, static_cast<int>(e.data.size())) >= 0)
+        if (logio::decode(e, rig))
           warp = std::make_unique<GroundWarp>(from_message(rig));
         continue;
       }
       stereo_image_t msg;
-      if (e.channel != channels::kStereoImages || msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) < 0) continue;
+      if (e.channel != channels::kStereoImages || !logio::decode(e, msg)) continue;
       const auto it = frames.find(msg.utime);
       if (it == frames.end() || index++ % o.overlay_every != 0) continue;
       const cv::Mat left = decode_image(msg.left);

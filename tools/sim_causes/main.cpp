@@ -67,25 +67,20 @@ struct SessionLog {
   int64_t bad_messages = 0;
 };
 
-template <class Msg>
-bool decode(const logio::LogEvent& e, Msg& msg) {
-  return msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) >= 0;
-}
-
 void read_event(const logio::LogEvent& e, bool want_labels, SessionLog& log) {
   bool ok = true;
   if (e.channel == channels::kRigCalibration && !log.rig) {
     rig_calibration_t msg;
-    if ((ok = decode(e, msg))) log.rig = from_message(msg);
+    if ((ok = logio::decode(e, msg))) log.rig = from_message(msg);
   } else if (e.channel == channels::kSimGroundTruth) {
     sim_ground_truth_t msg;
-    if ((ok = decode(e, msg))) log.truth[msg.utime] = {msg.scene, msg.seed, msg.seq, {msg.robot_x, msg.robot_y, msg.robot_yaw}};
+    if ((ok = logio::decode(e, msg))) log.truth[msg.utime] = {msg.scene, msg.seed, msg.seq, {msg.robot_x, msg.robot_y, msg.robot_yaw}};
   } else if (e.channel == channels::kIntrospectionLabels && want_labels) {
     Labels msg;
-    if ((ok = decode(e, msg))) log.labels.push_back(std::move(msg));
+    if ((ok = logio::decode(e, msg))) log.labels.push_back(std::move(msg));
   } else if (e.channel == channels::kStereoImages && log.pixelformat < 0) {
     stereo_image_t msg;
-    if ((ok = decode(e, msg))) log.pixelformat = msg.left.pixelformat;
+    if ((ok = logio::decode(e, msg))) log.pixelformat = msg.left.pixelformat;
   }
   if (!ok) {
     ++log.bad_messages;
@@ -206,7 +201,8 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
       continue;
     }
     try {
-      const std::vector<int32_t>& cell_ids = log.cell_ids.empty() ? std::vector<int32_t>() : log.cell_ids[f];
+      static const std::vector<int32_t> kGridOrder;  // recorded labels: entry i is cell i
+      const std::vector<int32_t>& cell_ids = log.cell_ids.empty() ? kGridOrder : log.cell_ids[f];
       write_rows(out.rows, session, labels, cell_ids, finder.explain(labels, truth->second.pose, log.pixelformat),
                  out.tally);
       ++out.tally.frames;

@@ -30,11 +30,6 @@ struct Truth {
   cv::Mat phenomena, surface;
 };
 
-template <class Msg>
-bool decode(const logio::LogEvent& e, Msg& msg) {
-  return msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) >= 0;
-}
-
 // Whether the TN cell `cell` of the frame at `utime` is stored when a
 // fraction `keep` of TN cells is: a hash (splitmix64) of both, so the same
 // log always keeps the same cells.
@@ -113,7 +108,7 @@ void SessionBuilder::Impl::open_writer() {
 
 void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
   rig_calibration_t msg;
-  if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.rig_calibration_t");
+  if (!logio::decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.rig_calibration_t");
   std::vector<uint8_t> bytes = calibration_content(msg);
   if (bytes == calibration_bytes) return;
   try {
@@ -133,7 +128,7 @@ void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
 
 void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
   stereo_image_t msg;
-  if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.stereo_image_t");
+  if (!logio::decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.stereo_image_t");
   ++report.stereo_frames;
   try {
     cv::Mat left = decode_image(msg.left);
@@ -159,7 +154,7 @@ void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
 void SessionBuilder::Impl::on_depth(const logio::LogEvent& e) {
   if (!rerun()) return;
   depth_image_t msg;
-  if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.depth_image_t");
+  if (!logio::decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.depth_image_t");
   if (!pipeline) return bad("depth frame " + std::to_string(msg.utime) + " before any calibration");
   try {
     cv::Mat depth = decode_depth(msg);
@@ -173,7 +168,7 @@ void SessionBuilder::Impl::on_depth(const logio::LogEvent& e) {
 void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
   if (rerun()) return;
   introspection_labels_t msg;
-  if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.introspection_labels_t");
+  if (!logio::decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.introspection_labels_t");
   if (info.detector.empty()) {
     info.detector = msg.detector;
     info.grid = geometry_of(msg);
@@ -186,7 +181,7 @@ void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
 
 void SessionBuilder::Impl::on_truth(const logio::LogEvent& e) {
   sim_ground_truth_t msg;
-  if (!decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.sim_ground_truth_t");
+  if (!logio::decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.sim_ground_truth_t");
   if (info.scene.empty()) {
     info.scene = msg.scene;
     info.seed = msg.seed;

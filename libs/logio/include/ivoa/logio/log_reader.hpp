@@ -20,6 +20,13 @@ struct LogEvent {
   std::vector<uint8_t> data;  // the encoded message, fingerprint first
 };
 
+// Decodes an event's message as an lcm-gen type; false if it is not one
+// (another fingerprint, or truncated).
+template <class Msg>
+bool decode(const LogEvent& event, Msg& msg) {
+  return msg.decode(event.data.data(), 0, static_cast<int>(event.data.size())) >= 0;
+}
+
 struct LogProblem {
   uint64_t offset = 0;  // where the bad event (or the garbage) starts
   std::string what;
