@@ -117,6 +117,54 @@ TEST(CauseFinder, FrameWithoutFailuresRendersNothing) {
   EXPECT_TRUE(make_finder(spec).explain(frame.labels, frame.pose, image_t::PIXEL_FORMAT_BAYER_RGGB).empty());
 }
 
+// A variant that behaves like the detector fixes nothing and breaks
+// nothing; one that matches anything fixes the false obstacles; one that
+// matches nothing calls every free cell an obstacle. Each is tallied apart.
+TEST(CauseFinder, TriesOtherDetectorSettingsOnTheSameFrame) {
+  const sim::SceneSpec spec = mirroring_floor();
+  const LabelledFrame frame = label_frame(spec);
+  ASSERT_GE(frame.fp, 5);
+  DetectorVariant same{"same", {}}, anything{"matches anything", {}}, nothing{"matches nothing", {}};
+  anything.config.jpp.conf_pos_thresh = 10.0;  // above any window cost (at most 2.41)
+  nothing.config.jpp.conf_pos_thresh = 1e-9;   // below any cost but a perfect match
+  SessionTiming timing;
+  timing.start_utime = kStart;
+  CauseFinder finder(spec, 1, sim::make_sim_rig(), timing, "jppc", {}, {same, anything, nothing});
+  const std::vector<CellCause> cells = finder.explain(frame.labels, frame.pose, image_t::PIXEL_FORMAT_BAYER_RGGB);
+  ASSERT_EQ(static_cast<int>(cells.size()), frame.fp);
+  int64_t fixed = 0;
+  for (const CellCause& c : cells) {
+    EXPECT_EQ(c.fixed_by & 0b101, 0) << "cell " << c.cell;
+    fixed += c.fixed_by == 0b010;
+  }
+
+  const std::vector<VariantTally>& t = finder.variant_tallies();
+  ASSERT_EQ(t.size(), 3u);
+  const auto fp = static_cast<size_t>(Labels::LABEL_FP), tn = static_cast<size_t>(Labels::LABEL_TN);
+  const int64_t tn_cells = static_cast<int64_t>(frame.labels.num_cells) - frame.fp;
+  for (const VariantTally& v : t) {
+    EXPECT_EQ(v.cells[fp], frame.fp);
+    EXPECT_EQ(v.cells[tn], tn_cells);
+  }
+  EXPECT_EQ(t[0].right[fp], 0);
+  EXPECT_EQ(t[0].wrong[tn], 0);
+  // Where a sample's window leaves the image, only the failed match made
+  // the cell an obstacle: matching anything, it has no verdict.
+  EXPECT_EQ(t[1].right[fp], fixed);
+  EXPECT_GE(fixed, 0.8 * frame.fp);
+  EXPECT_EQ(t[1].wrong[fp] + t[1].right[fp], fixed) << "none still an obstacle";
+  EXPECT_EQ(t[1].wrong[tn], 0);
+  EXPECT_EQ(t[2].right[fp], 0);
+  EXPECT_GE(t[2].wrong[tn], tn_cells / 2) << "matching nothing, the floor is an obstacle";
+  EXPECT_EQ(variant_names({same, anything, nothing}, 0b101), "same+matches nothing");
+}
+
+TEST(CauseFinder, RefusesVariantNamesThatAreNotCsvFields) {
+  EXPECT_NO_THROW(check_variant_name("full resolution"));
+  for (const char* bad : {"", "a,b", "a+b", "say \"hi\"", "two\nlines"})
+    EXPECT_THROW(check_variant_name(bad), std::invalid_argument) << bad;
+}
+
 TEST(CauseFinder, NamesCombinationsOfPhenomena) {
   EXPECT_EQ(phenomena_names(0), "none found");
   EXPECT_EQ(phenomena_names(GT::PHENOMENON_REFLECTION | GT::PHENOMENON_DARK_STRIPE), "reflection+dark stripe");

@@ -3,9 +3,14 @@
 // was and once per stereo-failure phenomenon taken out of the scene, re-runs
 // the detector on the failure cells, and writes which phenomena's removal
 // makes each verdict right (causes.csv, joined by ivoa_report.py --causes).
+// Each --variant (other settings of the same detector) is also run on the
+// frames as they were: which failures it fixes (the CSV's fixed_by column)
+// and, over every labelled cell of those frames, what it gets right and
+// wrong (--variants-out).
 //
 //   ivoa-sim-causes --out causes.csv out/main-job-default/logs/*_s31.lcmlog
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
@@ -47,7 +52,37 @@ struct Options {
   int64_t start_utime = -1;  // < 0: the utime of the logged frame with seq 0
   std::string dataset;       // failure cells from this dataset's sessions instead of the logs' labels
   stereo::DetectorConfig detector;
+  std::vector<causes::DetectorVariant> variants;
+  std::string variants_out;  // per session, variant and label: what each variant says (empty: not written)
 };
+
+// JPP-C works on half-resolution images (JPP's 480x300): does it miss
+// because of that? (For the dense detector: SGBM at full resolution, with
+// the disparity range that still sees the ground as near.)
+const char* const kDefaultVariant = "full resolution: --rect_scale 1 --sgbm_rect_scale 1 --sgbm_num_disparities 192";
+
+// "NAME: FLAGS" -> the base config with FLAGS (the detector flags of this
+// tool) applied. Throws std::invalid_argument naming the variant.
+causes::DetectorVariant parse_variant(const std::string& text, const stereo::DetectorConfig& base) {
+  const size_t colon = text.find(':');
+  if (colon == std::string::npos)
+    throw std::invalid_argument("--variant '" + text + "': expected 'NAME: FLAGS', e.g. '" + kDefaultVariant + "'");
+  auto trim = [](std::string t) {
+    t.erase(0, t.find_first_not_of(' '));
+    t.erase(t.find_last_not_of(' ') + 1);
+    return t;
+  };
+  causes::DetectorVariant v{trim(text.substr(0, colon)), base};
+  causes::check_variant_name(v.name);
+  CLI::App flags{"variant"};
+  stereo::add_detector_options(flags, v.config);
+  try {
+    flags.parse(text.substr(colon + 1), false);
+  } catch (const CLI::ParseError& e) {
+    throw std::invalid_argument("--variant '" + text + "': " + e.what());
+  }
+  return v;
+}
 
 struct TruthFrame {
   std::string scene;
@@ -110,13 +145,13 @@ SessionLog read_log(const std::string& path, bool want_labels) {
   return log;
 }
 
-// The FP/FN cells of a dataset session (e.g. the dense detector's labels,
+// The labelled cells of a dataset session (e.g. the dense detector's labels,
 // made offline by ivoa-dataset), one labels message per frame.
 void labels_from_dataset(const std::string& root, const std::string& session, SessionLog& log) {
   const dataset::SessionReader reader(root + "/" + session);
   const dataset::SessionInfo& info = reader.info();
   for (const dataset::SampleRecord& s : reader.samples()) {
-    if (s.label != Labels::LABEL_FP && s.label != Labels::LABEL_FN) continue;
+    if (s.label == Labels::LABEL_NONE) continue;
     if (log.labels.empty() || log.labels.back().utime != s.utime) {
       Labels l;
       l.utime = s.utime;
@@ -145,34 +180,66 @@ int64_t session_start(const SessionLog& log, const Options& opt, const std::stri
 struct Tally {
   std::map<std::pair<int, std::string>, int64_t> by_label_and_cause;
   int64_t failures = 0, reproduced = 0, frames = 0, skipped_frames = 0, bad_messages = 0;
+  // Per variant: what it says on the labelled cells, and how many of the
+  // failures no phenomenon explains ("none found") it fixes, by label.
+  std::vector<causes::VariantTally> variants;
+  std::vector<std::array<int64_t, 4>> unexplained_fixed;
+  std::array<int64_t, 4> unexplained{};
 
   void add(const Tally& o) {
     for (const auto& [key, count] : o.by_label_and_cause) by_label_and_cause[key] += count;
     failures += o.failures, reproduced += o.reproduced, frames += o.frames, skipped_frames += o.skipped_frames;
     bad_messages += o.bad_messages;
+    for (size_t l = 0; l < 4; ++l) unexplained[l] += o.unexplained[l];
+    // A session that stopped before its finder existed has no variant tallies.
+    if (o.variants.empty()) return;
+    variants.resize(o.variants.size()), unexplained_fixed.resize(o.variants.size());
+    for (size_t v = 0; v < o.variants.size(); ++v)
+      for (size_t l = 0; l < 4; ++l) {
+        variants[v].cells[l] += o.variants[v].cells[l], variants[v].right[l] += o.variants[v].right[l];
+        variants[v].wrong[l] += o.variants[v].wrong[l], unexplained_fixed[v][l] += o.unexplained_fixed[v][l];
+      }
   }
 };
 
 // One session's CSV rows (written in the logs' order once all are done) and counts.
 struct SessionResult {
-  std::ostringstream rows;
+  std::ostringstream rows, variant_rows;
   Tally tally;
   std::string error;  // the session could not be explained at all
 };
 
 void write_rows(std::ostream& csv, const std::string& session, const Labels& labels,
-                const std::vector<int32_t>& cell_ids, const std::vector<causes::CellCause>& cells, Tally& tally) {
+                const std::vector<int32_t>& cell_ids, const std::vector<causes::CellCause>& cells,
+                const std::vector<causes::DetectorVariant>& variants, Tally& tally) {
   for (const auto& c : cells) {
     const auto i = static_cast<size_t>(c.cell);
     csv << session << ',' << labels.detector << ',' << labels.utime << ',' << (cell_ids.empty() ? c.cell : cell_ids[i])
         << ','
         << (c.label == Labels::LABEL_FP ? "FP" : "FN") << ',' << labels.x[i] << ',' << labels.y[i] << ','
         << int{c.stereo_state} << ',' << int{c.replayed_state} << ',' << int{c.tested} << ',' << int{c.causes} << ','
-        << int{c.jointly} << ",\"" << causes::describe(c) << "\"\n";
+        << int{c.jointly} << ",\"" << causes::describe(c) << "\"," << causes::variant_names(variants, c.fixed_by)
+        << '\n';
     ++tally.failures;
     tally.reproduced += c.reproduced();
     ++tally.by_label_and_cause[{c.label, causes::describe(c)}];
+    if (c.reproduced() && !c.causes && !c.jointly) {
+      const auto l = static_cast<size_t>(c.label);
+      ++tally.unexplained[l];
+      for (size_t v = 0; v < variants.size(); ++v) tally.unexplained_fixed[v][l] += (c.fixed_by >> v) & 1u;
+    }
   }
+}
+
+constexpr const char* kLabelNames[] = {"TP", "TN", "FP", "FN"};
+
+void write_variant_rows(std::ostream& csv, const std::string& session, const std::string& detector,
+                        const std::vector<causes::DetectorVariant>& variants,
+                        const std::vector<causes::VariantTally>& tallies) {
+  for (size_t v = 0; v < variants.size(); ++v)
+    for (size_t l = 0; l < 4; ++l)
+      csv << session << ',' << detector << ',' << variants[v].name << ',' << kLabelNames[l] << ','
+          << tallies[v].cells[l] << ',' << tallies[v].right[l] << ',' << tallies[v].wrong[l] << '\n';
 }
 
 void explain_session(const std::string& path, const Options& opt, SessionResult& out) {
@@ -180,8 +247,8 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
   SessionLog log = read_log(path, opt.dataset.empty());
   if (!opt.dataset.empty()) labels_from_dataset(opt.dataset, session, log);
   out.tally.bad_messages = log.bad_messages;
-  if (log.labels.empty()) {  // a dataset session where the detector never failed: nothing to explain
-    spdlog::info("{}: no FP or FN cells", session);
+  if (log.labels.empty()) {  // a dataset session without labelled cells: nothing to explain
+    spdlog::info("{}: no labelled cells", session);
     return;
   }
   const TruthFrame& first = log.truth.begin()->second;
@@ -189,7 +256,8 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
   causes::SessionTiming timing = opt.timing;
   timing.start_utime = session_start(log, opt, path);
   causes::CauseFinder finder(sim::load_scene_spec(scene_file), static_cast<uint64_t>(first.seed), *log.rig, timing,
-                             log.labels.front().detector, opt.detector);
+                             log.labels.front().detector, opt.detector, opt.variants);
+  out.tally.unexplained_fixed.resize(opt.variants.size());
   Progress progress(session + " (" + causes::phenomena_names(finder.testable()) + ")",
                     static_cast<double>(log.labels.size()), "frames", 20.0);
   for (size_t f = 0; f < log.labels.size(); ++f) {
@@ -204,7 +272,7 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
       static const std::vector<int32_t> kGridOrder;  // recorded labels: entry i is cell i
       const std::vector<int32_t>& cell_ids = log.cell_ids.empty() ? kGridOrder : log.cell_ids[f];
       write_rows(out.rows, session, labels, cell_ids, finder.explain(labels, truth->second.pose, log.pixelformat),
-                 out.tally);
+                 opt.variants, out.tally);
       ++out.tally.frames;
     } catch (const causes::ReplayError& e) {
       ++out.tally.skipped_frames;
@@ -213,6 +281,8 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
     progress.update(static_cast<double>(f + 1));
   }
   progress.finish();
+  out.tally.variants = finder.variant_tallies();
+  write_variant_rows(out.variant_rows, session, log.labels.front().detector, opt.variants, out.tally.variants);
 }
 
 // Sessions on `jobs` threads (each renders on one core); results by log index.
@@ -232,6 +302,26 @@ std::vector<SessionResult> explain_sessions(const std::vector<std::string>& logs
   for (int j = 0; j < std::max(1, std::min<int>(jobs, static_cast<int>(logs.size()))); ++j) threads.emplace_back(worker);
   for (auto& t : threads) t.join();
   return results;
+}
+
+double percent(int64_t part, int64_t whole) {
+  return whole > 0 ? 100.0 * static_cast<double>(part) / static_cast<double>(whole) : 0.0;
+}
+
+// Per variant: the failures it fixes (all, and those no phenomenon explains)
+// and the price: the right verdicts it turns wrong.
+void print_variants(const Tally& t, const std::vector<causes::DetectorVariant>& variants) {
+  for (size_t v = 0; v < variants.size(); ++v) {
+    const causes::VariantTally& c = t.variants[v];
+    std::printf("with '%s', on the same frames:\n", variants[v].name.c_str());
+    for (const int l : {Labels::LABEL_FP, Labels::LABEL_FN})
+      std::printf("  fixes %5.1f %% of the %s (%lld), %5.1f %% of those with no cause found (%lld)\n",
+                  percent(c.right[l], c.cells[l]), kLabelNames[l], static_cast<long long>(c.cells[l]),
+                  percent(t.unexplained_fixed[v][l], t.unexplained[l]), static_cast<long long>(t.unexplained[l]));
+    for (const int l : {Labels::LABEL_TP, Labels::LABEL_TN})
+      std::printf("  gets wrong %5.1f %% of the %s (%lld)\n", percent(c.wrong[l], c.cells[l]), kLabelNames[l],
+                  static_cast<long long>(c.cells[l]));
+  }
 }
 
 void print_summary(const Tally& t) {
@@ -280,20 +370,50 @@ int main(int argc, char** argv) {
   app.add_option("--jobs", jobs, "sessions explained at once (each on one core)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  std::vector<std::string> variants{kDefaultVariant};
+  app.add_option("--variant", variants,
+                 "other settings of the detector to try on the frames as they were, 'NAME: FLAGS' (the detector "
+                 "flags below, applied over this run's); repeat for several (at most 8)")
+      ->capture_default_str()
+      ->expected(1)
+      ->allow_extra_args(false)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);  // one value per --variant: logs after it stay positional
+  bool no_variants = false;
+  app.add_flag("--no-variants", no_variants, "try no other settings");
+  app.add_option("--variants-out", opt.variants_out,
+                 "CSV to write: per session, variant and label, the labelled cells of the re-rendered frames and how "
+                 "many the variant gets right and wrong");
   stereo::add_detector_options(app, opt.detector);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("sim-causes", common.log_level);
+  try {
+    if (!no_variants)
+      for (const std::string& v : variants) opt.variants.push_back(parse_variant(v, opt.detector));
+    if (opt.variants.size() > 8) throw std::invalid_argument("at most 8 --variant");
+  } catch (const std::invalid_argument& e) {
+    spdlog::error("{}", e.what());
+    return kExitUsage;
+  }
 
   std::ofstream csv(opt.out);
   if (!csv) {
     spdlog::error("cannot write {}", opt.out);
     return kExitIoError;
   }
-  csv << "session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause\n";
+  std::ofstream variants_csv;
+  if (!opt.variants_out.empty() && !(variants_csv = std::ofstream(opt.variants_out))) {
+    spdlog::error("cannot write {}", opt.variants_out);
+    return kExitIoError;
+  }
+  csv << "session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause,fixed_by\n";
+  variants_csv << "session,detector,variant,label,cells,right,wrong\n";
   Tally tally;
+  tally.unexplained_fixed.resize(opt.variants.size());
+  tally.variants.resize(opt.variants.size());
   int worst = kExitOk;
   for (const SessionResult& r : explain_sessions(logs, opt, jobs)) {
     csv << r.rows.str();
+    variants_csv << r.variant_rows.str();
     tally.add(r.tally);
     if (!r.error.empty()) {
       spdlog::error("{}", r.error);
@@ -301,10 +421,12 @@ int main(int argc, char** argv) {
     }
   }
   csv.flush();
-  if (!csv) {
-    spdlog::error("writing {} failed", opt.out);
+  variants_csv.flush();
+  if (!csv || (!opt.variants_out.empty() && !variants_csv)) {
+    spdlog::error("writing {} failed", !csv ? opt.out : opt.variants_out);
     return kExitIoError;
   }
   print_summary(tally);
+  print_variants(tally, opt.variants);
   return worst;
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <optional>
 #include <utility>
 
@@ -45,15 +46,33 @@ sim::SimulatorConfig render_config(const RigCalibration& rig, uint64_t noise_see
                               noise_seed};
 }
 
+struct Variant {
+  std::string name;
+  std::unique_ptr<stereo::ObstacleDetector> detector;
+};
+
+// The true state of a labelled cell: the depth monitor's (TP, FN: obstacle).
+int8_t true_state(int8_t label) {
+  return label == Labels::LABEL_TP || label == Labels::LABEL_FN ? obstacle_grid_t::STATE_OBSTACLE
+                                                                 : obstacle_grid_t::STATE_FREE;
+}
+
 }  // namespace
 
 struct CauseFinder::Impl {
   Impl(const sim::SceneSpec& spec, uint64_t seed, const RigCalibration& rig, SessionTiming t,
-       const std::string& detector_name, const stereo::DetectorConfig& detector_config)
+       const std::string& detector_name, const stereo::DetectorConfig& detector_config,
+       const std::vector<DetectorVariant>& variant_specs)
       : timing(t),
         factual(sim::generate_scene(spec, seed), render_config(rig, t.noise_seed)),
         trajectory(factual.scene(), seed),
         detector(stereo::make_detector(detector_name, rig, detector_config)) {
+    if (variant_specs.size() > 8) throw std::invalid_argument("at most 8 detector variants");
+    for (const DetectorVariant& v : variant_specs) {
+      check_variant_name(v.name);
+      variants.push_back({v.name, stereo::make_detector(detector_name, rig, v.config)});
+    }
+    tallies.resize(variants.size());
     for (const uint8_t p : sim::removable_phenomena())
       if (std::optional<sim::Scene> scene = sim::generate_scene_without(spec, seed, p)) {
         twins.push_back({p, sim::Simulator(std::move(*scene), render_config(rig, t.noise_seed))});
@@ -65,14 +84,22 @@ struct CauseFinder::Impl {
   }
 
   sim::RenderRequest request_for(const Labels& labels, const sim::Pose2D& recorded_pose);
-  // The detector's state for each failure cell on a frame rendered by `simulator`.
-  std::vector<int8_t> states(const sim::Simulator& simulator, const sim::RenderRequest& request,
-                             const Labels& labels, const std::vector<int32_t>& cells, int32_t pixelformat);
+  // Renders the frame and gives it to `detectors` as the live detector
+  // received it (through the message: Bayer mosaic and demosaicing included).
+  void show(const sim::Simulator& simulator, const sim::RenderRequest& request, const Labels& labels,
+            int32_t pixelformat, const std::vector<stereo::ObstacleDetector*>& detectors) const;
+  // The state `d` gives each of `cells` on the frame it was last shown.
+  static std::vector<int8_t> states(stereo::ObstacleDetector& d, const Labels& labels,
+                                    const std::vector<int32_t>& cells);
+  // The variants on the factual frame: marks the failures each fixes and tallies every labelled cell.
+  void try_variants(const Labels& labels, std::vector<CellCause>& failures);
 
   SessionTiming timing;
   sim::Simulator factual;
   sim::Trajectory trajectory;
   std::unique_ptr<stereo::ObstacleDetector> detector;
+  std::vector<Variant> variants;
+  std::vector<VariantTally> tallies;
   std::vector<Twin> twins;
   std::unique_ptr<sim::Simulator> all_removed;  // every testable phenomenon taken away (two or more)
   uint8_t testable = 0;
@@ -100,29 +127,56 @@ sim::RenderRequest CauseFinder::Impl::request_for(const Labels& labels, const si
   return request;
 }
 
-std::vector<int8_t> CauseFinder::Impl::states(const sim::Simulator& simulator, const sim::RenderRequest& request,
-                                              const Labels& labels, const std::vector<int32_t>& cells,
-                                              int32_t pixelformat) {
+void CauseFinder::Impl::show(const sim::Simulator& simulator, const sim::RenderRequest& request, const Labels& labels,
+                             int32_t pixelformat, const std::vector<stereo::ObstacleDetector*>& detectors) const {
   const sim::SimFrame frame = simulator.render(request);
-  // Through the message, as the live detector received it (Bayer mosaic and demosaicing included).
   const stereo_image_t msg = sim::make_stereo_message(frame, labels.utime, 0, pixelformat);
-  detector->set_frame(decode_image(msg.left), decode_image(msg.right));
+  const cv::Mat left = decode_image(msg.left), right = decode_image(msg.right);
+  for (stereo::ObstacleDetector* d : detectors) d->set_frame(left, right);
+}
+
+std::vector<int8_t> CauseFinder::Impl::states(stereo::ObstacleDetector& d, const Labels& labels,
+                                              const std::vector<int32_t>& cells) {
   std::vector<int8_t> out;
   out.reserve(cells.size());
   for (const int32_t c : cells) {
     const auto i = static_cast<size_t>(c);
-    out.push_back(stereo::to_state(detector->check(labels.x[i], labels.y[i], labels.safety_radius)));
+    out.push_back(stereo::to_state(d.check(labels.x[i], labels.y[i], labels.safety_radius)));
   }
   return out;
 }
 
+void CauseFinder::Impl::try_variants(const Labels& labels, std::vector<CellCause>& failures) {
+  std::vector<int32_t> labelled;
+  for (int32_t c = 0; c < labels.num_cells; ++c)
+    if (labels.label[static_cast<size_t>(c)] != Labels::LABEL_NONE) labelled.push_back(c);
+  for (size_t v = 0; v < variants.size(); ++v) {
+    const std::vector<int8_t> said = states(*variants[v].detector, labels, labelled);
+    std::map<int32_t, int8_t> said_at;
+    for (size_t k = 0; k < labelled.size(); ++k) {
+      const int8_t label = labels.label[static_cast<size_t>(labelled[k])];
+      const auto l = static_cast<size_t>(label);
+      const int8_t truth = true_state(label);
+      ++tallies[v].cells[l];
+      tallies[v].right[l] += said[k] == truth;
+      tallies[v].wrong[l] += said[k] != truth && said[k] != obstacle_grid_t::STATE_UNKNOWN;
+      said_at[labelled[k]] = said[k];
+    }
+    for (CellCause& f : failures)
+      if (f.reproduced() && said_at[f.cell] == right_state(f.label)) f.fixed_by |= static_cast<uint8_t>(1u << v);
+  }
+}
+
 CauseFinder::CauseFinder(const sim::SceneSpec& spec, uint64_t seed, const RigCalibration& rig, SessionTiming timing,
-                         const std::string& detector, const stereo::DetectorConfig& detector_config)
-    : impl_(std::make_unique<Impl>(spec, seed, rig, timing, detector, detector_config)) {}
+                         const std::string& detector, const stereo::DetectorConfig& detector_config,
+                         const std::vector<DetectorVariant>& variants)
+    : impl_(std::make_unique<Impl>(spec, seed, rig, timing, detector, detector_config, variants)) {}
 
 CauseFinder::~CauseFinder() = default;
 
 uint8_t CauseFinder::testable() const { return impl_->testable; }
+
+const std::vector<VariantTally>& CauseFinder::variant_tallies() const { return impl_->tallies; }
 
 std::vector<CellCause> CauseFinder::explain(const introspection_labels_t& labels, const sim::Pose2D& pose,
                                             int32_t pixelformat) {
@@ -131,23 +185,42 @@ std::vector<CellCause> CauseFinder::explain(const introspection_labels_t& labels
     if (is_failure(labels.label[static_cast<size_t>(c)])) cells.push_back(c);
   if (cells.empty()) return {};
   const sim::RenderRequest request = impl_->request_for(labels, pose);
-  const std::vector<int8_t> replayed = impl_->states(impl_->factual, request, labels, cells, pixelformat);
+  std::vector<stereo::ObstacleDetector*> on_factual{impl_->detector.get()};
+  for (const Variant& v : impl_->variants) on_factual.push_back(v.detector.get());
+  impl_->show(impl_->factual, request, labels, pixelformat, on_factual);
+  const std::vector<int8_t> replayed = Impl::states(*impl_->detector, labels, cells);
   std::vector<CellCause> out(cells.size());
   for (size_t k = 0; k < cells.size(); ++k) {
     const auto i = static_cast<size_t>(cells[k]);
-    out[k] = {cells[k], labels.label[i], labels.stereo_state[i], replayed[k], impl_->testable, 0, false};
+    out[k] = {cells[k], labels.label[i], labels.stereo_state[i], replayed[k], impl_->testable, 0, false, 0};
   }
+  impl_->try_variants(labels, out);
   for (const Twin& twin : impl_->twins) {
-    const std::vector<int8_t> without = impl_->states(twin.simulator, request, labels, cells, pixelformat);
+    impl_->show(twin.simulator, request, labels, pixelformat, {impl_->detector.get()});
+    const std::vector<int8_t> without = Impl::states(*impl_->detector, labels, cells);
     for (size_t k = 0; k < cells.size(); ++k)
       if (out[k].reproduced() && without[k] == right_state(out[k].label)) out[k].causes |= twin.phenomenon;
   }
   const bool unexplained = std::any_of(out.begin(), out.end(), [](const CellCause& c) { return c.reproduced() && !c.causes; });
   if (impl_->all_removed && unexplained) {
-    const std::vector<int8_t> without = impl_->states(*impl_->all_removed, request, labels, cells, pixelformat);
+    impl_->show(*impl_->all_removed, request, labels, pixelformat, {impl_->detector.get()});
+    const std::vector<int8_t> without = Impl::states(*impl_->detector, labels, cells);
     for (size_t k = 0; k < cells.size(); ++k)
       out[k].jointly = out[k].reproduced() && !out[k].causes && without[k] == right_state(out[k].label);
   }
+  return out;
+}
+
+void check_variant_name(const std::string& name) {
+  if (name.empty() || name.find_first_of(",\"+\r\n") != std::string::npos)
+    throw std::invalid_argument("detector variant name '" + name +
+                                "': must be non-empty, without ',', '\"', '+' or line breaks (a CSV field)");
+}
+
+std::string variant_names(const std::vector<DetectorVariant>& variants, uint8_t bits) {
+  std::string out;
+  for (size_t v = 0; v < variants.size(); ++v)
+    if (bits & (1u << v)) out += (out.empty() ? "" : "+") + variants[v].name;
   return out;
 }
 

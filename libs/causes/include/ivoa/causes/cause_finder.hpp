@@ -7,6 +7,12 @@
 // away turns the detector's verdict into the right one. Where no single
 // phenomenon does, a last twin without all of them tells whether they cause
 // it together.
+//
+// The same frames can also be checked by the detector with other settings
+// (DetectorVariant): where a variant gives the right verdict on a failure,
+// the failure is one of the detector's settings, and what the variant gets
+// wrong on the cells the detector got right is the price of changing it.
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -35,6 +41,13 @@ struct SessionTiming {
   uint64_t noise_seed = 0;  // the driver's --noise-seed
 };
 
+// Other settings of the same detector to try on the factual frames, e.g.
+// "full resolution" (--rect_scale 1). At most 8.
+struct DetectorVariant {
+  std::string name;                 // a CSV field: no ',', '"', '+' or line breaks
+  stereo::DetectorConfig config;
+};
+
 struct CellCause {
   int32_t cell = 0;            // index into the labels message
   int8_t label = 0;            // LABEL_FP or LABEL_FN
@@ -43,15 +56,26 @@ struct CellCause {
   uint8_t tested = 0;          // PHENOMENON_* bits the scene carries (a twin was rendered)
   uint8_t causes = 0;          // PHENOMENON_* bits whose removal (each alone) makes the verdict right
   bool jointly = false;        // no single removal does, removing all `tested` together does
+  uint8_t fixed_by = 0;        // bit i: variants[i] gives the right verdict on the factual frame
   bool reproduced() const { return replayed_state == stereo_state; }
+};
+
+// What one variant says on every labelled cell of the frames explained so
+// far (frames with failures only: others are not rendered), by the
+// recorded label (introspection_labels_t::LABEL_*, TP 0 .. FN 3). Right:
+// the state the depth monitor found (TP, FN: obstacle; TN, FP: free);
+// wrong: the other one; the rest gave no verdict.
+struct VariantTally {
+  std::array<int64_t, 4> cells{}, right{}, wrong{};
 };
 
 class CauseFinder {
  public:
   // Generates the scene and its twins once. Throws SceneSpecError or
-  // std::invalid_argument (detector name or config).
+  // std::invalid_argument (detector name or config, a bad variant).
   CauseFinder(const sim::SceneSpec& spec, uint64_t seed, const RigCalibration& rig, SessionTiming timing,
-              const std::string& detector, const stereo::DetectorConfig& detector_config);
+              const std::string& detector, const stereo::DetectorConfig& detector_config,
+              const std::vector<DetectorVariant>& variants = {});
   ~CauseFinder();
 
   // The failure cells of one frame's labels, in cell order (none: nothing
@@ -62,11 +86,18 @@ class CauseFinder {
 
   // The PHENOMENON_* bits this scene carries and twins exist for.
   uint8_t testable() const;
+  // One per variant, in the constructor's order.
+  const std::vector<VariantTally>& variant_tallies() const;
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// Throws std::invalid_argument unless the name can be a CSV field.
+void check_variant_name(const std::string& name);
+// "full resolution+narrow window" for bits 0 and 1; "" for none.
+std::string variant_names(const std::vector<DetectorVariant>& variants, uint8_t bits);
 
 // "reflection+dark stripe", "none found" for 0: names of PHENOMENON_* bits.
 std::string phenomena_names(uint8_t bits);
