@@ -596,14 +596,17 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         self.assertEqual(code, 2)
 
 
-def write_causes(path, sessions, detector="jppc", cause_of=None, not_reproduced=0, relabel=None):
+def write_causes(path, sessions, detector="jppc", cause_of=None, not_reproduced=0, relabel=None, fixed_by=None):
     """An ivoa-sim-causes CSV for the true FP/FN rows of `sessions`: causes
     bits from cause_of[label]; the first `not_reproduced` rows replayed to the
-    other state; `relabel` = (row index, label) writes one row with a wrong label."""
+    other state; `relabel` = (row index, label) writes one row with a wrong label;
+    `fixed_by(row index, label)`, if given, the fixed_by column (the tool's
+    newer output; older files lack it)."""
     cause_of = cause_of or {FP: REFLECTION, FN: 0}
     k = 0
     with open(path, "w") as f:
-        f.write("session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause\n")
+        f.write("session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause"
+                + (",fixed_by\n" if fixed_by else "\n"))
         for name, _, rows in sessions:
             for r in rows:
                 if r["label"] not in (FP, FN):
@@ -614,8 +617,16 @@ def write_causes(path, sessions, detector="jppc", cause_of=None, not_reproduced=
                 state = 1 if r["label"] == FP else 0
                 replayed = 1 - state if k < not_reproduced else state
                 f.write(f"{name},{detector},{r['utime']},{r['cell']},{label},1.0,0.0,{state},{replayed},11,"
-                        f"{cause_of[r['label']]},0,x\n")
+                        f"{cause_of[r['label']]},0,x" + (f",{fixed_by(k, label)}\n" if fixed_by else "\n"))
                 k += 1
+
+
+def write_variants(path, rows):
+    """An ivoa-sim-causes --variants-out CSV: rows of (detector, variant, label, cells, right, wrong)."""
+    with open(path, "w") as f:
+        f.write("session,detector,variant,label,cells,right,wrong\n")
+        for detector, variant, label, cells, right, wrong in rows:
+            f.write(f"s1,{detector},{variant},{label},{cells},{right},{wrong}\n")
 
 
 class CausesTest(FabricatedInputsCase):
@@ -715,6 +726,53 @@ class CausesTest(FabricatedInputsCase):
         self.assertEqual(code, 3, stderr)
         self.assertIn("causes_wrong.csv", stderr)
         self.assertIn("are the causes from the logs this dataset was built from?", stderr)
+
+
+class DetectorSettingsTest(FabricatedInputsCase):
+    """--variants (with --causes): what other detector settings fix and break."""
+    prefix = "ivoa_report_settings_"
+
+    def test_fixes_and_breaks_per_setting(self):
+        causes, variants = os.path.join(self.root, "causes.csv"), os.path.join(self.root, "variants.csv")
+        # Every FN has no cause found; "full resolution" fixes every other failure, "stricter" none.
+        fixed = []
+
+        def fixed_by(k, label):
+            fixed.extend([label] if k % 2 else [])
+            return "full resolution" if k % 2 else ""
+        write_causes(causes, self.f.sessions, fixed_by=fixed_by)
+        write_variants(variants, [("jppc", "full resolution", "TP", 10, 9, 1), ("jppc", "full resolution", "TN", 100, 60, 40),
+                                  ("jppc", "full resolution", "FP", 50, 5, 45), ("jppc", "full resolution", "FN", 30, 15, 15),
+                                  ("jppc", "stricter", "TN", 100, 100, 0), ("jppc", "stricter", "FN", 30, 0, 30)])
+        out = os.path.join(self.root, "report_settings")
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--causes", causes,
+                                    "--variants", variants, "--out", out, "--tsne-iterations", "250"])
+        self.assertEqual(code, 0, stderr)
+        settings = json.loads(read_text(os.path.join(out, "metrics.json")))["detector_settings"]["jppc"]
+        full = next(e for e in settings if e["variant"] == "full resolution")
+        self.assertEqual((full["FN"]["changed"], full["FN"]["n"]), (15, 30))
+        self.assertAlmostEqual(full["TN"]["share"], 0.4)  # TP and TN: the right verdicts it gets wrong
+        self.assertAlmostEqual(full["TP"]["share"], 0.1)
+        n_fn = full["FN_none_found"]["n"]
+        self.assertEqual(n_fn, 30)  # every true FN row, none found
+        self.assertEqual(full["FN_none_found"]["changed"], fixed.count("FN"))
+        self.assertGreater(fixed.count("FN"), 0)
+        self.assertEqual(full["FP_none_found"]["n"], 0)  # the FP are the reflection's
+        stricter = next(e for e in settings if e["variant"] == "stricter")
+        self.assertEqual(stricter["FN"]["share"], 0.0)
+        self.assertEqual(stricter["TP"]["n"], 0)
+        self.assertEqual(stricter["FN_none_found"]["changed"], 0)
+        report = read_text(os.path.join(out, "report.md"))
+        self.assertIn("## Other detector settings on the same frames", report)
+        self.assertIn("| jppc | full resolution | 10 % of 50 | 50 % of 30 |", report)
+
+    def test_impossible_counts_are_refused(self):
+        variants = os.path.join(self.root, "variants_bad.csv")
+        write_variants(variants, [("jppc", "full resolution", "TN", 10, 8, 5)])
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--variants", variants,
+                                    "--out", os.path.join(self.root, "report_bad")])
+        self.assertEqual(code, 3, stderr)
+        self.assertIn("variants_bad.csv: row 1: 8 right and 5 wrong of 10 cells", stderr)
 
 
 class MetricUnitTest(unittest.TestCase):

@@ -73,7 +73,7 @@ import report_markdown as md  # noqa: E402
 import report_metrics as metrics  # noqa: E402
 from report_clustering import ClusterOptions, cluster_failures  # noqa: E402
 from report_inputs import (Dataset, EvalRun, InputError, attach_causes, attach_dataset, load_causes,  # noqa: E402
-                           load_eval, make_names, patch_scale, patch_sides, patch_size, query_grid)
+                           load_eval, load_variants, make_names, patch_scale, patch_sides, patch_size, query_grid)
 
 
 def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
@@ -104,6 +104,9 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     p.add_argument("--causes", action="append", metavar="CAUSES_CSV",
                    help="ivoa-sim-causes output for the test sessions' logs (once per detector): composition and "
                         "purity of the clusters by what causes each failure (simulated sessions only)")
+    p.add_argument("--variants", action="append", metavar="VARIANTS_CSV",
+                   help="ivoa-sim-causes --variants-out output: what other detector settings fix and break on the "
+                        "same frames (with --causes from the same run, also among the failures with no cause found)")
     p.add_argument("--max-overlays", type=int, default=0,
                    help="copy at most this many overlay figures per model into the report (0 = all)")
     a = p.parse_args(argv)
@@ -119,8 +122,9 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
 
 
 def load_inputs(args: argparse.Namespace):
-    """Reads every eval folder and its dataset, checking they agree. Raises
-    InputError on bad input; returns the runs and warnings for the report."""
+    """Reads every eval folder and its dataset, checking they agree, and the
+    causes and variants CSVs. Raises InputError on bad input; returns the
+    runs, the detector settings' figures and warnings for the report."""
     runs = [load_eval(p) for p in args.eval]
     make_names(runs)
     datasets: Dict[str, Dataset] = {}
@@ -131,11 +135,12 @@ def load_inputs(args: argparse.Namespace):
         if key not in datasets:
             datasets[key] = Dataset(path)
         warnings += attach_dataset(run, datasets[key])
-    if args.causes:
-        causes = [load_causes(path) for path in args.causes]
-        for run in runs:
+    causes = [load_causes(path) for path in args.causes or []]
+    for run in runs:
+        if causes:
             warnings += attach_causes(run, causes)
-    return runs, warnings
+    settings = metrics.detector_settings([load_variants(path) for path in args.variants or []], causes)
+    return runs, settings, warnings
 
 
 def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out_dir: str):
@@ -281,7 +286,7 @@ def _json_default(o):
 
 def run_report(args: argparse.Namespace, argv: List[str]) -> int:
     """Loads, analyses, writes report.md + metrics.json, prints the summary."""
-    runs, warnings = load_inputs(args)
+    runs, settings, warnings = load_inputs(args)
     out_dir = args.out
     try:
         os.makedirs(out_dir, exist_ok=True)
@@ -314,13 +319,14 @@ def run_report(args: argparse.Namespace, argv: List[str]) -> int:
     parts += sections
     if comparison:
         parts.append(comparison)
+    parts.append(md.settings_section(settings))
     parts.append(md.method_notes(opt))
     report_path = os.path.join(out_dir, "report.md")
     with open(report_path, "w", encoding="utf-8") as f:
         f.write("\n".join(parts))
     with open(os.path.join(out_dir, "metrics.json"), "w", encoding="utf-8") as f:
-        json.dump({"title": args.title, "models": numbers, "warnings": sorted(set(warnings))}, f, indent=1,
-                  default=_json_default)
+        json.dump({"title": args.title, "models": numbers, "detector_settings": settings,
+                   "warnings": sorted(set(warnings))}, f, indent=1, default=_json_default)
 
     for w in sorted(set(warnings)):
         print(f"warning: {w}", file=sys.stderr)

@@ -521,6 +521,11 @@ class Causes:
     path: str
     rows: Dict[tuple, tuple]
     detectors: set
+    # Failures no phenomenon explains ("none found"), by (detector, label
+    # name), and how many of them each detector variant fixes, by
+    # (detector, label name, variant): from the fixed_by column, when present.
+    unexplained: Dict[tuple, int] = field(default_factory=dict)
+    unexplained_fixed: Dict[tuple, int] = field(default_factory=dict)
 
 
 def load_causes(path: str) -> Causes:
@@ -536,7 +541,39 @@ def load_causes(path: str) -> Causes:
             raise InputError(f"{path}: row {i + 1}: label '{label}' (causes are for FP and FN cells)")
         cause = int(bits[i]) if stereo[i] == replayed[i] else NO_CAUSE
         rows[(session, detector, int(utime[i]), int(cell[i]))] = (LABEL_NAMES.index(label), cause)
-    return Causes(path=path, rows=rows, detectors=set(cols["detector"]))
+    causes = Causes(path=path, rows=rows, detectors=set(cols["detector"]))
+    for i, (detector, label) in enumerate(zip(cols["detector"], cols["label"])):
+        if "fixed_by" not in cols or stereo[i] != replayed[i] or bits[i] != 0:
+            continue
+        causes.unexplained[(detector, label)] = causes.unexplained.get((detector, label), 0) + 1
+        for variant in filter(None, cols["fixed_by"][i].split("+")):
+            key = (detector, label, variant)
+            causes.unexplained_fixed[key] = causes.unexplained_fixed.get(key, 0) + 1
+    return causes
+
+
+# The --variants-out CSV of ivoa-sim-causes: per session, detector variant
+# and label, the labelled cells of the re-rendered frames and how many the
+# variant gets right (the depth monitor's state) and wrong.
+VARIANT_COLUMNS = ("session", "detector", "variant", "label", "cells", "right", "wrong")
+
+
+def load_variants(path: str) -> Dict[tuple, Dict[str, int]]:
+    """Sums of cells/right/wrong by (detector, variant, label name); bad
+    content is an InputError naming the row."""
+    cols = _read_csv_columns(path, VARIANT_COLUMNS)
+    counts = {k: _numeric(path, cols, k, int) for k in ("cells", "right", "wrong")}
+    out: Dict[tuple, Dict[str, int]] = {}
+    for i, (detector, variant, label) in enumerate(zip(cols["detector"], cols["variant"], cols["label"])):
+        if label not in LABEL_NAMES:
+            raise InputError(f"{path}: row {i + 1}: label '{label}' (expected one of {', '.join(LABEL_NAMES)})")
+        n, right, wrong = (int(counts[k][i]) for k in ("cells", "right", "wrong"))
+        if min(n, right, wrong) < 0 or right + wrong > n:
+            raise InputError(f"{path}: row {i + 1}: {right} right and {wrong} wrong of {n} cells")
+        sums = out.setdefault((detector, variant, label), {"cells": 0, "right": 0, "wrong": 0})
+        for k, v in (("cells", n), ("right", right), ("wrong", wrong)):
+            sums[k] += v
+    return out
 
 
 def attach_causes(run: EvalRun, all_causes: List[Causes]) -> List[str]:

@@ -436,6 +436,27 @@ def _causes_comparison(runs: List[EvalRun], metrics: Dict[str, dict]) -> str:
             + table(headers, rows))
 
 
+def settings_section(settings: Dict[str, List[dict]]) -> str:
+    """Other settings of each detector, tried on the same frames: what they
+    fix and what they break."""
+    if not settings:
+        return ""
+    rows = []
+    for detector, entries in sorted(settings.items()):
+        for e in entries:
+            def cell(key):
+                return f"{pct(e[key]['share'], 0)} of {e[key]['n']}" if e[key]["n"] else "–"
+            rows.append([detector, e["variant"], cell("FP"), cell("FN"), cell("FP_none_found"),
+                         cell("FN_none_found"), cell("TP"), cell("TN")])
+    return ("\n## Other detector settings on the same frames\n\n"
+            "`ivoa-sim-causes --variant` re-ran each detector with other settings on the frames as they were "
+            "(those with failures). *Fixes*: the failures it gets right; *breaks*: the right verdicts it gets "
+            "wrong. A setting explains failures only where it fixes far more of them than it breaks: one that "
+            "fixes the misses and breaks free cells at a similar rate merely says \"obstacle\" more often.\n\n"
+            + table(["detector", "setting", "fixes FP", "fixes FN", "fixes FP with no cause found",
+                     "fixes FN with no cause found", "breaks TP", "breaks TN"], rows) + "\n")
+
+
 def _rate_extremes(runs: List[EvalRun], metrics: Dict[str, dict], code, key: str, min_samples: int):
     """(highest, lowest) of one per-phenomenon rate over the models with enough
     samples of that phenomenon, each as (rate, model name, entry); None if fewer

@@ -348,3 +348,25 @@ def headline(run_metrics: dict) -> Dict[str, Optional[float]]:
         "mpca_at_70": s["at_70"]["mean_per_class_accuracy"],
         "accuracy_at_70": s["at_70"]["overall_accuracy"],
     }
+
+
+def detector_settings(variants: List[Dict[tuple, Dict[str, int]]], causes: list) -> Dict[str, List[dict]]:
+    """Per detector, each variant tried by ivoa-sim-causes on the same frames:
+    the share of the FP and FN it fixes (of all, and of those no phenomenon
+    explains) and the share of the right TP and TN verdicts it gets wrong."""
+    out: Dict[str, List[dict]] = {}
+    for table in variants:
+        for detector, variant in sorted({(d, v) for d, v, _ in table}):
+            entry = {"variant": variant}
+            for label in LABEL_NAMES:
+                c = table.get((detector, variant, label), {"cells": 0, "right": 0, "wrong": 0})
+                changed = c["right"] if label in ("FP", "FN") else c["wrong"]
+                entry[label] = {"n": c["cells"], "changed": changed,
+                                "share": changed / c["cells"] if c["cells"] else None}
+            for label in ("FP", "FN"):
+                n = sum(x.unexplained.get((detector, label), 0) for x in causes)
+                fixed = sum(x.unexplained_fixed.get((detector, label, variant), 0) for x in causes)
+                entry[f"{label}_none_found"] = {"n": n, "changed": fixed, "share": fixed / n if n else None}
+            out.setdefault(detector, []).append(entry)
+    return out
+
