@@ -12,7 +12,8 @@
 #   4. evaluate them (and the shipped model) on the held-out test sessions:
 #      scenes generated from seeds never used in training;
 #   5. find what causes each detector's failures in the test sessions:
-#      re-render the frame without each phenomenon and re-run the detector;
+#      re-render the frame without each phenomenon and re-run the detector,
+#      and run the detector at full resolution on the frame as it was;
 #   6. write the report (metrics, uncertainty, failure clusters and their
 #      purity by phenomenon and by cause, figures).
 #
@@ -218,19 +219,22 @@ if [ -f "$SHIPPED" ] && [ "$views" = "$SHIPPED_VIEWS" ] && [ "$patch_scale" = "$
 fi
 
 step "Finding what causes each detector's failures in the test sessions"
-echo "  each failure frame re-rendered without each phenomenon, the detector re-run on its FP/FN cells (ivoa-sim-causes)"
+echo "  each failure frame re-rendered without each phenomenon, the detector re-run on its FP/FN cells, and at full"
+echo "  resolution on the frame as it was (ivoa-sim-causes)"
 test_logs=()
 for s in "${test[@]}"; do test_logs+=("$out/logs/$s.lcmlog"); done
 echo "  JPP-C (the labels recorded live):"
-"$BIN/ivoa-sim-causes" --log-level warn --jobs 2 --rate "$RATE" --out "$out/causes_jppc.csv" "${test_logs[@]}" |
-  tee "$out/causes_jppc.txt"
+"$BIN/ivoa-sim-causes" --log-level warn --jobs 2 --rate "$RATE" --out "$out/causes_jppc.csv" \
+  --variants-out "$out/variants_jppc.csv" "${test_logs[@]}" | tee "$out/causes_jppc.txt"
 echo "  dense (the labels made offline, from its dataset):"
 "$BIN/ivoa-sim-causes" --log-level warn --jobs 2 --rate "$RATE" --dataset "$out/data_dense" \
-  --out "$out/causes_dense.csv" "${test_logs[@]}" | tee "$out/causes_dense.txt"
+  --out "$out/causes_dense.csv" --variants-out "$out/variants_dense.csv" "${test_logs[@]}" |
+  tee "$out/causes_dense.txt"
 
 step "Writing the report"
 "$PY" "$ROOT/tools/report/ivoa_report.py" "${evals[@]}" "${datasets[@]}" --causes "$out/causes_jppc.csv" \
-  --causes "$out/causes_dense.csv" --out "$out/report" --title "IVOA on the simulated robot ($scale scale)" |
+  --causes "$out/causes_dense.csv" --variants "$out/variants_jppc.csv" --variants "$out/variants_dense.csv" \
+  --out "$out/report" --title "IVOA on the simulated robot ($scale scale)" |
   tee "$out/report_summary.txt"
 
 elapsed=$(($(date +%s) - start_time))
