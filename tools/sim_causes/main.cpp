@@ -62,7 +62,7 @@ struct Options {
 const char* const kDefaultVariant = "full resolution: --rect_scale 1 --sgbm_rect_scale 1 --sgbm_num_disparities 192";
 
 // "NAME: FLAGS" -> the base config with FLAGS (the detector flags of this
-// tool) applied. Throws std::invalid_argument naming the variant.
+// tool) applied and checked. Throws std::invalid_argument naming the variant.
 causes::DetectorVariant parse_variant(const std::string& text, const stereo::DetectorConfig& base) {
   const size_t colon = text.find(':');
   if (colon == std::string::npos)
@@ -78,7 +78,9 @@ causes::DetectorVariant parse_variant(const std::string& text, const stereo::Det
   stereo::add_detector_options(flags, v.config);
   try {
     flags.parse(text.substr(colon + 1), false);
-  } catch (const CLI::ParseError& e) {
+    stereo::validate(v.config.jpp);
+    stereo::validate(v.config.dense);
+  } catch (const std::exception& e) {  // CLI::ParseError or a bad value
     throw std::invalid_argument("--variant '" + text + "': " + e.what());
   }
   return v;
@@ -388,7 +390,12 @@ int main(int argc, char** argv) {
   init_logging("sim-causes", common.log_level);
   try {
     if (!no_variants)
-      for (const std::string& v : variants) opt.variants.push_back(parse_variant(v, opt.detector));
+      for (const std::string& v : variants) {
+        opt.variants.push_back(parse_variant(v, opt.detector));
+        for (size_t i = 0; i + 1 < opt.variants.size(); ++i)
+          if (opt.variants[i].name == opt.variants.back().name)
+            throw std::invalid_argument("--variant '" + v + "': the name is already used");
+      }
     if (opt.variants.size() > 8) throw std::invalid_argument("at most 8 --variant");
   } catch (const std::invalid_argument& e) {
     spdlog::error("{}", e.what());
@@ -400,13 +407,16 @@ int main(int argc, char** argv) {
     spdlog::error("cannot write {}", opt.out);
     return kExitIoError;
   }
-  std::ofstream variants_csv;
-  if (!opt.variants_out.empty() && !(variants_csv = std::ofstream(opt.variants_out))) {
-    spdlog::error("cannot write {}", opt.variants_out);
-    return kExitIoError;
+  std::ofstream variants_csv;  // stays closed without --variants-out: writes to it do nothing
+  if (!opt.variants_out.empty()) {
+    variants_csv.open(opt.variants_out);
+    if (!variants_csv) {
+      spdlog::error("cannot write {}", opt.variants_out);
+      return kExitIoError;
+    }
+    variants_csv << "session,detector,variant,label,cells,right,wrong\n";
   }
   csv << "session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause,fixed_by\n";
-  variants_csv << "session,detector,variant,label,cells,right,wrong\n";
   Tally tally;
   tally.unexplained_fixed.resize(opt.variants.size());
   tally.variants.resize(opt.variants.size());
