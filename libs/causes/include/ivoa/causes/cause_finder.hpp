@@ -10,8 +10,9 @@
 //
 // The same frames can also be checked by the detector with other settings
 // (DetectorVariant): where a variant gives the right verdict on a failure,
-// the failure is one of the detector's settings, and what the variant gets
-// wrong on the cells the detector got right is the price of changing it.
+// that setting would have avoided it, and what the variant gets wrong on the
+// cells the detector got right is the price. A setting that fixes and
+// breaks at similar rates only shifts the detector's bias.
 #include <array>
 #include <cstdint>
 #include <memory>
