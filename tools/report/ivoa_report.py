@@ -136,8 +136,8 @@ def load_inputs(args: argparse.Namespace):
             datasets[key] = Dataset(path)
         warnings += attach_dataset(run, datasets[key])
     causes = [load_causes(path) for path in args.causes or []]
-    for run in runs:
-        if causes:
+    if causes:
+        for run in runs:
             warnings += attach_causes(run, causes)
     settings = metrics.detector_settings([load_variants(path) for path in args.variants or []], causes)
     return runs, settings, warnings

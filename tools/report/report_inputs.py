@@ -542,13 +542,13 @@ def load_causes(path: str) -> Causes:
         cause = int(bits[i]) if stereo[i] == replayed[i] else NO_CAUSE
         rows[(session, detector, int(utime[i]), int(cell[i]))] = (LABEL_NAMES.index(label), cause)
     causes = Causes(path=path, rows=rows, detectors=set(cols["detector"]))
-    for i, (detector, label) in enumerate(zip(cols["detector"], cols["label"])):
-        if "fixed_by" not in cols or stereo[i] != replayed[i] or bits[i] != 0:
-            continue
-        causes.unexplained[(detector, label)] = causes.unexplained.get((detector, label), 0) + 1
-        for variant in filter(None, cols["fixed_by"][i].split("+")):
-            key = (detector, label, variant)
-            causes.unexplained_fixed[key] = causes.unexplained_fixed.get(key, 0) + 1
+    if "fixed_by" in cols:  # older files lack it
+        none_found = (stereo == replayed) & (bits == 0)
+        for detector, label, fixed_by in zip(*(np.array(cols[k])[none_found] for k in ("detector", "label", "fixed_by"))):
+            key = (str(detector), str(label))
+            causes.unexplained[key] = causes.unexplained.get(key, 0) + 1
+            for variant in filter(None, str(fixed_by).split("+")):
+                causes.unexplained_fixed[key + (variant,)] = causes.unexplained_fixed.get(key + (variant,), 0) + 1
     return causes
 
 

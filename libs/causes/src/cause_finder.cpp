@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <optional>
 #include <utility>
 
@@ -152,7 +151,7 @@ void CauseFinder::Impl::try_variants(const Labels& labels, std::vector<CellCause
     if (labels.label[static_cast<size_t>(c)] != Labels::LABEL_NONE) labelled.push_back(c);
   for (size_t v = 0; v < variants.size(); ++v) {
     const std::vector<int8_t> said = states(*variants[v].detector, labels, labelled);
-    std::map<int32_t, int8_t> said_at;
+    std::vector<int8_t> said_at(static_cast<size_t>(labels.num_cells), obstacle_grid_t::STATE_UNKNOWN);
     for (size_t k = 0; k < labelled.size(); ++k) {
       const int8_t label = labels.label[static_cast<size_t>(labelled[k])];
       const auto l = static_cast<size_t>(label);
@@ -160,10 +159,10 @@ void CauseFinder::Impl::try_variants(const Labels& labels, std::vector<CellCause
       ++tallies[v].cells[l];
       tallies[v].right[l] += said[k] == truth;
       tallies[v].wrong[l] += said[k] != truth && said[k] != obstacle_grid_t::STATE_UNKNOWN;
-      said_at[labelled[k]] = said[k];
+      said_at[static_cast<size_t>(labelled[k])] = said[k];
     }
     for (CellCause& f : failures)
-      if (f.reproduced() && said_at[f.cell] == right_state(f.label)) f.fixed_by |= static_cast<uint8_t>(1u << v);
+      if (f.reproduced() && said_at[static_cast<size_t>(f.cell)] == right_state(f.label)) f.fixed_by |= static_cast<uint8_t>(1u << v);
   }
 }
 
