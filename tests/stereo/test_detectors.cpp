@@ -2,6 +2,7 @@
 // see (a textured box, free textured floor) and the failures the IVOA paper
 // reports for JPP-C where physics says they happen (a texture-less wall read
 // as free, a reflective floor read as an obstacle).
+#include <cmath>
 #include <functional>
 
 #include <gtest/gtest.h>
@@ -249,6 +250,47 @@ TEST(Detectors, JppcDiscFootprintHasThirteenSamplesWithinR) {
   detector.set_frame(left, right);
   EXPECT_EQ(detector.check(1.5, 0.0, 0.10), Verdict::kFree);
   EXPECT_EQ(detector.stats().cp_tests, 13);  // the 0.05 m lattice points within 0.10 m
+}
+
+TEST(Detectors, JppcEvidenceIsTheWindowCostOfEverySample) {
+  const RigCalibration rig = test::make_test_rig();
+  cv::Mat left, right;
+  test::render_pair(cabinet(true), rig, left, right, 1);
+  const JppConfig config;
+  JppcDetector detector(rig, config);
+  detector.set_frame(left, right);
+  for (const auto& [x, expected] : {std::pair{1.0, Verdict::kFree}, {1.5, Verdict::kObstacle}}) {
+    const Evidence e = detector.evidence(x, 0.0, 0.10);
+    EXPECT_EQ(e.verdict, expected) << x;
+    EXPECT_EQ(e.verdict, detector.check(x, 0.0, 0.10)) << x;
+    ASSERT_EQ(e.values.size(), 15u) << x;  // all samples, also after one fails
+    int failing = 0;
+    for (float cost : e.values) {
+      ASSERT_TRUE(std::isfinite(cost));
+      EXPECT_GE(cost, 0.0f);
+      failing += cost >= config.conf_pos_thresh;
+    }
+    EXPECT_EQ(failing > 0, expected == Verdict::kObstacle) << x;
+    if (expected == Verdict::kObstacle) {
+      EXPECT_GT(failing, 1) << "the ground hidden by the face fails throughout";
+    }
+  }
+  // Nothing seen: NaN for every sample, and the verdict check() gives.
+  const Evidence behind = detector.evidence(-1.0, 0.0, 0.10);
+  EXPECT_EQ(behind.verdict, Verdict::kUnknown);
+  ASSERT_EQ(behind.values.size(), 15u);
+  for (float cost : behind.values) EXPECT_TRUE(std::isnan(cost));
+}
+
+TEST(Detectors, DenseDetectorKeepsNoEvidence) {
+  const RigCalibration rig = test::make_test_rig();
+  cv::Mat left, right;
+  test::render_pair(room(), rig, left, right, 1);
+  auto detector = make_detector("dense", rig, {});
+  detector->set_frame(left, right);
+  const Evidence e = detector->evidence(1.5, 0.0, 0.10);
+  EXPECT_TRUE(e.values.empty());
+  EXPECT_EQ(e.verdict, detector->check(1.5, 0.0, 0.10));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "ivoa/stereo/jppc_detector.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include "region_remap.hpp"
 
@@ -75,11 +76,12 @@ void JppcDetector::for_each_sample(double x, double y, double radius, Visit visi
         if (!visit(Eigen::Vector3d(x + i * step, y + j * step, 0.0))) return;
 }
 
-PointCheck JppcDetector::confident_positive(const Eigen::Vector3d& p_robot) {
+PointCheck JppcDetector::confident_positive(const Eigen::Vector3d& p_robot, double* cost) {
+  if (cost) *cost = std::numeric_limits<double>::quiet_NaN();
   const Projection p = project(p_robot);
   if (!has_frame_ || !p.valid) return PointCheck::kUnobserved;
   if (!prepared_ || !matcher_.covers(p.left, p.right)) prepare({}, {});
-  return matcher_.confident_positive(p.left, p.right);
+  return matcher_.confident_positive(p.left, p.right, cost);
 }
 
 Verdict JppcDetector::check(double x, double y, double radius) {
@@ -94,6 +96,21 @@ Verdict JppcDetector::check(double x, double y, double radius) {
   });
   if (obstacle) return Verdict::kObstacle;
   return unobserved ? Verdict::kUnknown : Verdict::kFree;
+}
+
+Evidence JppcDetector::evidence(double x, double y, double radius) {
+  Evidence e;
+  bool obstacle = false, unobserved = false;
+  for_each_sample(x, y, radius, [&](const Eigen::Vector3d& q) {
+    double cost = 0;
+    const PointCheck c = confident_positive(q, &cost);
+    obstacle |= c == PointCheck::kNoMatch;
+    unobserved |= c == PointCheck::kUnobserved;
+    e.values.push_back(static_cast<float>(cost));
+    return true;  // every sample, unlike check()
+  });
+  e.verdict = obstacle ? Verdict::kObstacle : unobserved ? Verdict::kUnknown : Verdict::kFree;
+  return e;
 }
 
 void JppcDetector::evaluate(const QueryGrid& grid, obstacle_grid_t& out) {

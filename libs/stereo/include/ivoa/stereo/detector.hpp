@@ -21,6 +21,17 @@ namespace ivoa::stereo {
 
 enum class Verdict { kFree, kObstacle, kUnknown };
 
+// What a footprint check measured on the way to its verdict: one value per
+// ground sample the detector tests, in a fixed order for a given radius
+// (NaN where it saw nothing), and the verdict they give. Introspection
+// learns to predict these values as a side task (ivoa-train
+// --evidence-weight): they say how close each verdict came to going the
+// other way, which the verdict alone does not.
+struct Evidence {
+  std::vector<float> values;
+  Verdict verdict = Verdict::kUnknown;
+};
+
 // Thrown by set_frame for images that do not fit the calibration; what()
 // says what was received and what was expected.
 class FrameError : public std::runtime_error {
@@ -40,6 +51,12 @@ class ObstacleDetector {
 
   // Footprint check of the ground point (x, y, 0), robot frame, metres.
   virtual Verdict check(double x, double y, double radius) = 0;
+
+  // The same check with what it measured (Evidence); empty values for a
+  // detector that keeps none. JPP-C: the window cost of every ground sample
+  // (obstacle iff one is >= conf_pos_thresh), all of them even after the
+  // first that fails.
+  virtual Evidence evidence(double x, double y, double radius) { return {{}, check(x, y, radius)}; }
 
   // Fills out.state for every cell of `grid` (out as made by
   // make_obstacle_grid for this grid): check() at the grid's safety radius

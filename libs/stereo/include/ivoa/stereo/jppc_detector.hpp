@@ -57,10 +57,12 @@ class JppcDetector : public ObstacleDetector {
   std::string name() const override { return "jppc"; }
   void set_frame(const cv::Mat& left_raw, const cv::Mat& right_raw) override;
   Verdict check(double x, double y, double radius) override;
+  Evidence evidence(double x, double y, double radius) override;  // window costs, 15 for r = 0.10
   void evaluate(const QueryGrid& grid, obstacle_grid_t& out) override;
 
-  // Confident positive for one robot-frame point (JPP's CP).
-  PointCheck confident_positive(const Eigen::Vector3d& p_robot);
+  // Confident positive for one robot-frame point (JPP's CP); `cost`, if
+  // given, receives the window cost (NaN when unobserved).
+  PointCheck confident_positive(const Eigen::Vector3d& p_robot, double* cost = nullptr);
 
   const StereoRectification& rectification() const { return rect_; }
   // Rectified images, valid inside the prepared regions (all of it after
