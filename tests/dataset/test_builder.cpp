@@ -3,6 +3,7 @@
 // (detector + monitor + Algorithm 1 per frame, without the pairing
 // pipeline), and recorded labels are taken as they are.
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -21,6 +22,7 @@
 #include "ivoa/monitor/depth_monitor.hpp"
 #include "ivoa/monitor/labeler.hpp"
 #include "ivoa/stereo/detector.hpp"
+#include "ivoa/stereo/jppc_detector.hpp"
 #include "sim_log.hpp"
 #include "test_rig.hpp"
 
@@ -115,6 +117,58 @@ TEST(DatasetBuilder, RerunLabelsMatchAnIndependentRecomputationAndPatchesTheFram
     const cv::Mat crop = extract_patch(expected.left.at(s.utime), s.u, s.v, 100);
     EXPECT_EQ(cv::norm(session.patch(k), crop, cv::NORM_INF), 0) << "patch " << k;
   }
+}
+
+TEST(DatasetBuilder, StoresTheDetectorsEvidenceAndNaNWhereTheRecordedVerdictDiffers) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("ev.lcmlog");
+  const RigCalibration rig = sim::make_sim_rig();
+  std::map<std::pair<int64_t, int>, std::vector<float>> expected;
+  std::pair<int64_t, int> flipped{-1, -1};
+  test::write_sim_log(log_path, kScene, 5, 3, [&](Bus& bus, const test::SimLogFrame& f, const sim::SimFrame& frame) {
+    introspection_labels_t labels = recompute_labels(rig, frame, f.utime, f.depth_utime);
+    stereo::JppcDetector jppc(rig, stereo::JppConfig{});
+    jppc.set_frame(frame.left, frame.right);
+    for (size_t i = 0; i < labels.label.size(); ++i) {
+      if (labels.label[i] == introspection_labels_t::LABEL_NONE) continue;
+      expected[{f.utime, static_cast<int>(i)}] = jppc.evidence(labels.x[i], labels.y[i], labels.safety_radius).values;
+      if (flipped.first < 0) {  // as if recorded with other settings
+        labels.stereo_state[i] = static_cast<int8_t>(1 - labels.stereo_state[i]);
+        flipped = {f.utime, static_cast<int>(i)};
+      }
+    }
+    bus.publish(channels::kIntrospectionLabels, labels);
+  });
+  SessionBuilder builder(dir.file("data"), "ev", BuildOptions{});  // recorded labels
+  builder.add_log(log_path);
+  EXPECT_EQ(builder.finish().evidence_mismatches, 1);
+  const SessionReader session(dir.file("data") + "/ev");
+  ASSERT_EQ(session.info().evidence_size, 15);
+  size_t compared = 0;
+  for (size_t k = 0; k < session.size(); ++k) {
+    const SampleRecord& s = session.samples()[k];
+    const float* e = session.evidence(k);
+    const std::vector<float>& want = expected.at({s.utime, s.cell});
+    ASSERT_EQ(want.size(), 15u);
+    for (size_t j = 0; j < 15; ++j) {
+      if (std::make_pair(s.utime, s.cell) == flipped || std::isnan(want[j])) {
+        EXPECT_TRUE(std::isnan(e[j])) << k;
+      } else {
+        EXPECT_EQ(e[j], want[j]) << "sample " << k << " ground sample " << j;
+      }
+    }
+    ++compared;
+  }
+  EXPECT_GT(compared, 20u);
+
+  BuildOptions off;
+  off.evidence = false;
+  EXPECT_EQ(build_session(dir.file("data"), "off", log_path, off).info().evidence_size, 0);
+  BuildOptions dense;
+  dense.labels = "dense";
+  const SessionReader dense_session = build_session(dir.file("data"), "dense", log_path, dense);
+  EXPECT_EQ(dense_session.info().evidence_size, 0) << "the dense detector keeps no evidence";
+  EXPECT_GT(dense_session.size(), 0u);
 }
 
 TEST(DatasetBuilder, TwoViewPatchesStackTheGroundWarpedRightView) {

@@ -1,4 +1,6 @@
+#include <cmath>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <iterator>
 
@@ -160,6 +162,47 @@ TEST(DatasetFormat, TruncatedPatchStoreIsReported) {
     FAIL();
   } catch (const DatasetError& e) {
     EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DatasetFormat, EvidenceRoundTripsPerSampleAndOldSessionsHaveNone) {
+  test::TempDir dir;
+  SessionInfo with = info("ev");
+  with.evidence_size = 3;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  {
+    SessionWriter w(dir.path().string(), with);
+    w.add_frame(1, 1, 2);
+    SampleRecord s;
+    w.add_sample(s, numbered_patch(0), {0.25f, 0.5f, 1.25f});
+    w.add_sample(s, numbered_patch(1), {nan, 0.75f, 2.0f});
+    EXPECT_THROW(w.add_sample(s, numbered_patch(2)), DatasetError) << "the session stores 3 values per sample";
+    EXPECT_THROW(w.add_sample(s, numbered_patch(2), {1.0f}), DatasetError);
+  }
+  const SessionReader r((dir.path() / "ev").string());
+  ASSERT_EQ(r.info().evidence_size, 3);
+  ASSERT_EQ(r.size(), 2u);
+  EXPECT_FLOAT_EQ(r.evidence(0)[2], 1.25f);
+  EXPECT_TRUE(std::isnan(r.evidence(1)[0]));
+  EXPECT_FLOAT_EQ(r.evidence(1)[1], 0.75f);
+
+  {
+    SessionWriter w(dir.path().string(), info("none"));
+    w.add_frame(1, 1, 1);
+    EXPECT_THROW(w.add_sample(SampleRecord{}, numbered_patch(0), {1.0f}), DatasetError);
+    w.add_sample(SampleRecord{}, numbered_patch(0));
+  }
+  const SessionReader none((dir.path() / "none").string());
+  EXPECT_EQ(none.info().evidence_size, 0);
+  EXPECT_EQ(none.evidence(0), nullptr);
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "none" / "evidence.f32"));
+
+  std::filesystem::resize_file(dir.path() / "ev" / "evidence.f32", 5 * sizeof(float));
+  try {
+    SessionReader truncated((dir.path() / "ev").string());
+    FAIL();
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("evidence.f32"), std::string::npos) << e.what();
   }
 }
 

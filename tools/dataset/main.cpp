@@ -62,6 +62,9 @@ int build_session(const std::string& out, const std::string& session, const std:
   if (r.tn_dropped > 0)
     std::printf("%-28s %lld TN cells left out (--keep-tn %g)\n", "", static_cast<long long>(r.tn_dropped),
                 options.keep_tn);
+  if (r.evidence_mismatches > 0)
+    std::printf("%-28s %lld samples' evidence left NaN: the re-run detector's verdict differs from the label's\n", "",
+                static_cast<long long>(r.evidence_mismatches));
   for (const auto& p : r.problems) spdlog::warn("{}: {}", session, p);
   return r.problems.empty() ? kExitOk : kExitBadInput;
 }
@@ -103,6 +106,7 @@ int run_info(const std::string& root, const std::string& split_path) {
                 split_of.count(name) ? split_of[name].c_str() : "-", i.environment.c_str(), i.detector.c_str(),
                 static_cast<long long>(i.frames), static_cast<long long>(i.samples),
                 class_counts(i.class_counts).c_str());
+    if (i.evidence_size > 0) std::printf("%-28s evidence: %d values per sample\n", "", i.evidence_size);
     if (i.tn_kept < 1)
       std::printf("%-28s TN thinned to %g: %lld TN cells left out\n", "", i.tn_kept, static_cast<long long>(i.tn_dropped));
     for (int k = 0; k < dataset::kNumClasses; ++k) total[static_cast<size_t>(k)] += i.class_counts[static_cast<size_t>(k)];
@@ -154,6 +158,10 @@ int main(int argc, char** argv) {
           },
           "in (0, 1]"))
       ->capture_default_str();
+  bool no_evidence = false;
+  build->add_flag("--no-evidence", no_evidence,
+                  "do not store the detector's per-sample evidence (JPP-C's window costs, re-run on each frame; "
+                  "ivoa-train learns them as a side task)");
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
       ->capture_default_str();
   build->add_option("logs", logs, "LCM log files, in order")->required()->check(CLI::ExistingFile);
@@ -170,6 +178,7 @@ int main(int argc, char** argv) {
 
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("dataset", common.log_level);
+  options.evidence = !no_evidence;
   if (*build && options.labels == dataset::kRecordedLabels) {
     const CLI::Option& patch_size = *build->get_option("--patch-size");
     if (const CLI::Option* flag = ignored_with_recorded_labels(relabel_flags, patch_size, options)) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <deque>
+#include <limits>
 #include <map>
 #include <optional>
 
@@ -69,6 +70,9 @@ struct SessionBuilder::Impl {
 
   std::unique_ptr<GroundWarp> warp;        // views == 2
   std::map<int64_t, cv::Mat> left_images;  // utime -> raw left BGR (views == 2: the warped right view below it)
+  std::map<int64_t, cv::Mat> right_images;  // utime -> raw right BGR, for evidence
+  std::unique_ptr<stereo::ObstacleDetector> evidence_detector;  // made for the labels' detector when first needed
+  bool evidence_warned = false;
   std::map<int64_t, Truth> truths;         // utime -> simulator truth
   std::deque<introspection_labels_t> ready;  // labels waiting for their frame's truth
 
@@ -82,6 +86,7 @@ struct SessionBuilder::Impl {
   void take(std::vector<monitor::PipelineOutcome> outcomes);
   void emit_ready(bool all);
   void emit(const introspection_labels_t& labels);
+  std::vector<std::vector<float>> evidence_of(const introspection_labels_t& labels, const cv::Mat& views);
   std::vector<int> patch_sides(const introspection_labels_t& labels, const cv::Mat& views) const;
   void open_writer();
 };
@@ -119,6 +124,7 @@ void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
   calibration_bytes = std::move(bytes);
   info.rig_name = rig->rig_name;
   if (options.views == 2) warp = std::make_unique<GroundWarp>(*rig);
+  evidence_detector.reset();  // remade for the new rig
   if (rerun()) {
     if (pipeline) take(pipeline->flush());
     detector = stereo::make_detector(options.labels, *rig, options.detector);
@@ -132,7 +138,8 @@ void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
   ++report.stereo_frames;
   try {
     cv::Mat left = decode_image(msg.left);
-    const cv::Mat right = rerun() || warp ? decode_image(msg.right) : cv::Mat();
+    const cv::Mat right = rerun() || warp || options.evidence ? decode_image(msg.right) : cv::Mat();
+    if (options.evidence) right_images[msg.utime] = right;
     cv::Mat views = warp ? warp->stack(left, right) : left;
     if (rerun()) {
       if (!detector) return bad("stereo frame " + std::to_string(msg.utime) + " before any calibration");
@@ -148,6 +155,7 @@ void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
     return bad("stereo frame " + std::to_string(msg.utime) + ": " + err.what());
   }
   trim(left_images, kMaxCachedFrames);
+  trim(right_images, kMaxCachedFrames);
   emit_ready(false);
 }
 
@@ -227,6 +235,7 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
   if (image == left_images.end()) {
     return bad("labels for frame " + std::to_string(labels.utime) + " whose stereo images are not in the log");
   }
+  const std::vector<std::vector<float>> evidence = evidence_of(labels, image->second);
   open_writer();
   const auto truth = truths.find(labels.utime);
   int32_t labelled = 0;
@@ -262,12 +271,58 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
       s.phenomenon = t.phenomenon;
       s.surface = t.surface;
     }
-    writer->add_sample(s, patch);
+    writer->add_sample(s, patch, evidence.empty() ? std::vector<float>{} : evidence[i]);
     ++report.class_counts[static_cast<size_t>(s.label)];
     ++samples;
   }
   report.samples += samples;
   report.frames_labelled += samples > 0;
+}
+
+// Per cell of `labels`, the re-run detector's evidence (empty for unlabelled
+// cells; NaN where its verdict is not the recorded one, or the frame's right
+// image is gone). The first frame sets info.evidence_size; nothing when the
+// session stores no evidence.
+std::vector<std::vector<float>> SessionBuilder::Impl::evidence_of(const introspection_labels_t& labels, const cv::Mat& views) {
+  if (!options.evidence || !rig || (writer && info.evidence_size == 0)) return {};
+  if (!evidence_detector) {
+    try {
+      evidence_detector = stereo::make_detector(labels.detector, *rig, options.detector);
+    } catch (const std::invalid_argument& e) {
+      spdlog::warn("no evidence for detector '{}': {}", labels.detector, e.what());
+      options.evidence = false;
+      return {};
+    }
+  }
+  const auto right = right_images.find(labels.utime);
+  if (right != right_images.end()) evidence_detector->set_frame(views.rowRange(0, views.rows / options.views), right->second);
+  std::vector<std::vector<float>> out(labels.label.size());
+  for (size_t i = 0; i < labels.label.size(); ++i) {
+    if (labels.label[i] == introspection_labels_t::LABEL_NONE) continue;
+    if (right == right_images.end()) {
+      out[i].assign(static_cast<size_t>(info.evidence_size), std::numeric_limits<float>::quiet_NaN());
+      continue;
+    }
+    stereo::Evidence e = evidence_detector->evidence(labels.x[i], labels.y[i], labels.safety_radius);
+    if (!writer && info.evidence_size == 0) info.evidence_size = static_cast<int>(e.values.size());
+    if (info.evidence_size == 0) return {};  // this detector keeps none
+    if (static_cast<int>(e.values.size()) != info.evidence_size)
+      throw DatasetError(fmt::format("frame {}: {} evidence values for cell {}, the session's others {}", labels.utime,
+                                     e.values.size(), i, info.evidence_size));
+    if (stereo::to_state(e.verdict) != labels.stereo_state[i]) {
+      ++report.evidence_mismatches;
+      std::fill(e.values.begin(), e.values.end(), std::numeric_limits<float>::quiet_NaN());
+      if (!evidence_warned)
+        spdlog::warn("frame {} cell {}: {} re-run says {}, the labels' verdict is state {}: evidence stored as NaN "
+                     "where they differ (recorded with other detector settings? re-label with --labels {} and those "
+                     "settings)",
+                     labels.utime, i, labels.detector, stereo::to_string(e.verdict),
+                     static_cast<int>(labels.stereo_state[i]), labels.detector);
+      evidence_warned = true;
+    }
+    out[i] = std::move(e.values);
+  }
+  return out;
 }
 
 SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::string& session, BuildOptions options)

@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
 #include "ivoa/core/json_text.hpp"
@@ -37,6 +38,7 @@ std::string session_json(const SessionInfo& i) {
     << ",\n  \"environment\": " << json_quote(i.environment) << ",\n  \"rig_name\": " << json_quote(i.rig_name)
     << ",\n  \"patch_size\": " << i.patch_size << ",\n  \"views\": " << i.views
     << ",\n  \"patch_scale\": " << i.patch_scale << ",\n  \"tn_kept\": " << i.tn_kept
+    << ",\n  \"evidence_size\": " << i.evidence_size
     << ",\n  \"tn_dropped\": " << i.tn_dropped << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples
     << ",\n  \"class_counts\": {";
   for (int c = 0; c < kNumClasses; ++c) o << (c ? ", " : "") << json_quote(kLabelNames[c]) << ": " << i.class_counts[c];
@@ -80,6 +82,8 @@ SessionInfo parse_session_json(const std::string& path) {
   if (i.patch_scale < 0) throw DatasetError(path + ": patch_scale must be >= 0");
   i.tn_kept = root["tn_kept"] ? get<double>(root, "tn_kept", path) : 1.0;  // written before TN could be thinned
   if (!(i.tn_kept > 0 && i.tn_kept <= 1)) throw DatasetError(path + ": tn_kept must be in (0, 1]");
+  i.evidence_size = root["evidence_size"] ? get<int>(root, "evidence_size", path) : 0;  // written before evidence
+  if (i.evidence_size < 0) throw DatasetError(path + ": evidence_size must be >= 0");
   i.tn_dropped = root["tn_dropped"] ? get<int64_t>(root, "tn_dropped", path) : 0;
   i.frames = get<int64_t>(root, "frames", path);
   i.samples = get<int64_t>(root, "samples", path);
@@ -116,9 +120,10 @@ SampleRecord parse_sample_row(const std::string& line, int columns, const std::s
 struct SessionWriter::Files {
   std::FILE* patches = nullptr;
   std::FILE* samples = nullptr;
+  std::FILE* evidence = nullptr;  // only if evidence_size > 0
   ~Files() {
-    if (patches) std::fclose(patches);
-    if (samples) std::fclose(samples);
+    for (std::FILE* f : {patches, samples, evidence})
+      if (f) std::fclose(f);
   }
 };
 
@@ -131,7 +136,9 @@ SessionWriter::SessionWriter(const std::string& dataset_root, SessionInfo info)
   if (ec) throw DatasetError(dir_ + ": cannot create session folder: " + ec.message());
   files_->patches = std::fopen((dir_ + "/patches.bin").c_str(), "wb");
   files_->samples = std::fopen((dir_ + "/samples.csv").c_str(), "w");
-  if (!files_->patches || !files_->samples) throw DatasetError(dir_ + ": cannot write session files");
+  if (info_.evidence_size > 0) files_->evidence = std::fopen((dir_ + "/evidence.f32").c_str(), "wb");
+  if (!files_->patches || !files_->samples || (info_.evidence_size > 0 && !files_->evidence))
+    throw DatasetError(dir_ + ": cannot write session files");
   std::fprintf(files_->samples, "%s\n", kSamplesHeader);
   info_.frames = info_.samples = info_.tn_dropped = 0;
   info_.class_counts = {};
@@ -149,7 +156,7 @@ int64_t SessionWriter::add_frame(int64_t utime, int64_t depth_utime, int32_t cel
   return static_cast<int64_t>(frames_.size()) - 1;
 }
 
-void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch) {
+void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch, const std::vector<float>& evidence) {
   const int p = info_.patch_size;
   if (!files_->patches) throw DatasetError(dir_ + ": session already closed");
   if (patch.rows != p * info_.views || patch.cols != p || patch.type() != CV_8UC3)
@@ -157,6 +164,10 @@ void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch) {
                        std::to_string(info_.views) + " view(s) of " + std::to_string(p) + " px)");
   if (s.label < 0 || s.label >= kNumClasses) throw DatasetError("sample label " + std::to_string(s.label) + " out of range");
   if (s.frame < 0 || s.frame >= static_cast<int64_t>(frames_.size())) throw DatasetError("sample refers to no frame");
+  if (static_cast<int>(evidence.size()) != info_.evidence_size)
+    throw DatasetError(fmt::format("sample {}: {} evidence values, the session stores {}", info_.samples, evidence.size(),
+                                   info_.evidence_size));
+  write_evidence(evidence);
   const cv::Mat contiguous = patch.isContinuous() ? patch : patch.clone();
   const size_t bytes = static_cast<size_t>(p) * p * 3 * info_.views;
   if (std::fwrite(contiguous.data, 1, bytes, files_->patches) != bytes)
@@ -171,12 +182,19 @@ void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch) {
   ++frames_[static_cast<size_t>(s.frame)].samples;
 }
 
+void SessionWriter::write_evidence(const std::vector<float>& evidence) {
+  if (evidence.empty()) return;
+  if (std::fwrite(evidence.data(), sizeof(float), evidence.size(), files_->evidence) != evidence.size())
+    throw DatasetError(dir_ + "/evidence.f32: write failed (disk full?)");
+}
+
 void SessionWriter::close() {
   if (!files_->patches) return;
-  const bool ok = std::fflush(files_->patches) == 0 && std::fflush(files_->samples) == 0;
+  bool ok = std::fflush(files_->patches) == 0 && std::fflush(files_->samples) == 0;
+  if (files_->evidence) ok = std::fclose(files_->evidence) == 0 && ok;
   std::fclose(files_->patches);
   std::fclose(files_->samples);
-  files_->patches = files_->samples = nullptr;
+  files_->patches = files_->samples = files_->evidence = nullptr;
   if (!ok) throw DatasetError(dir_ + ": write failed (disk full?)");
   info_.frames = static_cast<int64_t>(frames_.size());
   std::ofstream frames(dir_ + "/frames.csv");
@@ -227,6 +245,24 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
     mapped_ = static_cast<const uint8_t*>(m);
   }
   ::close(fd);
+  read_evidence();
+}
+
+void SessionReader::read_evidence() {
+  if (info_.evidence_size == 0) return;
+  const std::string path = dir_ + "/evidence.f32";
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw DatasetError(path + ": cannot open (session.json says evidence_size " +
+                              std::to_string(info_.evidence_size) + ")");
+  evidence_.resize(samples_.size() * static_cast<size_t>(info_.evidence_size));
+  in.read(reinterpret_cast<char*>(evidence_.data()), static_cast<std::streamsize>(evidence_.size() * sizeof(float)));
+  if (in.gcount() != static_cast<std::streamsize>(evidence_.size() * sizeof(float)) || in.peek() != EOF)
+    throw DatasetError(path + ": does not hold " + std::to_string(info_.evidence_size) + " values for each of the " +
+                       std::to_string(samples_.size()) + " samples (truncated dataset?)");
+}
+
+const float* SessionReader::evidence(size_t i) const {
+  return evidence_.empty() ? nullptr : evidence_.data() + i * static_cast<size_t>(info_.evidence_size);
 }
 
 SessionReader::~SessionReader() {

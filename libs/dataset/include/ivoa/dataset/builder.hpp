@@ -42,6 +42,12 @@ struct BuildOptions {
   monitor::PairingConfig pairing;
   std::string environment;  // "" = the simulator's truth messages, else the scene name (indoor_*/outdoor_*)
   int views = 1;            // 2: store the ground-warped right view under each patch (SessionInfo::views)
+  // Store each sample's stereo::Evidence (SessionInfo::evidence_size), from
+  // the labels' detector re-run on the frame with `detector` settings (for
+  // recorded labels those must be the settings the log was recorded with:
+  // samples where the re-run verdict differs get NaN evidence and are
+  // counted). Detectors without evidence (dense) store none.
+  bool evidence = true;
   std::string stereo_channel{channels::kStereoImages};
   std::string depth_channel{channels::kDepthImage};
   std::string calibration_channel{channels::kRigCalibration};
@@ -57,6 +63,7 @@ struct BuildReport {
   int64_t samples = 0;
   int64_t tn_dropped = 0;        // TN cells left out (keep_tn < 1)
   int64_t bad_messages = 0;      // undecodable or inconsistent, skipped
+  int64_t evidence_mismatches = 0;  // samples whose re-run verdict differs from the label's (NaN evidence)
   std::vector<std::string> problems;  // log damage (with byte offsets) and bad messages
   std::array<int64_t, kNumClasses> class_counts{};
 };

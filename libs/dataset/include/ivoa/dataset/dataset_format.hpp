@@ -74,6 +74,9 @@ struct SessionInfo {
   // < 1: only this fraction of the TN cells was stored, to save disk
   // (BuildOptions::keep_tn); class_counts count what was stored.
   double tn_kept = 1;
+  // Values per sample in evidence.f32 (the detector's Evidence for the
+  // sample's cell: JPP-C's 15 window costs); 0: the session has none.
+  int evidence_size = 0;
   QueryGridConfig grid;
   // Filled by the writer / reader:
   int64_t frames = 0;
@@ -93,8 +96,9 @@ class SessionWriter {
 
   // Starts a frame; returns its index for the samples that follow.
   int64_t add_frame(int64_t utime, int64_t depth_utime, int32_t cells_labelled);
-  // `patch` must be (views x patch_size) x patch_size CV_8UC3.
-  void add_sample(SampleRecord sample, const cv::Mat& patch);
+  // `patch` must be (views x patch_size) x patch_size CV_8UC3; `evidence`
+  // must hold info().evidence_size values (NaN: not measured).
+  void add_sample(SampleRecord sample, const cv::Mat& patch, const std::vector<float>& evidence = {});
   // A TN cell of the current frame left out (SessionInfo::tn_kept < 1).
   void count_dropped_tn() { ++info_.tn_dropped; }
   void close();
@@ -102,6 +106,7 @@ class SessionWriter {
 
  private:
   struct Files;
+  void write_evidence(const std::vector<float>& evidence);
   std::string dir_;
   SessionInfo info_;
   std::unique_ptr<Files> files_;
@@ -125,11 +130,16 @@ class SessionReader {
   cv::Mat left_patch(size_t i) const { return patch(i).rowRange(0, info_.patch_size); }
   size_t patch_bytes() const;
   const uint8_t* patch_data(size_t i) const;
+  // The info().evidence_size evidence values of sample i; nullptr if the
+  // session has none.
+  const float* evidence(size_t i) const;
 
  private:
+  void read_evidence();
   std::string dir_;
   SessionInfo info_;
   std::vector<SampleRecord> samples_;
+  std::vector<float> evidence_;
   const uint8_t* mapped_ = nullptr;
   size_t mapped_bytes_ = 0;
 };
