@@ -2,6 +2,7 @@
 // different: the loss falls and held-out sessions are classified far above
 // chance. (Training on simulated sessions is tested end to end elsewhere.)
 #include <fstream>
+#include <limits>
 #include <random>
 
 #include <opencv2/imgproc.hpp>
@@ -30,12 +31,16 @@ cv::Mat pattern(int label, std::mt19937& rng) {
   return p + noise;
 }
 
-void write_session(const std::string& root, const std::string& name, int per_class, unsigned seed) {
+// `evidence_size` > 0: each sample carries evidence that follows its class
+// (NaN in the third value, as if not measured).
+void write_session(const std::string& root, const std::string& name, int per_class, unsigned seed,
+                   int evidence_size = 0) {
   std::mt19937 rng(seed);
   dataset::SessionInfo info;
   info.session = name;
   info.detector = "jppc";
   info.labels_from = "rerun";
+  info.evidence_size = evidence_size;
   dataset::SessionWriter w(root, info);
   const int64_t frame = w.add_frame(0, 0, 4 * per_class);
   for (int k = 0; k < per_class; ++k)
@@ -44,7 +49,10 @@ void write_session(const std::string& root, const std::string& name, int per_cla
       s.frame = frame;
       s.label = label;
       s.stereo_state = label == 0 || label == 2 ? 1 : 0;  // TP / FP: the detector said obstacle
-      w.add_sample(s, pattern(label, rng));
+      std::vector<float> evidence;
+      for (int j = 0; j < evidence_size; ++j)
+        evidence.push_back(j == 2 ? std::numeric_limits<float>::quiet_NaN() : 0.5f * static_cast<float>(label) + 0.1f * j);
+      w.add_sample(s, pattern(label, rng), evidence);
     }
 }
 
@@ -147,6 +155,59 @@ TEST(Training, StaleCheckpointIsRefusedWithTheWayOut) {
     EXPECT_NE(what.find("cannot resume"), std::string::npos) << what;
     EXPECT_NE(what.find("architecture slidenet, not alexnet"), std::string::npos) << what;
     EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
+  }
+}
+
+TEST(Training, LearnsTheDetectorsEvidenceAsASideTaskWhenTheDatasetHasIt) {
+  test::TempDir dir;
+  const std::string root = dir.file("data");
+  write_session(root, "a", 20, 1, 5);
+  write_session(root, "v", 5, 3, 5);
+  write_session(root, "plain", 20, 2);  // built without evidence
+  std::ofstream(dir.file("split.yaml")) << "train: [a]\nval: [v]\n";
+  std::ofstream(dir.file("mixed.yaml")) << "train: [a, plain]\nval: [v]\n";
+  TrainConfig c;
+  c.dataset = root;
+  c.split_file = dir.file("split.yaml");
+  c.output = dir.file("model.pt");
+  c.steps = 60;
+  c.batch_size = 8;
+  c.warmup_steps = 2;
+  c.validate_every = 30;
+  c.checkpoint_every = 30;
+  c.threshold_passes = 3;
+  std::vector<double> evidence_losses;
+  train_model(c, [&](const TrainStatus& s) { evidence_losses.push_back(s.evidence_loss); });
+  ASSERT_EQ(evidence_losses.size(), 60u);
+  EXPECT_GT(evidence_losses.front(), 0.0);
+  EXPECT_LT(evidence_losses.back(), 0.5 * evidence_losses[4]) << "the head learns what the class implies";
+  InferenceConfig ic;
+  ic.mc_passes = 1;
+  const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
+  EXPECT_NE(summary.find("\"evidence_weight\": \"5\""), std::string::npos) << summary;
+
+  // Resuming must keep the setting the checkpoint was trained with.
+  c.resume = true;
+  c.steps = 65;
+  c.evidence_weight = 0;
+  try {
+    train_model(c);
+    FAIL() << "resumed without the side task from a checkpoint trained with it";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("with the evidence side task, this run without"), std::string::npos) << e.what();
+  }
+
+  // Off, or sessions without evidence among the training ones: no side task.
+  for (const auto& [split, weight] : {std::pair{dir.file("split.yaml"), 0.0}, {dir.file("mixed.yaml"), 5.0}}) {
+    TrainConfig off = c;
+    off.resume = false;
+    off.split_file = split;
+    off.evidence_weight = weight;
+    off.output = dir.file("off.pt");
+    off.steps = 5;
+    double last = 0;
+    train_model(off, [&](const TrainStatus& s) { last = s.evidence_loss; });
+    EXPECT_EQ(last, -1.0) << split;
   }
 }
 

@@ -48,6 +48,11 @@ int main(int argc, char** argv) {
   app.add_option("--dropout", c.dropout, "dropout before FC1 and FC2")->capture_default_str();
   app.add_option("--fn-weight", c.fn_weight, "FN share of class-balanced sampling (reference: 0.1 outdoors)")
       ->capture_default_str();
+  app.add_option("--evidence-weight", c.evidence_weight,
+                 "weight of the side task: regress the detector's evidence stored with each sample (JPP-C's window "
+                 "costs) from the trunk's features; 0: off")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   bool no_augment = false;
   app.add_flag("--no-augment", no_augment, "no photometric augmentation");
   app.add_option("--seed", c.seed)->capture_default_str();
@@ -76,9 +81,10 @@ int main(int argc, char** argv) {
     }
     Progress progress("training", static_cast<double>(c.steps), "steps", 10.0);
     const auto r = introspection::train_model(c, [&](const introspection::TrainStatus& s) {
-      char detail[200];
-      std::snprintf(detail, sizeof(detail), "loss %.3f, train acc %.3f, lr %.4f, %.0f patches/s, val mean-class acc %s",
-                    s.loss, s.accuracy, s.learning_rate, s.patches_per_s,
+      char detail[240], evidence[40] = "";
+      if (s.evidence_loss >= 0) std::snprintf(evidence, sizeof(evidence), " (evidence %.4f)", s.evidence_loss);
+      std::snprintf(detail, sizeof(detail), "loss %.3f%s, train acc %.3f, lr %.4f, %.0f patches/s, val mean-class acc %s",
+                    s.loss, evidence, s.accuracy, s.learning_rate, s.patches_per_s,
                     s.val_mean_class_accuracy < 0 ? "-" : std::to_string(s.val_mean_class_accuracy).substr(0, 5).c_str());
       progress.update(static_cast<double>(s.step), detail);
     });

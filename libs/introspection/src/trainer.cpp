@@ -14,6 +14,7 @@
 #include "ivoa/dataset/dataset_format.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
 #include "augmentation.hpp"
+#include "evidence_task.hpp"
 #include "mc_dropout.hpp"
 #include "model_file.hpp"
 
@@ -33,6 +34,7 @@ struct SplitData {
   int patch_size = 0;
   int views = 0;
   double patch_scale = -1;  // -1 until the first session is read
+  int evidence_size = -1;   // values per sample; 0 if a session has none
 
   size_t size() const {
     size_t n = 0;
@@ -60,6 +62,8 @@ SplitData load_split_data(const TrainConfig& c, const std::string& split) {
     if (reader->info().patch_scale != d.patch_scale)
       throw std::runtime_error(fmt::format("{}: patch scale {}, the other sessions {}", name,
                                            reader->info().patch_scale, d.patch_scale));
+    const int evidence_size = reader->info().evidence_size;  // sessions that disagree cannot share the side task
+    d.evidence_size = d.evidence_size < 0 || d.evidence_size == evidence_size ? evidence_size : 0;
     const auto session = static_cast<uint32_t>(d.sessions.size());
     for (size_t i = 0; i < reader->size(); ++i)
       d.by_class[static_cast<size_t>(reader->samples()[i].label)].push_back({session, static_cast<uint32_t>(i)});
@@ -75,6 +79,17 @@ std::vector<const uint8_t*> patch_pointers(const SplitData& d, const std::vector
   out.reserve(refs.size());
   for (const auto& r : refs) out.push_back(d.sessions[r.session]->patch_data(r.index));
   return out;
+}
+
+// The batch's evidence targets [B, size] (NaN: not measured).
+torch::Tensor evidence_targets(const SplitData& d, const std::vector<SampleRef>& refs, int size) {
+  std::vector<float> values;
+  values.reserve(refs.size() * static_cast<size_t>(size));
+  for (const auto& r : refs) {
+    const float* e = d.sessions[r.session]->evidence(r.index);
+    values.insert(values.end(), e, e + size);
+  }
+  return torch::from_blob(values.data(), {static_cast<int64_t>(refs.size()), size}, torch::kFloat).clone();
 }
 
 const dataset::SampleRecord& sample_of(const SplitData& d, const SampleRef& r) { return d.sessions[r.session]->samples()[r.index]; }
@@ -188,6 +203,7 @@ std::string training_summary(const TrainConfig& c, const SplitData& train, const
     << r.train_class_counts[3] << "], \"steps\": " << step << ", \"batch_size\": " << c.batch_size
     << ", \"learning_rate\": " << c.learning_rate << ", \"momentum\": " << c.momentum << ", \"seed\": " << c.seed
     << ", \"augment\": " << (c.augment ? "true" : "false") << ", \"fn_weight\": " << c.fn_weight
+    << ", \"evidence_weight\": " << (train.evidence_size > 0 ? c.evidence_weight : 0.0)
     << ", \"best_step\": " << r.best_step << ", \"val_mean_class_accuracy\": " << r.best_val_mean_class_accuracy
     << ", \"val_accuracy\": " << r.best_val_accuracy << ", \"val_accuracy_retained\": " << r.val_accuracy_retained
     << ", \"threshold_retain\": " << c.threshold_retain << "}";
@@ -238,6 +254,30 @@ void check_can_start_from(const ModelInfo& from, const ModelInfo& wanted, bool r
                                  : "fine-tune from a model trained on patches cut the same way";
   throw std::runtime_error(
       fmt::format("cannot {} from {}: {} ({})", resuming ? "resume" : "start", from.id, why, remedy));
+}
+
+// The side task, if the weight and the training sessions allow it.
+std::unique_ptr<EvidenceTask> make_evidence_task(const TrainConfig& c, const SplitData& train,
+                                                 IntrospectionNetImpl& net, torch::Device device) {
+  if (c.evidence_weight <= 0) return nullptr;
+  if (train.evidence_size <= 0) {
+    spdlog::warn("the training sessions carry no detector evidence (or not all the same): training without the side "
+                 "task (rebuild them with this ivoa-dataset, or pass --evidence-weight 0 to silence this)");
+    return nullptr;
+  }
+  spdlog::info("side task: regress {} evidence values per sample, weight {}", train.evidence_size, c.evidence_weight);
+  return std::make_unique<EvidenceTask>(net.fc1->options.in_features(), train.evidence_size, device);
+}
+
+// A checkpoint's optimiser state covers the side task's head iff it was
+// trained with it: resuming must use the same setting.
+void resume_evidence_task(EvidenceTask* evidence, const std::string& checkpoint, double weight) {
+  const bool saved = std::filesystem::exists(checkpoint + ".evidence");
+  if (evidence && saved) return evidence->load(checkpoint + ".evidence");
+  if (!evidence && !saved) return;
+  throw std::runtime_error(fmt::format(
+      "cannot resume from {}: it was trained {} the evidence side task, this run {} (--evidence-weight {})", checkpoint,
+      saved ? "with" : "without", evidence ? "with" : "without", weight));
 }
 
 }  // namespace
@@ -309,10 +349,15 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     net = make_network(c.architecture, c.dropout, train.views);
   }
   net->to(device);
-  torch::optim::SGD optimizer(net->parameters(),
+  std::unique_ptr<EvidenceTask> evidence = make_evidence_task(c, train, *net, device);
+  auto parameters = net->parameters();
+  if (evidence)
+    for (auto& p : evidence->parameters()) parameters.push_back(p);
+  torch::optim::SGD optimizer(parameters,
                               torch::optim::SGDOptions(c.learning_rate).momentum(c.momentum).weight_decay(c.weight_decay));
   int64_t first_step = 0;
   if (resuming) {
+    resume_evidence_task(evidence.get(), checkpoint, c.evidence_weight);
     torch::load(optimizer, checkpoint + ".optimizer");
     std::ifstream(checkpoint + ".step") >> first_step >> report.best_val_mean_class_accuracy >> report.best_step;
     spdlog::info("resuming from {} at step {}", checkpoint, first_step);
@@ -332,7 +377,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   TrainStatus status;
   status.steps = c.steps;
   status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
-  double loss_sum = 0, acc_sum = 0, window = 0;
+  double loss_sum = 0, acc_sum = 0, evidence_sum = 0, window = 0;
   const double loop_start = monotonic_ms();
   for (int64_t step = first_step; step < c.steps; ++step) {
     net->train();
@@ -349,8 +394,14 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     for (auto& group : optimizer.param_groups())
       static_cast<torch::optim::SGDOptions&>(group.options()).lr(learning_rate_at(c, step));
     optimizer.zero_grad();
-    const auto logits = net->forward(x);
-    const auto loss = torch::nn::functional::cross_entropy(logits, labels);
+    const auto features = net->features(x);
+    const auto logits = net->head(features);
+    auto loss = torch::nn::functional::cross_entropy(logits, labels);
+    if (evidence) {
+      const auto evidence_loss = evidence->loss(features, evidence_targets(train, batch, train.evidence_size).to(device));
+      loss = loss + c.evidence_weight * evidence_loss;
+      evidence_sum = evidence_sum * 0.98 + evidence_loss.item<double>();
+    }
     loss.backward();
     optimizer.step();
 
@@ -360,6 +411,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     status.step = step + 1;
     status.loss = loss_sum / window;
     status.accuracy = acc_sum / window;
+    status.evidence_loss = evidence ? evidence_sum / window : -1;
     status.learning_rate = learning_rate_at(c, step);
     status.patches_per_s = static_cast<double>((step + 1 - first_step) * c.batch_size) / ((monotonic_ms() - loop_start) / 1000.0);
 
@@ -380,6 +432,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     }
     if ((step + 1) % c.checkpoint_every == 0 || last) {
       save_model(*net, info, checkpoint + ".model");
+      if (evidence) evidence->save(checkpoint + ".evidence");
       torch::save(optimizer, checkpoint + ".optimizer");
       std::ofstream(checkpoint + ".step") << step + 1 << " " << report.best_val_mean_class_accuracy << " "
                                           << report.best_step << "\n";

@@ -34,6 +34,10 @@ struct TrainConfig {
   // class's share is multiplied by this (the reference uses 0.1 outdoors).
   double fn_weight = 1.0;
   bool augment = true;            // photometric: brightness, contrast, gamma, channel gains, noise
+  // Weight of the side task (evidence_task.hpp) in the loss: regress the
+  // detector's evidence stored with each sample; 0 turns it off, and
+  // datasets without evidence train without it.
+  double evidence_weight = 5.0;
   uint64_t seed = 1;
   int threads = 2;
   std::string device = "cpu";
@@ -52,6 +56,7 @@ struct TrainStatus {
   double accuracy = 0;       // running mean, training batches
   double learning_rate = 0;
   double patches_per_s = 0;
+  double evidence_loss = -1;  // running mean of the side task's loss (-1: off)
   double val_mean_class_accuracy = -1;  // last validation (-1 before the first)
   double best_val_mean_class_accuracy = -1;
 };
