@@ -186,8 +186,11 @@ echo "  dense (SGBM): the detector and the monitor re-run offline on the same ra
 
 # --resume continues an interrupted run; a checkpoint left by a run with
 # other settings in the same --out cannot be continued, so start over.
-training_setup="views $views, patch scale $patch_scale, $STEPS steps, batch $BATCH"
+# JPP-C's datasets carry its window costs, which training also learns to
+# predict (ivoa-train --evidence-weight); the dense detector keeps none.
 for detector in jppc dense; do
+  evidence_weight=$([ "$detector" = jppc ] && echo 5 || echo 0)
+  training_setup="views $views, patch scale $patch_scale, $STEPS steps, batch $BATCH, evidence weight $evidence_weight"
   step "Training introspection for $detector ($STEPS steps, batch $BATCH)"
   setup_file="$out/model_$detector.pt.setup"
   if compgen -G "$out/model_$detector.pt.checkpoint.*" > /dev/null &&
@@ -198,7 +201,7 @@ for detector in jppc dense; do
   echo "$training_setup" > "$setup_file"
   "$BIN/ivoa-train" --dataset "$out/data_$detector" --split "$split_file" --out "$out/model_$detector.pt" \
     --steps "$STEPS" --batch-size "$BATCH" --validate-every $((STEPS / 6)) --checkpoint-every $((STEPS / 3)) \
-    --resume | tee "$out/train_$detector.txt"
+    --evidence-weight "$evidence_weight" --resume | tee "$out/train_$detector.txt"
 done
 
 step "Evaluating on the held-out test sessions (T = 20 MC-dropout passes)"
