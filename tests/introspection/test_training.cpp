@@ -102,12 +102,8 @@ TEST(Training, LossFallsAndHeldOutSessionsBeatChance) {
   EXPECT_GT(static_cast<double>(right) / static_cast<double>(test.size()), 0.6);  // chance is 0.25
 }
 
-// A train session "a" of 10 samples per class and a validation session "v"
-// of `val_per_class`, and a short training run on them.
-TrainConfig tiny_run(const test::TempDir& dir, int val_per_class, int64_t steps) {
-  write_session(dir.file("data"), "a", 10, 1);
-  write_session(dir.file("data"), "v", val_per_class, 3);
-  std::ofstream(dir.file("split.yaml")) << "train: [a]\nval: [v]\n";
+// A short training run on dir/data with dir/split.yaml.
+TrainConfig tiny_config(const test::TempDir& dir, int64_t steps) {
   TrainConfig c;
   c.dataset = dir.file("data");
   c.split_file = dir.file("split.yaml");
@@ -119,6 +115,15 @@ TrainConfig tiny_run(const test::TempDir& dir, int val_per_class, int64_t steps)
   c.checkpoint_every = 5;
   c.threshold_passes = 3;
   return c;
+}
+
+// A train session "a" of 10 samples per class and a validation session "v"
+// of `val_per_class`, and a short training run on them.
+TrainConfig tiny_run(const test::TempDir& dir, int val_per_class, int64_t steps) {
+  write_session(dir.file("data"), "a", 10, 1);
+  write_session(dir.file("data"), "v", val_per_class, 3);
+  std::ofstream(dir.file("split.yaml")) << "train: [a]\nval: [v]\n";
+  return tiny_config(dir, steps);
 }
 
 TEST(Training, ResumesFromTheCheckpoint) {
@@ -166,16 +171,8 @@ TEST(Training, LearnsTheDetectorsEvidenceAsASideTaskWhenTheDatasetHasIt) {
   write_session(root, "plain", 20, 2);  // built without evidence
   std::ofstream(dir.file("split.yaml")) << "train: [a]\nval: [v]\n";
   std::ofstream(dir.file("mixed.yaml")) << "train: [a, plain]\nval: [v]\n";
-  TrainConfig c;
-  c.dataset = root;
-  c.split_file = dir.file("split.yaml");
-  c.output = dir.file("model.pt");
-  c.steps = 60;
-  c.batch_size = 8;
-  c.warmup_steps = 2;
-  c.validate_every = 30;
-  c.checkpoint_every = 30;
-  c.threshold_passes = 3;
+  TrainConfig c = tiny_config(dir, 60);
+  c.validate_every = c.checkpoint_every = 30;
   std::vector<double> evidence_losses;
   train_model(c, [&](const TrainStatus& s) { evidence_losses.push_back(s.evidence_loss); });
   ASSERT_EQ(evidence_losses.size(), 60u);
