@@ -36,6 +36,16 @@ std::string write_model(const test::TempDir& dir, int views, double patch_scale 
 }
 
 // The worker runs asynchronously: deliver messages until `done` (bounded, ~6 s).
+// The same patch through the network in batches of different sizes may differ
+// in the last bits (the CPU's kernels block the work differently), so compare
+// probabilities to well below what tells two patches apart.
+::testing::AssertionResult same_probabilities(const introspection::Prediction& a, const introspection::Prediction& b) {
+  for (size_t k = 0; k < a.probability.size(); ++k)
+    if (std::abs(a.probability[k] - b.probability[k]) > 1e-5f)
+      return ::testing::AssertionFailure() << "class " << k << ": " << a.probability[k] << " vs " << b.probability[k];
+  return ::testing::AssertionSuccess();
+}
+
 template <typename Done>
 bool deliver_until(Bus& bus, Done done) {
   for (int i = 0; i < 600 && !done(); ++i) {
@@ -115,9 +125,9 @@ TEST(IntrospectionNode, ScaledModelPredictsQueryCellsFromTheirOwnPatches) {
     const bool near = cells[i].side > 100;
     own_squares += near;
     const auto want = near ? own[i] : scaled->predict_at(h, cells[i].u, cells[i].v);
-    EXPECT_EQ(got[i].probability, want.probability) << "cell " << i << ", side " << cells[i].side;
+    EXPECT_TRUE(same_probabilities(got[i], want)) << "cell " << i << ", side " << cells[i].side;
     if (near) {
-      EXPECT_NE(got[i].probability, scaled->predict_at(h, cells[i].u, cells[i].v).probability) << i;
+      EXPECT_FALSE(same_probabilities(got[i], scaled->predict_at(h, cells[i].u, cells[i].v))) << i;
     }
   }
   EXPECT_GT(own_squares, 0);
@@ -128,7 +138,7 @@ TEST(IntrospectionNode, ScaledModelPredictsQueryCellsFromTheirOwnPatches) {
   const auto from_heatmap = query_predictions(*fixed, hf, image, grid);
   ASSERT_EQ(from_heatmap.size(), cells.size());
   for (size_t i = 0; i < cells.size(); ++i)
-    EXPECT_EQ(from_heatmap[i].probability, fixed->predict_at(hf, cells[i].u, cells[i].v).probability) << "cell " << i;
+    EXPECT_TRUE(same_probabilities(from_heatmap[i], fixed->predict_at(hf, cells[i].u, cells[i].v))) << "cell " << i;
   const introspection_t msg =
       make_introspection_message(*fixed, hf, 1000, image.cols, image.rows, &grid, from_heatmap, 1, false);
   EXPECT_EQ(msg.query_class.size(), cells.size());
