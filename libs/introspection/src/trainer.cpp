@@ -280,6 +280,104 @@ void resume_evidence_task(EvidenceTask* evidence, const std::string& checkpoint,
       saved ? "with" : "without", evidence ? "with" : "without", weight));
 }
 
+// What the model file will say about the network, from the training and
+// validation sessions (which must have patches cut the same way).
+ModelInfo model_info_for(const TrainConfig& c, const SplitData& train, const SplitData& val) {
+  if (val.views != train.views)
+    throw std::runtime_error("the validation sessions have " + std::to_string(val.views) + " view(s), the training ones " +
+                             std::to_string(train.views));
+  if (val.patch_scale != train.patch_scale || val.patch_size != train.patch_size)
+    throw std::runtime_error(fmt::format("the validation sessions' patches (size {}, scale {}) differ from the "
+                                         "training ones' (size {}, scale {})",
+                                         val.patch_size, val.patch_scale, train.patch_size, train.patch_scale));
+  ModelInfo info;
+  info.architecture = c.architecture;
+  info.patch_size = train.patch_size;
+  info.views = train.views;
+  info.patch_scale = train.patch_scale;
+  info.input_size = input_size_of(c.architecture);
+  info.dropout = c.dropout;
+  info.detector = train.sessions[0]->info().detector;
+  return info;
+}
+
+// The classes the training split has (at least two), counted into the report.
+std::vector<int> classes_present(const SplitData& train, TrainReport& report) {
+  std::vector<int> classes;
+  for (int k = 0; k < kNumClasses; ++k) {
+    report.train_class_counts[static_cast<size_t>(k)] = static_cast<int64_t>(train.by_class[static_cast<size_t>(k)].size());
+    if (!train.by_class[static_cast<size_t>(k)].empty()) classes.push_back(k);
+    else spdlog::warn("training split has no {} samples: the model cannot learn that class", dataset::kLabelNames[static_cast<size_t>(k)]);
+  }
+  if (classes.size() < 2) throw std::runtime_error("training split has fewer than two classes");
+  return classes;
+}
+
+// Class-balanced sampling with replacement: pick a class, then a sample.
+class BalancedSampler {
+ public:
+  BalancedSampler(const SplitData& train, std::vector<int> classes, double fn_weight, uint64_t seed)
+      : train_(train), classes_(std::move(classes)), rng_(seed) {
+    std::vector<double> weights;
+    for (int k : classes_) weights.push_back(k == 3 ? fn_weight : 1.0);
+    pick_class_ = std::discrete_distribution<size_t>(weights.begin(), weights.end());
+  }
+  std::vector<SampleRef> batch(int size) {
+    std::vector<SampleRef> out;
+    for (int i = 0; i < size; ++i) {
+      const auto& pool = train_.by_class[static_cast<size_t>(classes_[pick_class_(rng_)])];
+      out.push_back(pool[std::uniform_int_distribution<size_t>(0, pool.size() - 1)(rng_)]);
+    }
+    return out;
+  }
+
+ private:
+  const SplitData& train_;
+  std::vector<int> classes_;
+  std::mt19937_64 rng_;
+  std::discrete_distribution<size_t> pick_class_;
+};
+
+torch::Tensor labels_of(const SplitData& d, const std::vector<SampleRef>& refs) {
+  std::vector<int64_t> labels;
+  for (const auto& r : refs) labels.push_back(label_of(d, r));
+  return torch::tensor(labels, torch::kLong);
+}
+
+// A checkpoint: OUT.checkpoint.model, .optimizer, .evidence (side task) and
+// .step ("step best_val best_step").
+void save_checkpoint(const std::string& checkpoint, IntrospectionNetImpl& net, const ModelInfo& info,
+                     const EvidenceTask* evidence, torch::optim::SGD& optimizer, int64_t step, const TrainReport& report) {
+  save_model(net, info, checkpoint + ".model");
+  if (evidence) evidence->save(checkpoint + ".evidence");
+  torch::save(optimizer, checkpoint + ".optimizer");
+  std::ofstream(checkpoint + ".step") << step << " " << report.best_val_mean_class_accuracy << " " << report.best_step
+                                      << "\n";
+}
+
+// Restores the optimiser and side task of a checkpoint; returns its step.
+int64_t load_checkpoint(const std::string& checkpoint, EvidenceTask* evidence, double evidence_weight,
+                        torch::optim::SGD& optimizer, TrainReport& report) {
+  resume_evidence_task(evidence, checkpoint, evidence_weight);
+  torch::load(optimizer, checkpoint + ".optimizer");
+  int64_t step = 0;
+  std::ifstream(checkpoint + ".step") >> step >> report.best_val_mean_class_accuracy >> report.best_step;
+  spdlog::info("resuming from {} at step {}", checkpoint, step);
+  report.best_before_resume = true;  // until a validation of this run beats it
+  return step;
+}
+
+// Running means of the training batches (exponential, 0.98 per step).
+struct RunningMeans {
+  double loss = 0, accuracy = 0, evidence = 0, window = 0;
+  void add(double batch_loss, double batch_accuracy, double evidence_loss) {
+    loss = loss * 0.98 + batch_loss;
+    accuracy = accuracy * 0.98 + batch_accuracy;
+    evidence = evidence * 0.98 + evidence_loss;
+    window = window * 0.98 + 1.0;
+  }
+};
+
 }  // namespace
 
 TrainReport calibrate_model(const TrainConfig& c) {
@@ -313,29 +411,8 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   const SplitData train = load_split_data(c, c.train_split);
   const SplitData val = load_split_data(c, c.val_split);
   TrainReport report;
-  std::vector<int> classes;  // the classes the training split has
-  for (int k = 0; k < kNumClasses; ++k) {
-    report.train_class_counts[static_cast<size_t>(k)] = static_cast<int64_t>(train.by_class[static_cast<size_t>(k)].size());
-    if (!train.by_class[static_cast<size_t>(k)].empty()) classes.push_back(k);
-    else spdlog::warn("training split has no {} samples: the model cannot learn that class", dataset::kLabelNames[static_cast<size_t>(k)]);
-  }
-  if (classes.size() < 2) throw std::runtime_error("training split has fewer than two classes");
-
-  ModelInfo info;
-  info.architecture = c.architecture;
-  info.patch_size = train.patch_size;
-  info.views = train.views;
-  info.patch_scale = train.patch_scale;
-  if (val.views != train.views)
-    throw std::runtime_error("the validation sessions have " + std::to_string(val.views) + " view(s), the training ones " +
-                             std::to_string(train.views));
-  if (val.patch_scale != train.patch_scale || val.patch_size != train.patch_size)
-    throw std::runtime_error(fmt::format("the validation sessions' patches (size {}, scale {}) differ from the "
-                                         "training ones' (size {}, scale {})",
-                                         val.patch_size, val.patch_scale, train.patch_size, train.patch_scale));
-  info.input_size = input_size_of(c.architecture);
-  info.dropout = c.dropout;
-  info.detector = train.sessions[0]->info().detector;
+  const std::vector<int> classes = classes_present(train, report);
+  ModelInfo info = model_info_for(c, train, val);
   // Start from scratch, from a given model (fine-tuning), or from the last
   // checkpoint (resume); the optimiser is made for the network's final parameters.
   const std::string checkpoint = c.output + ".checkpoint";
@@ -355,20 +432,11 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     for (auto& p : evidence->parameters()) parameters.push_back(p);
   torch::optim::SGD optimizer(parameters,
                               torch::optim::SGDOptions(c.learning_rate).momentum(c.momentum).weight_decay(c.weight_decay));
-  int64_t first_step = 0;
-  if (resuming) {
-    resume_evidence_task(evidence.get(), checkpoint, c.evidence_weight);
-    torch::load(optimizer, checkpoint + ".optimizer");
-    std::ifstream(checkpoint + ".step") >> first_step >> report.best_val_mean_class_accuracy >> report.best_step;
-    spdlog::info("resuming from {} at step {}", checkpoint, first_step);
-    report.best_before_resume = true;  // until a validation of this run beats it
-  }
+  const int64_t first_step =
+      resuming ? load_checkpoint(checkpoint, evidence.get(), c.evidence_weight, optimizer, report) : 0;
 
-  // Class-balanced sampling with replacement: pick a class, then a sample.
-  std::vector<double> class_weights;
-  for (int k : classes) class_weights.push_back(k == 3 ? c.fn_weight : 1.0);
-  std::mt19937_64 rng(c.seed * 7919 + static_cast<uint64_t>(first_step));
-  std::discrete_distribution<size_t> pick_class(class_weights.begin(), class_weights.end());
+  // Every random stream continues from the step (a resumed run does not replay the first batches).
+  BalancedSampler sampler(train, classes, c.fn_weight, c.seed * 7919 + static_cast<uint64_t>(first_step));
   auto generator = at::detail::createCPUGenerator(c.seed + static_cast<uint64_t>(first_step));
   BatchAugmenter make_batch(info, c.augment, c.seed * 104729 + static_cast<uint64_t>(first_step));
   const std::vector<SampleRef> val_refs = validation_subset(val, c.max_val_samples);
@@ -377,41 +445,33 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   TrainStatus status;
   status.steps = c.steps;
   status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
-  double loss_sum = 0, acc_sum = 0, evidence_sum = 0, window = 0;
+  RunningMeans means;
   const double loop_start = monotonic_ms();
   for (int64_t step = first_step; step < c.steps; ++step) {
     net->train();
-    std::vector<SampleRef> batch;
-    std::vector<int64_t> batch_labels;
-    for (int i = 0; i < c.batch_size; ++i) {
-      const auto& pool = train.by_class[static_cast<size_t>(classes[pick_class(rng)])];
-      batch.push_back(pool[std::uniform_int_distribution<size_t>(0, pool.size() - 1)(rng)]);
-      batch_labels.push_back(label_of(train, batch.back()));
-    }
-    auto labels = torch::tensor(batch_labels, torch::kLong);
+    const std::vector<SampleRef> batch = sampler.batch(c.batch_size);
+    const auto labels = labels_of(train, batch).to(device);
     const auto x = make_batch(patch_pointers(train, batch)).to(device);
-    labels = labels.to(device);
     for (auto& group : optimizer.param_groups())
       static_cast<torch::optim::SGDOptions&>(group.options()).lr(learning_rate_at(c, step));
     optimizer.zero_grad();
     const auto features = net->features(x);
     const auto logits = net->head(features);
     auto loss = torch::nn::functional::cross_entropy(logits, labels);
+    double evidence_loss = 0;
     if (evidence) {
-      const auto evidence_loss = evidence->loss(features, evidence_targets(train, batch, train.evidence_size).to(device));
-      loss = loss + c.evidence_weight * evidence_loss;
-      evidence_sum = evidence_sum * 0.98 + evidence_loss.item<double>();
+      const auto e = evidence->loss(features, evidence_targets(train, batch, train.evidence_size).to(device));
+      loss = loss + c.evidence_weight * e;
+      evidence_loss = e.item<double>();
     }
     loss.backward();
     optimizer.step();
 
-    loss_sum = loss_sum * 0.98 + loss.item<double>();
-    acc_sum = acc_sum * 0.98 + logits.argmax(1).eq(labels).to(torch::kFloat).mean().item<double>();
-    window = window * 0.98 + 1.0;
+    means.add(loss.item<double>(), logits.argmax(1).eq(labels).to(torch::kFloat).mean().item<double>(), evidence_loss);
     status.step = step + 1;
-    status.loss = loss_sum / window;
-    status.accuracy = acc_sum / window;
-    status.evidence_loss = evidence ? evidence_sum / window : -1;
+    status.loss = means.loss / means.window;
+    status.accuracy = means.accuracy / means.window;
+    status.evidence_loss = evidence ? means.evidence / means.window : -1;
     status.learning_rate = learning_rate_at(c, step);
     status.patches_per_s = static_cast<double>((step + 1 - first_step) * c.batch_size) / ((monotonic_ms() - loop_start) / 1000.0);
 
@@ -430,13 +490,8 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
       }
       status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
     }
-    if ((step + 1) % c.checkpoint_every == 0 || last) {
-      save_model(*net, info, checkpoint + ".model");
-      if (evidence) evidence->save(checkpoint + ".evidence");
-      torch::save(optimizer, checkpoint + ".optimizer");
-      std::ofstream(checkpoint + ".step") << step + 1 << " " << report.best_val_mean_class_accuracy << " "
-                                          << report.best_step << "\n";
-    }
+    if ((step + 1) % c.checkpoint_every == 0 || last)
+      save_checkpoint(checkpoint, *net, info, evidence.get(), optimizer, step + 1, report);
     if (progress) progress(status);
   }
 
