@@ -146,6 +146,23 @@ TEST(Training, ResumesFromTheCheckpoint) {
   }
 }
 
+TEST(Training, KeepLastWritesTheFinalStepsModelWhateverItsValidation) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 20);
+  c.keep_last = true;
+  double final_validation = -1;
+  const TrainReport r = train_model(c, [&](const TrainStatus& s) {
+    if (s.step == c.steps) final_validation = s.val_mean_class_accuracy;
+  });
+  EXPECT_EQ(r.best_step, 20);
+  EXPECT_FALSE(r.best_before_resume);
+  EXPECT_NEAR(r.best_val_mean_class_accuracy, final_validation, 1e-9);
+  InferenceConfig ic;
+  ic.mc_passes = 2;
+  const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
+  EXPECT_NE(summary.find("\"best_step\": \"20\""), std::string::npos) << summary;
+}
+
 TEST(Training, StaleCheckpointIsRefusedWithTheWayOut) {
   test::TempDir dir;
   TrainConfig c = tiny_run(dir, 5, 5);  // a checkpoint at step 5

@@ -60,6 +60,9 @@ int main(int argc, char** argv) {
   app.add_option("--device", c.device, "cpu or cuda")->capture_default_str();
   app.add_option("--validate-every", c.validate_every)->capture_default_str();
   app.add_option("--checkpoint-every", c.checkpoint_every)->capture_default_str();
+  app.add_flag("--keep-last", c.keep_last,
+               "write the final step's model, not the best-validated one (a few validation sessions make the best "
+               "step partly chance)");
   app.add_option("--max-val-samples", c.max_val_samples)->capture_default_str();
   app.add_option("--threshold-retain", c.threshold_retain,
                  "the stored uncertainty gate keeps this fraction of validation samples")->capture_default_str();
@@ -94,8 +97,9 @@ int main(int argc, char** argv) {
       std::printf("best validation (step %lld, before the resume; not beaten since): mean per-class accuracy %.3f\n",
                   static_cast<long long>(r.best_step), r.best_val_mean_class_accuracy);
     else
-      std::printf("best validation (step %lld): mean per-class accuracy %.3f, overall %.3f, per class TP %.3f TN %.3f "
+      std::printf("%s (step %lld): mean per-class accuracy %.3f, overall %.3f, per class TP %.3f TN %.3f "
                   "FP %.3f FN %.3f\n",
+                  c.keep_last ? "validation of the final model" : "best validation",
                   static_cast<long long>(r.best_step), r.best_val_mean_class_accuracy, r.best_val_accuracy,
                   r.best_val_class_accuracy[0], r.best_val_class_accuracy[1], r.best_val_class_accuracy[2],
                   r.best_val_class_accuracy[3]);

@@ -479,14 +479,15 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     if ((step + 1) % c.validate_every == 0 || last) {
       const ValOutputs v = run_validation(*net, val, val_refs, info, device, 1, generator);
       status.val_mean_class_accuracy = v.confusion.mean_class_accuracy();
-      if (status.val_mean_class_accuracy > report.best_val_mean_class_accuracy) {
+      const bool better = status.val_mean_class_accuracy > report.best_val_mean_class_accuracy;
+      if (c.keep_last ? last : better) {
         report.best_val_mean_class_accuracy = status.val_mean_class_accuracy;
         report.best_val_accuracy = v.confusion.accuracy();
         for (int k = 0; k < kNumClasses; ++k) report.best_val_class_accuracy[static_cast<size_t>(k)] = v.confusion.class_accuracy(k);
         report.best_step = step + 1;
         report.best_before_resume = false;
         info.training_summary = training_summary(c, train, val, report, step + 1);
-        save_model(*net, info, c.output);  // the best so far, complete at every moment
+        save_model(*net, info, c.output);  // the best so far (or the last), complete at every moment
       }
       status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
     }
@@ -495,7 +496,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     if (progress) progress(status);
   }
 
-  // Calibrate the uncertainty gates of the best model on validation data.
+  // Calibrate the uncertainty gates of the model kept on validation data.
   NativeModel best = load_native_model(c.output);
   best.net->to(device);
   calibrate_gates(best, val, val_refs, c, device, generator, report);

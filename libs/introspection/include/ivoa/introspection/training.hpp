@@ -18,7 +18,7 @@ struct TrainConfig {
   std::string split_file;         // YAML: split name -> sessions
   std::string train_split = "train";
   std::string val_split = "val";
-  std::string output;             // model file to write (the best model)
+  std::string output;             // model file to write (the best model, or the last with keep_last)
   std::string architecture = "slidenet";
   std::string init;               // optional model file to start from (fine-tuning)
   bool resume = false;            // continue from output + ".checkpoint" if present
@@ -42,6 +42,10 @@ struct TrainConfig {
   int threads = 2;
   std::string device = "cpu";
   int64_t validate_every = 250;
+  // Write the final step's model instead of the best-validated one. With a
+  // few validation sessions the best step is partly chance, and it is often
+  // a mid-run one whose learning rate is still high.
+  bool keep_last = false;
   int64_t checkpoint_every = 500;
   int64_t max_val_samples = 20000;  // validation subset (deterministic, spread over sessions)
   // The uncertainty gate stored in the model: the predicted-class variance
@@ -63,6 +67,8 @@ struct TrainStatus {
 
 struct TrainReport {
   TrainStatus last;
+  // best_*: the validation of the model written, the best one (or, with
+  // keep_last, the final one).
   int64_t best_step = 0;
   double best_val_mean_class_accuracy = 0;
   double best_val_accuracy = 0;
