@@ -1,6 +1,7 @@
 // Training mechanics on a small synthetic dataset whose four classes look
 // different: the loss falls and held-out sessions are classified far above
 // chance. (Training on simulated sessions is tested end to end elsewhere.)
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <random>
@@ -151,9 +152,12 @@ TEST(Training, KeepLastWritesTheFinalStepsModelWhateverItsValidation) {
   TrainConfig c = tiny_run(dir, 5, 20);
   c.keep_last = true;
   double final_validation = -1;
+  bool written_early = false;  // the default writes the first validated model (step 5)
   const TrainReport r = train_model(c, [&](const TrainStatus& s) {
+    if (s.step < c.steps) written_early = written_early || std::filesystem::exists(c.output);
     if (s.step == c.steps) final_validation = s.val_mean_class_accuracy;
   });
+  EXPECT_FALSE(written_early);
   EXPECT_EQ(r.best_step, 20);
   EXPECT_FALSE(r.best_before_resume);
   EXPECT_NEAR(r.best_val_mean_class_accuracy, final_validation, 1e-9);
