@@ -15,6 +15,10 @@ for f in split.yaml model_jppc.pt model_dense.pt eval_jppc/eval.json eval_dense/
   report/report.md report/metrics.json report/jppc_eval_jppc/confusion.png report/jppc_eval_jppc/clusters_tsne.png; do
   [ -s "$OUT/$f" ] || { echo "FAILED: $f missing or empty" >&2; tail -40 "$OUT/main_job.log" >&2; exit 1; }
 done
+for detector in jppc dense; do  # the smaller scales keep the final step's model
+  grep -q "validation of the final model (step 60)" "$OUT/train_$detector.txt" ||
+    { echo "FAILED: $detector's training did not keep its final model:" >&2; cat "$OUT/train_$detector.txt" >&2; exit 1; }
+done
 ls "$OUT"/viewer/*/*.png > /dev/null || { echo "FAILED: the viewer wrote no figures" >&2; exit 1; }
 
 /usr/bin/python3 - "$OUT" <<'PY'
