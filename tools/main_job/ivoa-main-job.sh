@@ -192,9 +192,9 @@ echo "  dense (SGBM): the detector and the monitor re-run offline on the same ra
 # other settings in the same --out cannot be continued, so start over.
 # JPP-C's datasets carry its window costs, which training also learns to
 # predict (ivoa-train --evidence-weight); the dense detector keeps none.
+keep=$([ "$KEEP_LAST" = 1 ] && echo --keep-last || true)
 for detector in jppc dense; do
   evidence_weight=$([ "$detector" = jppc ] && echo 5 || echo 0)
-  keep=$([ "$KEEP_LAST" = 1 ] && echo --keep-last || true)
   training_setup="views $views, patch scale $patch_scale, $STEPS steps, batch $BATCH, evidence weight $evidence_weight${keep:+, keep last}"
   step "Training introspection for $detector ($STEPS steps, batch $BATCH)"
   setup_file="$out/model_$detector.pt.setup"
