@@ -75,7 +75,7 @@ case "$scale" in
   *) echo "ivoa-main-job: --scale must be default, full or smoke" >&2; exit 2 ;;
 esac
 # KEEP_LAST: three validation sessions of 24 frames cannot rank checkpoints
-# (README, "What remains": over training seeds the two choices are even), so
+# (docs/accuracy.md, "What remains": over training seeds the two choices are even), so
 # the smaller scales keep the final model, the simpler rule; the full scale's
 # nine 60-frame sessions pick the best-validated one, as for the shipped model.
 RATE=2  # frames per second of session time: consecutive frames 0.5 s of driving apart
