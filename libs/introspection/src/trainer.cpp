@@ -367,16 +367,97 @@ int64_t load_checkpoint(const std::string& checkpoint, EvidenceTask* evidence, d
   return step;
 }
 
+// One training batch's loss, accuracy and side-task loss.
+struct StepResult {
+  double loss, accuracy, evidence_loss;
+};
+
 // Running means of the training batches (exponential, 0.98 per step).
 struct RunningMeans {
   double loss = 0, accuracy = 0, evidence = 0, window = 0;
-  void add(double batch_loss, double batch_accuracy, double evidence_loss) {
-    loss = loss * 0.98 + batch_loss;
-    accuracy = accuracy * 0.98 + batch_accuracy;
-    evidence = evidence * 0.98 + evidence_loss;
+  void add(const StepResult& batch) {
+    loss = loss * 0.98 + batch.loss;
+    accuracy = accuracy * 0.98 + batch.accuracy;
+    evidence = evidence * 0.98 + batch.evidence_loss;
     window = window * 0.98 + 1.0;
   }
 };
+
+// The network, its side task and one SGD optimiser over both, from scratch,
+// from a given model (fine-tuning, --init) or from the last checkpoint
+// (--resume); the optimiser is made for the network's final parameters.
+struct Learner {
+  std::shared_ptr<IntrospectionNetImpl> net;
+  std::unique_ptr<EvidenceTask> evidence;
+  std::unique_ptr<torch::optim::SGD> optimizer;
+  int64_t first_step = 0;  // the checkpoint's step when resuming
+};
+
+Learner make_learner(const TrainConfig& c, const SplitData& train, const ModelInfo& info, torch::Device device,
+                     TrainReport& report) {
+  const std::string checkpoint = c.output + ".checkpoint";
+  const bool resuming = c.resume && std::filesystem::exists(checkpoint + ".model");
+  Learner l;
+  if (resuming || !c.init.empty()) {
+    NativeModel start_from = load_native_model(resuming ? checkpoint + ".model" : c.init);
+    check_can_start_from(start_from.info, info, resuming, c.output);
+    l.net = start_from.net;
+  } else {
+    l.net = make_network(c.architecture, c.dropout, train.views);
+  }
+  l.net->to(device);
+  l.evidence = make_evidence_task(c, train, *l.net, device);
+  auto parameters = l.net->parameters();
+  if (l.evidence)
+    for (auto& p : l.evidence->parameters()) parameters.push_back(p);
+  l.optimizer = std::make_unique<torch::optim::SGD>(
+      parameters, torch::optim::SGDOptions(c.learning_rate).momentum(c.momentum).weight_decay(c.weight_decay));
+  if (resuming) l.first_step = load_checkpoint(checkpoint, l.evidence.get(), c.evidence_weight, *l.optimizer, report);
+  return l;
+}
+
+// One SGD step on a batch: cross-entropy on the four classes, plus the side
+// task's loss when there is one.
+StepResult train_step(Learner& l, const TrainConfig& c, const SplitData& train, const std::vector<SampleRef>& batch,
+                      BatchAugmenter& make_batch, int64_t step, torch::Device device) {
+  l.net->train();
+  const auto labels = labels_of(train, batch).to(device);
+  const auto x = make_batch(patch_pointers(train, batch)).to(device);
+  for (auto& group : l.optimizer->param_groups())
+    static_cast<torch::optim::SGDOptions&>(group.options()).lr(learning_rate_at(c, step));
+  l.optimizer->zero_grad();
+  const auto features = l.net->features(x);
+  const auto logits = l.net->head(features);
+  auto loss = torch::nn::functional::cross_entropy(logits, labels);
+  double evidence_loss = 0;
+  if (l.evidence) {
+    const auto e = l.evidence->loss(features, evidence_targets(train, batch, train.evidence_size).to(device));
+    loss = loss + c.evidence_weight * e;
+    evidence_loss = e.item<double>();
+  }
+  loss.backward();
+  l.optimizer->step();
+  return {loss.item<double>(), logits.argmax(1).eq(labels).to(torch::kFloat).mean().item<double>(), evidence_loss};
+}
+
+void update_status(TrainStatus& status, const RunningMeans& means, const TrainConfig& c, int64_t step,
+                   bool has_evidence, double patches_per_s) {
+  status.step = step + 1;
+  status.loss = means.loss / means.window;
+  status.accuracy = means.accuracy / means.window;
+  status.evidence_loss = has_evidence ? means.evidence / means.window : -1;
+  status.learning_rate = learning_rate_at(c, step);
+  status.patches_per_s = patches_per_s;
+}
+
+// The report's record of the model kept: the best so far, or the last.
+void record_kept(TrainReport& report, const Confusion& val, int64_t step) {
+  report.best_val_mean_class_accuracy = val.mean_class_accuracy();
+  report.best_val_accuracy = val.accuracy();
+  for (int k = 0; k < kNumClasses; ++k) report.best_val_class_accuracy[static_cast<size_t>(k)] = val.class_accuracy(k);
+  report.best_step = step;
+  report.best_before_resume = false;
+}
 
 }  // namespace
 
@@ -413,27 +494,8 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   TrainReport report;
   const std::vector<int> classes = classes_present(train, report);
   ModelInfo info = model_info_for(c, train, val);
-  // Start from scratch, from a given model (fine-tuning), or from the last
-  // checkpoint (resume); the optimiser is made for the network's final parameters.
-  const std::string checkpoint = c.output + ".checkpoint";
-  const bool resuming = c.resume && std::filesystem::exists(checkpoint + ".model");
-  std::shared_ptr<IntrospectionNetImpl> net;
-  if (resuming || !c.init.empty()) {
-    NativeModel start_from = load_native_model(resuming ? checkpoint + ".model" : c.init);
-    check_can_start_from(start_from.info, info, resuming, c.output);
-    net = start_from.net;
-  } else {
-    net = make_network(c.architecture, c.dropout, train.views);
-  }
-  net->to(device);
-  std::unique_ptr<EvidenceTask> evidence = make_evidence_task(c, train, *net, device);
-  auto parameters = net->parameters();
-  if (evidence)
-    for (auto& p : evidence->parameters()) parameters.push_back(p);
-  torch::optim::SGD optimizer(parameters,
-                              torch::optim::SGDOptions(c.learning_rate).momentum(c.momentum).weight_decay(c.weight_decay));
-  const int64_t first_step =
-      resuming ? load_checkpoint(checkpoint, evidence.get(), c.evidence_weight, optimizer, report) : 0;
+  Learner learner = make_learner(c, train, info, device, report);
+  const int64_t first_step = learner.first_step;
 
   // Every random stream continues from the step (a resumed run does not replay the first batches).
   BalancedSampler sampler(train, classes, c.fn_weight, c.seed * 7919 + static_cast<uint64_t>(first_step));
@@ -448,51 +510,26 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   RunningMeans means;
   const double loop_start = monotonic_ms();
   for (int64_t step = first_step; step < c.steps; ++step) {
-    net->train();
     const std::vector<SampleRef> batch = sampler.batch(c.batch_size);
-    const auto labels = labels_of(train, batch).to(device);
-    const auto x = make_batch(patch_pointers(train, batch)).to(device);
-    for (auto& group : optimizer.param_groups())
-      static_cast<torch::optim::SGDOptions&>(group.options()).lr(learning_rate_at(c, step));
-    optimizer.zero_grad();
-    const auto features = net->features(x);
-    const auto logits = net->head(features);
-    auto loss = torch::nn::functional::cross_entropy(logits, labels);
-    double evidence_loss = 0;
-    if (evidence) {
-      const auto e = evidence->loss(features, evidence_targets(train, batch, train.evidence_size).to(device));
-      loss = loss + c.evidence_weight * e;
-      evidence_loss = e.item<double>();
-    }
-    loss.backward();
-    optimizer.step();
-
-    means.add(loss.item<double>(), logits.argmax(1).eq(labels).to(torch::kFloat).mean().item<double>(), evidence_loss);
-    status.step = step + 1;
-    status.loss = means.loss / means.window;
-    status.accuracy = means.accuracy / means.window;
-    status.evidence_loss = evidence ? means.evidence / means.window : -1;
-    status.learning_rate = learning_rate_at(c, step);
-    status.patches_per_s = static_cast<double>((step + 1 - first_step) * c.batch_size) / ((monotonic_ms() - loop_start) / 1000.0);
+    means.add(train_step(learner, c, train, batch, make_batch, step, device));
+    update_status(status, means, c, step, static_cast<bool>(learner.evidence),
+                  static_cast<double>((step + 1 - first_step) * c.batch_size) / ((monotonic_ms() - loop_start) / 1000.0));
 
     const bool last = step + 1 == c.steps;
     if ((step + 1) % c.validate_every == 0 || last) {
-      const ValOutputs v = run_validation(*net, val, val_refs, info, device, 1, generator);
+      const ValOutputs v = run_validation(*learner.net, val, val_refs, info, device, 1, generator);
       status.val_mean_class_accuracy = v.confusion.mean_class_accuracy();
       const bool better = status.val_mean_class_accuracy > report.best_val_mean_class_accuracy;
       if (c.keep_last ? last : better) {
-        report.best_val_mean_class_accuracy = status.val_mean_class_accuracy;
-        report.best_val_accuracy = v.confusion.accuracy();
-        for (int k = 0; k < kNumClasses; ++k) report.best_val_class_accuracy[static_cast<size_t>(k)] = v.confusion.class_accuracy(k);
-        report.best_step = step + 1;
-        report.best_before_resume = false;
+        record_kept(report, v.confusion, step + 1);
         info.training_summary = training_summary(c, train, val, report, step + 1);
-        save_model(*net, info, c.output);  // the best so far (or the last), complete at every moment
+        save_model(*learner.net, info, c.output);  // the best so far (or the last), complete at every moment
       }
       status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
     }
     if ((step + 1) % c.checkpoint_every == 0 || last)
-      save_checkpoint(checkpoint, *net, info, evidence.get(), optimizer, step + 1, report);
+      save_checkpoint(c.output + ".checkpoint", *learner.net, info, learner.evidence.get(), *learner.optimizer, step + 1,
+                      report);
     if (progress) progress(status);
   }
 
