@@ -1,10 +1,13 @@
 # Warnings on everywhere; IVOA_WERROR (on in CI) turns them into errors.
 option(IVOA_WERROR "Treat compiler warnings as errors" OFF)
 
+# ccache with the checkout as its base directory: paths under it are hashed
+# relative to the build folder, so clones at other paths share the cache.
 find_program(CCACHE_PROGRAM ccache)
 if(CCACHE_PROGRAM)
-  set(CMAKE_C_COMPILER_LAUNCHER ${CCACHE_PROGRAM})
-  set(CMAKE_CXX_COMPILER_LAUNCHER ${CCACHE_PROGRAM})
+  set(IVOA_CCACHE ${CMAKE_COMMAND} -E env CCACHE_BASEDIR=${CMAKE_SOURCE_DIR} ${CCACHE_PROGRAM})
+  set(CMAKE_C_COMPILER_LAUNCHER ${IVOA_CCACHE})
+  set(CMAKE_CXX_COMPILER_LAUNCHER ${IVOA_CCACHE})
 endif()
 
 add_library(ivoa_warnings INTERFACE)
