@@ -393,9 +393,12 @@ struct Learner {
   int64_t first_step = 0;  // the checkpoint's step when resuming
 };
 
+// The files of a run's checkpoint are OUT.checkpoint.*.
+std::string checkpoint_of(const TrainConfig& c) { return c.output + ".checkpoint"; }
+
 Learner make_learner(const TrainConfig& c, const SplitData& train, const ModelInfo& info, torch::Device device,
                      TrainReport& report) {
-  const std::string checkpoint = c.output + ".checkpoint";
+  const std::string checkpoint = checkpoint_of(c);
   const bool resuming = c.resume && std::filesystem::exists(checkpoint + ".model");
   Learner l;
   if (resuming || !c.init.empty()) {
@@ -440,6 +443,7 @@ StepResult train_step(Learner& l, const TrainConfig& c, const SplitData& train, 
   return {loss.item<double>(), logits.argmax(1).eq(labels).to(torch::kFloat).mean().item<double>(), evidence_loss};
 }
 
+// What the progress callback sees after a step: the running means, the rate.
 void update_status(TrainStatus& status, const RunningMeans& means, const TrainConfig& c, int64_t step,
                    bool has_evidence, double patches_per_s) {
   status.step = step + 1;
@@ -528,7 +532,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
       status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
     }
     if ((step + 1) % c.checkpoint_every == 0 || last)
-      save_checkpoint(c.output + ".checkpoint", *learner.net, info, learner.evidence.get(), *learner.optimizer, step + 1,
+      save_checkpoint(checkpoint_of(c), *learner.net, info, learner.evidence.get(), *learner.optimizer, step + 1,
                       report);
     if (progress) progress(status);
   }
