@@ -127,205 +127,268 @@ Plan plan_for(const Material& m) {
 
 using Painter = std::function<Srgb(double u, double v)>;  // metres within one period
 
-Painter make_painter(const Material& m, const Plan& plan, Rng& rng) {
-  const double P = plan.period, c = m.contrast;
-  const Rgb a = m.color, b = m.color2;
-  const uint64_t cell_seed = rng.next();
-  auto cells = [&](double feature) { return std::max(1, static_cast<int>(std::lround(P / std::max(feature, 1e-4)))); };
-  auto fbm = [&](int c0, int octaves, double persistence, double aspect = 1.0) {
-    return std::make_shared<Fbm>(c0, octaves, persistence, rng, plan.n, aspect);
-  };
-  auto lattice = [&](int cx, int cy) { return std::make_shared<PeriodicNoise>(cx, cy, rng, plan.n); };
+// What every painter reads of its material, captured by value in the painters.
+struct Look {
+  double P;          // texture period, metres
+  double c;          // contrast
+  double s;          // the material's feature scale, metres
+  Rgb a, b;          // colour and secondary colour
+  uint64_t cell_seed;  // per-tile / per-brick variation
+  Srgb first() const { return {a[0], a[1], a[2]}; }
+  Srgb second() const { return {b[0], b[1], b[2]}; }
+};
 
-  switch (m.pattern) {
-    case Pattern::kUniform: {
-      auto low = fbm(2, 2, 0.5);
-      return [=](double u, double v) { return scaled(mix(a, a, 0), 1.0 + 0.012 * low->at(u / P, v / P)); };
-    }
-    case Pattern::kPlaster: {
-      auto blot = fbm(cells(m.scale * 8), 6, 0.6);
-      auto grain = lattice(cells(0.003), cells(0.003));
-      return [=](double u, double v) {
-        const double t = 0.5 + 0.6 * blot->at(u / P, v / P);
-        return scaled(mix(a, b, t * c * 1.6), 1.0 + 0.35 * c * grain->at(u / P, v / P));
-      };
-    }
-    case Pattern::kCarpet: {
-      auto fibre = lattice(cells(m.scale * 0.7), cells(m.scale * 0.7));
-      auto loop = lattice(cells(m.scale * 2), cells(m.scale * 2));
-      auto mottle = fbm(cells(0.15), 3, 0.5);
-      return [=](double u, double v) {
-        const double f = 0.55 * fibre->at(u / P, v / P) + 0.45 * loop->at(u / P, v / P);
-        return scaled(mix(a, b, 0.5 + 0.8 * f * c), 1.0 + 0.08 * mottle->at(u / P, v / P));
-      };
-    }
-    case Pattern::kSpeckle:
-    case Pattern::kAsphalt: {
-      const bool asphalt = m.pattern == Pattern::kAsphalt;
-      auto base = fbm(cells(m.scale * 2), 3, 0.6);
-      auto dots = lattice(cells(m.scale), cells(m.scale));
-      auto fine = lattice(cells(0.0025), cells(0.0025));
-      auto patchy = fbm(cells(0.4), 3, 0.5);
-      const double threshold = asphalt ? 0.45 : 0.55;
-      return [=](double u, double v) {
-        const double d = dots->at(u / P, v / P);
-        const double speck = std::clamp((d - threshold) * 5.0, 0.0, 1.0);
-        Srgb col = mix(a, b, speck * c * 1.3);
-        const double shade = 1.0 + c * (0.25 * base->at(u / P, v / P) + 0.25 * fine->at(u / P, v / P)) +
-                             0.06 * patchy->at(u / P, v / P);
-        return scaled(col, shade);
-      };
-    }
-    case Pattern::kTiles:
-    case Pattern::kChecker: {
-      const bool checker = m.pattern == Pattern::kChecker;
-      const double s = m.scale, grout = std::max(0.004, s * 0.015);
-      auto noise = fbm(cells(0.02), 3, 0.5);
-      auto fine = lattice(cells(0.003), cells(0.003));
-      return [=](double u, double v) {
-        const int64_t i = static_cast<int64_t>(std::floor(u / s)), j = static_cast<int64_t>(std::floor(v / s));
-        const double fu = u - i * s, fv = v - j * s;
-        const double edge = std::min(std::min(fu, s - fu), std::min(fv, s - fv));
-        const double in_grout = std::clamp((grout - edge) / 0.0015 + 0.5, 0.0, 1.0);
-        const int64_t n_per = static_cast<int64_t>(std::llround(P / s));
-        const double jitter = cell_random(cell_seed, ((i % n_per) + n_per) % n_per, ((j % n_per) + n_per) % n_per) - 0.5;
-        Srgb tile = checker && ((i + j) & 1) ? Srgb{b[0], b[1], b[2]} : Srgb{a[0], a[1], a[2]};
-        tile = scaled(tile, 1.0 + 0.25 * c * jitter + 0.06 * noise->at(u / P, v / P) + 0.04 * fine->at(u / P, v / P));
-        const Srgb g = scaled(Srgb{b[0], b[1], b[2]}, checker ? 2.5 : 1.0);
-        return mix({tile[0], tile[1], tile[2]}, {g[0], g[1], g[2]}, in_grout * (checker ? 0.5 : 1.0));
-      };
-    }
-    case Pattern::kBricks: {
-      const double len = m.scale, h = m.scale / 3.0, mortar = std::max(0.006, m.scale * 0.04);
-      auto noise = fbm(cells(0.01), 4, 0.55);
-      return [=](double u, double v) {
-        const int64_t row = static_cast<int64_t>(std::floor(v / h));
-        const double shift = (row & 1) ? len / 2 : 0.0;
-        const int64_t col = static_cast<int64_t>(std::floor((u + shift) / len));
-        const double fu = u + shift - col * len, fv = v - row * h;
-        const double edge = std::min(std::min(fu, len - fu), std::min(fv, h - fv));
-        const double in_mortar = std::clamp((mortar / 2 - edge) / 0.002 + 0.5, 0.0, 1.0);
-        const int64_t cols = static_cast<int64_t>(std::llround(P / len)), rows = static_cast<int64_t>(std::llround(P / h));
-        const double jitter = cell_random(cell_seed, ((col % cols) + cols) % cols, ((row % rows) + rows) % rows) - 0.5;
-        const Srgb brick = scaled(Srgb{a[0], a[1], a[2]}, 1.0 + 0.45 * c * jitter + 0.25 * c * noise->at(u / P, v / P));
-        return mix({brick[0], brick[1], brick[2]}, b, in_mortar);
-      };
-    }
-    case Pattern::kWood: {
-      const double w = m.scale;
-      auto grain = fbm(cells(0.05), 4, 0.5, 0.15);
-      auto fine = lattice(cells(0.004), cells(0.0015));
-      return [=](double u, double v) {
-        const int64_t plank = static_cast<int64_t>(std::floor(v / w));
-        const double fv = v - plank * w;
-        const int64_t planks = static_cast<int64_t>(std::llround(P / w));
-        const double jitter = cell_random(cell_seed, 0, ((plank % planks) + planks) % planks) - 0.5;
-        const double rings = std::sin(kTwoPi * (v / 0.012 + 3.0 * grain->at(u / P, v / P)));
-        const double seam = std::clamp((0.002 - std::min(fv, w - fv)) / 0.001 + 0.5, 0.0, 1.0);
-        Srgb col = mix(a, b, 0.5 + 0.5 * c * rings + 0.6 * c * jitter);
-        col = scaled(col, 1.0 + 0.1 * c * fine->at(u / P, v / P));
-        return mix({col[0], col[1], col[2]}, {b[0] * 0.5, b[1] * 0.5, b[2] * 0.5}, seam);
-      };
-    }
-    case Pattern::kFabric: {
-      const double s = m.scale;
-      auto motif = fbm(cells(0.2), 3, 0.5);
-      auto fine = lattice(cells(s), cells(s));
-      const int64_t threads = std::max<int64_t>(1, std::llround(P / s));
-      return [=](double u, double v) {
-        const double wu = std::sin(kTwoPi * u / P * static_cast<double>(threads));
-        const double wv = std::sin(kTwoPi * v / P * static_cast<double>(threads));
-        const double weave = 0.5 * wu * wv;
-        const double mo = motif->at(u / P, v / P);
-        Srgb col = mix(a, b, std::clamp((mo + 0.1) * 4.0, 0.0, 1.0) * c);
-        return scaled(col, 1.0 + 0.3 * c * weave + 0.25 * c * fine->at(u / P, v / P));
-      };
-    }
-    case Pattern::kMetal: {
-      auto brushed = fbm(cells(0.002), 3, 0.5, 0.02);
-      auto smudge = fbm(cells(0.2), 2, 0.5);
-      return [=](double u, double v) {
-        return scaled(mix(a, b, 0.5 + 0.5 * smudge->at(u / P, v / P) * c * 3),
-                      1.0 + 0.6 * c * brushed->at(u / P, v / P));
-      };
-    }
-    case Pattern::kCardboard: {
-      auto fibres = fbm(cells(m.scale), 4, 0.6, 0.3);
-      auto blots = fbm(cells(0.1), 3, 0.5);
-      return [=](double u, double v) {
-        const double t = 0.5 + 0.5 * blots->at(u / P, v / P);
-        return scaled(mix(a, b, t * c), 1.0 + 0.4 * c * fibres->at(u / P, v / P));
-      };
-    }
-    case Pattern::kGrass: {
-      auto blades = fbm(cells(m.scale * 0.5), 3, 0.6, 0.25);
-      auto clumps = fbm(cells(0.15), 3, 0.5);
-      return [=](double u, double v) {
-        const double t = 0.5 + 0.7 * blades->at(u / P, v / P);
-        return scaled(mix(a, b, t), 1.0 + 0.35 * c * clumps->at(u / P, v / P));
-      };
-    }
-    case Pattern::kStripes: {
-      const double s = m.scale;
-      auto noise = fbm(cells(0.01), 3, 0.5);
-      return [=](double u, double v) {
-        const double phase = std::fmod(u / (2 * s), 1.0);
-        const double t = std::clamp((std::abs(phase - 0.5) - 0.25) / 0.01 + 0.5, 0.0, 1.0);
-        return scaled(mix(a, b, t * c * 1.5), 1.0 + 0.05 * noise->at(u / P, v / P));
-      };
-    }
-    case Pattern::kFacade: {
-      const double s = m.scale, floor_h = 2 * s;  // window bay width and storey height
-      auto noise = fbm(cells(0.05), 4, 0.55);
-      auto glass = fbm(cells(0.5), 3, 0.5);
-      return [=](double u, double v) {
-        const double fu = std::fmod(u, s) / s, fv = std::fmod(v, floor_h) / floor_h;
-        const bool window = fu > 0.2 && fu < 0.8 && fv > 0.3 && fv < 0.8;
-        const bool frame = fu > 0.17 && fu < 0.83 && fv > 0.27 && fv < 0.83 && !window;
-        if (window) return scaled(mix(b, a, 0.15 + 0.15 * glass->at(u / P, v / P)), 1.0);
-        if (frame) return Srgb{0.25, 0.25, 0.26};
-        return scaled(Srgb{a[0], a[1], a[2]}, 1.0 + 0.2 * c * noise->at(u / P, v / P));
-      };
-    }
-    case Pattern::kCeilingTiles: {
-      const double s = m.scale;
-      auto holes = lattice(cells(0.004), cells(0.004));
-      return [=](double u, double v) {
-        const double fu = std::fmod(u, s), fv = std::fmod(v, s);
-        const double edge = std::min(std::min(fu, s - fu), std::min(fv, s - fv));
-        if (edge < 0.012) return Srgb{b[0], b[1], b[2]};
-        return scaled(Srgb{a[0], a[1], a[2]}, 1.0 - 0.3 * c * std::max(0.0f, holes->at(u / P, v / P) - 0.3f));
-      };
-    }
-    case Pattern::kPrinted: {
-      // Random overlapping rectangles and text-like lines in a few colours.
-      struct Rect {
-        double x0, y0, x1, y1;
-        Srgb col;
-      };
-      auto rects = std::make_shared<std::vector<Rect>>();
-      const Srgb palette[] = {{a[0], a[1], a[2]}, {b[0], b[1], b[2]}, {0.1, 0.1, 0.12}, {0.9, 0.8, 0.2}, {0.2, 0.5, 0.3}};
-      for (int i = 0; i < 60; ++i) {
-        const double w = rng.uniform(0.02, 0.3) * P, h = rng.uniform(0.005, 0.2) * P;
-        const double x = rng.uniform(0, P), y = rng.uniform(0, P);
-        rects->push_back({x, y, x + w, y + h, palette[rng.uniform_int(0, 4)]});
-      }
-      auto noise = fbm(cells(0.01), 3, 0.5);
-      return [=](double u, double v) {
-        Srgb col{a[0], a[1], a[2]};
-        for (const Rect& r : *rects) {
-          for (int wrap = 0; wrap < 4; ++wrap) {
-            const double uu = u + ((wrap & 1) ? P : 0), vv = v + ((wrap & 2) ? P : 0);
-            if (uu >= r.x0 && uu < r.x1 && vv >= r.y0 && vv < r.y1) col = r.col;
-          }
-        }
-        const Srgb base{a[0], a[1], a[2]};
-        Srgb out = {base[0] + (col[0] - base[0]) * c, base[1] + (col[1] - base[1]) * c, base[2] + (col[2] - base[2]) * c};
-        return scaled(out, 1.0 + 0.04 * noise->at(u / P, v / P));
-      };
-    }
+// Noise images for one texture. The order of the calls fixes the random
+// draws, and so the texture: painters must keep theirs.
+class NoiseMaker {
+ public:
+  NoiseMaker(const Plan& plan, Rng& rng) : plan_(plan), rng_(rng) {}
+  // Lattice cells per period for features of `feature` metres.
+  int cells(double feature) const {
+    return std::max(1, static_cast<int>(std::lround(plan_.period / std::max(feature, 1e-4))));
   }
-  return [=](double, double) { return Srgb{a[0], a[1], a[2]}; };
+  std::shared_ptr<const Fbm> fbm(int c0, int octaves, double persistence, double aspect = 1.0) {
+    return std::make_shared<Fbm>(c0, octaves, persistence, rng_, plan_.n, aspect);
+  }
+  std::shared_ptr<const PeriodicNoise> lattice(int cx, int cy) {
+    return std::make_shared<PeriodicNoise>(cx, cy, rng_, plan_.n);
+  }
+  Rng& rng() { return rng_; }
+
+ private:
+  Plan plan_;
+  Rng& rng_;
+};
+
+// Index of a cell within the period, for cells that repeat every `count`.
+int64_t wrapped(int64_t i, int64_t count) { return ((i % count) + count) % count; }
+
+Painter paint_uniform(const Look& k, NoiseMaker& noise) {
+  auto low = noise.fbm(2, 2, 0.5);
+  return [=](double u, double v) { return scaled(mix(k.a, k.a, 0), 1.0 + 0.012 * low->at(u / k.P, v / k.P)); };
+}
+
+Painter paint_plaster(const Look& k, NoiseMaker& noise) {
+  auto blot = noise.fbm(noise.cells(k.s * 8), 6, 0.6);
+  auto grain = noise.lattice(noise.cells(0.003), noise.cells(0.003));
+  return [=](double u, double v) {
+    const double t = 0.5 + 0.6 * blot->at(u / k.P, v / k.P);
+    return scaled(mix(k.a, k.b, t * k.c * 1.6), 1.0 + 0.35 * k.c * grain->at(u / k.P, v / k.P));
+  };
+}
+
+Painter paint_carpet(const Look& k, NoiseMaker& noise) {
+  auto fibre = noise.lattice(noise.cells(k.s * 0.7), noise.cells(k.s * 0.7));
+  auto loop = noise.lattice(noise.cells(k.s * 2), noise.cells(k.s * 2));
+  auto mottle = noise.fbm(noise.cells(0.15), 3, 0.5);
+  return [=](double u, double v) {
+    const double f = 0.55 * fibre->at(u / k.P, v / k.P) + 0.45 * loop->at(u / k.P, v / k.P);
+    return scaled(mix(k.a, k.b, 0.5 + 0.8 * f * k.c), 1.0 + 0.08 * mottle->at(u / k.P, v / k.P));
+  };
+}
+
+// Speckle and asphalt: dots over a shaded base; asphalt has more of them.
+Painter paint_speckle(const Look& k, NoiseMaker& noise, bool asphalt) {
+  auto base = noise.fbm(noise.cells(k.s * 2), 3, 0.6);
+  auto dots = noise.lattice(noise.cells(k.s), noise.cells(k.s));
+  auto fine = noise.lattice(noise.cells(0.0025), noise.cells(0.0025));
+  auto patchy = noise.fbm(noise.cells(0.4), 3, 0.5);
+  const double threshold = asphalt ? 0.45 : 0.55;
+  return [=](double u, double v) {
+    const double d = dots->at(u / k.P, v / k.P);
+    const double speck = std::clamp((d - threshold) * 5.0, 0.0, 1.0);
+    Srgb col = mix(k.a, k.b, speck * k.c * 1.3);
+    const double shade = 1.0 + k.c * (0.25 * base->at(u / k.P, v / k.P) + 0.25 * fine->at(u / k.P, v / k.P)) +
+                         0.06 * patchy->at(u / k.P, v / k.P);
+    return scaled(col, shade);
+  };
+}
+
+// Square tiles in grout; a checker alternates the two colours and has light grout.
+Painter paint_tiles(const Look& k, NoiseMaker& noise, bool checker) {
+  const double s = k.s, grout = std::max(0.004, s * 0.015);
+  auto shading = noise.fbm(noise.cells(0.02), 3, 0.5);
+  auto fine = noise.lattice(noise.cells(0.003), noise.cells(0.003));
+  return [=](double u, double v) {
+    const int64_t i = static_cast<int64_t>(std::floor(u / s)), j = static_cast<int64_t>(std::floor(v / s));
+    const double fu = u - i * s, fv = v - j * s;
+    const double edge = std::min(std::min(fu, s - fu), std::min(fv, s - fv));
+    const double in_grout = std::clamp((grout - edge) / 0.0015 + 0.5, 0.0, 1.0);
+    const int64_t n_per = static_cast<int64_t>(std::llround(k.P / s));
+    const double jitter = cell_random(k.cell_seed, wrapped(i, n_per), wrapped(j, n_per)) - 0.5;
+    Srgb tile = checker && ((i + j) & 1) ? k.second() : k.first();
+    tile = scaled(tile, 1.0 + 0.25 * k.c * jitter + 0.06 * shading->at(u / k.P, v / k.P) +
+                            0.04 * fine->at(u / k.P, v / k.P));
+    const Srgb g = scaled(k.second(), checker ? 2.5 : 1.0);
+    return mix({tile[0], tile[1], tile[2]}, {g[0], g[1], g[2]}, in_grout * (checker ? 0.5 : 1.0));
+  };
+}
+
+// Running bond: every other row shifted by half a brick.
+Painter paint_bricks(const Look& k, NoiseMaker& noise) {
+  const double len = k.s, h = k.s / 3.0, mortar = std::max(0.006, k.s * 0.04);
+  auto shading = noise.fbm(noise.cells(0.01), 4, 0.55);
+  return [=](double u, double v) {
+    const int64_t row = static_cast<int64_t>(std::floor(v / h));
+    const double shift = (row & 1) ? len / 2 : 0.0;
+    const int64_t col = static_cast<int64_t>(std::floor((u + shift) / len));
+    const double fu = u + shift - col * len, fv = v - row * h;
+    const double edge = std::min(std::min(fu, len - fu), std::min(fv, h - fv));
+    const double in_mortar = std::clamp((mortar / 2 - edge) / 0.002 + 0.5, 0.0, 1.0);
+    const int64_t cols = static_cast<int64_t>(std::llround(k.P / len)), rows = static_cast<int64_t>(std::llround(k.P / h));
+    const double jitter = cell_random(k.cell_seed, wrapped(col, cols), wrapped(row, rows)) - 0.5;
+    const Srgb brick = scaled(k.first(), 1.0 + 0.45 * k.c * jitter + 0.25 * k.c * shading->at(u / k.P, v / k.P));
+    return mix({brick[0], brick[1], brick[2]}, k.b, in_mortar);
+  };
+}
+
+// Planks along u with ring grain and dark seams between them.
+Painter paint_wood(const Look& k, NoiseMaker& noise) {
+  const double w = k.s;
+  auto grain = noise.fbm(noise.cells(0.05), 4, 0.5, 0.15);
+  auto fine = noise.lattice(noise.cells(0.004), noise.cells(0.0015));
+  return [=](double u, double v) {
+    const int64_t plank = static_cast<int64_t>(std::floor(v / w));
+    const double fv = v - plank * w;
+    const int64_t planks = static_cast<int64_t>(std::llround(k.P / w));
+    const double jitter = cell_random(k.cell_seed, 0, wrapped(plank, planks)) - 0.5;
+    const double rings = std::sin(kTwoPi * (v / 0.012 + 3.0 * grain->at(u / k.P, v / k.P)));
+    const double seam = std::clamp((0.002 - std::min(fv, w - fv)) / 0.001 + 0.5, 0.0, 1.0);
+    Srgb col = mix(k.a, k.b, 0.5 + 0.5 * k.c * rings + 0.6 * k.c * jitter);
+    col = scaled(col, 1.0 + 0.1 * k.c * fine->at(u / k.P, v / k.P));
+    return mix({col[0], col[1], col[2]}, {k.b[0] * 0.5, k.b[1] * 0.5, k.b[2] * 0.5}, seam);
+  };
+}
+
+Painter paint_fabric(const Look& k, NoiseMaker& noise) {
+  auto motif = noise.fbm(noise.cells(0.2), 3, 0.5);
+  auto fine = noise.lattice(noise.cells(k.s), noise.cells(k.s));
+  const int64_t threads = std::max<int64_t>(1, std::llround(k.P / k.s));
+  return [=](double u, double v) {
+    const double wu = std::sin(kTwoPi * u / k.P * static_cast<double>(threads));
+    const double wv = std::sin(kTwoPi * v / k.P * static_cast<double>(threads));
+    const double weave = 0.5 * wu * wv;
+    const double mo = motif->at(u / k.P, v / k.P);
+    Srgb col = mix(k.a, k.b, std::clamp((mo + 0.1) * 4.0, 0.0, 1.0) * k.c);
+    return scaled(col, 1.0 + 0.3 * k.c * weave + 0.25 * k.c * fine->at(u / k.P, v / k.P));
+  };
+}
+
+Painter paint_metal(const Look& k, NoiseMaker& noise) {
+  auto brushed = noise.fbm(noise.cells(0.002), 3, 0.5, 0.02);
+  auto smudge = noise.fbm(noise.cells(0.2), 2, 0.5);
+  return [=](double u, double v) {
+    return scaled(mix(k.a, k.b, 0.5 + 0.5 * smudge->at(u / k.P, v / k.P) * k.c * 3),
+                  1.0 + 0.6 * k.c * brushed->at(u / k.P, v / k.P));
+  };
+}
+
+Painter paint_cardboard(const Look& k, NoiseMaker& noise) {
+  auto fibres = noise.fbm(noise.cells(k.s), 4, 0.6, 0.3);
+  auto blots = noise.fbm(noise.cells(0.1), 3, 0.5);
+  return [=](double u, double v) {
+    const double t = 0.5 + 0.5 * blots->at(u / k.P, v / k.P);
+    return scaled(mix(k.a, k.b, t * k.c), 1.0 + 0.4 * k.c * fibres->at(u / k.P, v / k.P));
+  };
+}
+
+Painter paint_grass(const Look& k, NoiseMaker& noise) {
+  auto blades = noise.fbm(noise.cells(k.s * 0.5), 3, 0.6, 0.25);
+  auto clumps = noise.fbm(noise.cells(0.15), 3, 0.5);
+  return [=](double u, double v) {
+    const double t = 0.5 + 0.7 * blades->at(u / k.P, v / k.P);
+    return scaled(mix(k.a, k.b, t), 1.0 + 0.35 * k.c * clumps->at(u / k.P, v / k.P));
+  };
+}
+
+Painter paint_stripes(const Look& k, NoiseMaker& noise) {
+  auto shading = noise.fbm(noise.cells(0.01), 3, 0.5);
+  return [=](double u, double v) {
+    const double phase = std::fmod(u / (2 * k.s), 1.0);
+    const double t = std::clamp((std::abs(phase - 0.5) - 0.25) / 0.01 + 0.5, 0.0, 1.0);
+    return scaled(mix(k.a, k.b, t * k.c * 1.5), 1.0 + 0.05 * shading->at(u / k.P, v / k.P));
+  };
+}
+
+// A grid of framed windows, one bay `s` wide and one storey 2 s high.
+Painter paint_facade(const Look& k, NoiseMaker& noise) {
+  const double s = k.s, floor_h = 2 * s;
+  auto shading = noise.fbm(noise.cells(0.05), 4, 0.55);
+  auto glass = noise.fbm(noise.cells(0.5), 3, 0.5);
+  return [=](double u, double v) {
+    const double fu = std::fmod(u, s) / s, fv = std::fmod(v, floor_h) / floor_h;
+    const bool window = fu > 0.2 && fu < 0.8 && fv > 0.3 && fv < 0.8;
+    const bool frame = fu > 0.17 && fu < 0.83 && fv > 0.27 && fv < 0.83 && !window;
+    if (window) return scaled(mix(k.b, k.a, 0.15 + 0.15 * glass->at(u / k.P, v / k.P)), 1.0);
+    if (frame) return Srgb{0.25, 0.25, 0.26};
+    return scaled(k.first(), 1.0 + 0.2 * k.c * shading->at(u / k.P, v / k.P));
+  };
+}
+
+Painter paint_ceiling_tiles(const Look& k, NoiseMaker& noise) {
+  auto holes = noise.lattice(noise.cells(0.004), noise.cells(0.004));
+  return [=](double u, double v) {
+    const double fu = std::fmod(u, k.s), fv = std::fmod(v, k.s);
+    const double edge = std::min(std::min(fu, k.s - fu), std::min(fv, k.s - fv));
+    if (edge < 0.012) return k.second();
+    return scaled(k.first(), 1.0 - 0.3 * k.c * std::max(0.0f, holes->at(u / k.P, v / k.P) - 0.3f));
+  };
+}
+
+// Random overlapping rectangles and text-like lines in a few colours.
+Painter paint_printed(const Look& k, NoiseMaker& noise) {
+  struct Rect {
+    double x0, y0, x1, y1;
+    Srgb col;
+  };
+  auto rects = std::make_shared<std::vector<Rect>>();
+  const Srgb palette[] = {k.first(), k.second(), {0.1, 0.1, 0.12}, {0.9, 0.8, 0.2}, {0.2, 0.5, 0.3}};
+  Rng& rng = noise.rng();
+  for (int i = 0; i < 60; ++i) {
+    const double w = rng.uniform(0.02, 0.3) * k.P, h = rng.uniform(0.005, 0.2) * k.P;
+    const double x = rng.uniform(0, k.P), y = rng.uniform(0, k.P);
+    rects->push_back({x, y, x + w, y + h, palette[rng.uniform_int(0, 4)]});
+  }
+  auto shading = noise.fbm(noise.cells(0.01), 3, 0.5);
+  return [=](double u, double v) {
+    Srgb col = k.first();
+    for (const Rect& r : *rects) {
+      for (int wrap = 0; wrap < 4; ++wrap) {  // rectangles running over the period's edge
+        const double uu = u + ((wrap & 1) ? k.P : 0), vv = v + ((wrap & 2) ? k.P : 0);
+        if (uu >= r.x0 && uu < r.x1 && vv >= r.y0 && vv < r.y1) col = r.col;
+      }
+    }
+    const Srgb base = k.first();
+    Srgb out = {base[0] + (col[0] - base[0]) * k.c, base[1] + (col[1] - base[1]) * k.c,
+                base[2] + (col[2] - base[2]) * k.c};
+    return scaled(out, 1.0 + 0.04 * shading->at(u / k.P, v / k.P));
+  };
+}
+
+Painter make_painter(const Material& m, const Plan& plan, Rng& rng) {
+  const uint64_t cell_seed = rng.next();
+  const Look k{plan.period, m.contrast, m.scale, m.color, m.color2, cell_seed};
+  NoiseMaker noise(plan, rng);
+  switch (m.pattern) {
+    case Pattern::kUniform: return paint_uniform(k, noise);
+    case Pattern::kPlaster: return paint_plaster(k, noise);
+    case Pattern::kCarpet: return paint_carpet(k, noise);
+    case Pattern::kSpeckle: return paint_speckle(k, noise, false);
+    case Pattern::kAsphalt: return paint_speckle(k, noise, true);
+    case Pattern::kTiles: return paint_tiles(k, noise, false);
+    case Pattern::kChecker: return paint_tiles(k, noise, true);
+    case Pattern::kBricks: return paint_bricks(k, noise);
+    case Pattern::kWood: return paint_wood(k, noise);
+    case Pattern::kFabric: return paint_fabric(k, noise);
+    case Pattern::kMetal: return paint_metal(k, noise);
+    case Pattern::kCardboard: return paint_cardboard(k, noise);
+    case Pattern::kGrass: return paint_grass(k, noise);
+    case Pattern::kStripes: return paint_stripes(k, noise);
+    case Pattern::kFacade: return paint_facade(k, noise);
+    case Pattern::kCeilingTiles: return paint_ceiling_tiles(k, noise);
+    case Pattern::kPrinted: return paint_printed(k, noise);
+  }
+  return [k](double, double) { return k.first(); };
 }
 
 // sRGB -> linear through a table: pow() per texel would dominate synthesis.
