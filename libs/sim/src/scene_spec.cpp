@@ -189,29 +189,29 @@ ElementSpec::Type parse_element_type(const Reader& r) {
   r.fail("unknown element type '" + s + "' (one of: " + all + ")");
 }
 
-ElementSpec parse_element(const Reader& r) {
-  r.allow({"type", "position", "from", "to", "size", "yaw_deg", "elevation", "depth", "intensity", "shape", "material",
-           "height", "width", "thickness", "diameter", "baseboard", "doors"});
-  if (!r.has("type")) r.fail("an element needs a type");
-  ElementSpec e;
-  e.type = parse_element_type(r["type"]);
+// An element's size before its keys: the usual piece of furniture of its type.
+Eigen::Vector3d default_size(ElementSpec::Type type) {
   using T = ElementSpec::Type;
-  const bool linear = e.type == T::kWall || e.type == T::kCurb;
-  // Defaults per type, then the keys given.
-  switch (e.type) {
-    case T::kCylinder: e.size = {0.4, 0.4, 0.8}; break;
-    case T::kChair: e.size = {0.46, 0.46, 0.88}; break;
-    case T::kTable: e.size = {1.2, 0.7, 0.73}; break;
-    case T::kWall: e.size = {0, 0.12, 2.6}; break;
-    case T::kPole: e.size = {0.08, 0.08, 2.5}; break;
-    case T::kLampPost: e.size = {0.14, 0.14, 4.0}; break;
-    case T::kCurb: e.size = {0, 0.15, 0.13}; break;
-    case T::kFloorPatch: e.size = {1.5, 1.0, 0}; break;
-    case T::kPuddle: e.size = {1.2, 0.8, 0}; break;
-    case T::kPit: e.size = {0.6, 0.6, 0}; break;
-    case T::kLight: e.size = {0.6, 0.6, 0}; break;
+  switch (type) {
+    case T::kCylinder: return {0.4, 0.4, 0.8};
+    case T::kChair: return {0.46, 0.46, 0.88};
+    case T::kTable: return {1.2, 0.7, 0.73};
+    case T::kWall: return {0, 0.12, 2.6};
+    case T::kPole: return {0.08, 0.08, 2.5};
+    case T::kLampPost: return {0.14, 0.14, 4.0};
+    case T::kCurb: return {0, 0.15, 0.13};
+    case T::kFloorPatch: return {1.5, 1.0, 0};
+    case T::kPuddle: return {1.2, 0.8, 0};
+    case T::kPit: return {0.6, 0.6, 0};
+    case T::kLight: return {0.6, 0.6, 0};
     case T::kBox: break;
   }
+  return ElementSpec{}.size;
+}
+
+// Walls and curbs run from one point to another; everything else stands at a position.
+void parse_placement(const Reader& r, ElementSpec& e) {
+  const bool linear = e.type == ElementSpec::Type::kWall || e.type == ElementSpec::Type::kCurb;
   if (linear) {
     if (!r.has("from") || !r.has("to")) r.fail(std::string(ElementSpec::type_name(e.type)) + " needs from and to");
     e.position = r["from"].vec2();
@@ -221,21 +221,54 @@ ElementSpec parse_element(const Reader& r) {
     if (!r.has("position")) r.fail(std::string(ElementSpec::type_name(e.type)) + " needs a position");
     e.position = r["position"].vec2();
   }
+}
+
+// `size` ([x, y] or [x, y, z]), then the single dimensions, which override it.
+void parse_size(const Reader& r, Eigen::Vector3d& size) {
   if (r.has("size")) {
     const Reader s = r["size"];
     if (s.is_sequence() && s.size() == 2) {
       const auto v = s.numbers(2);
-      e.size.x() = v[0];
-      e.size.y() = v[1];
+      size.x() = v[0];
+      size.y() = v[1];
     } else {
       const auto v = s.numbers(3);
-      e.size = {v[0], v[1], v[2]};
+      size = {v[0], v[1], v[2]};
     }
   }
-  if (r.has("diameter")) e.size.x() = e.size.y() = r["diameter"].number();
-  if (r.has("height")) e.size.z() = r["height"].number();
-  if (r.has("width")) e.size.y() = r["width"].number();
-  if (r.has("thickness")) e.size.y() = r["thickness"].number();
+  if (r.has("diameter")) size.x() = size.y() = r["diameter"].number();
+  if (r.has("height")) size.z() = r["height"].number();
+  if (r.has("width")) size.y() = r["width"].number();
+  if (r.has("thickness")) size.y() = r["thickness"].number();
+  for (int i = 0; i < 3; ++i)
+    if (size[i] < 0) r["size"].fail("sizes must be >= 0");
+}
+
+std::vector<ElementSpec::Door> parse_doors(const Reader& d) {
+  std::vector<ElementSpec::Door> doors;
+  for (size_t i = 0; i < d.size(); ++i) {
+    const Reader dr = d.at(i);
+    dr.allow({"offset", "width", "height", "material", "open"});
+    ElementSpec::Door door;
+    maybe(dr, "offset", door.offset, &Reader::number);
+    maybe(dr, "width", door.width, &Reader::number);
+    maybe(dr, "height", door.height, &Reader::number);
+    maybe(dr, "material", door.material, &Reader::string);
+    maybe(dr, "open", door.open, &Reader::boolean);
+    doors.push_back(door);
+  }
+  return doors;
+}
+
+ElementSpec parse_element(const Reader& r) {
+  r.allow({"type", "position", "from", "to", "size", "yaw_deg", "elevation", "depth", "intensity", "shape", "material",
+           "height", "width", "thickness", "diameter", "baseboard", "doors"});
+  if (!r.has("type")) r.fail("an element needs a type");
+  ElementSpec e;
+  e.type = parse_element_type(r["type"]);
+  e.size = default_size(e.type);
+  parse_placement(r, e);
+  parse_size(r, e.size);
   if (r.has("yaw_deg")) e.yaw = r["yaw_deg"].number() * kDeg;
   maybe(r, "elevation", e.elevation, &Reader::number);
   maybe(r, "depth", e.depth, &Reader::number);
@@ -251,22 +284,7 @@ ElementSpec parse_element(const Reader& r) {
     e.baseboard_height = b.has("height") ? b["height"].number() : 0.1;
     e.baseboard_material = b.has("material") ? b["material"].string() : "baseboard_black";
   }
-  if (r.has("doors")) {
-    const Reader d = r["doors"];
-    for (size_t i = 0; i < d.size(); ++i) {
-      const Reader dr = d.at(i);
-      dr.allow({"offset", "width", "height", "material", "open"});
-      ElementSpec::Door door;
-      maybe(dr, "offset", door.offset, &Reader::number);
-      maybe(dr, "width", door.width, &Reader::number);
-      maybe(dr, "height", door.height, &Reader::number);
-      maybe(dr, "material", door.material, &Reader::string);
-      maybe(dr, "open", door.open, &Reader::boolean);
-      e.doors.push_back(door);
-    }
-  }
-  for (int i = 0; i < 3; ++i)
-    if (e.size[i] < 0) r["size"].fail("sizes must be >= 0");
+  if (r.has("doors")) e.doors = parse_doors(r["doors"]);
   return e;
 }
 
@@ -290,6 +308,85 @@ void parse_kinds(const Reader& r, std::vector<std::pair<std::string, double>>& k
   if (kinds.empty()) r.fail("no kinds given (one of: " + list + ")");
 }
 
+void parse_layout(const Reader& r, LayoutSpec& out) {
+  r.allow({"type", "width", "depth", "corridor_width", "corridor_length", "room_size", "ceiling_height",
+           "door_probability", "facade_height"});
+  if (r.has("type")) out.type = parse_layout_type(r["type"]);
+  maybe(r, "width", out.width, &Reader::range);
+  maybe(r, "depth", out.depth, &Reader::range);
+  maybe(r, "corridor_width", out.corridor_width, &Reader::range);
+  maybe(r, "corridor_length", out.corridor_length, &Reader::range);
+  maybe(r, "room_size", out.room_size, &Reader::range);
+  maybe(r, "ceiling_height", out.ceiling_height, &Reader::range);
+  maybe(r, "door_probability", out.door_probability, &Reader::probability);
+  maybe(r, "facade_height", out.facade_height, &Reader::range);
+}
+
+void parse_floor(const Reader& r, FloorSpec& out) {
+  r.allow({"materials", "patch_count", "patch_materials", "patch_size"});
+  maybe(r, "materials", out.materials, &Reader::strings);
+  maybe(r, "patch_count", out.patch_count, &Reader::range);
+  maybe(r, "patch_materials", out.patch_materials, &Reader::strings);
+  maybe(r, "patch_size", out.patch_size, &Reader::range);
+}
+
+void parse_walls(const Reader& r, WallSpec& out) {
+  r.allow({"materials", "baseboard_materials", "baseboard_height", "door_materials", "thickness"});
+  maybe(r, "materials", out.materials, &Reader::strings);
+  maybe(r, "baseboard_materials", out.baseboard_materials, &Reader::strings);
+  maybe(r, "baseboard_height", out.baseboard_height, &Reader::range);
+  maybe(r, "door_materials", out.door_materials, &Reader::strings);
+  maybe(r, "thickness", out.thickness, &Reader::range);
+}
+
+void parse_obstacles(const Reader& r, ObstacleSpec& out) {
+  r.allow({"count", "kinds", "materials", "color_jitter", "min_gap", "box_size", "box_height"});
+  maybe(r, "count", out.count, &Reader::range);
+  if (r.has("kinds")) parse_kinds(r["kinds"], out.kinds);
+  maybe(r, "materials", out.materials, &Reader::strings);
+  maybe(r, "color_jitter", out.color_jitter, &Reader::number);
+  maybe(r, "min_gap", out.min_gap, &Reader::number);
+  maybe(r, "box_size", out.box_size, &Reader::range);
+  maybe(r, "box_height", out.box_height, &Reader::range);
+}
+
+void parse_pits(const Reader& r, PitSpec& out) {
+  r.allow({"probability", "count", "size", "depth"});
+  maybe(r, "probability", out.probability, &Reader::probability);
+  maybe(r, "count", out.count, &Reader::range);
+  maybe(r, "size", out.size, &Reader::range);
+  maybe(r, "depth", out.depth, &Reader::range);
+}
+
+void parse_lighting(const Reader& r, LightingSpec& out) {
+  r.allow({"ambient", "light_spacing", "light_emission", "sun_elevation_deg", "sun_azimuth_deg", "sun_irradiance",
+           "sky_irradiance", "overcast_probability", "low_light_factor", "night", "max_exposure_scale"});
+  maybe(r, "ambient", out.ambient, &Reader::range);
+  maybe(r, "light_spacing", out.light_spacing, &Reader::range);
+  maybe(r, "light_emission", out.light_emission, &Reader::range);
+  maybe(r, "sun_elevation_deg", out.sun_elevation_deg, &Reader::range);
+  maybe(r, "sun_azimuth_deg", out.sun_azimuth_deg, &Reader::range);
+  maybe(r, "sun_irradiance", out.sun_irradiance, &Reader::range);
+  maybe(r, "sky_irradiance", out.sky_irradiance, &Reader::range);
+  maybe(r, "overcast_probability", out.overcast_probability, &Reader::probability);
+  maybe(r, "low_light_factor", out.low_light_factor, &Reader::range);
+  maybe(r, "night", out.night, &Reader::boolean);
+  maybe(r, "max_exposure_scale", out.max_exposure_scale, &Reader::number);
+}
+
+void parse_phenomena(const Reader& r, PhenomenaSpec& out) {
+  r.allow({"reflective_floor", "wet_patches", "textureless_walls", "textureless_obstacles", "dark_stripes",
+           "repetitive_floor", "glare", "low_light"});
+  maybe(r, "reflective_floor", out.reflective_floor, &Reader::probability);
+  maybe(r, "wet_patches", out.wet_patches, &Reader::range);
+  maybe(r, "textureless_walls", out.textureless_walls, &Reader::probability);
+  maybe(r, "textureless_obstacles", out.textureless_obstacles, &Reader::probability);
+  maybe(r, "dark_stripes", out.dark_stripes, &Reader::probability);
+  maybe(r, "repetitive_floor", out.repetitive_floor, &Reader::probability);
+  maybe(r, "glare", out.glare, &Reader::probability);
+  maybe(r, "low_light", out.low_light, &Reader::probability);
+}
+
 SceneSpec parse(const YAML::Node& root, const std::string& file) {
   const Reader r(root, "", file);
   if (!root.IsMap()) r.fail("a scene file is a mapping (name, environment, layout, ...)");
@@ -305,85 +402,13 @@ SceneSpec parse(const YAML::Node& root, const std::string& file) {
     s.walls.baseboard_materials = {};
     s.obstacles.materials = {"bin_green", "concrete_block"};
   }
-  if (r.has("layout")) {
-    const Reader l = r["layout"];
-    l.allow({"type", "width", "depth", "corridor_width", "corridor_length", "room_size", "ceiling_height",
-             "door_probability", "facade_height"});
-    if (l.has("type")) s.layout.type = parse_layout_type(l["type"]);
-    maybe(l, "width", s.layout.width, &Reader::range);
-    maybe(l, "depth", s.layout.depth, &Reader::range);
-    maybe(l, "corridor_width", s.layout.corridor_width, &Reader::range);
-    maybe(l, "corridor_length", s.layout.corridor_length, &Reader::range);
-    maybe(l, "room_size", s.layout.room_size, &Reader::range);
-    maybe(l, "ceiling_height", s.layout.ceiling_height, &Reader::range);
-    maybe(l, "door_probability", s.layout.door_probability, &Reader::probability);
-    maybe(l, "facade_height", s.layout.facade_height, &Reader::range);
-  }
-  if (r.has("floor")) {
-    const Reader f = r["floor"];
-    f.allow({"materials", "patch_count", "patch_materials", "patch_size"});
-    maybe(f, "materials", s.floor.materials, &Reader::strings);
-    maybe(f, "patch_count", s.floor.patch_count, &Reader::range);
-    maybe(f, "patch_materials", s.floor.patch_materials, &Reader::strings);
-    maybe(f, "patch_size", s.floor.patch_size, &Reader::range);
-  }
-  if (r.has("walls")) {
-    const Reader w = r["walls"];
-    w.allow({"materials", "baseboard_materials", "baseboard_height", "door_materials", "thickness"});
-    maybe(w, "materials", s.walls.materials, &Reader::strings);
-    maybe(w, "baseboard_materials", s.walls.baseboard_materials, &Reader::strings);
-    maybe(w, "baseboard_height", s.walls.baseboard_height, &Reader::range);
-    maybe(w, "door_materials", s.walls.door_materials, &Reader::strings);
-    maybe(w, "thickness", s.walls.thickness, &Reader::range);
-  }
-  if (r.has("obstacles")) {
-    const Reader o = r["obstacles"];
-    o.allow({"count", "kinds", "materials", "color_jitter", "min_gap", "box_size", "box_height"});
-    maybe(o, "count", s.obstacles.count, &Reader::range);
-    if (o.has("kinds")) parse_kinds(o["kinds"], s.obstacles.kinds);
-    maybe(o, "materials", s.obstacles.materials, &Reader::strings);
-    maybe(o, "color_jitter", s.obstacles.color_jitter, &Reader::number);
-    maybe(o, "min_gap", s.obstacles.min_gap, &Reader::number);
-    maybe(o, "box_size", s.obstacles.box_size, &Reader::range);
-    maybe(o, "box_height", s.obstacles.box_height, &Reader::range);
-  }
-  if (r.has("pits")) {
-    const Reader p = r["pits"];
-    p.allow({"probability", "count", "size", "depth"});
-    maybe(p, "probability", s.pits.probability, &Reader::probability);
-    maybe(p, "count", s.pits.count, &Reader::range);
-    maybe(p, "size", s.pits.size, &Reader::range);
-    maybe(p, "depth", s.pits.depth, &Reader::range);
-  }
-  if (r.has("lighting")) {
-    const Reader l = r["lighting"];
-    l.allow({"ambient", "light_spacing", "light_emission", "sun_elevation_deg", "sun_azimuth_deg", "sun_irradiance",
-             "sky_irradiance", "overcast_probability", "low_light_factor", "night", "max_exposure_scale"});
-    maybe(l, "ambient", s.lighting.ambient, &Reader::range);
-    maybe(l, "light_spacing", s.lighting.light_spacing, &Reader::range);
-    maybe(l, "light_emission", s.lighting.light_emission, &Reader::range);
-    maybe(l, "sun_elevation_deg", s.lighting.sun_elevation_deg, &Reader::range);
-    maybe(l, "sun_azimuth_deg", s.lighting.sun_azimuth_deg, &Reader::range);
-    maybe(l, "sun_irradiance", s.lighting.sun_irradiance, &Reader::range);
-    maybe(l, "sky_irradiance", s.lighting.sky_irradiance, &Reader::range);
-    maybe(l, "overcast_probability", s.lighting.overcast_probability, &Reader::probability);
-    maybe(l, "low_light_factor", s.lighting.low_light_factor, &Reader::range);
-    maybe(l, "night", s.lighting.night, &Reader::boolean);
-    maybe(l, "max_exposure_scale", s.lighting.max_exposure_scale, &Reader::number);
-  }
-  if (r.has("phenomena")) {
-    const Reader p = r["phenomena"];
-    p.allow({"reflective_floor", "wet_patches", "textureless_walls", "textureless_obstacles", "dark_stripes",
-             "repetitive_floor", "glare", "low_light"});
-    maybe(p, "reflective_floor", s.phenomena.reflective_floor, &Reader::probability);
-    maybe(p, "wet_patches", s.phenomena.wet_patches, &Reader::range);
-    maybe(p, "textureless_walls", s.phenomena.textureless_walls, &Reader::probability);
-    maybe(p, "textureless_obstacles", s.phenomena.textureless_obstacles, &Reader::probability);
-    maybe(p, "dark_stripes", s.phenomena.dark_stripes, &Reader::probability);
-    maybe(p, "repetitive_floor", s.phenomena.repetitive_floor, &Reader::probability);
-    maybe(p, "glare", s.phenomena.glare, &Reader::probability);
-    maybe(p, "low_light", s.phenomena.low_light, &Reader::probability);
-  }
+  if (r.has("layout")) parse_layout(r["layout"], s.layout);
+  if (r.has("floor")) parse_floor(r["floor"], s.floor);
+  if (r.has("walls")) parse_walls(r["walls"], s.walls);
+  if (r.has("obstacles")) parse_obstacles(r["obstacles"], s.obstacles);
+  if (r.has("pits")) parse_pits(r["pits"], s.pits);
+  if (r.has("lighting")) parse_lighting(r["lighting"], s.lighting);
+  if (r.has("phenomena")) parse_phenomena(r["phenomena"], s.phenomena);
   if (r.has("materials")) {
     const Reader m = r["materials"];
     for (size_t i = 0; i < m.size(); ++i) s.materials.push_back(parse_material(m.at(i), s.materials));
