@@ -75,63 +75,72 @@ Tracer::Tracer(const SceneData& scene, const CameraRays& rays, const Pose2D& pos
   }
 }
 
+Tracer::Candidate Tracer::make_candidate(uint32_t prism) const {
+  const Prism& p = scene_.prisms[prism];
+  Candidate c;
+  c.prism = prism;
+  c.circle = p.shape == Prism::kCircle;
+  c.hx = p.hx;
+  c.hy = p.hy;
+  c.z0 = p.z0;
+  c.z1 = p.z1;
+  if (c.circle) {
+    const float d = std::hypot(p.cx - ox_, p.cy - oy_);
+    c.c = cos_yaw_;
+    c.s = sin_yaw_;
+    c.lox = ox_ - p.cx;
+    c.loy = oy_ - p.cy;
+    c.s_min = std::max(0.0f, d - p.hx);
+  } else {
+    const float theta = std::atan2(p.sin_yaw, p.cos_yaw);
+    c.c = std::cos(static_cast<float>(pose_.yaw) - theta);
+    c.s = std::sin(static_cast<float>(pose_.yaw) - theta);
+    to_local(p, ox_, oy_, c.lox, c.loy);
+    c.s_min = static_cast<float>(std::max(0.0, footprint_distance(p, ox_, oy_)));
+  }
+  return c;
+}
+
+std::pair<float, float> Tracer::azimuth_extent(const Prism& p, float s_min) const {
+  if (s_min <= 0.01f)  // the camera is inside or on the footprint: every direction
+    return {-static_cast<float>(M_PI), static_cast<float>(M_PI)};
+  const float dxw = p.cx - ox_, dyw = p.cy - oy_;
+  const float centre = std::atan2(dyw, dxw);
+  if (p.shape == Prism::kCircle) {
+    const float half = std::asin(std::min(1.0f, p.hx / std::hypot(dxw, dyw)));
+    return {centre - half, centre + half};
+  }
+  float mn = 0, mx = 0;  // the corners' angles from the centre's direction
+  for (int k = 0; k < 4; ++k) {
+    const float lx = (k & 1) ? p.hx : -p.hx, ly = (k & 2) ? p.hy : -p.hy;
+    const float wx = p.cx + p.cos_yaw * lx - p.sin_yaw * ly - ox_, wy = p.cy + p.sin_yaw * lx + p.cos_yaw * ly - oy_;
+    const float a = wrap_angle(std::atan2(wy, wx) - centre);
+    mn = std::min(mn, a);
+    mx = std::max(mx, a);
+  }
+  return {centre + mn, centre + mx};
+}
+
 void Tracer::build_candidates(bool accelerate) {
+  std::vector<Candidate> all;
+  all.reserve(scene_.prisms.size());
+  for (size_t i = 0; i < scene_.prisms.size(); ++i) all.push_back(make_candidate(static_cast<uint32_t>(i)));
+  if (!accelerate) {
+    brute_force_ = true;
+    candidates_ = std::move(all);
+    bin_start_ = {0, static_cast<uint32_t>(candidates_.size())};
+    return;
+  }
+  // Each candidate's azimuth bins, in the robot frame: up to three spans of
+  // bins, as the extent may wrap around +-pi.
   const int num_bins = rays_.num_bins();
   const float az0 = rays_.az_min(), bw = rays_.bin_width();
-  const float yaw = static_cast<float>(pose_.yaw);
-  std::vector<Candidate> all;
-  std::vector<std::pair<int, int>> spans;  // bin ranges (inclusive), up to 3 per candidate
-  std::vector<int> span_owner;
-  for (size_t i = 0; i < scene_.prisms.size(); ++i) {
-    const Prism& p = scene_.prisms[i];
-    Candidate c;
-    c.prism = static_cast<uint32_t>(i);
-    c.circle = p.shape == Prism::kCircle;
-    c.hx = p.hx;
-    c.hy = p.hy;
-    c.z0 = p.z0;
-    c.z1 = p.z1;
-    const float dxw = p.cx - ox_, dyw = p.cy - oy_, d = std::hypot(dxw, dyw);
-    if (c.circle) {
-      c.c = cos_yaw_;
-      c.s = sin_yaw_;
-      c.lox = ox_ - p.cx;
-      c.loy = oy_ - p.cy;
-      c.s_min = std::max(0.0f, d - p.hx);
-    } else {
-      const float theta = std::atan2(p.sin_yaw, p.cos_yaw);
-      c.c = std::cos(yaw - theta);
-      c.s = std::sin(yaw - theta);
-      to_local(p, ox_, oy_, c.lox, c.loy);
-      c.s_min = static_cast<float>(std::max(0.0, footprint_distance(p, ox_, oy_)));
-    }
-    const size_t index = all.size();
-    all.push_back(c);
-    if (!accelerate) continue;
-    // Angular extent in the robot frame.
-    float lo, hi;
-    const float centre = std::atan2(dyw, dxw);
-    if (c.s_min <= 0.01f) {  // the camera is inside or on the footprint: every direction
-      lo = -static_cast<float>(M_PI);
-      hi = static_cast<float>(M_PI);
-    } else if (c.circle) {
-      const float half = std::asin(std::min(1.0f, p.hx / d));
-      lo = centre - half;
-      hi = centre + half;
-    } else {
-      float mn = 0, mx = 0;
-      for (int k = 0; k < 4; ++k) {
-        const float lx = (k & 1) ? p.hx : -p.hx, ly = (k & 2) ? p.hy : -p.hy;
-        const float wx = p.cx + p.cos_yaw * lx - p.sin_yaw * ly - ox_, wy = p.cy + p.sin_yaw * lx + p.cos_yaw * ly - oy_;
-        const float a = wrap_angle(std::atan2(wy, wx) - centre);
-        mn = std::min(mn, a);
-        mx = std::max(mx, a);
-      }
-      lo = centre + mn;
-      hi = centre + mx;
-    }
-    lo -= yaw;
-    hi -= yaw;
+  std::vector<std::pair<int, int>> spans;  // bin ranges (inclusive)
+  std::vector<size_t> span_owner;
+  for (size_t i = 0; i < all.size(); ++i) {
+    auto [lo, hi] = azimuth_extent(scene_.prisms[i], all[i].s_min);
+    lo -= static_cast<float>(pose_.yaw);
+    hi -= static_cast<float>(pose_.yaw);
     const float shift = wrap_angle(lo) - lo;  // bring lo into (-pi, pi]
     lo += shift;
     hi += shift;
@@ -141,28 +150,29 @@ void Tracer::build_candidates(bool accelerate) {
       const int b1 = std::min(num_bins - 1, static_cast<int>(std::floor((b - az0) / bw)));
       if (b0 <= b1) {
         spans.emplace_back(b0, b1);
-        span_owner.push_back(static_cast<int>(index));
+        span_owner.push_back(i);
       }
     }
   }
-  if (!accelerate) {
-    brute_force_ = true;
-    candidates_ = std::move(all);
-    bin_start_ = {0, static_cast<uint32_t>(candidates_.size())};
-    return;
-  }
-  std::vector<uint32_t> count(static_cast<size_t>(num_bins) + 1, 0);
+  fill_bins(all, spans, span_owner);
+}
+
+void Tracer::fill_bins(const std::vector<Candidate>& all, const std::vector<std::pair<int, int>>& spans,
+                       const std::vector<size_t>& span_owner) {
+  const size_t num_bins = static_cast<size_t>(rays_.num_bins());
+  std::vector<uint32_t> count(num_bins + 1, 0);
   for (const auto& [b0, b1] : spans)
     for (int b = b0; b <= b1; ++b) ++count[static_cast<size_t>(b)];
-  bin_start_.assign(static_cast<size_t>(num_bins) + 1, 0);
-  for (int b = 0; b < num_bins; ++b) bin_start_[static_cast<size_t>(b) + 1] = bin_start_[static_cast<size_t>(b)] + count[static_cast<size_t>(b)];
+  bin_start_.assign(num_bins + 1, 0);
+  for (size_t b = 0; b < num_bins; ++b) bin_start_[b + 1] = bin_start_[b] + count[b];
   candidates_.resize(bin_start_.back());
   std::vector<uint32_t> fill(bin_start_.begin(), bin_start_.end() - 1);
   for (size_t k = 0; k < spans.size(); ++k)
     for (int b = spans[k].first; b <= spans[k].second; ++b)
-      candidates_[fill[static_cast<size_t>(b)]++] = all[static_cast<size_t>(span_owner[k])];
-  for (int b = 0; b < num_bins; ++b)
-    std::sort(candidates_.begin() + bin_start_[static_cast<size_t>(b)], candidates_.begin() + bin_start_[static_cast<size_t>(b) + 1],
+      candidates_[fill[static_cast<size_t>(b)]++] = all[span_owner[k]];
+  // Nearest first; ties by index, so the order does not depend on the sort.
+  for (size_t b = 0; b < num_bins; ++b)
+    std::sort(candidates_.begin() + bin_start_[b], candidates_.begin() + bin_start_[b + 1],
               [](const Candidate& x, const Candidate& y) { return x.s_min < y.s_min || (x.s_min == y.s_min && x.prism < y.prism); });
 }
 

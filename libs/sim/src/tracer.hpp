@@ -8,6 +8,7 @@
 // reflection reuses the bin's list.
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include "camera_rays.hpp"
@@ -72,6 +73,12 @@ class Tracer {
   };
 
   void build_candidates(bool accelerate);
+  Candidate make_candidate(uint32_t prism) const;
+  // Azimuths [lo, hi] (world frame, radians) a solid covers as seen from the camera.
+  std::pair<float, float> azimuth_extent(const Prism& p, float s_min) const;
+  // Sorts the candidates into their azimuth bins (spans[k] holds all[span_owner[k]]).
+  void fill_bins(const std::vector<Candidate>& all, const std::vector<std::pair<int, int>>& spans,
+                 const std::vector<size_t>& span_owner);
   inline Ray make_ray(const PixelRay& r) const;
   // False when no solid of the ray's azimuth bin starts before s_hi (nearest() would find none).
   bool bin_may_hit(const Ray& ray, float s_hi) const;
