@@ -124,6 +124,92 @@ std::pair<double, double> batch_preparation_ms(int batch, int runs) {
   return {time_ms([&] { tensor_pass_batch(raw, noise_bank, info); }, runs), time_ms([&] { fused(patches); }, runs)};
 }
 
+// The in-image query cells of the default grid with their footprint-scaled
+// squares, as ivoa-introspection predicts them.
+std::vector<IntrospectionModel::CellPatch> default_query_cells(const cv::Size& image) {
+  const QueryGrid grid(QueryGridConfig{}, RigGeometry(sim::make_sim_rig()).left);
+  const auto sides = footprint_patch_sides(make_obstacle_grid(grid, "jppc", 0), 100, image, 1.6);
+  std::vector<IntrospectionModel::CellPatch> cells;
+  for (int i = 0; i < grid.size(); ++i)
+    if (grid.cell(i).in_image) cells.push_back({grid.cell(i).u, grid.cell(i).v, sides[static_cast<size_t>(i)]});
+  return cells;
+}
+
+// ms per frame of the reference (every patch resized to 224, the whole
+// AlexNet T times as one batch, MC dropout on), from the sample of patches.
+double reference_ms_per_patch(const std::vector<cv::Mat>& sample, int passes, int runs) {
+  auto alexnet = make_network("alexnet", 0.5);
+  alexnet->eval();
+  alexnet->drop1->train();  // MC dropout on, as the reference does
+  alexnet->drop2->train();
+  ModelInfo alex_info;
+  alex_info.architecture = "alexnet";
+  alex_info.input_size = 224;
+  const double sample_ms = time_ms(
+      [&] {
+        torch::NoGradGuard no_grad;
+        for (const auto& patch : sample) {
+          const auto x = patches_to_tensor({patch}, alex_info).repeat({passes, 1, 1, 1});  // T copies, one batch
+          torch::softmax(alexnet->forward(x), -1).mean(0);
+        }
+      },
+      runs);
+  return sample_ms / static_cast<double>(sample.size());
+}
+
+// Patches spread evenly over the grid of 100 px patches at stride 20.
+std::vector<cv::Mat> patch_sample(const cv::Mat& frame, int rows, int cols, int n) {
+  std::vector<cv::Mat> sample;
+  for (int k = 0; k < n; ++k) {
+    const int cell = k * rows * cols / n;
+    sample.push_back(frame(cv::Rect((cell % cols) * 20, (cell / cols) * 20, 100, 100)).clone());
+  }
+  return sample;
+}
+
+struct InferenceTimes {
+  int rows = 0, cols = 0, near_cells = 0;
+  double ours = 0, two_view = 0, scaled = 0, alex = 0, reference = 0;  // ms per frame
+};
+
+void print_inference(const InferenceTimes& t, int passes, int threads, int reference_patches) {
+  std::printf("Introspection on a 960x600 frame: %d x %d = %d cells (100 px patches, stride 20), T = %d, %d threads\n",
+              t.rows, t.cols, t.rows * t.cols, passes, threads);
+  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours: slidenet, trunk once over the image, head x T batched",
+              t.ours, 1000.0 / t.ours);
+  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours, two views: ground warp + slidenet on 6 channels",
+              t.two_view, 1000.0 / t.two_view);
+  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n",
+              ("ours, two views, scaled: + " + std::to_string(t.near_cells) + " near cells' own squares").c_str(),
+              t.scaled, 1000.0 / t.scaled);
+  std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "alexnet-224, trunk once per patch, head x T batched",
+              t.alex, reference_patches);
+  std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "reference: alexnet-224, whole network x T per patch",
+              t.reference, reference_patches);
+  const double worst_ms = std::max({t.ours, t.two_view, t.scaled});
+  std::printf("  speed-up over the reference: %.0fx (one view), %.0fx (two views); budget 100 ms: %s (%.2f of budget)\n",
+              t.reference / t.ours, t.reference / t.two_view, worst_ms <= 100.0 ? "met" : "NOT met", worst_ms / 100.0);
+}
+
+void print_training(int batch, int runs) {
+  const double slide_step = train_step_ms("slidenet", batch, std::max(1, runs / 2));
+  const double two_view_step = train_step_ms("slidenet", batch, std::max(1, runs / 2), 2);
+  const int alex_batch = std::min(batch, 32);
+  const double alex_step = train_step_ms("alexnet", alex_batch, 2);
+  std::printf("Training throughput (forward + backward + SGD step):\n");
+  std::printf("  %-58s %10.0f patches/s (batch %d)\n", "slidenet, 100x100 patches", 1000.0 * batch / slide_step, batch);
+  std::printf("  %-58s %10.0f patches/s (batch %d)\n", "slidenet, two views", 1000.0 * batch / two_view_step, batch);
+  std::printf("  %-58s %10.0f patches/s (batch %d)\n", "alexnet-224, whole network", 1000.0 * alex_batch / alex_step,
+              alex_batch);
+  const auto [tensor_ms, fused_ms] = batch_preparation_ms(batch, runs);
+  std::printf("Training batch preparation (%d two-view patches: decode, augment, normalise):\n", batch);
+  std::printf("  %-58s %10.1f ms/batch\n", "baseline: whole-batch tensor passes", tensor_ms);
+  std::printf("  %-58s %10.1f ms/batch  (%.1fx faster)\n", "ours: fused per-value tables (BatchAugmenter)", fused_ms,
+              tensor_ms / fused_ms);
+  std::printf("  %-58s %10.0f patches/s (with the baseline: %.0f)\n", "slidenet two views, step + batch preparation",
+              1000.0 * batch / (two_view_step + fused_ms), 1000.0 * batch / (two_view_step + tensor_ms));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -146,31 +232,23 @@ int main(int argc, char** argv) {
   config.mc_passes = passes;
   config.threads = threads;
   config.seed = 1;
+  InferenceTimes t;
   const auto ours = IntrospectionModel::load(model.empty() ? write_model("slidenet", dir) : model, config);
   introspection::Heatmaps h;
-  const double ours_ms = time_ms([&] { h = ours->run(frame); }, runs);
-  const int cells = h.rows * h.cols;
+  t.ours = time_ms([&] { h = ours->run(frame); }, runs);
+  t.rows = h.rows;
+  t.cols = h.cols;
   // Two views (the main job's and the shipped model's input): the right
   // image warped onto the ground, stacked under the left, 6 channels.
   const GroundWarp warp(sim::make_sim_rig());
   const auto two_view = IntrospectionModel::load(write_model("slidenet", dir, 2), config);
-  const double two_view_ms = time_ms(
-      [&] { h = two_view->run(warp.stack(frame, frame)); },
-      runs);
+  t.two_view = time_ms([&] { h = two_view->run(warp.stack(frame, frame)); }, runs);
   // A footprint-scaled two-view model: the heatmaps as above, then the
-  // in-image query cells of the default grid as ivoa-introspection predicts
-  // them (near cells from their own squares, the rest from the heatmaps).
-  const QueryGrid grid(QueryGridConfig{}, RigGeometry(sim::make_sim_rig()).left);
-  const auto sides = footprint_patch_sides(make_obstacle_grid(grid, "jppc", 0), 100, frame.size(), 1.6);
-  std::vector<IntrospectionModel::CellPatch> query_cells;
-  int near_cells = 0;
-  for (int i = 0; i < grid.size(); ++i) {
-    if (!grid.cell(i).in_image) continue;
-    query_cells.push_back({grid.cell(i).u, grid.cell(i).v, sides[static_cast<size_t>(i)]});
-    near_cells += query_cells.back().side > 100;
-  }
+  // query cells (near cells from their own squares, the rest from the heatmaps).
+  std::vector<IntrospectionModel::CellPatch> query_cells = default_query_cells(frame.size());
+  for (const auto& cell : query_cells) t.near_cells += cell.side > 100;
   const auto scaled = IntrospectionModel::load(write_model("slidenet", dir, 2, 1.6), config);
-  const double scaled_ms = time_ms(
+  t.scaled = time_ms(
       [&] {
         const cv::Mat input = warp.stack(frame, frame);
         h = scaled->run(input);
@@ -178,67 +256,15 @@ int main(int argc, char** argv) {
       },
       runs);
 
-  // Reference: per patch, resize to 224 and run the whole AlexNet T times.
-  auto alexnet = make_network("alexnet", 0.5);
-  alexnet->eval();
-  alexnet->drop1->train();  // MC dropout on, as the reference does
-  alexnet->drop2->train();
-  ModelInfo alex_info;
-  alex_info.architecture = "alexnet";
-  alex_info.input_size = 224;
-  std::vector<cv::Mat> sample;
-  for (int k = 0; k < reference_patches; ++k) {
-    const int cell = k * cells / reference_patches;
-    sample.push_back(frame(cv::Rect((cell % h.cols) * 20, (cell / h.cols) * 20, 100, 100)).clone());
-  }
-  const double reference_sample_ms = time_ms(
-      [&] {
-        torch::NoGradGuard no_grad;
-        for (const auto& patch : sample) {
-          const auto x = patches_to_tensor({patch}, alex_info).repeat({passes, 1, 1, 1});  // T copies, one batch
-          torch::softmax(alexnet->forward(x), -1).mean(0);
-        }
-      },
-      std::max(1, runs / 3));
-  const double reference_ms = reference_sample_ms * cells / reference_patches;
+  // The reference and our faithful AlexNet-224 option (trunk once per
+  // patch, head T times batched), both linear in patches: timed on a sample.
+  const std::vector<cv::Mat> sample = patch_sample(frame, t.rows, t.cols, reference_patches);
+  const int cells = t.rows * t.cols;
+  t.reference = reference_ms_per_patch(sample, passes, std::max(1, runs / 3)) * cells;
+  const auto alex_model = IntrospectionModel::load(write_model("alexnet", dir), config);
+  t.alex = time_ms([&] { alex_model->run_patches(sample, false); }, std::max(1, runs / 3)) * cells / reference_patches;
 
-  // Our faithful AlexNet-224 option: trunk once per patch, head T times (batched).
-  InferenceConfig alex_config = config;
-  const auto alex_model = IntrospectionModel::load(write_model("alexnet", dir), alex_config);
-  const double alex_sample_ms = time_ms([&] { alex_model->run_patches(sample, false); }, std::max(1, runs / 3));
-  const double alex_ms = alex_sample_ms * cells / reference_patches;
-
-  std::printf("Introspection on a 960x600 frame: %d x %d = %d cells (100 px patches, stride 20), T = %d, %d threads\n",
-              h.rows, h.cols, cells, passes, threads);
-  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours: slidenet, trunk once over the image, head x T batched",
-              ours_ms, 1000.0 / ours_ms);
-  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours, two views: ground warp + slidenet on 6 channels",
-              two_view_ms, 1000.0 / two_view_ms);
-  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n",
-              ("ours, two views, scaled: + " + std::to_string(near_cells) + " near cells' own squares").c_str(),
-              scaled_ms, 1000.0 / scaled_ms);
-  std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "alexnet-224, trunk once per patch, head x T batched",
-              alex_ms, reference_patches);
-  std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "reference: alexnet-224, whole network x T per patch",
-              reference_ms, reference_patches);
-  const double worst_ms = std::max({ours_ms, two_view_ms, scaled_ms});
-  std::printf("  speed-up over the reference: %.0fx (one view), %.0fx (two views); budget 100 ms: %s (%.2f of budget)\n",
-              reference_ms / ours_ms, reference_ms / two_view_ms, worst_ms <= 100.0 ? "met" : "NOT met", worst_ms / 100.0);
-
-  const double slide_step = train_step_ms("slidenet", batch, std::max(1, runs / 2));
-  const double two_view_step = train_step_ms("slidenet", batch, std::max(1, runs / 2), 2);
-  const double alex_step = train_step_ms("alexnet", std::min(batch, 32), 2);
-  std::printf("Training throughput (forward + backward + SGD step):\n");
-  std::printf("  %-58s %10.0f patches/s (batch %d)\n", "slidenet, 100x100 patches", 1000.0 * batch / slide_step, batch);
-  std::printf("  %-58s %10.0f patches/s (batch %d)\n", "slidenet, two views", 1000.0 * batch / two_view_step, batch);
-  std::printf("  %-58s %10.0f patches/s (batch %d)\n", "alexnet-224, whole network", 1000.0 * std::min(batch, 32) / alex_step,
-              std::min(batch, 32));
-  const auto [tensor_ms, fused_ms] = batch_preparation_ms(batch, runs);
-  std::printf("Training batch preparation (%d two-view patches: decode, augment, normalise):\n", batch);
-  std::printf("  %-58s %10.1f ms/batch\n", "baseline: whole-batch tensor passes", tensor_ms);
-  std::printf("  %-58s %10.1f ms/batch  (%.1fx faster)\n", "ours: fused per-value tables (BatchAugmenter)", fused_ms,
-              tensor_ms / fused_ms);
-  std::printf("  %-58s %10.0f patches/s (with the baseline: %.0f)\n", "slidenet two views, step + batch preparation",
-              1000.0 * batch / (two_view_step + fused_ms), 1000.0 * batch / (two_view_step + tensor_ms));
+  print_inference(t, passes, threads, reference_patches);
+  print_training(batch, runs);
   return 0;
 }
