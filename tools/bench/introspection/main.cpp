@@ -135,8 +135,8 @@ std::vector<IntrospectionModel::CellPatch> default_query_cells(const cv::Size& i
   return cells;
 }
 
-// ms per frame of the reference (every patch resized to 224, the whole
-// AlexNet T times as one batch, MC dropout on), from the sample of patches.
+// ms per patch of the reference (each patch resized to 224, the whole
+// AlexNet T times as one batch, MC dropout on), timed on the sample.
 double reference_ms_per_patch(const std::vector<cv::Mat>& sample, int passes, int runs) {
   auto alexnet = make_network("alexnet", 0.5);
   alexnet->eval();
