@@ -305,35 +305,43 @@ void place_obstacles(SceneBuilder& b) {
   }
 }
 
-void place_floor_details(SceneBuilder& b) {
-  const auto& spec = b.spec();
-  Rng& rng = b.rng();
+// A uniformly random floor point at least `margin` inside the scene's bounds.
+V2 random_floor_point(SceneBuilder& b, double margin) {
   const auto& box = b.data().bounds;
-  auto random_point = [&](double margin) {
-    const double x = rng.uniform(box.min().x() + margin, std::max(box.min().x() + margin, box.max().x() - margin));
-    const double y = rng.uniform(box.min().y() + margin, std::max(box.min().y() + margin, box.max().y() - margin));
-    return V2(x, y);
-  };
-  // (Every random draw below is its own statement: argument evaluation order is unspecified.)
-  const bool outdoor = spec.environment == Environment::kOutdoor;
-  if (!spec.floor.patch_materials.empty()) {
-    const int n = draw_count(rng, spec.floor.patch_count);
-    for (int i = 0; i < n; ++i) {
-      const double sx = draw(rng, spec.floor.patch_size);
-      const double sy = draw(rng, spec.floor.patch_size);
-      const double yaw = outdoor ? rng.uniform(0, M_PI) : (rng.chance(0.8) ? 0.0 : rng.uniform(0, M_PI));
-      const V2 p = random_point(0.3);
-      const bool ellipse = rng.chance(outdoor ? 0.5 : 0.2);
-      b.add_patch(p, {sx, sy}, yaw, ellipse, one_of(rng, spec.floor.patch_materials));
-    }
+  Rng& rng = b.rng();
+  const double x = rng.uniform(box.min().x() + margin, std::max(box.min().x() + margin, box.max().x() - margin));
+  const double y = rng.uniform(box.min().y() + margin, std::max(box.min().y() + margin, box.max().y() - margin));
+  return V2(x, y);
+}
+
+// (In these placers every random draw is its own statement: argument
+// evaluation order is unspecified, and the scenes must not depend on it.)
+
+// Rugs, mats and other floor materials laid on the floor.
+void place_floor_patches(SceneBuilder& b, bool outdoor) {
+  const auto& floor = b.spec().floor;
+  Rng& rng = b.rng();
+  if (floor.patch_materials.empty()) return;
+  const int n = draw_count(rng, floor.patch_count);
+  for (int i = 0; i < n; ++i) {
+    const double sx = draw(rng, floor.patch_size);
+    const double sy = draw(rng, floor.patch_size);
+    const double yaw = outdoor ? rng.uniform(0, M_PI) : (rng.chance(0.8) ? 0.0 : rng.uniform(0, M_PI));
+    const V2 p = random_floor_point(b, 0.3);
+    const bool ellipse = rng.chance(outdoor ? 0.5 : 0.2);
+    b.add_patch(p, {sx, sy}, yaw, ellipse, one_of(rng, floor.patch_materials));
   }
-  // Wet patches and puddles: water films and mirror-like pools.
-  const int wet = draw_count(rng, spec.phenomena.wet_patches);
+}
+
+// Wet patches and puddles: water films and mirror-like pools.
+void place_wet_patches(SceneBuilder& b, bool outdoor) {
+  Rng& rng = b.rng();
+  const int wet = draw_count(rng, b.spec().phenomena.wet_patches);
   const std::string base = b.data().materials[b.data().floor_material].spec.name;
   const std::string wet_variant =
       has_builtin_material(base + "_wet") ? base + "_wet" : (outdoor ? "asphalt_wet" : "water");
   for (int i = 0; i < wet; ++i) {
-    const V2 p = random_point(0.5);
+    const V2 p = random_floor_point(b, 0.5);
     const bool puddle = rng.chance(outdoor ? 0.55 : 0.7);
     const double s = puddle ? (outdoor ? rng.uniform(0.6, 2.8) : rng.uniform(0.4, 1.4))
                             : (outdoor ? rng.uniform(2.0, 6.0) : rng.uniform(1.0, 2.5));
@@ -342,75 +350,93 @@ void place_floor_details(SceneBuilder& b) {
     if (puddle) b.add_puddle(p, {s, s * aspect}, yaw, "water");
     else b.add_patch(p, {s, s * aspect}, yaw, true, wet_variant);
   }
-  if (rng.chance(spec.pits.probability)) {
-    const int n = draw_count(rng, spec.pits.count);
-    for (int i = 0; i < n; ++i) {
-      const double sx = draw(rng, spec.pits.size);
-      const double sy = draw(rng, spec.pits.size);
-      const double depth = draw(rng, spec.pits.depth);
-      const double yaw = rng.uniform(0, M_PI);
-      const bool ellipse = rng.chance(0.4);
-      const double r = std::hypot(sx, sy) / 2;
-      for (int attempt = 0; attempt < 40; ++attempt) {
-        const V2 p = random_point(r + 0.3);
-        if (b.gap_to_placed(p, r) < 0.9) continue;
-        b.add_pit(p, {sx, sy}, depth, yaw, ellipse, outdoor ? "pit_soil" : "concrete");
-        break;
-      }
+}
+
+// Holes in the ground, kept clear of what is already placed (40 tries each).
+void place_pits(SceneBuilder& b, bool outdoor) {
+  const auto& pits = b.spec().pits;
+  Rng& rng = b.rng();
+  if (!rng.chance(pits.probability)) return;
+  const int n = draw_count(rng, pits.count);
+  for (int i = 0; i < n; ++i) {
+    const double sx = draw(rng, pits.size);
+    const double sy = draw(rng, pits.size);
+    const double depth = draw(rng, pits.depth);
+    const double yaw = rng.uniform(0, M_PI);
+    const bool ellipse = rng.chance(0.4);
+    const double r = std::hypot(sx, sy) / 2;
+    for (int attempt = 0; attempt < 40; ++attempt) {
+      const V2 p = random_floor_point(b, r + 0.3);
+      if (b.gap_to_placed(p, r) < 0.9) continue;
+      b.add_pit(p, {sx, sy}, depth, yaw, ellipse, outdoor ? "pit_soil" : "concrete");
+      break;
     }
   }
 }
 
-void place_lights(SceneBuilder& b) {
+void place_floor_details(SceneBuilder& b) {
+  const bool outdoor = b.spec().environment == Environment::kOutdoor;
+  place_floor_patches(b, outdoor);
+  place_wet_patches(b, outdoor);
+  place_pits(b, outdoor);
+}
+
+// A grid of ceiling panels over the scene's bounds, some of them glaring.
+void place_ceiling_lights(SceneBuilder& b) {
   const auto& l = b.spec().lighting;
-  const auto& ph = b.spec().phenomena;
   SceneData& d = b.data();
   Rng& rng = b.rng();
-  const float level = rng.chance(ph.low_light) ? static_cast<float>(draw(rng, l.low_light_factor)) : 1.0f;
-  d.light_level = level;
-  if (d.environment == Environment::kIndoor) {
-    d.ambient = Rgbf(static_cast<float>(draw(rng, l.ambient)));
-    const double spacing = draw(rng, l.light_spacing);
-    const bool strip = rng.chance(0.4);
-    const V2 size = strip ? V2(1.2, 0.3) : V2(0.6, 0.6);
-    const auto& box = d.bounds;
-    const int nx = std::max(1, static_cast<int>(box.sizes().x() / spacing + 0.5));
-    const int ny = std::max(1, static_cast<int>(box.sizes().y() / spacing + 0.5));
-    const double sx = box.sizes().x() / nx, sy = box.sizes().y() / ny;
-    const double emission = draw(rng, l.light_emission);
-    for (int i = 0; i < nx; ++i)
-      for (int j = 0; j < ny; ++j) {
-        const double boost = rng.chance(ph.glare) ? rng.uniform(2.0, 3.5) : 1.0;  // bright, glaring fixtures
-        b.add_ceiling_light({box.min().x() + (i + 0.5) * sx, box.min().y() + (j + 0.5) * sy}, size, emission * boost);
-      }
-  } else {
-    SkyData& sky = d.sky;
-    const float sky_e = static_cast<float>(draw(rng, l.sky_irradiance));
-    if (l.night) {
-      d.ambient = Rgbf(0.008f, 0.008f, 0.012f);
-      sky.zenith = Rgbf(0.004f, 0.005f, 0.01f);
-      sky.horizon = Rgbf(0.02f, 0.018f, 0.02f);
-      sky.has_sun = false;
-    } else if (rng.chance(l.overcast_probability)) {
-      d.ambient = Rgbf(sky_e * 1.3f);
-      sky.zenith = Rgbf(sky_e * 1.1f);
-      sky.horizon = Rgbf(sky_e * 1.5f);
-      sky.has_sun = false;
-    } else {
-      d.ambient = Rgbf(sky_e * 0.9f, sky_e * 0.95f, sky_e * 1.1f);
-      sky.zenith = Rgbf(sky_e * 0.35f, sky_e * 0.55f, sky_e * 1.1f);
-      sky.horizon = Rgbf(sky_e * 1.1f, sky_e * 1.15f, sky_e * 1.25f);
-      sky.has_sun = true;
-      const bool low_sun = rng.chance(ph.glare);
-      const double elev = (low_sun ? rng.uniform(4, 12) : draw(rng, l.sun_elevation_deg)) * M_PI / 180;
-      const double az = draw(rng, l.sun_azimuth_deg) * M_PI / 180;
-      sky.sun_dir = Eigen::Vector3f(static_cast<float>(std::cos(elev) * std::cos(az)),
-                                    static_cast<float>(std::cos(elev) * std::sin(az)), static_cast<float>(std::sin(elev)));
-      const float e = static_cast<float>(draw(rng, l.sun_irradiance));
-      sky.sun_irradiance = Rgbf(e, e * 0.96f, e * 0.88f) * (low_sun ? 0.7f : 1.0f);
+  d.ambient = Rgbf(static_cast<float>(draw(rng, l.ambient)));
+  const double spacing = draw(rng, l.light_spacing);
+  const bool strip = rng.chance(0.4);
+  const V2 size = strip ? V2(1.2, 0.3) : V2(0.6, 0.6);
+  const auto& box = d.bounds;
+  const int nx = std::max(1, static_cast<int>(box.sizes().x() / spacing + 0.5));
+  const int ny = std::max(1, static_cast<int>(box.sizes().y() / spacing + 0.5));
+  const double sx = box.sizes().x() / nx, sy = box.sizes().y() / ny;
+  const double emission = draw(rng, l.light_emission);
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < ny; ++j) {
+      const double boost = rng.chance(b.spec().phenomena.glare) ? rng.uniform(2.0, 3.5) : 1.0;  // glaring fixtures
+      b.add_ceiling_light({box.min().x() + (i + 0.5) * sx, box.min().y() + (j + 0.5) * sy}, size, emission * boost);
     }
+}
+
+// Outdoors: a night sky, an overcast one, or sun (low and glaring by the glare phenomenon).
+void set_sky(SceneBuilder& b) {
+  const auto& l = b.spec().lighting;
+  SceneData& d = b.data();
+  Rng& rng = b.rng();
+  SkyData& sky = d.sky;
+  const float sky_e = static_cast<float>(draw(rng, l.sky_irradiance));
+  if (l.night) {
+    d.ambient = Rgbf(0.008f, 0.008f, 0.012f);
+    sky.zenith = Rgbf(0.004f, 0.005f, 0.01f);
+    sky.horizon = Rgbf(0.02f, 0.018f, 0.02f);
+    sky.has_sun = false;
+  } else if (rng.chance(l.overcast_probability)) {
+    d.ambient = Rgbf(sky_e * 1.3f);
+    sky.zenith = Rgbf(sky_e * 1.1f);
+    sky.horizon = Rgbf(sky_e * 1.5f);
+    sky.has_sun = false;
+  } else {
+    d.ambient = Rgbf(sky_e * 0.9f, sky_e * 0.95f, sky_e * 1.1f);
+    sky.zenith = Rgbf(sky_e * 0.35f, sky_e * 0.55f, sky_e * 1.1f);
+    sky.horizon = Rgbf(sky_e * 1.1f, sky_e * 1.15f, sky_e * 1.25f);
+    sky.has_sun = true;
+    const bool low_sun = rng.chance(b.spec().phenomena.glare);
+    const double elev = (low_sun ? rng.uniform(4, 12) : draw(rng, l.sun_elevation_deg)) * M_PI / 180;
+    const double az = draw(rng, l.sun_azimuth_deg) * M_PI / 180;
+    sky.sun_dir = Eigen::Vector3f(static_cast<float>(std::cos(elev) * std::cos(az)),
+                                  static_cast<float>(std::cos(elev) * std::sin(az)), static_cast<float>(std::sin(elev)));
+    const float e = static_cast<float>(draw(rng, l.sun_irradiance));
+    sky.sun_irradiance = Rgbf(e, e * 0.96f, e * 0.88f) * (low_sun ? 0.7f : 1.0f);
   }
-  // A low-light session dims every source alike.
+}
+
+// A low-light session dims every source alike.
+void dim_every_source(SceneBuilder& b, float level) {
+  SceneData& d = b.data();
   d.ambient = d.ambient * level;
   d.sky.zenith = d.sky.zenith * level;
   d.sky.horizon = d.sky.horizon * level;
@@ -418,6 +444,17 @@ void place_lights(SceneBuilder& b) {
   for (PointLight& p : d.lights) p.intensity = p.intensity * level, p.glare *= level;
   for (auto& panel : b.panels()) panel.emission *= level;
   for (MaterialData& m : d.materials) m.emission = m.emission * level;
+}
+
+void place_lights(SceneBuilder& b) {
+  Rng& rng = b.rng();
+  const float level = rng.chance(b.spec().phenomena.low_light)
+                          ? static_cast<float>(draw(rng, b.spec().lighting.low_light_factor))
+                          : 1.0f;
+  b.data().light_level = level;
+  if (b.data().environment == Environment::kIndoor) place_ceiling_lights(b);
+  else set_sky(b);
+  dim_every_source(b, level);
 }
 
 void choose_start(SceneBuilder& b) {
