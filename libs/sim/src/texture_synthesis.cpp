@@ -80,7 +80,7 @@ class Fbm {
   std::vector<float> image_;
 };
 
-using Srgb = std::array<double, 3>;
+using Srgb = Rgb;  // a painted colour, sRGB
 
 Srgb mix(const Rgb& a, const Rgb& b, double t) {
   t = std::clamp(t, 0.0, 1.0);
@@ -134,8 +134,6 @@ struct Look {
   double s;          // the material's feature scale, metres
   Rgb a, b;          // colour and secondary colour
   uint64_t cell_seed;  // per-tile / per-brick variation
-  Srgb first() const { return {a[0], a[1], a[2]}; }
-  Srgb second() const { return {b[0], b[1], b[2]}; }
 };
 
 // Noise images for one texture. The order of the calls fixes the random
@@ -165,7 +163,7 @@ int64_t wrapped(int64_t i, int64_t count) { return ((i % count) + count) % count
 
 Painter paint_uniform(const Look& k, NoiseMaker& noise) {
   auto low = noise.fbm(2, 2, 0.5);
-  return [=](double u, double v) { return scaled(mix(k.a, k.a, 0), 1.0 + 0.012 * low->at(u / k.P, v / k.P)); };
+  return [=](double u, double v) { return scaled(k.a, 1.0 + 0.012 * low->at(u / k.P, v / k.P)); };
 }
 
 Painter paint_plaster(const Look& k, NoiseMaker& noise) {
@@ -216,11 +214,11 @@ Painter paint_tiles(const Look& k, NoiseMaker& noise, bool checker) {
     const double in_grout = std::clamp((grout - edge) / 0.0015 + 0.5, 0.0, 1.0);
     const int64_t n_per = static_cast<int64_t>(std::llround(k.P / s));
     const double jitter = cell_random(k.cell_seed, wrapped(i, n_per), wrapped(j, n_per)) - 0.5;
-    Srgb tile = checker && ((i + j) & 1) ? k.second() : k.first();
+    Srgb tile = checker && ((i + j) & 1) ? k.b : k.a;
     tile = scaled(tile, 1.0 + 0.25 * k.c * jitter + 0.06 * shading->at(u / k.P, v / k.P) +
                             0.04 * fine->at(u / k.P, v / k.P));
-    const Srgb g = scaled(k.second(), checker ? 2.5 : 1.0);
-    return mix({tile[0], tile[1], tile[2]}, {g[0], g[1], g[2]}, in_grout * (checker ? 0.5 : 1.0));
+    const Srgb grout_colour = scaled(k.b, checker ? 2.5 : 1.0);
+    return mix(tile, grout_colour, in_grout * (checker ? 0.5 : 1.0));
   };
 }
 
@@ -237,8 +235,8 @@ Painter paint_bricks(const Look& k, NoiseMaker& noise) {
     const double in_mortar = std::clamp((mortar / 2 - edge) / 0.002 + 0.5, 0.0, 1.0);
     const int64_t cols = static_cast<int64_t>(std::llround(k.P / len)), rows = static_cast<int64_t>(std::llround(k.P / h));
     const double jitter = cell_random(k.cell_seed, wrapped(col, cols), wrapped(row, rows)) - 0.5;
-    const Srgb brick = scaled(k.first(), 1.0 + 0.45 * k.c * jitter + 0.25 * k.c * shading->at(u / k.P, v / k.P));
-    return mix({brick[0], brick[1], brick[2]}, k.b, in_mortar);
+    const Srgb brick = scaled(k.a, 1.0 + 0.45 * k.c * jitter + 0.25 * k.c * shading->at(u / k.P, v / k.P));
+    return mix(brick, k.b, in_mortar);
   };
 }
 
@@ -256,7 +254,7 @@ Painter paint_wood(const Look& k, NoiseMaker& noise) {
     const double seam = std::clamp((0.002 - std::min(fv, w - fv)) / 0.001 + 0.5, 0.0, 1.0);
     Srgb col = mix(k.a, k.b, 0.5 + 0.5 * k.c * rings + 0.6 * k.c * jitter);
     col = scaled(col, 1.0 + 0.1 * k.c * fine->at(u / k.P, v / k.P));
-    return mix({col[0], col[1], col[2]}, {k.b[0] * 0.5, k.b[1] * 0.5, k.b[2] * 0.5}, seam);
+    return mix(col, scaled(k.b, 0.5), seam);
   };
 }
 
@@ -321,7 +319,7 @@ Painter paint_facade(const Look& k, NoiseMaker& noise) {
     const bool frame = fu > 0.17 && fu < 0.83 && fv > 0.27 && fv < 0.83 && !window;
     if (window) return scaled(mix(k.b, k.a, 0.15 + 0.15 * glass->at(u / k.P, v / k.P)), 1.0);
     if (frame) return Srgb{0.25, 0.25, 0.26};
-    return scaled(k.first(), 1.0 + 0.2 * k.c * shading->at(u / k.P, v / k.P));
+    return scaled(k.a, 1.0 + 0.2 * k.c * shading->at(u / k.P, v / k.P));
   };
 }
 
@@ -330,8 +328,8 @@ Painter paint_ceiling_tiles(const Look& k, NoiseMaker& noise) {
   return [=](double u, double v) {
     const double fu = std::fmod(u, k.s), fv = std::fmod(v, k.s);
     const double edge = std::min(std::min(fu, k.s - fu), std::min(fv, k.s - fv));
-    if (edge < 0.012) return k.second();
-    return scaled(k.first(), 1.0 - 0.3 * k.c * std::max(0.0f, holes->at(u / k.P, v / k.P) - 0.3f));
+    if (edge < 0.012) return k.b;
+    return scaled(k.a, 1.0 - 0.3 * k.c * std::max(0.0f, holes->at(u / k.P, v / k.P) - 0.3f));
   };
 }
 
@@ -342,7 +340,7 @@ Painter paint_printed(const Look& k, NoiseMaker& noise) {
     Srgb col;
   };
   auto rects = std::make_shared<std::vector<Rect>>();
-  const Srgb palette[] = {k.first(), k.second(), {0.1, 0.1, 0.12}, {0.9, 0.8, 0.2}, {0.2, 0.5, 0.3}};
+  const Srgb palette[] = {k.a, k.b, {0.1, 0.1, 0.12}, {0.9, 0.8, 0.2}, {0.2, 0.5, 0.3}};
   Rng& rng = noise.rng();
   for (int i = 0; i < 60; ++i) {
     const double w = rng.uniform(0.02, 0.3) * k.P, h = rng.uniform(0.005, 0.2) * k.P;
@@ -351,16 +349,15 @@ Painter paint_printed(const Look& k, NoiseMaker& noise) {
   }
   auto shading = noise.fbm(noise.cells(0.01), 3, 0.5);
   return [=](double u, double v) {
-    Srgb col = k.first();
+    Srgb col = k.a;
     for (const Rect& r : *rects) {
       for (int wrap = 0; wrap < 4; ++wrap) {  // rectangles running over the period's edge
         const double uu = u + ((wrap & 1) ? k.P : 0), vv = v + ((wrap & 2) ? k.P : 0);
         if (uu >= r.x0 && uu < r.x1 && vv >= r.y0 && vv < r.y1) col = r.col;
       }
     }
-    const Srgb base = k.first();
-    Srgb out = {base[0] + (col[0] - base[0]) * k.c, base[1] + (col[1] - base[1]) * k.c,
-                base[2] + (col[2] - base[2]) * k.c};
+    const Srgb out = {k.a[0] + (col[0] - k.a[0]) * k.c, k.a[1] + (col[1] - k.a[1]) * k.c,
+                      k.a[2] + (col[2] - k.a[2]) * k.c};
     return scaled(out, 1.0 + 0.04 * shading->at(u / k.P, v / k.P));
   };
 }
@@ -388,7 +385,7 @@ Painter make_painter(const Material& m, const Plan& plan, Rng& rng) {
     case Pattern::kCeilingTiles: return paint_ceiling_tiles(k, noise);
     case Pattern::kPrinted: return paint_printed(k, noise);
   }
-  return [k](double, double) { return k.first(); };
+  return [k](double, double) { return k.a; };
 }
 
 // sRGB -> linear through a table: pow() per texel would dominate synthesis.
