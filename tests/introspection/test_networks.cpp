@@ -47,6 +47,19 @@ TEST(SlideNet, WholeImagePassEqualsEveryPatchAlone) {
   EXPECT_LT((p_cells - p_alone).abs().max().item<double>(), 1e-5);
 }
 
+TEST(InferenceMaxPool, EqualsMaxPool2dExactly) {
+  torch::manual_seed(7);
+  const auto x = torch::randn({2, 5, 37, 52});
+  for (const int64_t stride : {1, 2}) {
+    InferenceMaxPool pool(2, stride);
+    pool->eval();
+    torch::NoGradGuard no_grad;
+    const auto fast = pool(x), reference = torch::max_pool2d(x, 2, stride);
+    ASSERT_EQ(fast.sizes(), reference.sizes()) << "stride " << stride;
+    EXPECT_TRUE(torch::equal(fast, reference)) << "stride " << stride;
+  }
+}
+
 TEST(SlideNet, FullFrameGridIs26By44) {
   SlideNet net;
   net->eval();

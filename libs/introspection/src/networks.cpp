@@ -15,6 +15,23 @@ nn::Sequential conv_bn_relu(nn::Sequential seq, int64_t in, int64_t out, int64_t
 
 }  // namespace
 
+torch::Tensor InferenceMaxPoolImpl::forward(const torch::Tensor& x) {
+  if (is_training() || torch::GradMode::is_enabled()) return torch::max_pool2d(x, kernel_, stride_);
+  const int64_t rows = (x.size(2) - kernel_) / stride_ + 1, cols = (x.size(3) - kernel_) / stride_ + 1;
+  // The window's element (dy, dx) of every output pixel, as one strided view.
+  const auto tap = [&](int64_t dy, int64_t dx) {
+    return x.slice(2, dy, dy + (rows - 1) * stride_ + 1, stride_).slice(3, dx, dx + (cols - 1) * stride_ + 1, stride_);
+  };
+  // Running maximum over the window's taps, in place after the first pair
+  // (copying a strided view costs more than comparing two).
+  torch::Tensor out;
+  for (int64_t k = 1; k < kernel_ * kernel_; ++k) {
+    const auto next = tap(k / kernel_, k % kernel_);
+    out = out.defined() ? torch::maximum_out(out, out, next) : torch::maximum(tap(0, 0), next);
+  }
+  return out;
+}
+
 IntrospectionNetImpl::IntrospectionNetImpl(int64_t features, int64_t fc1_width, double dropout) : dropout_p(dropout) {
   drop1 = register_module("drop1", nn::Dropout(dropout));
   fc1 = register_module("fc1", nn::Linear(features, fc1_width));
@@ -37,11 +54,11 @@ SlideNetImpl::SlideNetImpl(double dropout, int64_t in_channels) : IntrospectionN
   nn::Sequential t;
   t = conv_bn_relu(t, in_channels, 32, 5, 5);
   t = conv_bn_relu(t, 32, 64, 3);
-  t->push_back(nn::MaxPool2d(nn::MaxPool2dOptions(2).stride(2)));
+  t->push_back(InferenceMaxPool(2, 2));
   t = conv_bn_relu(t, 64, 96, 3);
   t = conv_bn_relu(t, 96, 96, 3);
   t = conv_bn_relu(t, 96, 64, 3);
-  t->push_back(nn::MaxPool2d(nn::MaxPool2dOptions(2).stride(1)));
+  t->push_back(InferenceMaxPool(2, 1));
   trunk = register_module("trunk", t);
 }
 

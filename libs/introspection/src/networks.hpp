@@ -27,6 +27,21 @@
 
 namespace ivoa::introspection {
 
+// Max pooling (unpadded, square window) that skips, at inference, the argmax
+// indices at::max_pool2d computes even without autograd (LibTorch 1.13):
+// on a whole frame they cost as much as two of the trunk's convolutions.
+// The values are the same either way (a max is exact); training and
+// gradient mode use at::max_pool2d.
+class InferenceMaxPoolImpl : public torch::nn::Module {
+ public:
+  InferenceMaxPoolImpl(int64_t kernel, int64_t stride) : kernel_(kernel), stride_(stride) {}
+  torch::Tensor forward(const torch::Tensor& x);
+
+ private:
+  int64_t kernel_, stride_;
+};
+TORCH_MODULE(InferenceMaxPool);
+
 class IntrospectionNetImpl : public torch::nn::Module {
  public:
   IntrospectionNetImpl(int64_t features, int64_t fc1_width, double dropout);
