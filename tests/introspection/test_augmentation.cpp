@@ -65,6 +65,26 @@ TEST(BatchAugmenter, WithoutAugmentationIsTheInferenceNormalisation) {
   EXPECT_LT((batch - normalize_patches(raw, info)).abs().max().item<double>(), 1e-5);
 }
 
+// Inference's patch path (a table lookup per value) gives the whole-batch
+// tensor passes' floats bit for bit, so evaluation and the near cells see
+// what they always saw; with a resize to 224 too.
+TEST(PatchesToTensor, EqualsTheTensorPassesBitForBit) {
+  for (const int input_size : {kSize, 224}) {
+    ModelInfo info = two_view_info();
+    info.input_size = input_size;
+    const auto patches = random_patches(3, 2, 4);
+    auto raw = torch::empty({3, 2 * kSize, kSize, 3}, torch::kUInt8);
+    std::vector<cv::Mat> mats;
+    for (int i = 0; i < 3; ++i) {
+      std::memcpy(raw[i].data_ptr<uint8_t>(), patches[static_cast<size_t>(i)].data(), patches[0].size());
+      mats.push_back(cv::Mat(2 * kSize, kSize, CV_8UC3, const_cast<uint8_t*>(patches[static_cast<size_t>(i)].data())));
+    }
+    const auto looked_up = patches_to_tensor(mats, info);
+    ASSERT_EQ(looked_up.sizes(), (std::vector<int64_t>{3, 6, input_size, input_size}));
+    EXPECT_TRUE(torch::equal(looked_up, normalize_patches(raw, info))) << "input size " << input_size;
+  }
+}
+
 TEST(BatchAugmenter, EveryValueFollowsThePhotometricModel) {
   const ModelInfo info = two_view_info();
   const auto patches = random_patches(2, 2, 2);

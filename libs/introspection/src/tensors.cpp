@@ -2,6 +2,7 @@
 
 #include <cstring>
 
+#include <ATen/Parallel.h>
 #include <opencv2/imgproc.hpp>
 
 namespace ivoa::introspection {
@@ -19,24 +20,53 @@ torch::Tensor to_unit_rgb(const torch::Tensor& bgr_uint8) {
       .div_(255.0);
 }
 
-// -> (x - mean) / std, resized to info.input_size.
-torch::Tensor normalize(const torch::Tensor& unit_rgb, const ModelInfo& info) {
+torch::Tensor resized_to_input(const torch::Tensor& x, const ModelInfo& info) {
+  if (x.size(2) == info.input_size) return x.contiguous();
+  return torch::nn::functional::interpolate(x, torch::nn::functional::InterpolateFuncOptions()
+                                                   .size(std::vector<int64_t>{info.input_size, info.input_size})
+                                                   .mode(torch::kBilinear)
+                                                   .align_corners(false))
+      .contiguous();
+}
+
+// (x - mean) / std per RGB channel of every view.
+torch::Tensor standardize(const torch::Tensor& unit_rgb, const ModelInfo& info) {
   const int64_t views = unit_rgb.size(1) / 3;
   const auto mean = torch::tensor({info.mean[0], info.mean[1], info.mean[2]}).view({1, 3, 1, 1}).repeat({1, views, 1, 1});
   const auto std = torch::tensor({info.std[0], info.std[1], info.std[2]}).view({1, 3, 1, 1}).repeat({1, views, 1, 1});
-  auto x = (unit_rgb - mean.to(unit_rgb.device())) / std.to(unit_rgb.device());
-  if (x.size(2) != info.input_size)
-    x = torch::nn::functional::interpolate(x, torch::nn::functional::InterpolateFuncOptions()
-                                                  .size(std::vector<int64_t>{info.input_size, info.input_size})
-                                                  .mode(torch::kBilinear)
-                                                  .align_corners(false));
-  return x.contiguous();
+  return (unit_rgb - mean.to(unit_rgb.device())) / std.to(unit_rgb.device());
+}
+
+// The standardized value of each 8-bit level per RGB channel, [3, 256]:
+// computed by the very operations normalize_patches() applies, each exactly
+// rounded, so a lookup gives the same floats bit for bit.
+torch::Tensor level_table(const ModelInfo& info) {
+  const auto levels = torch::arange(256, torch::kInt).to(torch::kUInt8).view({1, 1, 1, 256}).expand({1, 3, 1, 256});
+  return standardize(levels.to(torch::kFloat).div_(255.0), info).view({3, 256}).contiguous();
+}
+
+// One patch (8-bit BGR, views x S rows) -> its 3 x views planes of S x S floats.
+void fill_patch(const cv::Mat& patch, int views, const float* table, float* out) {
+  const int s = patch.cols;
+  const size_t plane = static_cast<size_t>(s) * s;
+  for (int v = 0; v < views; ++v)
+    for (int y = 0; y < s; ++y) {
+      const uint8_t* bgr = patch.ptr<uint8_t>(v * s + y);
+      float* r = out + static_cast<size_t>(3 * v) * plane + static_cast<size_t>(y) * s;
+      float* g = r + plane;
+      float* b = g + plane;
+      for (int x = 0; x < s; ++x) {
+        b[x] = table[2 * 256 + bgr[3 * x]];
+        g[x] = table[256 + bgr[3 * x + 1]];
+        r[x] = table[bgr[3 * x + 2]];
+      }
+    }
 }
 
 }  // namespace
 
 torch::Tensor normalize_patches(const torch::Tensor& bgr_uint8, const ModelInfo& info) {
-  return normalize(to_unit_rgb(bgr_uint8), info);
+  return resized_to_input(standardize(to_unit_rgb(bgr_uint8), info), info);
 }
 
 torch::Tensor image_to_tensor(const cv::Mat& bgr, const ModelInfo& info) {
@@ -61,15 +91,19 @@ torch::Tensor image_to_tensor(const cv::Mat& bgr, const ModelInfo& info) {
 
 torch::Tensor patches_to_tensor(const std::vector<cv::Mat>& patches, const ModelInfo& info) {
   if (patches.empty()) return torch::empty({0, 3 * info.views, info.input_size, info.input_size});
-  const int s = patches[0].cols, rows = s * info.views;
-  auto raw = torch::empty({static_cast<int64_t>(patches.size()), rows, s, 3}, torch::kUInt8);
-  const size_t bytes = static_cast<size_t>(rows) * s * 3;
-  for (size_t i = 0; i < patches.size(); ++i) {
-    CV_Assert(patches[i].type() == CV_8UC3 && patches[i].rows == rows && patches[i].cols == s);
-    const cv::Mat p = patches[i].isContinuous() ? patches[i] : patches[i].clone();
-    std::memcpy(raw.data_ptr<uint8_t>() + i * bytes, p.data, bytes);
-  }
-  return normalize_patches(raw, info);
+  const int s = patches[0].cols;
+  for (const auto& p : patches) CV_Assert(p.type() == CV_8UC3 && p.rows == s * info.views && p.cols == s);
+  // One table lookup per value instead of a chain of whole-batch tensor
+  // passes (flip, permute, convert, scale, standardize), same result.
+  const auto table = level_table(info);
+  auto out = torch::empty({static_cast<int64_t>(patches.size()), 3 * info.views, s, s}, torch::kFloat);
+  const size_t patch_floats = static_cast<size_t>(3 * info.views) * s * s;
+  at::parallel_for(0, static_cast<int64_t>(patches.size()), 1, [&](int64_t begin, int64_t end) {
+    for (int64_t i = begin; i < end; ++i)
+      fill_patch(patches[static_cast<size_t>(i)], info.views, table.data_ptr<float>(),
+                 out.data_ptr<float>() + static_cast<size_t>(i) * patch_floats);
+  });
+  return resized_to_input(out, info);
 }
 
 cv::Mat to_mat(const torch::Tensor& values, int rows, int cols) {
