@@ -7,6 +7,7 @@
 #include <functional>
 
 #include <ATen/CPUGeneratorImpl.h>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <torch/script.h>
 
@@ -303,15 +304,21 @@ double IntrospectionModel::verdict_threshold() const {
 
 std::vector<Prediction> IntrospectionModel::predict_cells(const cv::Mat& image, const std::vector<CellPatch>& cells) {
   check_image(image, info());
-  std::vector<cv::Mat> patches;
-  patches.reserve(cells.size());
-  for (const auto& c : cells) {
-    patches.push_back(cut_patch(image, info().views, c.u, c.v, c.side, info().patch_size));
-    if (patches.back().empty())
-      throw ModelError("the " + std::to_string(c.side) + " px patch around (" + std::to_string(c.u) + ", " +
-                       std::to_string(c.v) + ") leaves the image");
-  }
-  if (patches.empty()) return {};
+  if (cells.empty()) return {};
+  // Resizing a square to the patch size (INTER_AREA at a scale that is rarely
+  // a whole number) takes about 0.15 ms a view, as long as the network on
+  // the patch: spread over OpenCV's threads.
+  std::vector<cv::Mat> patches(cells.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(cells.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const auto& c = cells[static_cast<size_t>(i)];
+      patches[static_cast<size_t>(i)] = cut_patch(image, info().views, c.u, c.v, c.side, info().patch_size);
+    }
+  });
+  for (size_t i = 0; i < cells.size(); ++i)
+    if (patches[i].empty())
+      throw ModelError("the " + std::to_string(cells[i].side) + " px patch around (" + std::to_string(cells[i].u) +
+                       ", " + std::to_string(cells[i].v) + ") leaves the image");
   return run_patches(patches, false).predictions;
 }
 
