@@ -307,14 +307,19 @@ std::vector<Prediction> IntrospectionModel::predict_cells(const cv::Mat& image, 
   if (cells.empty()) return {};
   // Resizing a square to the patch size (INTER_AREA at a scale that is rarely
   // a whole number) takes about 0.15 ms a view, as long as the network on
-  // the patch: spread over OpenCV's threads.
+  // the patch: spread over OpenCV's threads, one cell a stripe (their sizes
+  // differ), or on this thread alone when the model is held to one.
   std::vector<cv::Mat> patches(cells.size());
-  cv::parallel_for_(cv::Range(0, static_cast<int>(cells.size())), [&](const cv::Range& range) {
-    for (int i = range.start; i < range.end; ++i) {
-      const auto& c = cells[static_cast<size_t>(i)];
-      patches[static_cast<size_t>(i)] = cut_patch(image, info().views, c.u, c.v, c.side, info().patch_size);
-    }
-  });
+  const double stripes = config_.threads > 1 ? static_cast<double>(cells.size()) : 1.0;
+  cv::parallel_for_(
+      cv::Range(0, static_cast<int>(cells.size())),
+      [&](const cv::Range& range) {
+        for (int i = range.start; i < range.end; ++i) {
+          const auto& c = cells[static_cast<size_t>(i)];
+          patches[static_cast<size_t>(i)] = cut_patch(image, info().views, c.u, c.v, c.side, info().patch_size);
+        }
+      },
+      stripes);
   for (size_t i = 0; i < cells.size(); ++i)
     if (patches[i].empty())
       throw ModelError("the " + std::to_string(cells[i].side) + " px patch around (" + std::to_string(cells[i].u) +

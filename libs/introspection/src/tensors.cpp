@@ -20,6 +20,7 @@ torch::Tensor to_unit_rgb(const torch::Tensor& bgr_uint8) {
       .div_(255.0);
 }
 
+// Resized to the network's input (AlexNet's 224) where the patches differ.
 torch::Tensor resized_to_input(const torch::Tensor& x, const ModelInfo& info) {
   if (x.size(2) == info.input_size) return x.contiguous();
   return torch::nn::functional::interpolate(x, torch::nn::functional::InterpolateFuncOptions()
