@@ -1,6 +1,7 @@
 // Footprint-scaled patches: the side follows the disc's width in pixels
 // measured between neighbouring cells, stays inside the image and never
-// drops under the fixed patch; cutting resizes the square of every view.
+// drops under the fixed patch; cutting resizes the square of every view,
+// many squares at once as each alone.
 #include <cmath>
 #include <limits>
 
@@ -99,6 +100,25 @@ TEST(FootprintPatch, CutResizesTheSquareOfEachStackedView) {
   EXPECT_EQ(cv::norm(cut_patch(stacked, 1, 150, 100, 40, 40), stacked(cv::Rect(130, 80, 40, 40)), cv::NORM_INF), 0);
   EXPECT_TRUE(cut_patch(stacked, 2, 150, 100, 220, 60).empty());
   EXPECT_THROW(cut_patch(stacked, 3, 150, 100, 40, 40), std::invalid_argument);
+}
+
+TEST(FootprintPatch, CuttingManyOverThreadsGivesEachPatchAsAlone) {
+  cv::Mat stacked(400, 300, CV_8UC3);
+  cv::randu(stacked, 0, 255);
+  std::vector<PatchSquare> squares;
+  for (int k = 0; k < 24; ++k) squares.push_back({100.0 + 3 * k, 90.0 + k, 60 + 6 * k});  // sides 60..198
+  for (const bool parallel : {true, false}) {
+    const auto patches = cut_patches(stacked, 2, squares, 50, parallel);
+    ASSERT_EQ(patches.size(), squares.size());
+    for (size_t k = 0; k < squares.size(); ++k) {
+      const cv::Mat alone = cut_patch(stacked, 2, squares[k].u, squares[k].v, squares[k].side, 50);
+      ASSERT_EQ(patches[k].empty(), alone.empty()) << "square " << k;
+      if (!alone.empty()) {
+        EXPECT_EQ(cv::norm(patches[k], alone, cv::NORM_INF), 0) << "square " << k;
+      }
+    }
+    EXPECT_TRUE(patches.back().empty());  // 198 px around row 113 leaves the 200-row view
+  }
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace ivoa {
@@ -71,6 +72,21 @@ cv::Mat cut_patch(const cv::Mat& stacked, int views, double u, double v, int sid
   cv::Mat out;
   cv::vconcat(parts, out);
   return out;
+}
+
+std::vector<cv::Mat> cut_patches(const cv::Mat& stacked, int views, const std::vector<PatchSquare>& squares,
+                                 int out_size, bool parallel) {
+  std::vector<cv::Mat> patches(squares.size());
+  const auto cut = [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const PatchSquare& q = squares[static_cast<size_t>(i)];
+      patches[static_cast<size_t>(i)] = cut_patch(stacked, views, q.u, q.v, q.side, out_size);
+    }
+  };
+  const cv::Range all(0, static_cast<int>(squares.size()));
+  if (parallel) cv::parallel_for_(all, cut, static_cast<double>(squares.size()));
+  else cut(all);
+  return patches;
 }
 
 }  // namespace ivoa

@@ -5,6 +5,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <utility>
 
 #include <spdlog/spdlog.h>
 
@@ -88,6 +89,8 @@ struct SessionBuilder::Impl {
   void emit(const introspection_labels_t& labels);
   std::vector<std::vector<float>> evidence_of(const introspection_labels_t& labels, const cv::Mat& views);
   std::vector<int> patch_sides(const introspection_labels_t& labels, const cv::Mat& views) const;
+  std::vector<std::pair<size_t, cv::Mat>> labelled_patches(const introspection_labels_t& labels, const cv::Mat& views,
+                                                           const std::vector<int>& sides) const;
   void open_writer();
 };
 
@@ -230,6 +233,24 @@ std::vector<int> SessionBuilder::Impl::patch_sides(const introspection_labels_t&
   return footprint_patch_sides(labels, info.patch_size, image, options.patch_scale);
 }
 
+// Each labelled cell of `labels` with its patch (empty where the square
+// leaves the image), all cut at once (see cut_patches).
+std::vector<std::pair<size_t, cv::Mat>> SessionBuilder::Impl::labelled_patches(const introspection_labels_t& labels,
+                                                                               const cv::Mat& views,
+                                                                               const std::vector<int>& sides) const {
+  std::vector<size_t> cells;
+  std::vector<PatchSquare> squares;
+  for (size_t i = 0; i < labels.label.size(); ++i)
+    if (labels.label[i] != introspection_labels_t::LABEL_NONE) {
+      cells.push_back(i);
+      squares.push_back({labels.u[i], labels.v[i], sides[i]});
+    }
+  const std::vector<cv::Mat> patches = cut_patches(views, info.views, squares, info.patch_size);
+  std::vector<std::pair<size_t, cv::Mat>> out;
+  for (size_t k = 0; k < cells.size(); ++k) out.emplace_back(cells[k], patches[k]);
+  return out;
+}
+
 void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
   const auto image = left_images.find(labels.utime);
   if (image == left_images.end()) {
@@ -243,9 +264,7 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
   const int64_t frame = writer->add_frame(labels.utime, labels.depth_utime, labelled);
   int64_t samples = 0;
   const std::vector<int> sides = patch_sides(labels, image->second);
-  for (size_t i = 0; i < labels.label.size(); ++i) {
-    if (labels.label[i] == introspection_labels_t::LABEL_NONE) continue;
-    const cv::Mat patch = cut_patch(image->second, info.views, labels.u[i], labels.v[i], sides[i], info.patch_size);
+  for (const auto& [i, patch] : labelled_patches(labels, image->second, sides)) {
     if (patch.empty()) continue;  // the patch would leave the image
     if (labels.label[i] == introspection_labels_t::LABEL_TN && !keeps_tn(labels.utime, i, options.keep_tn)) {
       writer->count_dropped_tn();  // only cells that would have been stored count as left out

@@ -7,7 +7,6 @@
 #include <functional>
 
 #include <ATen/CPUGeneratorImpl.h>
-#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <torch/script.h>
 
@@ -305,21 +304,9 @@ double IntrospectionModel::verdict_threshold() const {
 std::vector<Prediction> IntrospectionModel::predict_cells(const cv::Mat& image, const std::vector<CellPatch>& cells) {
   check_image(image, info());
   if (cells.empty()) return {};
-  // Resizing a square to the patch size (INTER_AREA at a scale that is rarely
-  // a whole number) takes about 0.15 ms a view, as long as the network on
-  // the patch: spread over OpenCV's threads, one cell a stripe (their sizes
-  // differ), or on this thread alone when the model is held to one.
-  std::vector<cv::Mat> patches(cells.size());
-  const double stripes = config_.threads > 1 ? static_cast<double>(cells.size()) : 1.0;
-  cv::parallel_for_(
-      cv::Range(0, static_cast<int>(cells.size())),
-      [&](const cv::Range& range) {
-        for (int i = range.start; i < range.end; ++i) {
-          const auto& c = cells[static_cast<size_t>(i)];
-          patches[static_cast<size_t>(i)] = cut_patch(image, info().views, c.u, c.v, c.side, info().patch_size);
-        }
-      },
-      stripes);
+  std::vector<PatchSquare> squares;
+  for (const auto& c : cells) squares.push_back({c.u, c.v, c.side});
+  const auto patches = cut_patches(image, info().views, squares, info().patch_size, config_.threads > 1);
   for (size_t i = 0; i < cells.size(); ++i)
     if (patches[i].empty())
       throw ModelError("the " + std::to_string(cells[i].side) + " px patch around (" + std::to_string(cells[i].u) +

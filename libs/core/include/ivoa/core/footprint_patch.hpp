@@ -43,4 +43,18 @@ std::vector<int> footprint_patch_sides(const Msg& msg, int patch_size, cv::Size 
 // averaging; a copy either way). Empty if the square leaves the image.
 cv::Mat cut_patch(const cv::Mat& stacked, int views, double u, double v, int side, int out_size);
 
+// A square to cut: side x side pixels centred on (u, v).
+struct PatchSquare {
+  double u = 0, v = 0;
+  int side = 0;
+};
+
+// cut_patch for every square (empty where one leaves the image), spread
+// over OpenCV's threads one square a stripe: resizing a near cell's square
+// (area averaging at a scale that is rarely a whole number) takes about
+// 0.15 ms a view. parallel = false cuts them on the calling thread. The
+// patches are the same either way.
+std::vector<cv::Mat> cut_patches(const cv::Mat& stacked, int views, const std::vector<PatchSquare>& squares,
+                                 int out_size, bool parallel = true);
+
 }  // namespace ivoa
