@@ -50,13 +50,13 @@ TEST(SlideNet, WholeImagePassEqualsEveryPatchAlone) {
 TEST(InferenceMaxPool, EqualsMaxPool2dExactly) {
   torch::manual_seed(7);
   const auto x = torch::randn({2, 5, 37, 52});
-  for (const int64_t stride : {1, 2}) {
-    InferenceMaxPool pool(2, stride);
+  for (const auto& [kernel, stride] : std::vector<std::pair<int64_t, int64_t>>{{2, 1}, {2, 2}, {3, 2}}) {
+    InferenceMaxPool pool(kernel, stride);
     pool->eval();
     torch::NoGradGuard no_grad;
-    const auto fast = pool(x), reference = torch::max_pool2d(x, 2, stride);
-    ASSERT_EQ(fast.sizes(), reference.sizes()) << "stride " << stride;
-    EXPECT_TRUE(torch::equal(fast, reference)) << "stride " << stride;
+    const auto fast = pool(x), reference = torch::max_pool2d(x, kernel, stride);
+    ASSERT_EQ(fast.sizes(), reference.sizes()) << kernel << "/" << stride;
+    EXPECT_TRUE(torch::equal(fast, reference)) << kernel << "/" << stride;
   }
 }
 
