@@ -304,9 +304,7 @@ double IntrospectionModel::verdict_threshold() const {
 std::vector<Prediction> IntrospectionModel::predict_cells(const cv::Mat& image, const std::vector<CellPatch>& cells) {
   check_image(image, info());
   if (cells.empty()) return {};
-  std::vector<PatchSquare> squares;
-  for (const auto& c : cells) squares.push_back({c.u, c.v, c.side});
-  const auto patches = cut_patches(image, info().views, squares, info().patch_size, config_.threads > 1);
+  const auto patches = cut_patches(image, info().views, cells, info().patch_size, config_.threads > 1);
   for (size_t i = 0; i < cells.size(); ++i)
     if (patches[i].empty())
       throw ModelError("the " + std::to_string(cells[i].side) + " px patch around (" + std::to_string(cells[i].u) +

@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 
 #include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/patch_square.hpp"
 #include "ivoa/core/query_grid.hpp"
 
 namespace ivoa {
@@ -42,12 +43,6 @@ std::vector<int> footprint_patch_sides(const Msg& msg, int patch_size, cv::Size 
 // in the same order and resized to out_size x out_size per view (area
 // averaging; a copy either way). Empty if the square leaves the image.
 cv::Mat cut_patch(const cv::Mat& stacked, int views, double u, double v, int side, int out_size);
-
-// A square to cut: side x side pixels centred on (u, v).
-struct PatchSquare {
-  double u = 0, v = 0;
-  int side = 0;
-};
 
 // cut_patch for every square (empty where one leaves the image), spread
 // over OpenCV's threads one square a stripe: resizing a near cell's square

@@ -20,6 +20,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "ivoa/core/patch_square.hpp"
+
 namespace ivoa::introspection {
 
 inline constexpr int kNumClasses = 4;  // TP, TN, FP, FN (introspection_labels_t.LABEL_*)
@@ -157,10 +159,7 @@ class IntrospectionModel {
   // resized to patch_size. What a footprint-scaled model needs; side =
   // patch_size gives the heatmap's patch at that point without the mean
   // filter. Throws ModelError for a square that leaves the image.
-  struct CellPatch {
-    double u = 0, v = 0;
-    int side = 0;
-  };
+  using CellPatch = PatchSquare;
   std::vector<Prediction> predict_cells(const cv::Mat& image, const std::vector<CellPatch>& cells);
   // Query cells as ivoa-introspection predicts them: a cell whose square is
   // larger than patch_size (a footprint-scaled model's near cells) from its
