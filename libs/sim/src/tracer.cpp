@@ -467,12 +467,17 @@ inline void Tracer::add_reflection(Shaded& out, float fresnel, const Rgbf& refle
   if (out.specular > 0.35f * out.radiance.luminance()) out.phenomena |= GT::PHENOMENON_REFLECTION;
 }
 
+// How far a primary ray can reach a solid: to the floor when it falls, to
+// the ceiling (if any) when it rises.
+float Tracer::primary_range(const PixelRay& pr, const Ray& ray) const {
+  return pr.slope > 0 && scene_.has_ceiling ? s_ceiling_up_ * ray.inv_slope : pr.s_floor;
+}
+
 bool Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, FloorSample* floor) const {
   const PixelRay& pr = rays_.ray(pixel);
   const Ray ray = make_ray(pr);
-  float s_hi = pr.s_floor;
   const bool up = pr.slope > 0;
-  if (up && scene_.has_ceiling) s_hi = s_ceiling_up_ * ray.inv_slope;
+  const float s_hi = primary_range(pr, ray);
   Hit hit;
   if (bin_may_hit(ray, s_hi)) nearest(ray, 0.0f, s_hi, false, hit);
   fresnel = 0;
@@ -624,9 +629,8 @@ void Tracer::blend_reflections(int y0, int y1, const uint8_t* step, const float*
 Ranged Tracer::range(int pixel) const {
   const PixelRay& pr = rays_.ray(pixel);
   const Ray ray = make_ray(pr);
-  float s_hi = pr.s_floor;
   const bool up = pr.slope > 0;
-  if (up && scene_.has_ceiling) s_hi = s_ceiling_up_ * ray.inv_slope;
+  const float s_hi = primary_range(pr, ray);
   Hit hit;
   if (bin_may_hit(ray, s_hi)) nearest(ray, 0.0f, s_hi, false, hit);
   const SkyData& sky = scene_.sky;

@@ -80,6 +80,7 @@ class Tracer {
   void fill_bins(const std::vector<Candidate>& all, const std::vector<std::pair<int, int>>& spans,
                  const std::vector<size_t>& span_owner);
   inline Ray make_ray(const PixelRay& r) const;
+  float primary_range(const PixelRay& pr, const Ray& ray) const;
   // False when no solid of the ray's azimuth bin starts before s_hi (nearest() would find none).
   bool bin_may_hit(const Ray& ray, float s_hi) const;
   // Nearest solid along the ray with s in [s_lo, s_hi); mirrored: below the floor.
