@@ -57,7 +57,10 @@ void write_session(const std::string& root, const std::string& name, int per_cla
     }
 }
 
-TEST(Training, LossFallsAndHeldOutSessionsBeatChance) {
+// The tests that hold for either optimiser.
+class TrainingWith : public ::testing::TestWithParam<Optimizer> {};
+
+TEST_P(TrainingWith, LossFallsAndHeldOutSessionsBeatChance) {
   test::TempDir dir;
   const std::string root = dir.file("data");
   write_session(root, "a", 60, 1);
@@ -76,6 +79,7 @@ TEST(Training, LossFallsAndHeldOutSessionsBeatChance) {
   c.validate_every = 50;
   c.checkpoint_every = 100;
   c.threshold_passes = 5;
+  use_optimizer(c, GetParam());
   std::vector<double> losses;
   const TrainReport r = train_model(c, [&](const TrainStatus& s) { losses.push_back(s.loss); });
   ASSERT_EQ(losses.size(), 150u);
@@ -94,6 +98,9 @@ TEST(Training, LossFallsAndHeldOutSessionsBeatChance) {
   EXPECT_GE(r.val_verdict_accuracy_retained, r.val_accuracy_retained - 1e-9) << "the verdict leaves fewer ways to err";
   EXPECT_EQ(model->info().training_summary.find("held_out"), std::string::npos) << "test sessions must not be listed";
   EXPECT_NE(model->info().training_summary.find("\"a\""), std::string::npos);
+  EXPECT_NE(model->info().training_summary.find(std::string("\"optimizer\": \"") + optimizer_name(GetParam()) + "\""),
+            std::string::npos)
+      << model->info().training_summary;
   const dataset::SessionReader test((dir.path() / "data" / "held_out").string());
   std::vector<cv::Mat> patches;
   for (size_t i = 0; i < test.size(); ++i) patches.push_back(test.patch(i).clone());
@@ -127,9 +134,10 @@ TrainConfig tiny_run(const test::TempDir& dir, int val_per_class, int64_t steps)
   return tiny_config(dir, steps);
 }
 
-TEST(Training, ResumesFromTheCheckpoint) {
+TEST_P(TrainingWith, ResumesFromTheCheckpoint) {
   test::TempDir dir;
   TrainConfig c = tiny_run(dir, 5, 10);
+  use_optimizer(c, GetParam());
   const TrainReport before = train_model(c);
   c.steps = 14;
   c.resume = true;
@@ -146,6 +154,9 @@ TEST(Training, ResumesFromTheCheckpoint) {
     EXPECT_GT(r.best_val_accuracy, 0.0);
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Optimizers, TrainingWith, ::testing::Values(Optimizer::kSgd, Optimizer::kAdamW),
+                         [](const ::testing::TestParamInfo<Optimizer>& p) { return optimizer_name(p.param); });
 
 TEST(Training, KeepLastWritesTheFinalStepsModelWhateverItsValidation) {
   test::TempDir dir;
@@ -180,6 +191,23 @@ TEST(Training, StaleCheckpointIsRefusedWithTheWayOut) {
     const std::string what = e.what();
     EXPECT_NE(what.find("cannot resume"), std::string::npos) << what;
     EXPECT_NE(what.find("architecture slidenet, not alexnet"), std::string::npos) << what;
+    EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
+  }
+}
+
+TEST(Training, CheckpointOfAnotherOptimiserIsRefusedWithTheWayOut) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 5);  // an SGD checkpoint at step 5
+  train_model(c);
+  c.resume = true;
+  c.steps = 8;
+  use_optimizer(c, Optimizer::kAdamW);
+  try {
+    train_model(c);
+    FAIL() << "resumed AdamW from SGD's optimiser state";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("trained with --optimizer sgd, this run uses adamw"), std::string::npos) << what;
     EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
   }
 }

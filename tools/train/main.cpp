@@ -2,6 +2,8 @@
 //
 //   ivoa-train --dataset data/ --split split.yaml --out model.pt
 #include <cstdio>
+#include <map>
+#include <string>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -41,9 +43,16 @@ int main(int argc, char** argv) {
   app.add_flag("--resume", c.resume, "continue from OUT.checkpoint.* if present");
   app.add_option("--steps", c.steps, "optimiser steps")->capture_default_str();
   app.add_option("--batch-size", c.batch_size)->capture_default_str();
-  app.add_option("--lr", c.learning_rate, "SGD learning rate (paper: 0.005)")->capture_default_str();
+  introspection::Optimizer optimizer = c.optimizer;
+  app.add_option("--optimizer", optimizer, "sgd (the paper's) or adamw")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, introspection::Optimizer>{
+          {"sgd", introspection::Optimizer::kSgd}, {"adamw", introspection::Optimizer::kAdamW}}))
+      ->default_str("sgd");
+  double learning_rate = 0, weight_decay = 0;
+  auto* lr_option = app.add_option("--lr", learning_rate, "learning rate (default: SGD 0.005, the paper's; AdamW 0.001)");
   app.add_option("--momentum", c.momentum, "SGD momentum (paper: 0.9)")->capture_default_str();
-  app.add_option("--weight-decay", c.weight_decay)->capture_default_str();
+  auto* wd_option =
+      app.add_option("--weight-decay", weight_decay, "weight decay (default: SGD 5e-4, as L2; AdamW 0.05, decoupled)");
   app.add_option("--warmup-steps", c.warmup_steps, "linear warm-up, then cosine decay")->capture_default_str();
   app.add_option("--dropout", c.dropout, "dropout before FC1 and FC2")->capture_default_str();
   app.add_option("--fn-weight", c.fn_weight, "FN share of class-balanced sampling (reference: 0.1 outdoors)")
@@ -72,6 +81,9 @@ int main(int argc, char** argv) {
                "write it to --out");
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   c.augment = !no_augment;
+  introspection::use_optimizer(c, optimizer);
+  if (lr_option->count()) c.learning_rate = learning_rate;
+  if (wd_option->count()) c.weight_decay = weight_decay;
   init_logging("train", common.log_level);
 
   try {
@@ -86,7 +98,7 @@ int main(int argc, char** argv) {
     const auto r = introspection::train_model(c, [&](const introspection::TrainStatus& s) {
       char detail[240], evidence[40] = "";
       if (s.evidence_loss >= 0) std::snprintf(evidence, sizeof(evidence), " (evidence %.4f)", s.evidence_loss);
-      std::snprintf(detail, sizeof(detail), "loss %.3f%s, train acc %.3f, lr %.4f, %.0f patches/s, val mean-class acc %s",
+      std::snprintf(detail, sizeof(detail), "loss %.3f%s, train acc %.3f, lr %.3g, %.0f patches/s, val mean-class acc %s",
                     s.loss, evidence, s.accuracy, s.learning_rate, s.patches_per_s,
                     s.val_mean_class_accuracy < 0 ? "-" : std::to_string(s.val_mean_class_accuracy).substr(0, 5).c_str());
       progress.update(static_cast<double>(s.step), detail);
@@ -104,8 +116,10 @@ int main(int argc, char** argv) {
                   r.best_val_class_accuracy[0], r.best_val_class_accuracy[1], r.best_val_class_accuracy[2],
                   r.best_val_class_accuracy[3]);
     print_gates(r, c);
-    std::printf("training: %lld steps in %.0f s, %.0f patches/s; train samples TP %lld TN %lld FP %lld FN %lld\n",
-                static_cast<long long>(r.last.step), r.seconds, r.last.patches_per_s,
+    std::printf("training: %lld steps (%s, lr %g, weight decay %g) in %.0f s, %.0f patches/s; train samples TP %lld TN "
+                "%lld FP %lld FN %lld\n",
+                static_cast<long long>(r.last.step), introspection::optimizer_name(c.optimizer), c.learning_rate,
+                c.weight_decay, r.seconds, r.last.patches_per_s,
                 static_cast<long long>(r.train_class_counts[0]), static_cast<long long>(r.train_class_counts[1]),
                 static_cast<long long>(r.train_class_counts[2]), static_cast<long long>(r.train_class_counts[3]));
     return kExitOk;

@@ -201,7 +201,8 @@ std::string training_summary(const TrainConfig& c, const SplitData& train, const
     << json_list(train.names) << ", \"val_sessions\": " << json_list(val.names) << ", \"train_class_counts\": ["
     << r.train_class_counts[0] << ", " << r.train_class_counts[1] << ", " << r.train_class_counts[2] << ", "
     << r.train_class_counts[3] << "], \"steps\": " << step << ", \"batch_size\": " << c.batch_size
-    << ", \"learning_rate\": " << c.learning_rate << ", \"momentum\": " << c.momentum << ", \"seed\": " << c.seed
+    << ", \"optimizer\": \"" << optimizer_name(c.optimizer) << "\", \"learning_rate\": " << c.learning_rate
+    << ", \"momentum\": " << c.momentum << ", \"weight_decay\": " << c.weight_decay << ", \"seed\": " << c.seed
     << ", \"augment\": " << (c.augment ? "true" : "false") << ", \"fn_weight\": " << c.fn_weight
     << ", \"evidence_weight\": " << (train.evidence_size > 0 ? c.evidence_weight : 0.0)
     << ", \"best_step\": " << r.best_step << ", \"val_mean_class_accuracy\": " << r.best_val_mean_class_accuracy
@@ -345,23 +346,30 @@ torch::Tensor labels_of(const SplitData& d, const std::vector<SampleRef>& refs) 
 }
 
 // A checkpoint: OUT.checkpoint.model, .optimizer, .evidence (side task) and
-// .step ("step best_val best_step").
+// .step ("step best_val best_step optimizer"; checkpoints from before AdamW
+// have no optimiser name and are SGD's).
 void save_checkpoint(const std::string& checkpoint, IntrospectionNetImpl& net, const ModelInfo& info,
-                     const EvidenceTask* evidence, torch::optim::SGD& optimizer, int64_t step, const TrainReport& report) {
+                     const EvidenceTask* evidence, Optimizer kind, torch::optim::Optimizer& optimizer, int64_t step,
+                     const TrainReport& report) {
   save_model(net, info, checkpoint + ".model");
   if (evidence) evidence->save(checkpoint + ".evidence");
   torch::save(optimizer, checkpoint + ".optimizer");
   std::ofstream(checkpoint + ".step") << step << " " << report.best_val_mean_class_accuracy << " " << report.best_step
-                                      << "\n";
+                                      << " " << optimizer_name(kind) << "\n";
 }
 
 // Restores the optimiser and side task of a checkpoint; returns its step.
 int64_t load_checkpoint(const std::string& checkpoint, EvidenceTask* evidence, double evidence_weight,
-                        torch::optim::SGD& optimizer, TrainReport& report) {
+                        Optimizer kind, torch::optim::Optimizer& optimizer, TrainReport& report) {
+  int64_t step = 0;
+  std::string saved_kind = "sgd";
+  std::ifstream(checkpoint + ".step") >> step >> report.best_val_mean_class_accuracy >> report.best_step >> saved_kind;
+  if (saved_kind != optimizer_name(kind))
+    throw std::runtime_error("cannot resume " + checkpoint + ": it was trained with --optimizer " + saved_kind +
+                             ", this run uses " + optimizer_name(kind) + " (remove " + checkpoint +
+                             ".* to start over)");
   resume_evidence_task(evidence, checkpoint, evidence_weight);
   torch::load(optimizer, checkpoint + ".optimizer");
-  int64_t step = 0;
-  std::ifstream(checkpoint + ".step") >> step >> report.best_val_mean_class_accuracy >> report.best_step;
   spdlog::info("resuming from {} at step {}", checkpoint, step);
   report.best_before_resume = true;  // until a validation of this run beats it
   return step;
@@ -383,18 +391,27 @@ struct RunningMeans {
   }
 };
 
-// The network, its side task and one SGD optimiser over both, from scratch,
+// The network, its side task and one optimiser over both, from scratch,
 // from a given model (fine-tuning, --init) or from the last checkpoint
 // (--resume); the optimiser is made for the network's final parameters.
 struct Learner {
   std::shared_ptr<IntrospectionNetImpl> net;
   std::unique_ptr<EvidenceTask> evidence;
-  std::unique_ptr<torch::optim::SGD> optimizer;
+  std::unique_ptr<torch::optim::Optimizer> optimizer;
   int64_t first_step = 0;  // the checkpoint's step when resuming
 };
 
 // The files of a run's checkpoint are OUT.checkpoint.*.
 std::string checkpoint_of(const TrainConfig& c) { return c.output + ".checkpoint"; }
+
+std::unique_ptr<torch::optim::Optimizer> make_optimizer(const TrainConfig& c,
+                                                       const std::vector<torch::Tensor>& parameters) {
+  if (c.optimizer == Optimizer::kAdamW)
+    return std::make_unique<torch::optim::AdamW>(parameters,
+                                                 torch::optim::AdamWOptions(c.learning_rate).weight_decay(c.weight_decay));
+  return std::make_unique<torch::optim::SGD>(
+      parameters, torch::optim::SGDOptions(c.learning_rate).momentum(c.momentum).weight_decay(c.weight_decay));
+}
 
 Learner make_learner(const TrainConfig& c, const SplitData& train, const ModelInfo& info, torch::Device device,
                      TrainReport& report) {
@@ -413,13 +430,13 @@ Learner make_learner(const TrainConfig& c, const SplitData& train, const ModelIn
   auto parameters = l.net->parameters();
   if (l.evidence)
     for (auto& p : l.evidence->parameters()) parameters.push_back(p);
-  l.optimizer = std::make_unique<torch::optim::SGD>(
-      parameters, torch::optim::SGDOptions(c.learning_rate).momentum(c.momentum).weight_decay(c.weight_decay));
-  if (resuming) l.first_step = load_checkpoint(checkpoint, l.evidence.get(), c.evidence_weight, *l.optimizer, report);
+  l.optimizer = make_optimizer(c, parameters);
+  if (resuming)
+    l.first_step = load_checkpoint(checkpoint, l.evidence.get(), c.evidence_weight, c.optimizer, *l.optimizer, report);
   return l;
 }
 
-// One SGD step on a batch: cross-entropy on the four classes, plus the side
+// One optimiser step on a batch: cross-entropy on the four classes, plus the side
 // task's loss when there is one.
 StepResult train_step(Learner& l, const TrainConfig& c, const SplitData& train, const std::vector<SampleRef>& batch,
                       BatchAugmenter& make_batch, int64_t step, torch::Device device) {
@@ -427,7 +444,7 @@ StepResult train_step(Learner& l, const TrainConfig& c, const SplitData& train, 
   const auto labels = labels_of(train, batch).to(device);
   const auto x = make_batch(patch_pointers(train, batch)).to(device);
   for (auto& group : l.optimizer->param_groups())
-    static_cast<torch::optim::SGDOptions&>(group.options()).lr(learning_rate_at(c, step));
+    group.options().set_lr(learning_rate_at(c, step));
   l.optimizer->zero_grad();
   const auto features = l.net->features(x);
   const auto logits = l.net->head(features);
@@ -464,6 +481,14 @@ void record_kept(TrainReport& report, const Confusion& val, int64_t step) {
 }
 
 }  // namespace
+
+const char* optimizer_name(Optimizer o) { return o == Optimizer::kAdamW ? "adamw" : "sgd"; }
+
+void use_optimizer(TrainConfig& c, Optimizer o) {
+  c.optimizer = o;
+  c.learning_rate = o == Optimizer::kAdamW ? 0.001 : 0.005;
+  c.weight_decay = o == Optimizer::kAdamW ? 0.05 : 5e-4;
+}
 
 TrainReport calibrate_model(const TrainConfig& c) {
   const double start = monotonic_ms();
@@ -532,7 +557,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
       status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
     }
     if ((step + 1) % c.checkpoint_every == 0 || last)
-      save_checkpoint(checkpoint_of(c), *learner.net, info, learner.evidence.get(), *learner.optimizer, step + 1,
+      save_checkpoint(checkpoint_of(c), *learner.net, info, learner.evidence.get(), c.optimizer, *learner.optimizer, step + 1,
                       report);
     if (progress) progress(status);
   }

@@ -3,8 +3,8 @@
 // session splits. Defaults follow the paper and the reference code where
 // they are known (SGD, lr 0.005, momentum 0.9, dropout 0.5, class-balanced
 // sampling with replacement); a CPU needs a smaller batch than the
-// reference's 2048, and the reference has no schedule, seeds or
-// augmentation, which we add.
+// reference's 2048, and the reference has no schedule, seeds, augmentation
+// or AdamW, which we add.
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -12,6 +12,12 @@
 #include <vector>
 
 namespace ivoa::introspection {
+
+// SGD with momentum is the paper's; AdamW (Adam with decoupled weight
+// decay) trains this network from scratch further in the same steps
+// (docs/accuracy.md).
+enum class Optimizer { kSgd, kAdamW };
+const char* optimizer_name(Optimizer o);  // "sgd", "adamw"
 
 struct TrainConfig {
   std::string dataset;            // dataset folder
@@ -25,9 +31,12 @@ struct TrainConfig {
 
   int64_t steps = 4000;           // optimiser steps
   int batch_size = 128;
+  // use_optimizer() sets the optimiser with its own learning rate and
+  // weight decay; these are SGD's.
+  Optimizer optimizer = Optimizer::kSgd;
   double learning_rate = 0.005;   // paper / reference
-  double momentum = 0.9;          // paper / reference
-  double weight_decay = 5e-4;
+  double momentum = 0.9;          // paper / reference; SGD only
+  double weight_decay = 5e-4;     // SGD: L2 in the gradient; AdamW: decoupled, per step times the learning rate
   int64_t warmup_steps = 200;     // linear warm-up, then cosine decay to 1% (reference: constant)
   double dropout = 0.5;
   // Class-balanced sampling: each class is drawn equally often; the FN
@@ -53,6 +62,10 @@ struct TrainConfig {
   double threshold_retain = 0.7;
   int threshold_passes = 20;
 };
+
+// The optimiser with its default learning rate and weight decay: SGD 0.005
+// and 5e-4 (the paper's), AdamW 0.001 and 0.05.
+void use_optimizer(TrainConfig& c, Optimizer o);
 
 struct TrainStatus {
   int64_t step = 0, steps = 0;
