@@ -16,6 +16,10 @@
 #include "test_rig.hpp"
 
 namespace ivoa::introspection {
+
+// Test names and messages name the optimiser (found by argument lookup).
+void PrintTo(Optimizer o, std::ostream* os) { *os << optimizer_name(o); }
+
 namespace {
 
 cv::Mat pattern(int label, std::mt19937& rng) {
@@ -198,6 +202,7 @@ TEST(Training, StaleCheckpointIsRefusedWithTheWayOut) {
 TEST(Training, CheckpointOfAnotherOptimiserIsRefusedWithTheWayOut) {
   test::TempDir dir;
   TrainConfig c = tiny_run(dir, 5, 5);  // an SGD checkpoint at step 5
+  use_optimizer(c, Optimizer::kSgd);
   train_model(c);
   c.resume = true;
   c.steps = 8;

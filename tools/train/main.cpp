@@ -2,7 +2,6 @@
 //
 //   ivoa-train --dataset data/ --split split.yaml --out model.pt
 #include <cstdio>
-#include <map>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -43,11 +42,10 @@ int main(int argc, char** argv) {
   app.add_flag("--resume", c.resume, "continue from OUT.checkpoint.* if present");
   app.add_option("--steps", c.steps, "optimiser steps")->capture_default_str();
   app.add_option("--batch-size", c.batch_size)->capture_default_str();
-  introspection::Optimizer optimizer = c.optimizer;
-  app.add_option("--optimizer", optimizer, "sgd (the paper's) or adamw")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, introspection::Optimizer>{
-          {"sgd", introspection::Optimizer::kSgd}, {"adamw", introspection::Optimizer::kAdamW}}))
-      ->default_str("sgd");
+  std::string optimizer = introspection::optimizer_name(c.optimizer);
+  app.add_option("--optimizer", optimizer, "adamw or sgd (the paper's)")
+      ->check(CLI::IsMember({"adamw", "sgd"}))
+      ->capture_default_str();
   double learning_rate = 0, weight_decay = 0;
   auto* lr_option = app.add_option("--lr", learning_rate, "learning rate (default: SGD 0.005, the paper's; AdamW 0.001)");
   app.add_option("--momentum", c.momentum, "SGD momentum (paper: 0.9)")->capture_default_str();
@@ -81,7 +79,7 @@ int main(int argc, char** argv) {
                "write it to --out");
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   c.augment = !no_augment;
-  introspection::use_optimizer(c, optimizer);
+  introspection::use_optimizer(c, optimizer == "sgd" ? introspection::Optimizer::kSgd : introspection::Optimizer::kAdamW);
   if (lr_option->count()) c.learning_rate = learning_rate;
   if (wd_option->count()) c.weight_decay = weight_decay;
   init_logging("train", common.log_level);

@@ -407,8 +407,8 @@ std::string checkpoint_of(const TrainConfig& c) { return c.output + ".checkpoint
 std::unique_ptr<torch::optim::Optimizer> make_optimizer(const TrainConfig& c,
                                                        const std::vector<torch::Tensor>& parameters) {
   if (c.optimizer == Optimizer::kAdamW)
-    return std::make_unique<torch::optim::AdamW>(parameters,
-                                                 torch::optim::AdamWOptions(c.learning_rate).weight_decay(c.weight_decay));
+    return std::make_unique<torch::optim::AdamW>(
+        parameters, torch::optim::AdamWOptions(c.learning_rate).weight_decay(c.weight_decay));
   return std::make_unique<torch::optim::SGD>(
       parameters, torch::optim::SGDOptions(c.learning_rate).momentum(c.momentum).weight_decay(c.weight_decay));
 }
@@ -557,8 +557,8 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
       status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
     }
     if ((step + 1) % c.checkpoint_every == 0 || last)
-      save_checkpoint(checkpoint_of(c), *learner.net, info, learner.evidence.get(), c.optimizer, *learner.optimizer, step + 1,
-                      report);
+      save_checkpoint(checkpoint_of(c), *learner.net, info, learner.evidence.get(), c.optimizer, *learner.optimizer,
+                      step + 1, report);
     if (progress) progress(status);
   }
 
