@@ -79,7 +79,7 @@ esac
 # the smaller scales keep the final model, the simpler rule; the full scale's
 # nine 60-frame sessions pick the best-validated one, as for the shipped model.
 # AdamW, not the paper's SGD: +2 points held out at the default scale, +1 at
-# full (docs/accuracy.md, "AdamW").
+# full (docs/accuracy.md, "The optimiser").
 OPTIMIZER=adamw
 RATE=2  # frames per second of session time: consecutive frames 0.5 s of driving apart
 
