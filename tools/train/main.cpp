@@ -5,6 +5,7 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/process.hpp"
@@ -47,10 +48,14 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"adamw", "sgd"}))
       ->capture_default_str();
   double learning_rate = 0, weight_decay = 0;
-  auto* lr_option = app.add_option("--lr", learning_rate, "learning rate (default: SGD 0.005, the paper's; AdamW 0.001)");
+  auto* lr_option = app.add_option("--lr", learning_rate,
+                                   fmt::format("learning rate (default: AdamW {}, SGD {}, the paper's)",
+                                               introspection::kAdamWLearningRate, introspection::kSgdLearningRate));
   app.add_option("--momentum", c.momentum, "SGD momentum (paper: 0.9)")->capture_default_str();
   auto* wd_option =
-      app.add_option("--weight-decay", weight_decay, "weight decay (default: SGD 5e-4, as L2; AdamW 0.05, decoupled)");
+      app.add_option("--weight-decay", weight_decay,
+                     fmt::format("weight decay (default: AdamW {}, decoupled; SGD {}, as L2)",
+                                 introspection::kAdamWWeightDecay, introspection::kSgdWeightDecay));
   app.add_option("--warmup-steps", c.warmup_steps, "linear warm-up, then cosine decay")->capture_default_str();
   app.add_option("--dropout", c.dropout, "dropout before FC1 and FC2")->capture_default_str();
   app.add_option("--fn-weight", c.fn_weight, "FN share of class-balanced sampling (reference: 0.1 outdoors)")

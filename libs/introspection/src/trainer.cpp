@@ -486,8 +486,8 @@ const char* optimizer_name(Optimizer o) { return o == Optimizer::kAdamW ? "adamw
 
 void use_optimizer(TrainConfig& c, Optimizer o) {
   c.optimizer = o;
-  c.learning_rate = o == Optimizer::kAdamW ? 0.001 : 0.005;
-  c.weight_decay = o == Optimizer::kAdamW ? 0.05 : 5e-4;
+  c.learning_rate = o == Optimizer::kAdamW ? kAdamWLearningRate : kSgdLearningRate;
+  c.weight_decay = o == Optimizer::kAdamW ? kAdamWWeightDecay : kSgdWeightDecay;
 }
 
 TrainReport calibrate_model(const TrainConfig& c) {

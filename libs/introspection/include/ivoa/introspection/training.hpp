@@ -18,6 +18,9 @@ namespace ivoa::introspection {
 // same steps (docs/accuracy.md: +1 to +2 points held out).
 enum class Optimizer { kSgd, kAdamW };
 const char* optimizer_name(Optimizer o);  // "sgd", "adamw"
+// Each optimiser's default learning rate and weight decay.
+inline constexpr double kAdamWLearningRate = 0.001, kAdamWWeightDecay = 0.05;  // decoupled
+inline constexpr double kSgdLearningRate = 0.005, kSgdWeightDecay = 5e-4;      // paper / reference; L2
 
 struct TrainConfig {
   std::string dataset;            // dataset folder
@@ -34,9 +37,9 @@ struct TrainConfig {
   // use_optimizer() sets the optimiser with its own learning rate and
   // weight decay; these are AdamW's.
   Optimizer optimizer = Optimizer::kAdamW;
-  double learning_rate = 0.001;   // SGD: 0.005 (paper / reference)
-  double momentum = 0.9;          // paper / reference; SGD only
-  double weight_decay = 0.05;     // AdamW: decoupled, per step times the learning rate; SGD: 5e-4, L2 in the gradient
+  double learning_rate = kAdamWLearningRate;
+  double momentum = 0.9;  // paper / reference; SGD only
+  double weight_decay = kAdamWWeightDecay;  // AdamW: per step times the learning rate; SGD: L2 in the gradient
   int64_t warmup_steps = 200;     // linear warm-up, then cosine decay to 1% (reference: constant)
   double dropout = 0.5;
   // Class-balanced sampling: each class is drawn equally often; the FN
@@ -63,8 +66,7 @@ struct TrainConfig {
   int threshold_passes = 20;
 };
 
-// The optimiser with its default learning rate and weight decay: SGD 0.005
-// and 5e-4 (the paper's), AdamW 0.001 and 0.05.
+// The optimiser with its default learning rate and weight decay.
 void use_optimizer(TrainConfig& c, Optimizer o);
 
 struct TrainStatus {
