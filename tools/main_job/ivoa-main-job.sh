@@ -141,6 +141,10 @@ if [ $live = 1 ]; then
     --status-file "$out/live/status.txt" --output-dir "$out/live/process_logs"
   "$BIN/ivoa-log-check" "$out/live/live.lcmlog" || true
   echo
+  echo "How the introspection did live, against the monitor's labels of the same frames (ivoa-live-score):"
+  "$BIN/ivoa-live-score" --log-level warn "$out/live/live.lcmlog" --json "$out/live/score.json" |
+    tee "$out/live/score.txt" || true
+  echo
   echo "Live run: log $out/live/live.lcmlog, viewer figures in $out/live/viewer/, process status in $out/live/status.txt"
   exit 0
 fi

@@ -1,0 +1,211 @@
+#include "live_score.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "ivoa/logio/log_writer.hpp"
+#include "ivoa/obstacle_grid_t.hpp"
+
+namespace ivoa::tools {
+namespace {
+
+constexpr int8_t kTP = 0, kTN = 1, kFP = 2, kFN = 3, kNone = -1;
+constexpr int8_t kFree = obstacle_grid_t::STATE_FREE, kObstacle = obstacle_grid_t::STATE_OBSTACLE;
+
+struct Cell {
+  float x, y;
+  int8_t label, stereo_state;
+};
+
+introspection_labels_t labels_message(int64_t utime, const std::vector<Cell>& cells) {
+  introspection_labels_t m{};
+  m.utime = utime;
+  m.detector = "jppc";
+  m.num_cells = static_cast<int32_t>(cells.size());
+  for (const auto& c : cells) {
+    m.label.push_back(c.label);
+    m.stereo_state.push_back(c.stereo_state);
+    m.depth_state.push_back(kFree);
+    m.x.push_back(c.x);
+    m.y.push_back(c.y);
+    m.u.push_back(0);
+    m.v.push_back(0);
+  }
+  return m;
+}
+
+struct Query {
+  float x, y;
+  int8_t predicted, announced;
+  int8_t verdict, verdict_class, verdict_announced;
+};
+
+introspection_t prediction_message(int64_t utime, const std::vector<Query>& queries, double compute_ms = 50) {
+  introspection_t m{};
+  m.utime = utime;
+  m.model_id = "model.pt#abc";
+  m.compute_ms = compute_ms;
+  m.num_queries = static_cast<int32_t>(queries.size());
+  for (const auto& q : queries) {
+    m.query_x.push_back(q.x);
+    m.query_y.push_back(q.y);
+    m.query_u.push_back(0);
+    m.query_v.push_back(0);
+    m.query_class.push_back(q.predicted);
+    m.query_probability.push_back(0.9f);
+    m.query_uncertainty.push_back(0.001f);
+    m.query_announced.push_back(q.announced);
+    m.query_verdict.push_back(q.verdict);
+    m.query_verdict_class.push_back(q.verdict_class);
+    m.query_p_wrong.push_back(0.1f);
+    m.query_p_wrong_variance.push_back(0.001f);
+    m.query_verdict_announced.push_back(q.verdict_announced);
+  }
+  return m;
+}
+
+TEST(ClassCounts, MeanPerClassIsOverTheLabelsPresent) {
+  ClassCounts c;
+  for (int i = 0; i < 3; ++i) c.add(kTN, kTN);
+  c.add(kTN, kFP);
+  c.add(kFN, kFN);
+  c.add(kFN, kTN);
+  c.add(kNone, kTN);  // no label: not counted
+  EXPECT_EQ(c.total(), 6);
+  EXPECT_DOUBLE_EQ(c.recall(kTN), 0.75);
+  EXPECT_DOUBLE_EQ(c.recall(kFN), 0.5);
+  EXPECT_TRUE(std::isnan(c.recall(kTP)));
+  EXPECT_DOUBLE_EQ(c.mean_per_class(), 0.625);
+  EXPECT_DOUBLE_EQ(c.overall(), 4.0 / 6.0);
+  EXPECT_TRUE(std::isnan(ClassCounts{}.mean_per_class()));
+}
+
+TEST(LiveScorer, MatchesCellsByPositionWhicheverMessageComesFirst) {
+  LiveScorer scorer;
+  // Frame 1: the prediction before the labels, queries in another order.
+  scorer.add(prediction_message(1, {{1.0f, 0.25f, kFP, 1, kObstacle, kFP, 1},
+                                    {0.75f, 0.0f, kTN, 0, kFree, kFN, 0},
+                                    {2.0f, 0.5f, kTN, 1, kFree, kTN, 1}}));
+  scorer.add(labels_message(1, {{0.75f, 0.0f, kTN, kFree},
+                                {1.0f, 0.25f, kFP, kObstacle},
+                                {2.0f, 0.5f, kNone, kFree},       // no label: not scored
+                                {3.0f, 0.0f, kTN, kFree}}));    // no query there
+  // Frame 2: labels only (the introspection dropped it); frame 3: prediction only.
+  scorer.add(labels_message(2, {{0.75f, 0.0f, kFN, kFree}}));
+  scorer.add(prediction_message(3, {{0.75f, 0.0f, kTN, 1, kFree, kTN, 1}}));
+  const LiveScore s = scorer.finish();
+  EXPECT_EQ(s.labelled_frames, 2);
+  EXPECT_EQ(s.predicted_frames, 2);
+  EXPECT_EQ(s.scored_frames, 1);
+  EXPECT_EQ(s.labelled_cells, 3);
+  EXPECT_EQ(s.unmatched_cells, 1);
+  EXPECT_EQ(s.image.all.total(), 2);
+  EXPECT_EQ(s.image.all.confusion[kTN][kTN], 1);
+  EXPECT_EQ(s.image.all.confusion[kFP][kFP], 1);
+  EXPECT_EQ(s.image.announced.total(), 1);  // the TN cell was not announced
+  EXPECT_EQ(s.given_verdict.all.confusion[kTN][kFN], 1);
+  EXPECT_EQ(s.given_verdict.announced.confusion[kFP][kFP], 1);
+  EXPECT_EQ(s.given_verdict.announced.total(), 1);
+  EXPECT_EQ(s.verdict_unknown, 0);
+  EXPECT_EQ(s.verdict_disagrees, 0);
+  EXPECT_EQ(s.models, std::set<std::string>{"model.pt#abc"});
+  EXPECT_EQ(s.detectors, std::set<std::string>{"jppc"});
+}
+
+TEST(LiveScorer, CountsVerdictsThatAreMissingOrNotTheLabelsOwn) {
+  LiveScorer scorer;
+  scorer.add(labels_message(5, {{1.0f, 0.0f, kTN, kFree}, {1.25f, 0.0f, kFP, kObstacle}}));
+  scorer.add(prediction_message(5, {{1.0f, 0.0f, kTN, 1, obstacle_grid_t::STATE_UNKNOWN, kNone, 0},
+                                    {1.25f, 0.0f, kFP, 1, kFree, kFN, 1}}));
+  const LiveScore s = scorer.finish();
+  EXPECT_EQ(s.image.all.total(), 2);
+  EXPECT_EQ(s.verdict_unknown, 1);
+  EXPECT_EQ(s.verdict_disagrees, 1);
+  EXPECT_EQ(s.given_verdict.all.confusion[kFP][kFN], 1);
+}
+
+TEST(ComputeTimes, NearestRankPercentiles) {
+  std::vector<double> ms;
+  for (int i = 10; i >= 1; --i) ms.push_back(10.0 * i);  // 100 .. 10, unsorted
+  const ComputeTimes t = summarize_compute_ms(ms);
+  EXPECT_EQ(t.frames, 10);
+  EXPECT_DOUBLE_EQ(t.median, 50);
+  EXPECT_DOUBLE_EQ(t.p90, 90);
+  EXPECT_DOUBLE_EQ(t.max, 100);
+  EXPECT_EQ(summarize_compute_ms({}).frames, 0);
+}
+
+// The tool on a log: the table, the JSON, and refusals that name the problem.
+class LiveScoreTool : public ::testing::Test {
+ protected:
+  std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                              ("live_score_" + std::to_string(::getpid()) + "_" +
+                               ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  void SetUp() override { std::filesystem::create_directories(dir); }
+  void TearDown() override { std::filesystem::remove_all(dir); }
+
+  template <class Msg>
+  static void write(logio::LogWriter& log, const char* channel, const Msg& m) {
+    std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+    m.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    log.write(channel, m.utime, buf.data(), buf.size());
+  }
+  // Runs the tool; its exit code, and stdout + stderr in `output`.
+  int run(const std::string& args, std::string& output) const {
+    const std::string out_file = (dir / "out.txt").string();
+    const int status = std::system((std::string(IVOA_LIVE_SCORE_BIN) + " " + args + " > " + out_file + " 2>&1").c_str());
+    std::stringstream text;
+    text << std::ifstream(out_file).rdbuf();
+    output = text.str();
+    return WEXITSTATUS(status);
+  }
+};
+
+TEST_F(LiveScoreTool, ScoresALogAndWritesJson) {
+  const std::string log_path = (dir / "live.lcmlog").string();
+  {
+    logio::LogWriter log(log_path);
+    for (int64_t t = 1; t <= 4; ++t) {
+      write(log, "INTROSPECTION_LABELS", labels_message(t, {{1.0f, 0.0f, kFP, kObstacle}, {1.5f, 0.0f, kTN, kFree}}));
+      write(log, "INTROSPECTION", prediction_message(t, {{1.0f, 0.0f, t == 4 ? kTN : kFP, 1, kObstacle, kFP, 1},
+                                                         {1.5f, 0.0f, kTN, 1, kFree, kTN, 1}}, 10.0 * t));
+    }
+    log.close();
+  }
+  std::string out;
+  ASSERT_EQ(run(log_path + " --json " + (dir / "score.json").string(), out), 0) << out;
+  EXPECT_NE(out.find("frames: 4 labelled, 4 predicted, 4 both (scored)"), std::string::npos) << out;
+  EXPECT_NE(out.find("median 20.0 ms, 90th percentile 40.0 ms, max 40.0 ms over 4 frames"), std::string::npos) << out;
+  std::stringstream json;
+  json << std::ifstream(dir / "score.json").rdbuf();
+  // From the image alone FP is 3 of 4, TN 4 of 4: mean per-class 0.875.
+  EXPECT_NE(json.str().find("\"image\": {\"all\": {\"cells\": 8, \"mean_per_class\": 0.875000"), std::string::npos)
+      << json.str();
+}
+
+TEST_F(LiveScoreTool, ALogWithoutIntrospectionIsRefusedByName) {
+  const std::string log_path = (dir / "labels_only.lcmlog").string();
+  {
+    logio::LogWriter log(log_path);
+    write(log, "INTROSPECTION_LABELS", labels_message(1, {{1.0f, 0.0f, kTN, kFree}}));
+    log.close();
+  }
+  std::string out;
+  EXPECT_EQ(run(log_path, out), 3);
+  EXPECT_NE(out.find("labels_only.lcmlog: no INTROSPECTION messages to score"), std::string::npos) << out;
+}
+
+TEST_F(LiveScoreTool, AFileThatIsNotALogIsRefused) {
+  std::ofstream(dir / "notes.txt") << "not an LCM log\n";
+  std::string out;
+  EXPECT_EQ(run((dir / "notes.txt").string(), out), 3);
+  EXPECT_NE(out.find("notes.txt"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace ivoa::tools

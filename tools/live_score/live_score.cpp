@@ -1,0 +1,132 @@
+#include "live_score.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "ivoa/obstacle_grid_t.hpp"
+
+namespace ivoa::tools {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+bool is_class(int c) { return c >= 0 && c < kClasses; }
+
+// Labels and queries come from grids of the same geometry: a cell is the
+// same cell when its position agrees to the millimetre.
+std::pair<long, long> cell_key(float x, float y) { return {std::lround(x * 1000.0f), std::lround(y * 1000.0f)}; }
+
+}  // namespace
+
+void ClassCounts::add(int label, int predicted) {
+  if (is_class(label) && is_class(predicted)) ++confusion[label][predicted];
+}
+
+int64_t ClassCounts::count(int label) const {
+  int64_t n = 0;
+  for (const int64_t c : confusion[label]) n += c;
+  return n;
+}
+
+int64_t ClassCounts::total() const {
+  int64_t n = 0;
+  for (int label = 0; label < kClasses; ++label) n += count(label);
+  return n;
+}
+
+double ClassCounts::recall(int label) const {
+  const int64_t n = count(label);
+  return n ? static_cast<double>(confusion[label][label]) / static_cast<double>(n) : kNaN;
+}
+
+double ClassCounts::mean_per_class() const {
+  double sum = 0;
+  int present = 0;
+  for (int label = 0; label < kClasses; ++label)
+    if (count(label)) sum += recall(label), ++present;
+  return present ? sum / present : kNaN;
+}
+
+double ClassCounts::overall() const {
+  int64_t right = 0;
+  for (int label = 0; label < kClasses; ++label) right += confusion[label][label];
+  const int64_t n = total();
+  return n ? static_cast<double>(right) / static_cast<double>(n) : kNaN;
+}
+
+void LiveScorer::add(const introspection_labels_t& m) {
+  ++labelled_frames_;
+  detectors_.insert(m.detector);
+  auto& cells = labels_[m.utime];
+  cells.clear();  // a repeated frame counts once, with its latest labels
+  for (int i = 0; i < m.num_cells; ++i)
+    if (is_class(m.label[i])) cells.push_back({m.x[i], m.y[i], m.label[i], m.stereo_state[i]});
+}
+
+void LiveScorer::add(const introspection_t& m) {
+  ++predicted_frames_;
+  models_.insert(m.model_id);
+  compute_ms_.push_back(m.compute_ms);
+  auto& queries = predictions_[m.utime];
+  queries.clear();
+  for (int i = 0; i < m.num_queries; ++i)
+    queries.push_back({m.query_x[i], m.query_y[i], m.query_class[i], m.query_announced[i], m.query_verdict[i],
+                       m.query_verdict_class[i], m.query_verdict_announced[i]});
+}
+
+void LiveScorer::score_frame(const std::vector<LabelledCell>& cells, const std::vector<Query>& queries,
+                             LiveScore& s) const {
+  std::map<std::pair<long, long>, const Query*> by_cell;
+  for (const auto& q : queries) by_cell[cell_key(q.x, q.y)] = &q;
+  for (const auto& c : cells) {
+    ++s.labelled_cells;
+    const auto it = by_cell.find(cell_key(c.x, c.y));
+    if (it == by_cell.end()) {
+      ++s.unmatched_cells;
+      continue;
+    }
+    const Query& q = *it->second;
+    s.image.all.add(c.label, q.predicted);
+    if (q.announced) s.image.announced.add(c.label, q.predicted);
+    if (!is_class(q.verdict_class)) {
+      ++s.verdict_unknown;
+      continue;
+    }
+    if (q.verdict != c.stereo_state) ++s.verdict_disagrees;
+    s.given_verdict.all.add(c.label, q.verdict_class);
+    if (q.verdict_announced) s.given_verdict.announced.add(c.label, q.verdict_class);
+  }
+}
+
+LiveScore LiveScorer::finish() const {
+  LiveScore s;
+  s.labelled_frames = labelled_frames_;
+  s.predicted_frames = predicted_frames_;
+  s.models = models_;
+  s.detectors = detectors_;
+  s.compute = summarize_compute_ms(compute_ms_);
+  for (const auto& [utime, cells] : labels_) {
+    const auto it = predictions_.find(utime);
+    if (it == predictions_.end()) continue;
+    ++s.scored_frames;
+    score_frame(cells, it->second, s);
+  }
+  return s;
+}
+
+ComputeTimes summarize_compute_ms(std::vector<double> ms) {
+  ComputeTimes t;
+  t.frames = static_cast<int64_t>(ms.size());
+  if (ms.empty()) return t;
+  std::sort(ms.begin(), ms.end());
+  // Nearest rank: the smallest time at least that fraction of frames took no longer than.
+  const auto rank = [&](double q) { return ms[static_cast<size_t>(std::ceil(q * ms.size())) - 1]; };
+  t.median = rank(0.5);
+  t.p90 = rank(0.9);
+  t.max = ms.back();
+  return t;
+}
+
+}  // namespace ivoa::tools

@@ -1,0 +1,87 @@
+#pragma once
+// Scores the introspection a log recorded: each INTROSPECTION message's
+// query-cell predictions against the INTROSPECTION_LABELS the depth monitor
+// published for the same frame (matched by utime and cell position), from
+// the image alone and given the detector's verdict, all and announced
+// (under the model's gate); and how long each frame's introspection took.
+// No model is run: this is what the robot predicted, as it happened.
+#include <array>
+#include <cstdint>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "ivoa/introspection_labels_t.hpp"
+#include "ivoa/introspection_t.hpp"
+
+namespace ivoa::tools {
+
+inline constexpr int kClasses = 4;  // introspection_labels_t.LABEL_TP .. LABEL_FN
+
+// A confusion matrix over the four labels, rows the true label.
+struct ClassCounts {
+  std::array<std::array<int64_t, kClasses>, kClasses> confusion{};  // [label][predicted]
+
+  void add(int label, int predicted);
+  int64_t total() const;
+  int64_t count(int label) const;  // samples with this true label
+  double recall(int label) const;  // NaN if there are none
+  double mean_per_class() const;   // mean recall over the labels present; NaN if empty
+  double overall() const;          // NaN if empty
+};
+
+struct PredictionScore {
+  ClassCounts all;        // every labelled cell with a prediction
+  ClassCounts announced;  // those whose uncertainty passed the model's gate
+};
+
+// compute_ms over the INTROSPECTION messages, milliseconds.
+struct ComputeTimes {
+  int64_t frames = 0;
+  double median = 0, p90 = 0, max = 0;
+};
+
+struct LiveScore {
+  PredictionScore image;          // from the image alone (the paper's)
+  PredictionScore given_verdict;  // given the detector's verdict for the cell
+  int64_t labelled_frames = 0;    // INTROSPECTION_LABELS messages
+  int64_t predicted_frames = 0;   // INTROSPECTION messages
+  int64_t scored_frames = 0;      // frames with both
+  int64_t labelled_cells = 0;     // cells of the scored frames with a label (not NONE)
+  int64_t unmatched_cells = 0;    // of those, no query cell at the same position
+  int64_t verdict_unknown = 0;    // matched, but no detector grid reached the introspection
+  int64_t verdict_disagrees = 0;  // the introspection's verdict is not the one the label was made from
+  ComputeTimes compute;
+  std::set<std::string> models;     // model_id of the INTROSPECTION messages
+  std::set<std::string> detectors;  // detector of the labels
+};
+
+// Collects both message kinds in any order; finish() matches and scores them.
+class LiveScorer {
+ public:
+  void add(const introspection_labels_t& labels);
+  void add(const introspection_t& prediction);
+  LiveScore finish() const;
+
+ private:
+  struct LabelledCell {
+    float x, y;
+    int8_t label, stereo_state;
+  };
+  struct Query {
+    float x, y;
+    int8_t predicted, announced, verdict, verdict_class, verdict_announced;
+  };
+  void score_frame(const std::vector<LabelledCell>& cells, const std::vector<Query>& queries, LiveScore& s) const;
+
+  std::map<int64_t, std::vector<LabelledCell>> labels_;  // by frame utime
+  std::map<int64_t, std::vector<Query>> predictions_;
+  std::vector<double> compute_ms_;
+  std::set<std::string> models_, detectors_;
+  int64_t labelled_frames_ = 0, predicted_frames_ = 0;
+};
+
+ComputeTimes summarize_compute_ms(std::vector<double> ms);
+
+}  // namespace ivoa::tools

@@ -1,0 +1,169 @@
+// ivoa-live-score: how the introspection a log recorded did against the
+// depth monitor's labels of the same frames, and how long it took (see
+// README.md). Several files (a split session, in order) are one recording.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/channels.hpp"
+#include "ivoa/core/json_text.hpp"
+#include "ivoa/core/process.hpp"
+#include "ivoa/logio/log_reader.hpp"
+#include "live_score.hpp"
+
+namespace {
+
+using namespace ivoa;
+using tools::ClassCounts;
+using tools::LiveScore;
+
+struct ReadCounts {
+  int64_t undecodable = 0;  // events on the two channels that are not their type
+  int64_t damaged_files = 0;
+};
+
+void skip_undecodable(const std::string& path, const logio::LogEvent& e, ReadCounts& counts) {
+  ++counts.undecodable;
+  spdlog::warn("{}: byte {}: a {} event that does not decode as its type, skipped", path, e.offset, e.channel);
+}
+
+// Feeds every INTROSPECTION and INTROSPECTION_LABELS event to the scorer;
+// damage is reported and read past, a message that does not decode skipped.
+void read_log(const std::string& path, bool resync, tools::LiveScorer& scorer, ReadCounts& counts) {
+  logio::LogReader reader(path, {resync});
+  logio::LogEvent e;
+  while (reader.next(e)) {
+    if (e.channel == channels::kIntrospection) {
+      introspection_t m;
+      if (logio::decode(e, m))
+        scorer.add(m);
+      else
+        skip_undecodable(path, e, counts);
+    } else if (e.channel == channels::kIntrospectionLabels) {
+      introspection_labels_t m;
+      if (logio::decode(e, m))
+        scorer.add(m);
+      else
+        skip_undecodable(path, e, counts);
+    }
+  }
+  for (const auto& p : reader.problems()) spdlog::warn("{}: {}", path, p.describe());
+  if (!reader.clean()) ++counts.damaged_files;
+}
+
+std::string join(const std::set<std::string>& items) {
+  std::string out;
+  for (const auto& s : items) out += (out.empty() ? "" : ", ") + s;
+  return out.empty() ? "-" : out;
+}
+
+std::string fraction(double x) { return std::isnan(x) ? "  n/a" : fmt::format("{:5.3f}", x); }
+
+void print_row(const char* name, const ClassCounts& c, int64_t of) {
+  std::printf("  %-30s %6lld %5.1f %%  %s  %s  %s  %s  %s  %s\n", name, static_cast<long long>(c.total()),
+              of ? 100.0 * static_cast<double>(c.total()) / static_cast<double>(of) : 0.0, fraction(c.recall(0)).c_str(),
+              fraction(c.recall(1)).c_str(), fraction(c.recall(2)).c_str(), fraction(c.recall(3)).c_str(),
+              fraction(c.mean_per_class()).c_str(), fraction(c.overall()).c_str());
+}
+
+void print_score(const LiveScore& s) {
+  std::printf("model: %s; labels about: %s\n", join(s.models).c_str(), join(s.detectors).c_str());
+  std::printf("frames: %lld labelled, %lld predicted, %lld both (scored); %lld labelled cells in them, %lld without a "
+              "query cell\n",
+              static_cast<long long>(s.labelled_frames), static_cast<long long>(s.predicted_frames),
+              static_cast<long long>(s.scored_frames), static_cast<long long>(s.labelled_cells),
+              static_cast<long long>(s.unmatched_cells));
+  std::printf("\n  %-30s %6s %7s  %5s  %5s  %5s  %5s  %5s  %5s\n", "prediction", "cells", "kept", "TP", "TN", "FP", "FN",
+              "mean", "all");
+  const int64_t matched = s.image.all.total();
+  print_row("from the image alone", s.image.all, matched);
+  print_row("  announced (under the gate)", s.image.announced, matched);
+  print_row("given the detector's verdict", s.given_verdict.all, matched);
+  print_row("  announced (under its gate)", s.given_verdict.announced, matched);
+  std::printf("  (per class: recall; mean: mean per-class accuracy, the paper's; all: overall accuracy; kept: share "
+              "of the %lld matched cells)\n",
+              static_cast<long long>(matched));
+  if (s.verdict_unknown || s.verdict_disagrees)
+    std::printf("verdicts: %lld cells without one (no detector grid reached the introspection), %lld where it is not "
+                "the one the label was made from\n",
+                static_cast<long long>(s.verdict_unknown), static_cast<long long>(s.verdict_disagrees));
+  std::printf("\ncompute per frame (compute_ms): median %.1f ms, 90th percentile %.1f ms, max %.1f ms over %lld frames\n",
+              s.compute.median, s.compute.p90, s.compute.max, static_cast<long long>(s.compute.frames));
+}
+
+std::string counts_json(const ClassCounts& c) {
+  std::string rows;
+  for (int label = 0; label < tools::kClasses; ++label)
+    rows += fmt::format("{}[{}, {}, {}, {}]", label ? ", " : "", c.confusion[label][0], c.confusion[label][1],
+                        c.confusion[label][2], c.confusion[label][3]);
+  const auto num = [](double x) { return std::isnan(x) ? std::string("null") : fmt::format("{:.6f}", x); };
+  return fmt::format("{{\"cells\": {}, \"mean_per_class\": {}, \"overall\": {}, \"confusion\": [{}]}}", c.total(),
+                     num(c.mean_per_class()), num(c.overall()), rows);
+}
+
+std::string score_json(const LiveScore& s) {
+  std::string models, detectors;
+  for (const auto& m : s.models) models += (models.empty() ? "" : ", ") + json_quote(m);
+  for (const auto& d : s.detectors) detectors += (detectors.empty() ? "" : ", ") + json_quote(d);
+  return fmt::format(
+      "{{\"models\": [{}], \"detectors\": [{}], \"labelled_frames\": {}, \"predicted_frames\": {}, "
+      "\"scored_frames\": {}, \"labelled_cells\": {}, \"unmatched_cells\": {}, \"verdict_unknown\": {}, "
+      "\"verdict_disagrees\": {},\n \"image\": {{\"all\": {}, \"announced\": {}}},\n \"given_verdict\": {{\"all\": {}, "
+      "\"announced\": {}}},\n \"compute_ms\": {{\"frames\": {}, \"median\": {:.3f}, \"p90\": {:.3f}, \"max\": {:.3f}}}, "
+      "\"class_order\": [\"TP\", \"TN\", \"FP\", \"FN\"]}}\n",
+      models, detectors, s.labelled_frames, s.predicted_frames, s.scored_frames, s.labelled_cells, s.unmatched_cells,
+      s.verdict_unknown, s.verdict_disagrees, counts_json(s.image.all), counts_json(s.image.announced),
+      counts_json(s.given_verdict.all), counts_json(s.given_verdict.announced), s.compute.frames, s.compute.median,
+      s.compute.p90, s.compute.max);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Score the introspection a log recorded against the depth monitor's labels of the same frames, and "
+               "how long it took per frame. Exit codes: 0 scored, 3 a log is unreadable or has nothing to score."};
+  CommonOptions common;
+  add_common_options(app, common);
+  std::vector<std::string> files;
+  std::string json_path;
+  bool resync = false;
+  app.add_option("files", files, "log files, in recording order (a split session is read as one)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_flag("--resync", resync, "skip damaged parts and read on (default: stop at the first damage)");
+  app.add_option("--json", json_path, "also write the counts and figures as JSON to this file");
+  if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
+  init_logging("live-score", common.log_level);
+  tools::LiveScorer scorer;
+  ReadCounts counts;
+  try {
+    for (const auto& path : files) read_log(path, resync, scorer, counts);
+  } catch (const logio::LogReadError& e) {
+    spdlog::error("{}", e.what());
+    return kExitBadInput;
+  }
+  const LiveScore s = scorer.finish();
+  const std::string logs = files.size() == 1 ? files[0] : files[0] + " (and " + std::to_string(files.size() - 1) + " more)";
+  if (s.predicted_frames == 0 || s.labelled_frames == 0) {
+    spdlog::error("{}: no {} messages to score{}", logs, s.predicted_frames == 0 ? "INTROSPECTION" : "INTROSPECTION_LABELS",
+                  s.predicted_frames == 0 ? " (was ivoa-introspection running when it was recorded?)"
+                                          : " (was ivoa-depth-monitor running, with a depth sensor?)");
+    return kExitBadInput;
+  }
+  print_score(s);
+  if (counts.undecodable || counts.damaged_files)
+    std::printf("skipped: %lld undecodable messages; %lld damaged file(s) (warnings above)\n",
+                static_cast<long long>(counts.undecodable), static_cast<long long>(counts.damaged_files));
+  if (!json_path.empty() && !(std::ofstream(json_path) << score_json(s))) {
+    spdlog::error("{}: cannot write", json_path);
+    return kExitIoError;
+  }
+  if (s.scored_frames == 0) {
+    spdlog::error("{}: no frame has both INTROSPECTION and INTROSPECTION_LABELS (their utimes never match)", logs);
+    return kExitBadInput;
+  }
+  return kExitOk;
+}
