@@ -109,3 +109,21 @@ assert (width, height) == (3 * 480, 300), f"figure is {width}x{height}, expected
 counts = {c: channels[c]["count"] for c in expected}
 print(f"OK: detector killed and respawned (restarts 1), log channels {counts}, {len(pngs)} viewer figures")
 PY
+
+# What the introspection published scores against the monitor's labels of
+# the same frames: every labelled cell of a predicted frame that the
+# introspection looks at (its patch inside the image) has a prediction.
+if [ ${#skip[@]} -eq 0 ]; then
+  "$B/bin/ivoa-live-score" "$out/sim.lcmlog" --json "$out/score.json" > "$out/score.txt" 2>&1 ||
+    { cat "$out/score.txt"; echo "ivoa-live-score failed on the session's log"; exit 1; }
+  python3 - "$out/score.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["scored_frames"] >= 1 and s["labelled_cells"] > 0, s
+assert s["unmatched_cells"] == 0, f"{s['unmatched_cells']} labelled cells in view without a prediction"
+assert s["image"]["all"]["cells"] == s["labelled_cells"] - s["outside_view_cells"] - s["no_grid_cells"], s
+assert s["compute_ms"]["frames"] == s["predicted_frames"] and s["compute_ms"]["median"] > 0, s["compute_ms"]
+print(f"live score: {s['scored_frames']} frames, {s['labelled_cells']} labelled cells, mean per-class "
+      f"{s['image']['all']['mean_per_class']} from the image, {s['given_verdict']['all']['mean_per_class']} given the verdict")
+PY
+fi

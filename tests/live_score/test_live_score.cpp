@@ -94,7 +94,17 @@ TEST(LiveScorer, MatchesCellsByPositionWhicheverMessageComesFirst) {
   scorer.add(labels_message(1, {{0.75f, 0.0f, kTN, kFree},
                                 {1.0f, 0.25f, kFP, kObstacle},
                                 {2.0f, 0.5f, kNone, kFree},       // no label: not scored
-                                {3.0f, 0.0f, kTN, kFree}}));    // no query there
+                                {3.0f, 0.0f, kTN, kFree},       // no query there: out of view
+                                {3.0f, 0.25f, kTN, kFree}}));   // no query there, in view
+  obstacle_grid_t grid{};  // the detector's: (3, 0) is outside the image, (3, 0.25) inside
+  grid.utime = 1;
+  grid.num_cells = 2;
+  grid.x = {3.0f, 3.0f};
+  grid.y = {0.0f, 0.25f};
+  grid.in_image = {0, 1};
+  grid.state = {kFree, kFree};
+  grid.u = grid.v = {0, 0};
+  scorer.add(grid);
   // Frame 2: labels only (the introspection dropped it); frame 3: prediction only.
   scorer.add(labels_message(2, {{0.75f, 0.0f, kFN, kFree}}));
   scorer.add(prediction_message(3, {{0.75f, 0.0f, kTN, 1, kFree, kTN, 1}}));
@@ -102,8 +112,10 @@ TEST(LiveScorer, MatchesCellsByPositionWhicheverMessageComesFirst) {
   EXPECT_EQ(s.labelled_frames, 2);
   EXPECT_EQ(s.predicted_frames, 2);
   EXPECT_EQ(s.scored_frames, 1);
-  EXPECT_EQ(s.labelled_cells, 3);
+  EXPECT_EQ(s.labelled_cells, 4);
+  EXPECT_EQ(s.outside_view_cells, 1);
   EXPECT_EQ(s.unmatched_cells, 1);
+  EXPECT_EQ(s.no_grid_cells, 0);
   EXPECT_EQ(s.image.all.total(), 2);
   EXPECT_EQ(s.image.all.confusion[kTN][kTN], 1);
   EXPECT_EQ(s.image.all.confusion[kFP][kFP], 1);
@@ -127,6 +139,17 @@ TEST(LiveScorer, CountsVerdictsThatAreMissingOrNotTheLabelsOwn) {
   EXPECT_EQ(s.verdict_unknown, 1);
   EXPECT_EQ(s.verdict_disagrees, 1);
   EXPECT_EQ(s.given_verdict.all.confusion[kFP][kFN], 1);
+}
+
+TEST(LiveScorer, CellsOfAFramePredictedBeforeAnyGridCountApart) {
+  LiveScorer scorer;
+  scorer.add(labels_message(7, {{1.0f, 0.0f, kTN, kFree}, {1.25f, 0.0f, kFP, kObstacle}}));
+  scorer.add(prediction_message(7, {}));  // no grid had reached the introspection: no query cells
+  const LiveScore s = scorer.finish();
+  EXPECT_EQ(s.scored_frames, 1);
+  EXPECT_EQ(s.no_grid_cells, 2);
+  EXPECT_EQ(s.unmatched_cells, 0);
+  EXPECT_EQ(s.image.all.total(), 0);
 }
 
 TEST(ComputeTimes, NearestRankPercentiles) {

@@ -5,8 +5,6 @@
 #include <limits>
 #include <utility>
 
-#include "ivoa/obstacle_grid_t.hpp"
-
 namespace ivoa::tools {
 namespace {
 
@@ -76,15 +74,29 @@ void LiveScorer::add(const introspection_t& m) {
                        m.query_verdict_class[i], m.query_verdict_announced[i]});
 }
 
-void LiveScorer::score_frame(const std::vector<LabelledCell>& cells, const std::vector<Query>& queries,
+void LiveScorer::add(const obstacle_grid_t& m) {
+  auto& outside = outside_view_[m.utime];
+  outside.clear();
+  for (int i = 0; i < m.num_cells; ++i)
+    if (!m.in_image[i]) outside.insert(cell_key(m.x[i], m.y[i]));
+}
+
+void LiveScorer::score_frame(int64_t utime, const std::vector<LabelledCell>& cells, const std::vector<Query>& queries,
                              LiveScore& s) const {
   std::map<std::pair<long, long>, const Query*> by_cell;
   for (const auto& q : queries) by_cell[cell_key(q.x, q.y)] = &q;
+  const auto grid = outside_view_.find(utime);
   for (const auto& c : cells) {
     ++s.labelled_cells;
-    const auto it = by_cell.find(cell_key(c.x, c.y));
+    const auto key = cell_key(c.x, c.y);
+    const auto it = by_cell.find(key);
     if (it == by_cell.end()) {
-      ++s.unmatched_cells;
+      if (grid != outside_view_.end() && grid->second.count(key))
+        ++s.outside_view_cells;
+      else if (queries.empty())
+        ++s.no_grid_cells;
+      else
+        ++s.unmatched_cells;
       continue;
     }
     const Query& q = *it->second;
@@ -111,7 +123,7 @@ LiveScore LiveScorer::finish() const {
     const auto it = predictions_.find(utime);
     if (it == predictions_.end()) continue;
     ++s.scored_frames;
-    score_frame(cells, it->second, s);
+    score_frame(utime, cells, it->second, s);
   }
   return s;
 }

@@ -4,7 +4,10 @@
 // published for the same frame (matched by utime and cell position), from
 // the image alone and given the detector's verdict, all and announced
 // (under the model's gate); and how long each frame's introspection took.
-// No model is run: this is what the robot predicted, as it happened.
+// No model is run: this is what the robot predicted, as it happened. The
+// detector's grids, where the log has them, tell a labelled cell the
+// introspection does not look at (its patch leaves the image: the grid's
+// in_image is 0) from one it should have predicted and did not.
 #include <array>
 #include <cstdint>
 #include <map>
@@ -14,6 +17,7 @@
 
 #include "ivoa/introspection_labels_t.hpp"
 #include "ivoa/introspection_t.hpp"
+#include "ivoa/obstacle_grid_t.hpp"
 
 namespace ivoa::tools {
 
@@ -49,7 +53,9 @@ struct LiveScore {
   int64_t predicted_frames = 0;   // INTROSPECTION messages
   int64_t scored_frames = 0;      // frames with both
   int64_t labelled_cells = 0;     // cells of the scored frames with a label (not NONE)
-  int64_t unmatched_cells = 0;    // of those, no query cell at the same position
+  int64_t outside_view_cells = 0; // of those, outside the introspection's view (the grid's in_image 0)
+  int64_t no_grid_cells = 0;      // in frames predicted with no query cells (no detector grid had come yet)
+  int64_t unmatched_cells = 0;    // the others with no query cell at the same position: a prediction missing
   int64_t verdict_unknown = 0;    // matched, but no detector grid reached the introspection
   int64_t verdict_disagrees = 0;  // the introspection's verdict is not the one the label was made from
   ComputeTimes compute;
@@ -62,6 +68,7 @@ class LiveScorer {
  public:
   void add(const introspection_labels_t& labels);
   void add(const introspection_t& prediction);
+  void add(const obstacle_grid_t& detector_grid);  // the stereo detector's, for in_image
   LiveScore finish() const;
 
  private:
@@ -73,10 +80,12 @@ class LiveScorer {
     float x, y;
     int8_t predicted, announced, verdict, verdict_class, verdict_announced;
   };
-  void score_frame(const std::vector<LabelledCell>& cells, const std::vector<Query>& queries, LiveScore& s) const;
+  void score_frame(int64_t utime, const std::vector<LabelledCell>& cells, const std::vector<Query>& queries,
+                   LiveScore& s) const;
 
   std::map<int64_t, std::vector<LabelledCell>> labels_;  // by frame utime
   std::map<int64_t, std::vector<Query>> predictions_;
+  std::map<int64_t, std::set<std::pair<long, long>>> outside_view_;  // by frame: cells not in_image
   std::vector<double> compute_ms_;
   std::set<std::string> models_, detectors_;
   int64_t labelled_frames_ = 0, predicted_frames_ = 0;

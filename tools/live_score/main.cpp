@@ -42,6 +42,12 @@ void read_log(const std::string& path, bool resync, tools::LiveScorer& scorer, R
         scorer.add(m);
       else
         skip_undecodable(path, e, counts);
+    } else if (e.channel == channels::kObstaclesStereo) {
+      obstacle_grid_t m;
+      if (logio::decode(e, m))
+        scorer.add(m);
+      else
+        skip_undecodable(path, e, counts);
     } else if (e.channel == channels::kIntrospectionLabels) {
       introspection_labels_t m;
       if (logio::decode(e, m))
@@ -71,11 +77,14 @@ void print_row(const char* name, const ClassCounts& c, int64_t of) {
 
 void print_score(const LiveScore& s) {
   std::printf("model: %s; labels about: %s\n", join(s.models).c_str(), join(s.detectors).c_str());
-  std::printf("frames: %lld labelled, %lld predicted, %lld both (scored); %lld labelled cells in them, %lld without a "
-              "query cell\n",
+  std::printf("frames: %lld labelled, %lld predicted, %lld both (scored); %lld labelled cells in them\n",
               static_cast<long long>(s.labelled_frames), static_cast<long long>(s.predicted_frames),
-              static_cast<long long>(s.scored_frames), static_cast<long long>(s.labelled_cells),
-              static_cast<long long>(s.unmatched_cells));
+              static_cast<long long>(s.scored_frames), static_cast<long long>(s.labelled_cells));
+  if (s.outside_view_cells || s.no_grid_cells || s.unmatched_cells)
+    std::printf("not scored: %lld outside the introspection's view (patch leaves the image), %lld in frames it "
+                "predicted before any detector grid came, %lld others without a prediction\n",
+                static_cast<long long>(s.outside_view_cells), static_cast<long long>(s.no_grid_cells),
+                static_cast<long long>(s.unmatched_cells));
   std::printf("\n  %-30s %6s %7s  %5s  %5s  %5s  %5s  %5s  %5s\n", "prediction", "cells", "kept", "TP", "TN", "FP", "FN",
               "mean", "all");
   const int64_t matched = s.image.all.total();
@@ -110,11 +119,12 @@ std::string score_json(const LiveScore& s) {
   for (const auto& d : s.detectors) detectors += (detectors.empty() ? "" : ", ") + json_quote(d);
   return fmt::format(
       "{{\"models\": [{}], \"detectors\": [{}], \"labelled_frames\": {}, \"predicted_frames\": {}, "
-      "\"scored_frames\": {}, \"labelled_cells\": {}, \"unmatched_cells\": {}, \"verdict_unknown\": {}, "
+      "\"scored_frames\": {}, \"labelled_cells\": {}, \"outside_view_cells\": {}, \"no_grid_cells\": {}, \"unmatched_cells\": {}, \"verdict_unknown\": {}, "
       "\"verdict_disagrees\": {},\n \"image\": {{\"all\": {}, \"announced\": {}}},\n \"given_verdict\": {{\"all\": {}, "
       "\"announced\": {}}},\n \"compute_ms\": {{\"frames\": {}, \"median\": {:.3f}, \"p90\": {:.3f}, \"max\": {:.3f}}}, "
       "\"class_order\": [\"TP\", \"TN\", \"FP\", \"FN\"]}}\n",
-      models, detectors, s.labelled_frames, s.predicted_frames, s.scored_frames, s.labelled_cells, s.unmatched_cells,
+      models, detectors, s.labelled_frames, s.predicted_frames, s.scored_frames, s.labelled_cells, s.outside_view_cells,
+      s.no_grid_cells, s.unmatched_cells,
       s.verdict_unknown, s.verdict_disagrees, counts_json(s.image.all), counts_json(s.image.announced),
       counts_json(s.given_verdict.all), counts_json(s.given_verdict.announced), s.compute.frames, s.compute.median,
       s.compute.p90, s.compute.max);
