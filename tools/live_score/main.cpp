@@ -25,36 +25,31 @@ struct ReadCounts {
   int64_t damaged_files = 0;
 };
 
-void skip_undecodable(const std::string& path, const logio::LogEvent& e, ReadCounts& counts) {
+// Decodes the event as Msg for the scorer; one that does not decode is
+// counted and skipped.
+template <class Msg>
+void feed(const std::string& path, const logio::LogEvent& e, tools::LiveScorer& scorer, ReadCounts& counts) {
+  Msg m;
+  if (logio::decode(e, m)) {
+    scorer.add(m);
+    return;
+  }
   ++counts.undecodable;
   spdlog::warn("{}: byte {}: a {} event that does not decode as its type, skipped", path, e.offset, e.channel);
 }
 
-// Feeds every INTROSPECTION and INTROSPECTION_LABELS event to the scorer;
-// damage is reported and read past, a message that does not decode skipped.
+// Feeds every INTROSPECTION, INTROSPECTION_LABELS and OBSTACLES_STEREO
+// event to the scorer; damage is reported and read past with --resync.
 void read_log(const std::string& path, bool resync, tools::LiveScorer& scorer, ReadCounts& counts) {
   logio::LogReader reader(path, {resync});
   logio::LogEvent e;
   while (reader.next(e)) {
-    if (e.channel == channels::kIntrospection) {
-      introspection_t m;
-      if (logio::decode(e, m))
-        scorer.add(m);
-      else
-        skip_undecodable(path, e, counts);
-    } else if (e.channel == channels::kObstaclesStereo) {
-      obstacle_grid_t m;
-      if (logio::decode(e, m))
-        scorer.add(m);
-      else
-        skip_undecodable(path, e, counts);
-    } else if (e.channel == channels::kIntrospectionLabels) {
-      introspection_labels_t m;
-      if (logio::decode(e, m))
-        scorer.add(m);
-      else
-        skip_undecodable(path, e, counts);
-    }
+    if (e.channel == channels::kIntrospection)
+      feed<introspection_t>(path, e, scorer, counts);
+    else if (e.channel == channels::kIntrospectionLabels)
+      feed<introspection_labels_t>(path, e, scorer, counts);
+    else if (e.channel == channels::kObstaclesStereo)
+      feed<obstacle_grid_t>(path, e, scorer, counts);
   }
   for (const auto& p : reader.problems()) spdlog::warn("{}: {}", path, p.describe());
   if (!reader.clean()) ++counts.damaged_files;
