@@ -129,7 +129,8 @@ std::string score_json(const LiveScore& s) {
 
 int main(int argc, char** argv) {
   CLI::App app{"Score the introspection a log recorded against the depth monitor's labels of the same frames, and "
-               "how long it took per frame. Exit codes: 0 scored, 3 a log is unreadable or has nothing to score."};
+               "how long it took per frame. Exit codes: 0 scored, 3 a log is unreadable or has nothing to score, 4 the "
+               "JSON cannot be written."};
   CommonOptions common;
   add_common_options(app, common);
   std::vector<std::string> files;
