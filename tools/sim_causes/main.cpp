@@ -344,14 +344,16 @@ void print_summary(const Tally& t) {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"Failure causes on simulated logs: re-render each failure without each phenomenon and re-run the detector"};
-  CommonOptions common;
-  add_common_options(app, common);
+struct CommandLine {
   Options opt;
   std::vector<std::string> logs;
+  int jobs = 1;
+  std::vector<std::string> variants{kDefaultVariant};
+  bool no_variants = false;
+};
+
+void add_options(CLI::App& app, CommandLine& cl) {
+  Options& opt = cl.opt;
   app.add_option("--out", opt.out, "CSV to write: one row per FP/FN cell (session, utime, cell, ..., causes)")->required();
   app.add_option("--scene", opt.scene_file, "scene file (default: <scene-dir>/<the logged scene name>.yaml)")
       ->check(CLI::ExistingFile);
@@ -365,67 +367,72 @@ int main(int argc, char** argv) {
                  "take the failure cells from this dataset's sessions (named like the logs) instead of the logs' "
                  "labels: e.g. the dense detector's, labelled offline by ivoa-dataset")
       ->check(CLI::ExistingDirectory);
-  app.add_option("logs", logs, "simulated session logs with recorded INTROSPECTION_LABELS, one session each")
+  app.add_option("logs", cl.logs, "simulated session logs with recorded INTROSPECTION_LABELS, one session each")
       ->required()
       ->check(CLI::ExistingFile);
-  int jobs = 1;
-  app.add_option("--jobs", jobs, "sessions explained at once (each on one core)")
+  app.add_option("--jobs", cl.jobs, "sessions explained at once (each on one core)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  std::vector<std::string> variants{kDefaultVariant};
-  app.add_option("--variant", variants,
+  app.add_option("--variant", cl.variants,
                  "other settings of the detector to try on the frames as they were, 'NAME: FLAGS' (the detector "
                  "flags below, applied over this run's); repeat for several (at most 8)")
       ->capture_default_str()
       ->expected(1)
       ->allow_extra_args(false)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);  // one value per --variant: logs after it stay positional
-  bool no_variants = false;
-  app.add_flag("--no-variants", no_variants, "try no other settings");
+  app.add_flag("--no-variants", cl.no_variants, "try no other settings");
   app.add_option("--variants-out", opt.variants_out,
                  "CSV to write: per session, variant and label, the labelled cells of the re-rendered frames and how "
                  "many the variant gets right and wrong");
   stereo::add_detector_options(app, opt.detector);
-  if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
-  init_logging("sim-causes", common.log_level);
-  try {
-    if (!no_variants)
-      for (const std::string& v : variants) {
-        opt.variants.push_back(parse_variant(v, opt.detector));
-        for (size_t i = 0; i + 1 < opt.variants.size(); ++i)
-          if (opt.variants[i].name == opt.variants.back().name)
-            throw std::invalid_argument("--variant '" + v + "': the name is already used");
-      }
-    if (opt.variants.size() > 8) throw std::invalid_argument("at most 8 --variant");
-  } catch (const std::invalid_argument& e) {
-    spdlog::error("{}", e.what());
-    return kExitUsage;
-  }
+}
 
-  std::ofstream csv(opt.out);
+// Throws std::invalid_argument naming the --variant at fault.
+void parse_variants(CommandLine& cl) {
+  if (cl.no_variants) return;
+  auto& parsed = cl.opt.variants;
+  for (const std::string& v : cl.variants) {
+    parsed.push_back(parse_variant(v, cl.opt.detector));
+    for (size_t i = 0; i + 1 < parsed.size(); ++i)
+      if (parsed[i].name == parsed.back().name)
+        throw std::invalid_argument("--variant '" + v + "': the name is already used");
+  }
+  if (parsed.size() > 8) throw std::invalid_argument("at most 8 --variant");
+}
+
+// The two CSVs with their headers; the variants' one stays closed (writes do
+// nothing) without --variants-out. Returns false, having said why, if one
+// cannot be written.
+bool open_outputs(const Options& opt, std::ofstream& csv, std::ofstream& variants_csv) {
+  csv.open(opt.out);
   if (!csv) {
     spdlog::error("cannot write {}", opt.out);
-    return kExitIoError;
-  }
-  std::ofstream variants_csv;  // stays closed without --variants-out: writes to it do nothing
-  if (!opt.variants_out.empty()) {
-    variants_csv.open(opt.variants_out);
-    if (!variants_csv) {
-      spdlog::error("cannot write {}", opt.variants_out);
-      return kExitIoError;
-    }
-    variants_csv << "session,detector,variant,label,cells,right,wrong\n";
+    return false;
   }
   csv << "session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause,fixed_by\n";
+  if (opt.variants_out.empty()) return true;
+  variants_csv.open(opt.variants_out);
+  if (!variants_csv) {
+    spdlog::error("cannot write {}", opt.variants_out);
+    return false;
+  }
+  variants_csv << "session,detector,variant,label,cells,right,wrong\n";
+  return true;
+}
+
+int explain(const CommandLine& cl) {
+  const Options& opt = cl.opt;
+  std::ofstream csv, variants_csv;
+  if (!open_outputs(opt, csv, variants_csv)) return kExitIoError;
   Tally tally;
   tally.unexplained_fixed.resize(opt.variants.size());
   tally.variants.resize(opt.variants.size());
   int worst = kExitOk;
-  for (const SessionResult& r : explain_sessions(logs, opt, jobs)) {
+  for (const SessionResult& r : explain_sessions(cl.logs, opt, cl.jobs)) {
     csv << r.rows.str();
     variants_csv << r.variant_rows.str();
     tally.add(r.tally);
-    if (!r.error.empty()) {
+    if (!r.error.empty()) {  // a bad session is reported and skipped; the others are still written
       spdlog::error("{}", r.error);
       worst = kExitBadInput;
     }
@@ -439,4 +446,23 @@ int main(int argc, char** argv) {
   print_summary(tally);
   print_variants(tally, opt.variants);
   return worst;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Failure causes on simulated logs: re-render each failure without each phenomenon and re-run the detector"};
+  CommonOptions common;
+  add_common_options(app, common);
+  CommandLine cl;
+  add_options(app, cl);
+  if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
+  init_logging("sim-causes", common.log_level);
+  try {
+    parse_variants(cl);
+  } catch (const std::invalid_argument& e) {
+    spdlog::error("{}", e.what());
+    return kExitUsage;
+  }
+  return explain(cl);
 }
