@@ -2,6 +2,9 @@
 // DEPTH_IMAGE, RIG_CALIBRATION and SIM_GROUND_TRUTH exactly as the real
 // drivers would, from a scene file and a seed (one seed + scene = one session).
 #include <map>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -29,6 +32,104 @@ const std::map<std::string, int32_t> kPixelFormats = {
     {"png", ivoa::image_t::PIXEL_FORMAT_PNG},
 };
 
+// Command-line values that land in the configs only after parsing.
+struct CommandLine {
+  ivoa::sim::SimDriverConfig driver;
+  std::string pixel_format = "bayer_rggb";
+  std::string rig_file, save_rig;
+  std::string status_channel{ivoa::channels::kProcessStatus};
+  bool fast = false, no_truth = false;
+  uint64_t noise_seed = 0;
+};
+
+std::vector<std::string> pixel_format_names() {
+  std::vector<std::string> names;
+  for (const auto& [name, format] : kPixelFormats) names.push_back(name);
+  return names;
+}
+
+void add_session_options(CLI::App& app, CommandLine& cl) {
+  auto& config = cl.driver;
+  app.add_option("--scene", config.scene_file, "scene file (YAML, see libs/sim/scenes)")->capture_default_str();
+  app.add_option("--seed", config.seed, "scene and trajectory seed (one seed + scene = one session)")->capture_default_str();
+  app.add_option("--noise-seed", cl.noise_seed,
+                 "sensor noise realisation: 0 keys the noise by frame alone; another value, same session with other "
+                 "noise")
+      ->capture_default_str();
+  app.add_option("--rate", config.rate_hz, "frames per second")->capture_default_str()->check(CLI::PositiveNumber);
+  auto* realtime = app.add_flag("--realtime", config.realtime, "pace frames by the wall clock (default)");
+  app.add_flag("--as-fast-as-possible", cl.fast, "render frames back to back (session time stays frame / rate)")
+      ->excludes(realtime);
+  app.add_option("--frames", config.frames, "stop after this many frames (0: no limit)")->capture_default_str();
+  app.add_option("--duration", config.duration_s, "stop after this many seconds of session time (0: no limit)");
+  app.add_option("--start-utime", config.start_utime, "utime of frame 0, us since epoch (default: now); frame k is "
+                                                      "at start + k / rate, so sessions are reproducible");
+  app.add_option("--rig", cl.rig_file, "render with this rig calibration file instead of the built-in rig");
+  app.add_option("--save-rig", cl.save_rig, "write the rig calibration (OpenCV YAML) to this file and go on");
+}
+
+void add_output_options(CLI::App& app, CommandLine& cl) {
+  auto& config = cl.driver;
+  app.add_option("--pixel-format", cl.pixel_format, "published pixel format")
+      ->capture_default_str()
+      ->check(CLI::IsMember(pixel_format_names()));
+  app.add_option("--depth-offset-ms", config.depth_offset_ms, "depth image utime minus stereo utime")->capture_default_str();
+  app.add_option("--calibration-period", config.calibration_period_s, "seconds between RIG_CALIBRATION messages")
+      ->capture_default_str();
+  app.add_flag("--no-truth", cl.no_truth, "do not publish SIM_GROUND_TRUTH");
+  app.add_option("--log", config.log_file, "also write every message to this LCM log, timestamped by message utime "
+                                           "(bit-identical for the same session)");
+  app.add_option("--stereo-channel", config.stereo_channel)->capture_default_str();
+  app.add_option("--depth-channel", config.depth_channel)->capture_default_str();
+  app.add_option("--rig-channel", config.rig_channel)->capture_default_str();
+  app.add_option("--truth-channel", config.truth_channel)->capture_default_str();
+  app.add_option("--status-channel", cl.status_channel)->capture_default_str();
+}
+
+// The rig to render with (--rig, else the built-in one), written to --save-rig
+// if asked. Returns an exit code, or -1 to go on.
+int prepare_rig(const CommandLine& cl, ivoa::sim::SimulatorConfig& sim_config) {
+  try {
+    if (!cl.rig_file.empty()) sim_config.rig = ivoa::load_rig_calibration(cl.rig_file);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitBadInput;
+  }
+  if (cl.save_rig.empty()) return -1;
+  try {
+    ivoa::save_rig_calibration(sim_config.rig, cl.save_rig);
+  } catch (const std::exception& e) {
+    spdlog::error("cannot write rig calibration {}: {}", cl.save_rig, e.what());
+    return ivoa::kExitIoError;
+  }
+  spdlog::info("wrote rig calibration {}", cl.save_rig);
+  return -1;
+}
+
+int drive(const ivoa::sim::SimDriverConfig& config, const ivoa::sim::SimulatorConfig& sim_config,
+          const std::string& lcm_url, const std::string& status_channel) {
+  ivoa::Bus bus(lcm_url);
+  ivoa::Heartbeat heartbeat(bus, "sim_driver", status_channel);
+  std::unique_ptr<ivoa::sim::SimDriver> driver;
+  try {
+    driver = std::make_unique<ivoa::sim::SimDriver>(config, sim_config, bus, &heartbeat);
+  } catch (const ivoa::sim::SceneSpecError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitBadInput;
+  } catch (const std::runtime_error& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitIoError;
+  }
+  spdlog::info("scene {} seed {} at {} Hz ({}), start utime {}, publishing on {}", config.scene_file, config.seed,
+               config.rate_hz, config.realtime ? "real time" : "as fast as possible", driver->start_utime(),
+               bus.url());
+  const int64_t frames = driver->run();
+  heartbeat.set_state("stopped");
+  heartbeat.publish_now();
+  spdlog::info("published {} frames{}", frames, ivoa::stop_requested() ? " (stopped by signal)" : "");
+  return ivoa::kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -36,92 +137,24 @@ int main(int argc, char** argv) {
                "image, the rig calibration and the simulator's ground truth"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
-  ivoa::sim::SimDriverConfig config;
-  config.scene_file = std::string(IVOA_SIM_SCENES_DIR) + "/indoor_office.yaml";
-  std::string pixel_format = "bayer_rggb", save_rig, rig_file, status_channel(ivoa::channels::kProcessStatus);
-  bool fast = false, no_truth = false;
-  uint64_t noise_seed = 0;
-  app.add_option("--scene", config.scene_file, "scene file (YAML, see libs/sim/scenes)")->capture_default_str();
-  app.add_option("--seed", config.seed, "scene and trajectory seed (one seed + scene = one session)")->capture_default_str();
-  app.add_option("--noise-seed", noise_seed,
-                 "sensor noise realisation: 0 keys the noise by frame alone; another value, same session with other "
-                 "noise")
-      ->capture_default_str();
-  app.add_option("--rate", config.rate_hz, "frames per second")->capture_default_str()->check(CLI::PositiveNumber);
-  auto* realtime = app.add_flag("--realtime", config.realtime, "pace frames by the wall clock (default)");
-  app.add_flag("--as-fast-as-possible", fast, "render frames back to back (session time stays frame / rate)")
-      ->excludes(realtime);
-  app.add_option("--frames", config.frames, "stop after this many frames (0: no limit)")->capture_default_str();
-  app.add_option("--duration", config.duration_s, "stop after this many seconds of session time (0: no limit)");
-  app.add_option("--start-utime", config.start_utime, "utime of frame 0, us since epoch (default: now); frame k is "
-                                                      "at start + k / rate, so sessions are reproducible");
-  app.add_option("--pixel-format", pixel_format, "published pixel format")
-      ->capture_default_str()
-      ->check(CLI::IsMember([] {
-        std::vector<std::string> names;
-        for (const auto& [name, f] : kPixelFormats) names.push_back(name);
-        return names;
-      }()));
-  app.add_option("--depth-offset-ms", config.depth_offset_ms, "depth image utime minus stereo utime")->capture_default_str();
-  app.add_option("--calibration-period", config.calibration_period_s, "seconds between RIG_CALIBRATION messages")
-      ->capture_default_str();
-  app.add_option("--rig", rig_file, "render with this rig calibration file instead of the built-in rig");
-  app.add_option("--save-rig", save_rig, "write the rig calibration (OpenCV YAML) to this file and go on");
-  app.add_flag("--no-truth", no_truth, "do not publish SIM_GROUND_TRUTH");
-  app.add_option("--log", config.log_file, "also write every message to this LCM log, timestamped by message utime "
-                                           "(bit-identical for the same session)");
-  app.add_option("--stereo-channel", config.stereo_channel)->capture_default_str();
-  app.add_option("--depth-channel", config.depth_channel)->capture_default_str();
-  app.add_option("--rig-channel", config.rig_channel)->capture_default_str();
-  app.add_option("--truth-channel", config.truth_channel)->capture_default_str();
-  app.add_option("--status-channel", status_channel)->capture_default_str();
+  CommandLine cl;
+  cl.driver.scene_file = std::string(IVOA_SIM_SCENES_DIR) + "/indoor_office.yaml";
+  add_session_options(app, cl);
+  add_output_options(app, cl);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("sim_driver", common.log_level);
-  config.realtime = !fast;
-  config.publish_truth = !no_truth;
-  config.pixelformat = kPixelFormats.at(pixel_format);
+  cl.driver.realtime = !cl.fast;
+  cl.driver.publish_truth = !cl.no_truth;
+  cl.driver.pixelformat = kPixelFormats.at(cl.pixel_format);
 
   ivoa::sim::SimulatorConfig sim_config;
-  sim_config.noise_seed = noise_seed;
-  try {
-    if (!rig_file.empty()) sim_config.rig = ivoa::load_rig_calibration(rig_file);
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return ivoa::kExitBadInput;
-  }
-  if (!save_rig.empty()) {
-    try {
-      ivoa::save_rig_calibration(sim_config.rig, save_rig);
-    } catch (const std::exception& e) {
-      spdlog::error("cannot write rig calibration {}: {}", save_rig, e.what());
-      return ivoa::kExitIoError;
-    }
-    spdlog::info("wrote rig calibration {}", save_rig);
-  }
+  sim_config.noise_seed = cl.noise_seed;
+  if (const int code = prepare_rig(cl, sim_config); code >= 0) return code;
   ivoa::install_stop_handlers();
   try {
-    ivoa::Bus bus(common.lcm_url);
-    ivoa::Heartbeat heartbeat(bus, "sim_driver", status_channel);
-    std::unique_ptr<ivoa::sim::SimDriver> driver;
-    try {
-      driver = std::make_unique<ivoa::sim::SimDriver>(config, sim_config, bus, &heartbeat);
-    } catch (const ivoa::sim::SceneSpecError& e) {
-      spdlog::error("{}", e.what());
-      return ivoa::kExitBadInput;
-    } catch (const std::runtime_error& e) {
-      spdlog::error("{}", e.what());
-      return ivoa::kExitIoError;
-    }
-    spdlog::info("scene {} seed {} at {} Hz ({}), start utime {}, publishing on {}", config.scene_file, config.seed,
-                 config.rate_hz, config.realtime ? "real time" : "as fast as possible", driver->start_utime(),
-                 bus.url());
-    const int64_t frames = driver->run();
-    heartbeat.set_state("stopped");
-    heartbeat.publish_now();
-    spdlog::info("published {} frames{}", frames, ivoa::stop_requested() ? " (stopped by signal)" : "");
+    return drive(cl.driver, sim_config, common.lcm_url, cl.status_channel);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitFailure;
   }
-  return ivoa::kExitOk;
 }
