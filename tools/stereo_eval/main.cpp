@@ -4,8 +4,13 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
@@ -31,90 +36,123 @@ cv::Mat load_gray(const std::string& path, double scale) {
 
 int round_up_16(double d) { return static_cast<int>(std::ceil(d / 16.0)) * 16; }
 
+struct CommandLine {
+  std::string left_path = std::string(kAloeDir) + "aloeL.jpg";
+  std::string right_path = std::string(kAloeDir) + "aloeR.jpg";
+  std::string gt_path = std::string(kAloeDir) + "aloeGT.png";
+  std::string json_path, overlay_path;
+  double gt_divisor = 1.0, scale = 0.5, sgbm_tolerance = 1.0;
+  std::vector<std::string> models{"jppc", "sgbm"};
+  ivoa::stereo_eval::ScoringOptions scoring;
+  ivoa::stereo::JppConfig jpp;
+  ivoa::stereo::SgbmConfig sgbm;
+};
+
+void add_options(CLI::App& app, CommandLine& cl) {
+  app.add_option("--left", cl.left_path, "rectified left image")->capture_default_str();
+  app.add_option("--right", cl.right_path, "rectified right image")->capture_default_str();
+  app.add_option("--gt", cl.gt_path, "ground-truth disparity of the left image: PFM, 16- or 8-bit PNG; 0/inf/NaN unknown")
+      ->capture_default_str();
+  app.add_option("--gt-divisor", cl.gt_divisor, "disparity = stored value / divisor (KITTI 16-bit PNG: 256)")
+      ->capture_default_str();
+  app.add_option("--scale", cl.scale, "resize images and disparities by this factor (aloeGT is full resolution)")
+      ->capture_default_str();
+  app.add_option("--stride", cl.scoring.stride, "score every N-th pixel in x and y")->capture_default_str();
+  app.add_option("--wrong-offsets", cl.scoring.wrong_offsets, "wrong hypotheses at truth +- these offsets, pixels")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--texture-threshold", cl.scoring.texture_threshold,
+                 "textured: RMS x-gradient over the 11x11 window >= this, gray levels/px")
+      ->capture_default_str();
+  app.add_option("--models", cl.models, "jppc, sgbm")->delimiter(',')->check(CLI::IsMember({"jppc", "sgbm"}));
+  app.add_option("--sgbm-tolerance", cl.sgbm_tolerance, "SGBM confirms a hypothesis within this many pixels")
+      ->capture_default_str();
+  app.add_option("--json", cl.json_path, "write the scores as JSON");
+  app.add_option("--overlay", cl.overlay_path, "write a PNG of JPP-C's truth outcomes (green confirmed, red rejected)");
+  ivoa::stereo::add_jpp_matcher_options(app, cl.jpp);
+  ivoa::stereo::add_sgbm_matcher_options(app, cl.sgbm);
+}
+
+struct Pair {
+  cv::Mat left, right, truth;
+};
+
+// Throws with the file or the sizes named.
+Pair load_pair(const CommandLine& cl) {
+  Pair p;
+  p.left = load_gray(cl.left_path, cl.scale);
+  p.right = load_gray(cl.right_path, cl.scale);
+  p.truth = ivoa::stereo_eval::scale_disparity(ivoa::stereo_eval::load_disparity(cl.gt_path, cl.gt_divisor), cl.scale);
+  if (p.left.size() != p.right.size() || p.left.size() != p.truth.size())
+    throw std::runtime_error(fmt::format("sizes differ: left {}x{}, right {}x{}, ground truth {}x{}", p.left.cols,
+                                         p.left.rows, p.right.cols, p.right.rows, p.truth.cols, p.truth.rows));
+  return p;
+}
+
+// Sizes SGBM's search to the truth unless --sgbm_num_disparities was given.
+void fit_sgbm_range(const CLI::App& app, const Pair& p, CommandLine& cl) {
+  double max_disparity = 0;
+  cv::Mat finite = p.truth.clone();
+  cv::patchNaNs(finite, 0);
+  cv::minMaxLoc(finite, nullptr, &max_disparity);
+  if (app.count("--sgbm_num_disparities") == 0) cl.sgbm.num_disparities = round_up_16(max_disparity + 8);
+  spdlog::info("{}x{} pair at scale {}, ground truth {:.1f}% known, max disparity {:.1f} px", p.left.cols, p.left.rows,
+               cl.scale, 100.0 * cv::countNonZero(finite > 0) / static_cast<double>(finite.total()), max_disparity);
+}
+
+std::vector<ivoa::stereo_eval::ModelScore> score_models(const CommandLine& cl, const Pair& p, cv::Mat& overlay) {
+  std::vector<ivoa::stereo_eval::ModelScore> scores;
+  for (const std::string& name : cl.models) {
+    std::unique_ptr<ivoa::stereo_eval::PointCheckModel> model;
+    if (name == "jppc")
+      model = std::make_unique<ivoa::stereo_eval::JppPointModel>(cl.jpp);
+    else
+      model = std::make_unique<ivoa::stereo_eval::SgbmPointModel>(cl.sgbm, cl.sgbm_tolerance);
+    scores.push_back(ivoa::stereo_eval::score(*model, p.left, p.right, p.truth, cl.scoring,
+                                              name == "jppc" && !cl.overlay_path.empty() ? &overlay : nullptr));
+  }
+  return scores;
+}
+
+int write_outputs(const CommandLine& cl, const std::vector<ivoa::stereo_eval::ModelScore>& scores,
+                  const cv::Mat& overlay) {
+  std::printf("%s", ivoa::stereo_eval::to_table(scores).c_str());
+  if (!cl.json_path.empty() && !(std::ofstream(cl.json_path) << ivoa::stereo_eval::to_json(scores, cl.scoring))) {
+    spdlog::error("cannot write {}", cl.json_path);
+    return ivoa::kExitIoError;
+  }
+  if (!overlay.empty() && !cv::imwrite(cl.overlay_path, overlay)) {
+    spdlog::error("cannot write {}", cl.overlay_path);
+    return ivoa::kExitIoError;
+  }
+  return ivoa::kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Score stereo point checks (JPP-C CP, SGBM) against ground-truth disparity on a rectified pair"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
-  std::string left_path = std::string(kAloeDir) + "aloeL.jpg", right_path = std::string(kAloeDir) + "aloeR.jpg";
-  std::string gt_path = std::string(kAloeDir) + "aloeGT.png", json_path, overlay_path;
-  double gt_divisor = 1.0, scale = 0.5, sgbm_tolerance = 1.0;
-  std::vector<std::string> models{"jppc", "sgbm"};
-  ivoa::stereo_eval::ScoringOptions scoring;
-  ivoa::stereo::JppConfig jpp;
-  ivoa::stereo::SgbmConfig sgbm;
-  app.add_option("--left", left_path, "rectified left image")->capture_default_str();
-  app.add_option("--right", right_path, "rectified right image")->capture_default_str();
-  app.add_option("--gt", gt_path, "ground-truth disparity of the left image: PFM, 16- or 8-bit PNG; 0/inf/NaN unknown")
-      ->capture_default_str();
-  app.add_option("--gt-divisor", gt_divisor, "disparity = stored value / divisor (KITTI 16-bit PNG: 256)")
-      ->capture_default_str();
-  app.add_option("--scale", scale, "resize images and disparities by this factor (aloeGT is full resolution)")
-      ->capture_default_str();
-  app.add_option("--stride", scoring.stride, "score every N-th pixel in x and y")->capture_default_str();
-  app.add_option("--wrong-offsets", scoring.wrong_offsets, "wrong hypotheses at truth +- these offsets, pixels")
-      ->delimiter(',')
-      ->capture_default_str();
-  app.add_option("--texture-threshold", scoring.texture_threshold,
-                 "textured: RMS x-gradient over the 11x11 window >= this, gray levels/px")
-      ->capture_default_str();
-  app.add_option("--models", models, "jppc, sgbm")->delimiter(',')->check(CLI::IsMember({"jppc", "sgbm"}));
-  app.add_option("--sgbm-tolerance", sgbm_tolerance, "SGBM confirms a hypothesis within this many pixels")
-      ->capture_default_str();
-  app.add_option("--json", json_path, "write the scores as JSON");
-  app.add_option("--overlay", overlay_path, "write a PNG of JPP-C's truth outcomes (green confirmed, red rejected)");
-  ivoa::stereo::add_jpp_matcher_options(app, jpp);
-  ivoa::stereo::add_sgbm_matcher_options(app, sgbm);
+  CommandLine cl;
+  add_options(app, cl);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("stereo-eval", common.log_level);
-
-  cv::Mat left, right, truth;
+  Pair pair;
   try {
-    left = load_gray(left_path, scale);
-    right = load_gray(right_path, scale);
-    truth = ivoa::stereo_eval::scale_disparity(ivoa::stereo_eval::load_disparity(gt_path, gt_divisor), scale);
+    pair = load_pair(cl);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitBadInput;
   }
-  if (left.size() != right.size() || left.size() != truth.size()) {
-    spdlog::error("sizes differ: left {}x{}, right {}x{}, ground truth {}x{}", left.cols, left.rows, right.cols,
-                  right.rows, truth.cols, truth.rows);
-    return ivoa::kExitBadInput;
-  }
-  double max_disparity = 0;
-  cv::Mat finite = truth.clone();
-  cv::patchNaNs(finite, 0);
-  cv::minMaxLoc(finite, nullptr, &max_disparity);
-  if (app.count("--sgbm_num_disparities") == 0) sgbm.num_disparities = round_up_16(max_disparity + 8);
-  spdlog::info("{}x{} pair at scale {}, ground truth {:.1f}% known, max disparity {:.1f} px", left.cols, left.rows,
-               scale, 100.0 * cv::countNonZero(finite > 0) / static_cast<double>(finite.total()), max_disparity);
-
+  fit_sgbm_range(app, pair, cl);
   std::vector<ivoa::stereo_eval::ModelScore> scores;
   cv::Mat overlay;
   try {
-    for (const std::string& name : models) {
-      std::unique_ptr<ivoa::stereo_eval::PointCheckModel> model;
-      if (name == "jppc")
-        model = std::make_unique<ivoa::stereo_eval::JppPointModel>(jpp);
-      else
-        model = std::make_unique<ivoa::stereo_eval::SgbmPointModel>(sgbm, sgbm_tolerance);
-      scores.push_back(ivoa::stereo_eval::score(*model, left, right, truth, scoring,
-                                                name == "jppc" && !overlay_path.empty() ? &overlay : nullptr));
-    }
-  } catch (const std::invalid_argument& e) {
+    scores = score_models(cl, pair, overlay);
+  } catch (const std::invalid_argument& e) {  // matcher settings the pair cannot take
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;
   }
-  std::printf("%s", ivoa::stereo_eval::to_table(scores).c_str());
-  if (!json_path.empty() && !(std::ofstream(json_path) << ivoa::stereo_eval::to_json(scores, scoring))) {
-    spdlog::error("cannot write {}", json_path);
-    return ivoa::kExitIoError;
-  }
-  if (!overlay.empty() && !cv::imwrite(overlay_path, overlay)) {
-    spdlog::error("cannot write {}", overlay_path);
-    return ivoa::kExitIoError;
-  }
-  return ivoa::kExitOk;
+  return write_outputs(cl, scores, overlay);
 }
