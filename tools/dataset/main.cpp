@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -118,23 +120,31 @@ int run_info(const std::string& root, const std::string& split_path) {
   return kExitOk;
 }
 
-}  // namespace
+// What "build" takes: --keep-tn as a fraction in (0, 1].
+std::string check_fraction(const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  const bool number = !text.empty() && *end == '\0';
+  return number && v > 0 && v <= 1 ? std::string() : "must be a number in (0, 1], not '" + text + "'";
+}
 
-int main(int argc, char** argv) {
-  CLI::App app{"Build introspection datasets from LCM logs, and summarise them"};
-  app.require_subcommand(1);
-  CommonOptions common;
-  add_common_options(app, common);
-
-  auto* build = app.add_subcommand("build", "logs -> dataset sessions");
+struct BuildCommand {
+  CLI::App* command = nullptr;
   std::string out, session;
   std::vector<std::string> logs;
   dataset::BuildOptions options;
-  build->add_option("--out", out, "dataset folder (created; sessions are added to it)")->required();
+  bool no_evidence = false;
+  std::vector<CLI::Option*> relabel_flags;  // the grid's and the detector's: they change offline labels only
+};
+
+void add_build_command(CLI::App& app, BuildCommand& b) {
+  CLI::App* build = b.command = app.add_subcommand("build", "logs -> dataset sessions");
+  auto& options = b.options;
+  build->add_option("--out", b.out, "dataset folder (created; sessions are added to it)")->required();
   build->add_option("--labels", options.labels,
                     "'recorded' (the log's INTROSPECTION_LABELS) or a detector to re-run offline: jppc, dense")
       ->capture_default_str();
-  build->add_option("--session", session, "session name for all logs (default: per log, from the file name)");
+  build->add_option("--session", b.session, "session name for all logs (default: per log, from the file name)");
   build->add_option("--environment", options.environment, "indoor or outdoor (default: what the simulator logged, else the scene name)");
   build->add_option("--views", options.views,
                     "1: left patches (the paper); 2: each with the right image warped onto the ground plane below it")
@@ -149,28 +159,44 @@ int main(int argc, char** argv) {
                     "store this fraction of the TN cells, the same ones on every rebuild (TN is about two thirds of "
                     "the cells; 0.25 saves about 45 % of the disk); keep 1 for test sessions, whose overall accuracy it "
                     "would skew")
-      ->check(CLI::Validator(
-          [](const std::string& text) {
-            char* end = nullptr;
-            const double v = std::strtod(text.c_str(), &end);
-            const bool number = !text.empty() && *end == '\0';
-            return number && v > 0 && v <= 1 ? std::string() : "must be a number in (0, 1], not '" + text + "'";
-          },
-          "in (0, 1]"))
+      ->check(CLI::Validator(check_fraction, "in (0, 1]"))
       ->capture_default_str();
-  bool no_evidence = false;
-  build->add_flag("--no-evidence", no_evidence,
+  build->add_flag("--no-evidence", b.no_evidence,
                   "do not store the detector's per-sample evidence (JPP-C's window costs, re-run on each frame; "
                   "ivoa-train learns them as a side task)");
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
       ->capture_default_str();
-  build->add_option("logs", logs, "LCM log files, in order")->required()->check(CLI::ExistingFile);
+  build->add_option("logs", b.logs, "LCM log files, in order")->required()->check(CLI::ExistingFile);
   const size_t before_relabel_flags = build->get_options().size();
   add_query_grid_options(*build, options.grid);
   stereo::add_detector_options(*build, options.detector);
-  std::vector<CLI::Option*> relabel_flags = build->get_options();  // a copy: erase what came before
-  relabel_flags.erase(relabel_flags.begin(), relabel_flags.begin() + static_cast<long>(before_relabel_flags));
+  b.relabel_flags = build->get_options();  // a copy: erase what came before
+  b.relabel_flags.erase(b.relabel_flags.begin(), b.relabel_flags.begin() + static_cast<long>(before_relabel_flags));
+}
 
+// After parsing. Returns an exit code, or -1 to go on.
+int finish_build_options(BuildCommand& b) {
+  b.options.evidence = !b.no_evidence;
+  if (b.options.labels != dataset::kRecordedLabels) return -1;
+  const CLI::Option& patch_size = *b.command->get_option("--patch-size");
+  if (const CLI::Option* flag = ignored_with_recorded_labels(b.relabel_flags, patch_size, b.options)) {
+    spdlog::error("{} does not apply to --labels recorded (the labels carry the grid and detector the live "
+                  "processes used); re-label offline with --labels jppc or dense to change them",
+                  flag->get_name());
+    return kExitUsage;
+  }
+  return -1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Build introspection datasets from LCM logs, and summarise them"};
+  app.require_subcommand(1);
+  CommonOptions common;
+  add_common_options(app, common);
+  BuildCommand build;
+  add_build_command(app, build);
   auto* info = app.add_subcommand("info", "sessions, class counts and splits of a dataset");
   std::string root, split;
   info->add_option("dataset", root, "dataset folder")->required()->check(CLI::ExistingDirectory);
@@ -178,18 +204,10 @@ int main(int argc, char** argv) {
 
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("dataset", common.log_level);
-  options.evidence = !no_evidence;
-  if (*build && options.labels == dataset::kRecordedLabels) {
-    const CLI::Option& patch_size = *build->get_option("--patch-size");
-    if (const CLI::Option* flag = ignored_with_recorded_labels(relabel_flags, patch_size, options)) {
-      spdlog::error("{} does not apply to --labels recorded (the labels carry the grid and detector the live "
-                    "processes used); re-label offline with --labels jppc or dense to change them",
-                    flag->get_name());
-      return kExitUsage;
-    }
-  }
+  if (*build.command)
+    if (const int code = finish_build_options(build); code >= 0) return code;
   try {
-    if (*build) return run_build(out, session, logs, options);
+    if (*build.command) return run_build(build.out, build.session, build.logs, build.options);
     return run_info(root, split);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

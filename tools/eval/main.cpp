@@ -5,6 +5,10 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -15,6 +19,7 @@
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/ground_warp.hpp"
 #include "ivoa/core/image_convert.hpp"
+#include "ivoa/core/json_text.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
@@ -45,6 +50,11 @@ constexpr const char* kHeader =
     "session,environment,split,sample,utime,cell,x,y,u,v,label,predicted,p_tp,p_tn,p_fp,p_fn,var_predicted,"
     "uncertainty,var_tp,var_tn,var_fp,var_fn,phenomena,phenomenon,surface,stereo_state,verdict_predicted,p_wrong,"
     "var_wrong";
+
+// A file under --out that cannot be written (exit code: I/O error, not bad input).
+struct OutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& session, const std::string& split,
                 introspection::IntrospectionModel& model, Progress& progress, double& done) {
@@ -112,7 +122,9 @@ void predict_cells(introspection::IntrospectionModel& model, const introspection
 }
 
 int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
-  fs::create_directories(o.out + "/overlays");
+  std::error_code error;
+  if (fs::create_directories(o.out + "/overlays", error); error)
+    throw OutputError(o.out + "/overlays: cannot create the folder: " + error.message());
   int written = 0;
   for (const auto& log : o.logs) {
     const std::string session = session_of_log(log);
@@ -150,7 +162,8 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
       predict_cells(model, h, input, it->second, o.dots_given_verdict);
       cv::Mat figure = tools::compose_frame_figure(left, h, it->second, o.dots_given_verdict);
       cv::resize(figure, figure, cv::Size(), o.overlay_scale, o.overlay_scale, cv::INTER_AREA);
-      cv::imwrite(o.out + "/overlays/" + session + "_" + std::to_string(msg.utime) + ".png", figure);
+      const std::string path = o.out + "/overlays/" + session + "_" + std::to_string(msg.utime) + ".png";
+      if (!cv::imwrite(path, figure)) throw OutputError(path + ": cannot write the overlay figure");
       ++written;
     }
   }
@@ -158,15 +171,63 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
   return written;
 }
 
-}  // namespace
+using SessionList = std::vector<std::pair<std::string, std::string>>;  // (split, session)
 
-int main(int argc, char** argv) {
-  introspection::prefer_passive_openmp_wait(argv);
-  CLI::App app{"Run a model on dataset sessions: predictions, uncertainties, embeddings, overlay figures"};
-  CommonOptions common;
-  add_common_options(app, common);
-  Options o;
-  o.inference.seed = 1;
+SessionList list_sessions(const Options& o) {
+  const auto splits = dataset::load_split(o.split_file);
+  SessionList sessions;
+  for (const auto& split : o.splits) {
+    const auto it = splits.find(split);
+    if (it == splits.end()) throw dataset::DatasetError(o.split_file + ": no split '" + split + "'");
+    for (const auto& s : it->second) sessions.push_back({split, s});
+  }
+  return sessions;
+}
+
+// predictions.csv and embeddings.f32 (one FC2 vector per row); returns the
+// number of rows.
+double write_predictions(const Options& o, const SessionList& sessions, introspection::IntrospectionModel& model) {
+  double total = 0;
+  for (const auto& [split, name] : sessions)
+    total += static_cast<double>(dataset::SessionReader(o.dataset + "/" + name).size());
+  const std::string csv_path = o.out + "/predictions.csv", emb_path = o.out + "/embeddings.f32";
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> csv(std::fopen(csv_path.c_str(), "w"), &std::fclose);
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> emb(std::fopen(emb_path.c_str(), "wb"), &std::fclose);
+  if (!csv || !emb) throw OutputError((!csv ? csv_path : emb_path) + ": cannot open for writing");
+  std::fprintf(csv.get(), "%s\n", kHeader);
+  Progress progress("evaluating (T = " + std::to_string(o.inference.mc_passes) + ")", total, "samples");
+  double done = 0;
+  for (const auto& [split, name] : sessions) {
+    const dataset::SessionReader session(o.dataset + "/" + name);
+    write_rows(csv.get(), emb.get(), session, split, model, progress, done);
+  }
+  progress.finish();
+  // A full disk shows only here: say so rather than leave short files behind unnoticed.
+  if (std::fflush(csv.get()) != 0 || std::ferror(csv.get())) throw OutputError(csv_path + ": write failed");
+  if (std::fflush(emb.get()) != 0 || std::ferror(emb.get())) throw OutputError(emb_path + ": write failed");
+  return done;
+}
+
+void write_eval_json(const Options& o, const introspection::IntrospectionModel& model, const SessionList& sessions,
+                     double samples) {
+  std::string evaluated;
+  for (const auto& [split, name] : sessions)
+    evaluated += std::string(evaluated.empty() ? "" : ", ") + "{\"split\": " + json_quote(split) +
+                 ", \"session\": " + json_quote(name) + "}";
+  const auto& info = model.info();
+  const std::string path = o.out + "/eval.json";
+  std::ofstream json(path);
+  json << "{\"model\": " << json_quote(info.id) << ", \"mc_passes\": " << o.inference.mc_passes
+       << ", \"uncertainty_threshold\": " << model.threshold()
+       << ", \"verdict_uncertainty_threshold\": " << model.verdict_threshold()
+       << ", \"overlay_dots\": \"" << (o.dots_given_verdict ? "given_verdict" : "image") << "\", \"samples\": " << samples
+       << ", \"sessions\": [" << evaluated << "], \"metadata\": {\"detector\": " << json_quote(info.detector)
+       << ", \"architecture\": " << json_quote(info.architecture)
+       << ", \"training\": " << (info.training_summary.empty() ? "{}" : info.training_summary) << "}}\n";
+  if (!json.flush()) throw OutputError(path + ": cannot write");
+}
+
+void add_options(CLI::App& app, Options& o) {
   app.add_option("--model", o.model, "model file")->required()->check(CLI::ExistingFile);
   app.add_option("--dataset", o.dataset, "dataset folder")->required()->check(CLI::ExistingDirectory);
   app.add_option("--split", o.split_file, "split file")->required()->check(CLI::ExistingFile);
@@ -181,52 +242,40 @@ int main(int argc, char** argv) {
   app.add_option("--mc-passes", o.inference.mc_passes, "T")->capture_default_str();
   app.add_option("--threads", o.inference.threads)->capture_default_str();
   app.add_option("--seed", o.inference.seed, "dropout masks")->capture_default_str();
+}
+
+int evaluate(const Options& o) {
+  auto model = introspection::IntrospectionModel::load(o.model, o.inference);
+  const SessionList sessions = list_sessions(o);
+  std::error_code error;
+  fs::create_directories(o.out, error);
+  if (error) throw OutputError(o.out + ": cannot create the output folder: " + error.message());
+  const double samples = write_predictions(o, sessions, *model);
+  write_eval_json(o, *model, sessions, samples);
+  if (!o.logs.empty()) write_overlays(o, *model);
+  std::printf("predictions: %s/predictions.csv (%.0f samples), embeddings: %s/embeddings.f32\n", o.out.c_str(), samples,
+              o.out.c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  introspection::prefer_passive_openmp_wait(argv);
+  CLI::App app{"Run a model on dataset sessions: predictions, uncertainties, embeddings, overlay figures"};
+  CommonOptions common;
+  add_common_options(app, common);
+  Options o;
+  o.inference.seed = 1;
+  add_options(app, o);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("eval", common.log_level);
   try {
-    auto model = introspection::IntrospectionModel::load(o.model, o.inference);
-    const auto splits = dataset::load_split(o.split_file);
-    fs::create_directories(o.out);
-    std::vector<std::pair<std::string, std::string>> sessions;  // (split, session)
-    double total = 0;
-    for (const auto& split : o.splits) {
-      const auto it = splits.find(split);
-      if (it == splits.end()) throw dataset::DatasetError(o.split_file + ": no split '" + split + "'");
-      for (const auto& s : it->second) {
-        sessions.push_back({split, s});
-        total += static_cast<double>(dataset::SessionReader(o.dataset + "/" + s).size());
-      }
-    }
-    std::FILE* csv = std::fopen((o.out + "/predictions.csv").c_str(), "w");
-    std::FILE* emb = std::fopen((o.out + "/embeddings.f32").c_str(), "wb");
-    if (!csv || !emb) throw dataset::DatasetError(o.out + ": cannot write outputs");
-    std::fprintf(csv, "%s\n", kHeader);
-    Progress progress("evaluating (T = " + std::to_string(o.inference.mc_passes) + ")", total, "samples");
-    double done = 0;
-    for (const auto& [split, name] : sessions) {
-      const dataset::SessionReader session(o.dataset + "/" + name);
-      write_rows(csv, emb, session, split, *model, progress, done);
-    }
-    progress.finish();
-    std::fclose(csv);
-    std::fclose(emb);
-    std::string evaluated;
-    for (const auto& [split, name] : sessions)
-      evaluated += std::string(evaluated.empty() ? "" : ", ") + "{\"split\": \"" + split + "\", \"session\": \"" + name + "\"}";
-    std::ofstream(o.out + "/eval.json") << "{\"model\": \"" << model->info().id << "\", \"mc_passes\": "
-                                        << o.inference.mc_passes << ", \"uncertainty_threshold\": " << model->threshold()
-                                        << ", \"verdict_uncertainty_threshold\": " << model->verdict_threshold()
-                                        << ", \"overlay_dots\": \"" << (o.dots_given_verdict ? "given_verdict" : "image")
-                                        << "\", \"samples\": " << done << ", \"sessions\": [" << evaluated << "]"
-                                        << ", \"metadata\": {\"detector\": \"" << model->info().detector
-                                        << "\", \"architecture\": \"" << model->info().architecture << "\", \"training\": "
-                                        << (model->info().training_summary.empty() ? "{}" : model->info().training_summary)
-                                        << "}}\n";
-    if (!o.logs.empty()) write_overlays(o, *model);
-    std::printf("predictions: %s/predictions.csv (%.0f samples), embeddings: %s/embeddings.f32\n", o.out.c_str(), done,
-                o.out.c_str());
-    return kExitOk;
-  } catch (const std::exception& e) {
+    return evaluate(o);
+  } catch (const OutputError& e) {
+    spdlog::error("{}", e.what());
+    return kExitIoError;
+  } catch (const std::exception& e) {  // the model, split or dataset: the message names which and where
     spdlog::error("{}", e.what());
     return kExitBadInput;
   }

@@ -2,8 +2,12 @@
 // lcm-spy shows, for ssh sessions and CI). Can also wait for expected
 // message counts and fail if they do not arrive.
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -25,79 +29,104 @@ bool expectations_met(const ivoa::tools::TrafficStats& stats, const std::map<std
   return true;
 }
 
+// "CHANNEL=N" arguments of --expect; throws std::invalid_argument naming the
+// one that is not, or whose N is not a whole number >= 1.
+std::map<std::string, int64_t> parse_expectations(const std::vector<std::string>& args) {
+  std::map<std::string, int64_t> expect;
+  for (const auto& arg : args) {
+    const auto eq = arg.find('=');
+    const std::string count = eq == std::string::npos ? "" : arg.substr(eq + 1);
+    char* end = nullptr;
+    const long long n = count.empty() ? 0 : std::strtoll(count.c_str(), &end, 10);
+    if (eq == 0 || count.empty() || *end != '\0' || n < 1)
+      throw std::invalid_argument("--expect " + arg + ": use CHANNEL=N, N a whole number >= 1");
+    expect[arg.substr(0, eq)] = n;
+  }
+  return expect;
+}
+
+struct Watch {
+  std::string channels = ".*";
+  double duration_s = 0, print_every_s = 2;
+  std::string json_path, ready_file;
+  std::map<std::string, int64_t> expect;
+};
+
+// Counts traffic until the expectations are met, the duration is over or a
+// stop signal; prints the table as it goes and at the end.
+int watch(const std::string& lcm_url, const Watch& w) {
+  ivoa::Bus bus(lcm_url);
+  ivoa::tools::TrafficStats stats;
+  bus.subscribe_raw(w.channels, [&](const void* data, size_t size, const ivoa::ReceiveInfo& info) {
+    stats.add(info.channel, data, size, info.recv_utime);
+  });
+  ivoa::install_stop_handlers();
+  bus.handle(0);  // udpm joins the group lazily, on the first handle
+  if (!w.ready_file.empty()) std::ofstream(w.ready_file) << "ready\n";
+  const double start = ivoa::monotonic_ms();
+  double last_print = start;
+  bool met = w.expect.empty();
+  while (!ivoa::stop_requested()) {
+    if (bus.handle(50) < 0) break;
+    const double now = ivoa::monotonic_ms();
+    if (!w.expect.empty() && expectations_met(stats, w.expect)) {
+      met = true;
+      break;
+    }
+    if (w.duration_s > 0 && now - start > w.duration_s * 1000.0) break;
+    if (w.print_every_s > 0 && now - last_print > w.print_every_s * 1000.0) {
+      std::printf("%s\n", stats.table().c_str());
+      std::fflush(stdout);
+      last_print = now;
+    }
+  }
+  std::printf("%s", stats.table().c_str());
+  if (!w.json_path.empty() && !(std::ofstream(w.json_path) << stats.json())) {
+    spdlog::error("cannot write {}", w.json_path);
+    return ivoa::kExitIoError;
+  }
+  if (!met) {
+    spdlog::error("expected message counts did not arrive");
+    return ivoa::kExitFailure;
+  }
+  return ivoa::kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Per-channel LCM traffic: type, count, rate, bandwidth, sequence gaps"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
-  std::string channels = ".*";
-  double duration_s = 0, print_every_s = 2;
-  std::string json_path, ready_file;
+  Watch w;
   std::vector<std::string> expect_args;
   bool list_types = false;
-  app.add_option("--channels", channels, "channel regex")->capture_default_str();
-  app.add_option("--duration", duration_s, "stop after this many seconds (0 = until Ctrl-C)");
-  app.add_option("--print-every", print_every_s, "print the table every N seconds (0 = only at the end)")
+  app.add_option("--channels", w.channels, "channel regex")->capture_default_str();
+  app.add_option("--duration", w.duration_s, "stop after this many seconds (0 = until Ctrl-C)");
+  app.add_option("--print-every", w.print_every_s, "print the table every N seconds (0 = only at the end)")
       ->capture_default_str();
-  app.add_option("--json", json_path, "write the final statistics as JSON to this file");
+  app.add_option("--json", w.json_path, "write the final statistics as JSON to this file");
   app.add_option("--expect", expect_args, "CHANNEL=N: exit 0 as soon as every channel has N messages, 1 on timeout")
       ->delimiter(',');
-  app.add_option("--ready-file", ready_file, "create this file once subscribed (lets scripts start publishers)");
+  app.add_option("--ready-file", w.ready_file, "create this file once subscribed (lets scripts start publishers)");
   app.add_flag("--list-types", list_types, "print every ivoa message type and its fingerprint, then exit");
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("lcm-stats", common.log_level);
-  std::map<std::string, int64_t> expect;
-  for (const auto& arg : expect_args) {
-    const auto eq = arg.find('=');
-    if (eq == std::string::npos) {
-      spdlog::error("--expect {}: use CHANNEL=N", arg);
-      return ivoa::kExitUsage;
-    }
-    expect[arg.substr(0, eq)] = std::stoll(arg.substr(eq + 1));
+  try {
+    w.expect = parse_expectations(expect_args);
+  } catch (const std::invalid_argument& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitUsage;
   }
-
   if (list_types) {
     for (const auto& t : ivoa::message_types())
       std::printf("%s %lld\n", std::string(t.name).c_str(), static_cast<long long>(t.fingerprint));
     return ivoa::kExitOk;
   }
-
   try {
-    ivoa::Bus bus(common.lcm_url);
-    ivoa::tools::TrafficStats stats;
-    bus.subscribe_raw(channels, [&](const void* data, size_t size, const ivoa::ReceiveInfo& info) {
-      stats.add(info.channel, data, size, info.recv_utime);
-    });
-    ivoa::install_stop_handlers();
-    bus.handle(0);  // udpm joins the group lazily, on the first handle
-    if (!ready_file.empty()) std::ofstream(ready_file) << "ready\n";
-    const double start = ivoa::monotonic_ms();
-    double last_print = start;
-    bool met = expect.empty();
-    while (!ivoa::stop_requested()) {
-      if (bus.handle(50) < 0) break;
-      const double now = ivoa::monotonic_ms();
-      if (!expect.empty() && expectations_met(stats, expect)) {
-        met = true;
-        break;
-      }
-      if (duration_s > 0 && now - start > duration_s * 1000.0) break;
-      if (print_every_s > 0 && now - last_print > print_every_s * 1000.0) {
-        std::printf("%s\n", stats.table().c_str());
-        std::fflush(stdout);
-        last_print = now;
-      }
-    }
-    std::printf("%s", stats.table().c_str());
-    if (!json_path.empty()) std::ofstream(json_path) << stats.json();
-    if (!met) {
-      spdlog::error("expected message counts did not arrive");
-      return ivoa::kExitFailure;
-    }
+    return watch(common.lcm_url, w);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitFailure;
   }
-  return ivoa::kExitOk;
 }
