@@ -2,7 +2,6 @@
 // lcm-spy shows, for ssh sessions and CI). Can also wait for expected
 // message counts and fail if they do not arrive.
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <stdexcept>
@@ -14,6 +13,7 @@
 
 #include "channel_stats.hpp"
 #include "ivoa/core/bus.hpp"
+#include "ivoa/core/channel_counts.hpp"
 #include "ivoa/core/message_registry.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
@@ -27,22 +27,6 @@ bool expectations_met(const ivoa::tools::TrafficStats& stats, const std::map<std
     if (it == stats.channels().end() || it->second.count < n) return false;
   }
   return true;
-}
-
-// "CHANNEL=N" arguments of --expect; throws std::invalid_argument naming the
-// one that is not, or whose N is not a whole number >= 1.
-std::map<std::string, int64_t> parse_expectations(const std::vector<std::string>& args) {
-  std::map<std::string, int64_t> expect;
-  for (const auto& arg : args) {
-    const auto eq = arg.find('=');
-    const std::string count = eq == std::string::npos ? "" : arg.substr(eq + 1);
-    char* end = nullptr;
-    const long long n = count.empty() ? 0 : std::strtoll(count.c_str(), &end, 10);
-    if (eq == 0 || count.empty() || *end != '\0' || n < 1)
-      throw std::invalid_argument("--expect " + arg + ": use CHANNEL=N, N a whole number >= 1");
-    expect[arg.substr(0, eq)] = n;
-  }
-  return expect;
 }
 
 struct Watch {
@@ -113,7 +97,7 @@ int main(int argc, char** argv) {
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("lcm-stats", common.log_level);
   try {
-    w.expect = parse_expectations(expect_args);
+    w.expect = ivoa::parse_channel_counts(expect_args, "--expect");
   } catch (const std::invalid_argument& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;

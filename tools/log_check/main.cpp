@@ -5,10 +5,12 @@
 // session, in order) are checked as one recording.
 #include <fstream>
 #include <map>
+#include <stdexcept>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/channel_counts.hpp"
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/logio/log_reader.hpp"
@@ -88,13 +90,10 @@ std::string results_json(const std::vector<FileResult>& files, const LogSummary&
   return out + "}}\n";
 }
 
-// CHANNEL=N pairs; false (with a message) if one does not hold.
-bool expectations_hold(const std::vector<std::string>& expect, const LogSummary& summary) {
+// False (with a message) if a channel's count is not the one expected.
+bool expectations_hold(const std::map<std::string, int64_t>& expect, const LogSummary& summary) {
   bool ok = true;
-  for (const auto& arg : expect) {
-    const auto eq = arg.find('=');
-    const std::string channel = arg.substr(0, eq);
-    const long long want = std::stoll(arg.substr(eq + 1));
+  for (const auto& [channel, want] : expect) {
     const auto it = summary.channels().find(channel);
     const long long got = it == summary.channels().end() ? 0 : it->second.count;
     if (got != want) {
@@ -121,7 +120,7 @@ bool sequences_complete(const LogSummary& summary) {
 int main(int argc, char** argv) {
   CLI::App app{"Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage.\n"
                "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 3 a log is damaged or "
-               "unreadable."};
+               "unreadable, 4 the --json file cannot be written."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
   std::vector<std::string> files, expect;
@@ -133,11 +132,12 @@ int main(int argc, char** argv) {
   app.add_option("--expect", expect, "CHANNEL=N: fail unless the log has exactly N messages on CHANNEL")
       ->delimiter(',')
       ->check([](const std::string& s) {
-        const auto eq = s.find('=');
-        return eq == std::string::npos || eq == 0 || s.find_first_not_of("0123456789", eq + 1) != std::string::npos ||
-                       eq + 1 == s.size()
-                   ? std::string("use CHANNEL=N")
-                   : std::string();
+        try {
+          ivoa::parse_channel_counts({s}, "");  // CLI11 names the option
+          return std::string();
+        } catch (const std::invalid_argument& e) {
+          return std::string(e.what());
+        }
       });
   app.add_flag("--no-gaps", no_gaps, "fail if a sequence-numbered channel misses or repeats a message");
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
@@ -152,8 +152,11 @@ int main(int argc, char** argv) {
     damaged = damaged || !results.back().error.empty() || !results.back().problems.empty();
   }
   std::printf("\n%s", summary.table().c_str());
-  if (!json_path.empty()) std::ofstream(json_path) << results_json(results, summary);
-  const bool expected = expectations_hold(expect, summary);
+  if (!json_path.empty() && !(std::ofstream(json_path) << results_json(results, summary))) {
+    spdlog::error("cannot write {}", json_path);
+    return ivoa::kExitIoError;
+  }
+  const bool expected = expectations_hold(ivoa::parse_channel_counts(expect, "--expect"), summary);
   const bool complete = !no_gaps || sequences_complete(summary);
   if (damaged) return ivoa::kExitBadInput;
   return expected && complete ? ivoa::kExitOk : ivoa::kExitFailure;
