@@ -217,6 +217,23 @@ TEST(Training, CheckpointOfAnotherOptimiserIsRefusedWithTheWayOut) {
   }
 }
 
+TEST(Training, DamagedCheckpointStepFileIsRefusedWithTheWayOut) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 5);  // a checkpoint at step 5
+  train_model(c);
+  std::ofstream(c.output + ".checkpoint.step") << "5 0.";  // cut short, as by a full disk
+  c.resume = true;
+  c.steps = 8;
+  try {
+    train_model(c);
+    FAIL() << "resumed from a step file that does not say where it stopped";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(c.output + ".checkpoint.step is not"), std::string::npos) << what;
+    EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
+  }
+}
+
 TEST(Training, LearnsTheDetectorsEvidenceAsASideTaskWhenTheDatasetHasIt) {
   test::TempDir dir;
   const std::string root = dir.file("data");

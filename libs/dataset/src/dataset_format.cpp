@@ -202,8 +202,9 @@ void SessionWriter::close() {
   for (size_t k = 0; k < frames_.size(); ++k)
     frames << k << "," << frames_[k].utime << "," << frames_[k].depth_utime << "," << frames_[k].cells_labelled << ","
            << frames_[k].samples << "\n";
-  std::ofstream(dir_ + "/session.json") << session_json(info_);
-  if (!frames) throw DatasetError(dir_ + ": write failed (disk full?)");
+  std::ofstream json(dir_ + "/session.json");
+  json << session_json(info_);
+  if (!frames.flush() || !json.flush()) throw DatasetError(dir_ + ": write failed (disk full?)");
   register_session(fs::path(dir_).parent_path().string(), info_.session, info_.patch_size);
 }
 

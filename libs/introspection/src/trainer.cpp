@@ -354,8 +354,10 @@ void save_checkpoint(const std::string& checkpoint, IntrospectionNetImpl& net, c
   save_model(net, info, checkpoint + ".model");
   if (evidence) evidence->save(checkpoint + ".evidence");
   torch::save(optimizer, checkpoint + ".optimizer");
-  std::ofstream(checkpoint + ".step") << step << " " << report.best_val_mean_class_accuracy << " " << report.best_step
-                                      << " " << optimizer_name(kind) << "\n";
+  std::ofstream step_file(checkpoint + ".step");
+  step_file << step << " " << report.best_val_mean_class_accuracy << " " << report.best_step << " "
+            << optimizer_name(kind) << "\n";
+  if (!step_file.flush()) throw std::runtime_error(checkpoint + ".step: cannot write the checkpoint (disk full?)");
 }
 
 // Restores the optimiser and side task of a checkpoint; returns its step.
@@ -363,7 +365,12 @@ int64_t load_checkpoint(const std::string& checkpoint, EvidenceTask* evidence, d
                         Optimizer kind, torch::optim::Optimizer& optimizer, TrainReport& report) {
   int64_t step = 0;
   std::string saved_kind = "sgd";
-  std::ifstream(checkpoint + ".step") >> step >> report.best_val_mean_class_accuracy >> report.best_step >> saved_kind;
+  std::ifstream step_file(checkpoint + ".step");
+  if (!(step_file >> step >> report.best_val_mean_class_accuracy >> report.best_step))
+    throw std::runtime_error("cannot resume " + checkpoint + ": " + checkpoint +
+                             ".step is not 'step best_val best_step [optimizer]' (remove " + checkpoint +
+                             ".* to start over)");
+  step_file >> saved_kind;  // absent before AdamW
   if (saved_kind != optimizer_name(kind))
     throw std::runtime_error("cannot resume " + checkpoint + ": it was trained with --optimizer " + saved_kind +
                              ", this run uses " + optimizer_name(kind) + " (remove " + checkpoint +
