@@ -121,6 +121,55 @@ void predict_cells(introspection::IntrospectionModel& model, const introspection
   tools::set_predictions(cells, predictions, given_verdict, model.verdict_threshold());
 }
 
+using LabelledFrames = std::map<int64_t, std::vector<tools::LabelledCell>>;  // by stereo utime
+
+LabelledFrames labelled_frames(const dataset::SessionReader& reader) {
+  LabelledFrames frames;
+  for (const auto& s : reader.samples())
+    frames[s.utime].push_back({s.u, s.v, s.label, -1, true, s.patch_side, s.stereo_state});
+  return frames;
+}
+
+// One frame's figure: the model run on it, its labelled cells' rings and dots.
+cv::Mat overlay_figure(const Options& o, introspection::IntrospectionModel& model, const stereo_image_t& msg,
+                       const GroundWarp* warp, std::vector<tools::LabelledCell>& cells) {
+  const cv::Mat left = decode_image(msg.left);
+  const cv::Mat input = warp ? warp->stack(left, decode_image(msg.right)) : left;
+  const introspection::Heatmaps h = model.run(input);
+  predict_cells(model, h, input, cells, o.dots_given_verdict);
+  cv::Mat figure = tools::compose_frame_figure(left, h, cells, o.dots_given_verdict);
+  cv::resize(figure, figure, cv::Size(), o.overlay_scale, o.overlay_scale, cv::INTER_AREA);
+  return figure;
+}
+
+// Overlays of one session's log, every overlay_every-th labelled frame, until
+// `written` reaches max_overlays.
+void write_log_overlays(const Options& o, introspection::IntrospectionModel& model, const std::string& log,
+                        LabelledFrames frames, int& written) {
+  const std::string session = session_of_log(log);
+  logio::LogReader in(log);
+  logio::LogEvent e;
+  int64_t index = 0;
+  std::unique_ptr<GroundWarp> warp;  // two-view models, from the log's calibration
+  while (written < o.max_overlays && in.next(e)) {
+    if (model.info().views == 2 && !warp && e.channel == channels::kRigCalibration) {
+      rig_calibration_t rig;
+      if (logio::decode(e, rig)) warp = std::make_unique<GroundWarp>(from_message(rig));
+      continue;
+    }
+    stereo_image_t msg;
+    if (e.channel != channels::kStereoImages || !logio::decode(e, msg)) continue;
+    const auto it = frames.find(msg.utime);
+    if (it == frames.end() || index++ % o.overlay_every != 0) continue;
+    if (model.info().views == 2 && !warp)
+      throw dataset::DatasetError(log + ": no rig calibration before the first frame (a two-view model needs it)");
+    const cv::Mat figure = overlay_figure(o, model, msg, warp.get(), it->second);
+    const std::string path = o.out + "/overlays/" + session + "_" + std::to_string(msg.utime) + ".png";
+    if (!cv::imwrite(path, figure)) throw OutputError(path + ": cannot write the overlay figure");
+    ++written;
+  }
+}
+
 int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
   std::error_code error;
   if (fs::create_directories(o.out + "/overlays", error); error)
@@ -133,39 +182,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
       spdlog::warn("{}: no session '{}' in {}: no labels for its overlays, skipped", log, session, o.dataset);
       continue;
     }
-    const dataset::SessionReader reader(dir);
-    std::map<int64_t, std::vector<tools::LabelledCell>> frames;
-    for (const auto& s : reader.samples())
-      frames[s.utime].push_back({s.u, s.v, s.label, -1, true, s.patch_side, s.stereo_state});
-    logio::LogReader in(log);
-    logio::LogEvent e;
-    int64_t index = 0;
-    std::unique_ptr<GroundWarp> warp;  // two-view models, from the log's calibration
-    while (in.next(e) && written < o.max_overlays) {
-      if (model.info().views == 2 && !warp && e.channel == channels::kRigCalibration) {
-        rig_calibration_t rig;
-        if (logio::decode(e, rig))
-          warp = std::make_unique<GroundWarp>(from_message(rig));
-        continue;
-      }
-      stereo_image_t msg;
-      if (e.channel != channels::kStereoImages || !logio::decode(e, msg)) continue;
-      const auto it = frames.find(msg.utime);
-      if (it == frames.end() || index++ % o.overlay_every != 0) continue;
-      const cv::Mat left = decode_image(msg.left);
-      cv::Mat input = left;
-      if (model.info().views == 2) {
-        if (!warp) throw dataset::DatasetError(log + ": no rig calibration before the first frame (a two-view model needs it)");
-        input = warp->stack(left, decode_image(msg.right));
-      }
-      const introspection::Heatmaps h = model.run(input);
-      predict_cells(model, h, input, it->second, o.dots_given_verdict);
-      cv::Mat figure = tools::compose_frame_figure(left, h, it->second, o.dots_given_verdict);
-      cv::resize(figure, figure, cv::Size(), o.overlay_scale, o.overlay_scale, cv::INTER_AREA);
-      const std::string path = o.out + "/overlays/" + session + "_" + std::to_string(msg.utime) + ".png";
-      if (!cv::imwrite(path, figure)) throw OutputError(path + ": cannot write the overlay figure");
-      ++written;
-    }
+    write_log_overlays(o, model, log, labelled_frames(dataset::SessionReader(dir)), written);
   }
   spdlog::info("wrote {} overlay figures to {}/overlays", written, o.out);
   return written;

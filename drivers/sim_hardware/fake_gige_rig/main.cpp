@@ -10,7 +10,9 @@
 #include <csignal>
 #include <fstream>
 #include <memory>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -60,13 +62,7 @@ std::unique_ptr<FakeGigeCamera> make_camera(const StereoScene& scene, RigCamera 
   return camera;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"Simulated GigE Vision stereo pair (two Aravis fake cameras serving a known scene). "
-               "SIGUSR1 powers one camera off, SIGUSR2 on again."};
-  Flags f;
-  ivoa::add_common_options(app, f.common);
+void add_camera_options(CLI::App& app, Flags& f) {
   app.add_option("--left-address", f.left.address, "local address of the left camera")->capture_default_str();
   app.add_option("--right-address", f.right.address, "local address of the right camera")->capture_default_str();
   app.add_option("--left-serial", f.left.serial, "serial number of the left camera")->capture_default_str();
@@ -74,13 +70,6 @@ int main(int argc, char** argv) {
   app.add_option("--cameras", f.cameras, "which cameras to run")
       ->capture_default_str()
       ->check(CLI::IsMember({"both", "left", "right"}));
-  app.add_option("--disparity", f.pattern.disparity_px, "pattern: right(x) = left(x + disparity), pixels")
-      ->capture_default_str();
-  app.add_option("--speed", f.pattern.speed_px, "pattern: pixels the texture moves per frame")->capture_default_str();
-  app.add_option("--cell", f.pattern.cell_px, "pattern: side of the coloured squares, pixels")->capture_default_str();
-  app.add_option("--left-images", f.left_images, "serve these image files (frame tick % count) instead of the pattern");
-  app.add_option("--right-images", f.right_images, "right-camera image files, as many as --left-images");
-  app.add_flag("--no-stamp", f.no_stamp, "do not write the frame tick into the top-left 256x8 pixels");
   app.add_option("--packet-loss", f.packet_loss, "fraction of GVSP packets dropped (the fake never resends)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
@@ -90,6 +79,47 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"left", "right"}));
   app.add_option("--ready-file", f.ready_file, "create this file once the cameras serve");
   app.add_option("--duration", f.duration_s, "stop after this many seconds (0 = until SIGINT/SIGTERM)");
+}
+
+void add_scene_options(CLI::App& app, Flags& f) {
+  app.add_option("--disparity", f.pattern.disparity_px, "pattern: right(x) = left(x + disparity), pixels")
+      ->capture_default_str();
+  app.add_option("--speed", f.pattern.speed_px, "pattern: pixels the texture moves per frame")->capture_default_str();
+  app.add_option("--cell", f.pattern.cell_px, "pattern: side of the coloured squares, pixels")->capture_default_str();
+  app.add_option("--left-images", f.left_images, "serve these image files (frame tick % count) instead of the pattern");
+  app.add_option("--right-images", f.right_images, "right-camera image files, as many as --left-images");
+  app.add_flag("--no-stamp", f.no_stamp, "do not write the frame tick into the top-left 256x8 pixels");
+}
+
+// Powers the chosen camera off and on as SIGUSR1/SIGUSR2 ask, until a stop
+// signal or --duration. Throws if the camera cannot start again.
+void serve(const StereoScene& scene, const Flags& f, std::unique_ptr<FakeGigeCamera> (&cameras)[2]) {
+  const RigCamera cycled = f.power_cycled == "left" ? RigCamera::kLeft : RigCamera::kRight;
+  auto& cycled_camera = cameras[cycled == RigCamera::kLeft ? 0 : 1];
+  const double start_ms = ivoa::monotonic_ms();
+  while (!ivoa::stop_requested()) {
+    if (f.duration_s > 0 && ivoa::monotonic_ms() - start_ms > f.duration_s * 1000.0) break;
+    const int request = g_power_requests.exchange(0);
+    if (request == 1 && cycled_camera) {
+      cycled_camera.reset();
+      spdlog::info("{} camera powered off", rig_camera_name(cycled));
+    } else if (request == 2 && !cycled_camera) {
+      cycled_camera = make_camera(scene, cycled, f);
+      spdlog::info("{} camera powered on", rig_camera_name(cycled));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Simulated GigE Vision stereo pair (two Aravis fake cameras serving a known scene). "
+               "SIGUSR1 powers one camera off, SIGUSR2 on again."};
+  Flags f;
+  ivoa::add_common_options(app, f.common);
+  add_camera_options(app, f);
+  add_scene_options(app, f);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("fake_gige_rig", f.common.log_level);
 
@@ -101,39 +131,18 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
     return f.left_images.empty() ? ivoa::kExitUsage : ivoa::kExitBadInput;
   }
-
   std::unique_ptr<FakeGigeCamera> cameras[2];
   try {
     if (f.cameras != "right") cameras[0] = make_camera(*scene, RigCamera::kLeft, f);
     if (f.cameras != "left") cameras[1] = make_camera(*scene, RigCamera::kRight, f);
+    ivoa::install_stop_handlers();
+    std::signal(SIGUSR1, on_power_signal);
+    std::signal(SIGUSR2, on_power_signal);
+    if (!f.ready_file.empty()) std::ofstream(f.ready_file) << "ready\n";
+    serve(*scene, f, cameras);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitFailure;
-  }
-  ivoa::install_stop_handlers();
-  std::signal(SIGUSR1, on_power_signal);
-  std::signal(SIGUSR2, on_power_signal);
-  if (!f.ready_file.empty()) std::ofstream(f.ready_file) << "ready\n";
-
-  const RigCamera cycled = f.power_cycled == "left" ? RigCamera::kLeft : RigCamera::kRight;
-  auto& cycled_camera = cameras[cycled == RigCamera::kLeft ? 0 : 1];
-  const double start_ms = ivoa::monotonic_ms();
-  while (!ivoa::stop_requested()) {
-    if (f.duration_s > 0 && ivoa::monotonic_ms() - start_ms > f.duration_s * 1000.0) break;
-    const int request = g_power_requests.exchange(0);
-    try {
-      if (request == 1 && cycled_camera) {
-        cycled_camera.reset();
-        spdlog::info("{} camera powered off", rig_camera_name(cycled));
-      } else if (request == 2 && !cycled_camera) {
-        cycled_camera = make_camera(*scene, cycled, f);
-        spdlog::info("{} camera powered on", rig_camera_name(cycled));
-      }
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      return ivoa::kExitFailure;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   for (int i = 0; i < 2; ++i)
     if (cameras[i]) spdlog::info("{} camera served {} frames ({} off beat: fired over a quarter period late)",
