@@ -1,8 +1,12 @@
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <fstream>
 #include <iterator>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -214,6 +218,26 @@ TEST(DatasetFormat, RejectsWrongPatchesAndLabels) {
   EXPECT_THROW(w.add_sample(s, numbered_patch(0, 64)), DatasetError);
   s.label = 7;
   EXPECT_THROW(w.add_sample(s, numbered_patch(0)), DatasetError);
+}
+
+// Builds of several sessions may run side by side into one dataset: none
+// may lose another's entry or read a half-written list.
+TEST(DatasetFormat, SessionsRegisteredSideBySideAreAllListed) {
+  test::TempDir dir;
+  const std::string root = dir.path().string();
+  std::atomic<int> errors{0};
+  std::vector<std::thread> builders;
+  for (int t = 0; t < 4; ++t)
+    builders.emplace_back([&, t] {
+      for (int k = 0; k < 25; ++k) try {
+          register_session(root, "b" + std::to_string(t) + "_" + std::to_string(k), 100);
+        } catch (const DatasetError&) {
+          ++errors;
+        }
+    });
+  for (auto& b : builders) b.join();
+  EXPECT_EQ(errors, 0);
+  EXPECT_EQ(list_sessions(root).size(), 100u);
 }
 
 TEST(DatasetFormat, SplitFileBySessionRejectsOverlap) {

@@ -1,11 +1,14 @@
 #include "ivoa/dataset/dataset_format.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -290,15 +293,45 @@ std::vector<std::string> list_sessions(const std::string& dataset_root) {
   }
 }
 
+namespace {
+
+// An exclusive flock(2) on DATASET/.dataset.lock while held: several
+// ivoa-dataset builds may add sessions to one dataset at once.
+class DatasetLock {
+ public:
+  explicit DatasetLock(const std::string& dataset_root) : path_(dataset_root + "/.dataset.lock") {
+    fd_ = ::open(path_.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+    if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0)
+      throw DatasetError(path_ + ": cannot lock the dataset: " + std::strerror(errno));
+  }
+  ~DatasetLock() { ::close(fd_); }  // releases the lock
+  DatasetLock(const DatasetLock&) = delete;
+  DatasetLock& operator=(const DatasetLock&) = delete;
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
+
+}  // namespace
+
 void register_session(const std::string& dataset_root, const std::string& session, int patch_size) {
+  const DatasetLock lock(dataset_root);
   std::vector<std::string> sessions = list_sessions(dataset_root);
   if (std::find(sessions.begin(), sessions.end(), session) == sessions.end()) sessions.push_back(session);
   std::sort(sessions.begin(), sessions.end());
-  std::ofstream out(dataset_root + "/dataset.json");
+  // Written aside and renamed into place: a reader never sees half a list.
+  const std::string path = dataset_root + "/dataset.json", written = path + ".tmp";
+  std::ofstream out(written);
   out << "{\n  \"format\": \"ivoa-dataset\",\n  \"version\": 1,\n  \"patch_size\": " << patch_size
       << ",\n  \"label_names\": [\"TP\", \"TN\", \"FP\", \"FN\"],\n  \"sessions\": [";
   for (size_t k = 0; k < sessions.size(); ++k) out << (k ? ", " : "") << json_quote(sessions[k]);
   out << "]\n}\n";
+  const bool complete = static_cast<bool>(out.flush());
+  out.close();
+  std::error_code error;
+  if (complete) fs::rename(written, path, error);
+  if (!complete || error) throw DatasetError(path + ": cannot write the list of sessions (disk full?)");
 }
 
 std::map<std::string, std::vector<std::string>> load_split(const std::string& path) {

@@ -144,8 +144,8 @@ class SessionReader {
   size_t mapped_bytes_ = 0;
 };
 
-// dataset.json: the list of sessions and the patch size; rewritten when a
-// session is added.
+// dataset.json: the list of sessions and the patch size; replaced, under a
+// lock, when a session is added, so builds may add sessions side by side.
 void register_session(const std::string& dataset_root, const std::string& session, int patch_size);
 std::vector<std::string> list_sessions(const std::string& dataset_root);
 
