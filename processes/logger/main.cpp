@@ -188,7 +188,7 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
   });
   bus->handle(0);  // udpm joins the multicast group (and opens its socket) on the first handle
   enlarge_receive_buffer(bus->url(), socket_buffer_mb);
-  if (!ready_file.empty()) std::ofstream(ready_file) << "ready\n";
+  ivoa::write_ready_file(ready_file);  // a script may wait in vain, but recording goes on
 
   const double start_ms = ivoa::monotonic_ms();
   code = receive(*bus, *recorder, reporter, heartbeat);

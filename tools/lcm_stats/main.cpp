@@ -46,7 +46,7 @@ int watch(const std::string& lcm_url, const Watch& w) {
   });
   ivoa::install_stop_handlers();
   bus.handle(0);  // udpm joins the group lazily, on the first handle
-  if (!w.ready_file.empty()) std::ofstream(w.ready_file) << "ready\n";
+  if (!ivoa::write_ready_file(w.ready_file)) return ivoa::kExitIoError;
   const double start = ivoa::monotonic_ms();
   double last_print = start;
   bool met = w.expect.empty();

@@ -138,7 +138,7 @@ int main(int argc, char** argv) {
     ivoa::install_stop_handlers();
     std::signal(SIGUSR1, on_power_signal);
     std::signal(SIGUSR2, on_power_signal);
-    if (!f.ready_file.empty()) std::ofstream(f.ready_file) << "ready\n";
+    if (!ivoa::write_ready_file(f.ready_file)) return ivoa::kExitIoError;
     serve(*scene, f, cameras);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

@@ -1,5 +1,7 @@
 #include "ivoa/core/process.hpp"
 
+#include <fstream>
+
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -56,6 +58,13 @@ int run_until_stopped(Bus& bus, Heartbeat* heartbeat, const std::function<void()
     heartbeat->publish_now();
   }
   return kExitOk;
+}
+
+bool write_ready_file(const std::string& path) {
+  if (path.empty()) return true;
+  if (std::ofstream(path) << "ready\n") return true;
+  spdlog::error("cannot write the ready file {}", path);
+  return false;
 }
 
 }  // namespace ivoa

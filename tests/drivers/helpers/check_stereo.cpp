@@ -284,7 +284,7 @@ int main(int argc, char** argv) {
                                          });
   ivoa::install_stop_handlers();
   bus.handle(0);  // udpm joins the group on the first handle
-  if (!f.ready_file.empty()) std::ofstream(f.ready_file) << "ready\n";
+  if (!ivoa::write_ready_file(f.ready_file)) return ivoa::kExitIoError;
   const double start = ivoa::monotonic_ms();
   while (!ivoa::stop_requested() && checker.checked() < f.expect && ivoa::monotonic_ms() - start < f.timeout_s * 1000) {
     if (bus.handle(50) < 0) break;

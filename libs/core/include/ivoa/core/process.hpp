@@ -35,6 +35,11 @@ void add_common_options(CLI::App& app, CommonOptions& options);
 // to use, otherwise returns -1 and the caller continues.
 int parse_command_line(CLI::App& app, int argc, char** argv);
 
+// --ready-file: creates `path` (nothing if empty) to tell a waiting script
+// that this process has subscribed or is serving. False, with an error
+// logged, if it cannot be written.
+bool write_ready_file(const std::string& path);
+
 // Sets up spdlog (stderr, one pattern for every process).
 void init_logging(const std::string& process_name, const std::string& level);
 
