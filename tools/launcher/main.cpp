@@ -88,6 +88,42 @@ void print_commands(const SelectedCommands& selected) {
   for (const auto& o : selected.other_hosts) std::printf("(other host) %s\n", o.c_str());
 }
 
+// Loads the configuration and picks this host's commands; throws with the
+// file and line of what is wrong.
+SelectedCommands prepare(CliOptions& o, Config& config) {
+  config = load_config(o.config_path);
+  for (const auto& w : config.warnings) spdlog::warn("{}", w);
+  std::map<std::string, std::string> overrides;
+  for (const auto& s : o.sets) overrides.insert(parse_assignment(s));
+  const Variables variables(config, overrides, builtin_variables(o.config_path));
+  SelectedCommands selected = select_commands(config, o.selection, variables);
+  o.launcher.supervisor.environment = variables.exported();
+  if (!o.launcher.script.empty()) flatten_script(config, o.launcher.script);
+  for (const auto& name : o.launcher.until) {
+    const bool selected_here = std::any_of(selected.commands.begin(), selected.commands.end(),
+                                           [&](const LaunchCommand& c) { return c.spec.name == name; });
+    if (!selected_here) throw ConfigError(config.path + ": --until " + name + ": no such command runs here");
+  }
+  return selected;
+}
+
+// False (with the hosts the configuration has) if nothing runs on this host.
+bool something_to_run(const Config& config, const SelectedCommands& selected, const CliOptions& o) {
+  if (!selected.other_hosts.empty())
+    spdlog::info("{} command(s) for other hosts not run here (--host {})", selected.other_hosts.size(), o.selection.host);
+  if (selected.commands.empty()) {
+    std::set<std::string> hosts;
+    for (const auto& c : config.commands) hosts.insert(host_of(c));
+    spdlog::error("{}: no command to run for host '{}' (its hosts: {}; pass --host NAME, or --host '*' for all)",
+                  config.path, o.selection.host, fmt::join(hosts, ", "));
+    return false;
+  }
+  if (o.launcher.once && std::all_of(selected.commands.begin(), selected.commands.end(),
+                                     [](const LaunchCommand& c) { return c.spec.auto_respawn; }))
+    spdlog::warn("--once: every command respawns, so only --duration or a signal ends the run");
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -105,19 +141,7 @@ int main(int argc, char** argv) {
   Config config;
   SelectedCommands selected;
   try {
-    config = load_config(o.config_path);
-    for (const auto& w : config.warnings) spdlog::warn("{}", w);
-    std::map<std::string, std::string> overrides;
-    for (const auto& s : o.sets) overrides.insert(parse_assignment(s));
-    const Variables variables(config, overrides, builtin_variables(o.config_path));
-    selected = select_commands(config, o.selection, variables);
-    o.launcher.supervisor.environment = variables.exported();
-    if (!o.launcher.script.empty()) flatten_script(config, o.launcher.script);
-    for (const auto& name : o.launcher.until) {
-      const bool selected_here = std::any_of(selected.commands.begin(), selected.commands.end(),
-                                             [&](const LaunchCommand& c) { return c.spec.name == name; });
-      if (!selected_here) throw ConfigError(config.path + ": --until " + name + ": no such command runs here");
-    }
+    selected = prepare(o, config);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;
@@ -126,18 +150,7 @@ int main(int argc, char** argv) {
     print_commands(selected);
     return ivoa::kExitOk;
   }
-  if (!selected.other_hosts.empty())
-    spdlog::info("{} command(s) for other hosts not run here (--host {})", selected.other_hosts.size(), o.selection.host);
-  if (selected.commands.empty()) {
-    std::set<std::string> hosts;
-    for (const auto& c : config.commands) hosts.insert(host_of(c));
-    spdlog::error("{}: no command to run for host '{}' (its hosts: {}; pass --host NAME, or --host '*' for all)",
-                  config.path, o.selection.host, fmt::join(hosts, ", "));
-    return ivoa::kExitUsage;
-  }
-  if (o.launcher.once && std::all_of(selected.commands.begin(), selected.commands.end(),
-                                     [](const LaunchCommand& c) { return c.spec.auto_respawn; }))
-    spdlog::warn("--once: every command respawns, so only --duration or a signal ends the run");
+  if (!something_to_run(config, selected, o)) return ivoa::kExitUsage;
   o.launcher.redraw = !o.plain && isatty(STDOUT_FILENO);
   // Orphans of the commands come to us, so a command's group can be seen to empty.
   prctl(PR_SET_CHILD_SUBREAPER, 1);
