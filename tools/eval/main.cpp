@@ -172,8 +172,8 @@ void write_log_overlays(const Options& o, introspection::IntrospectionModel& mod
 
 int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
   std::error_code error;
-  if (fs::create_directories(o.out + "/overlays", error); error)
-    throw OutputError(o.out + "/overlays: cannot create the folder: " + error.message());
+  fs::create_directories(o.out + "/overlays", error);
+  if (error) throw OutputError(o.out + "/overlays: cannot create the folder: " + error.message());
   int written = 0;
   for (const auto& log : o.logs) {
     const std::string session = session_of_log(log);

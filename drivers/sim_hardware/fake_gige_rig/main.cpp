@@ -8,7 +8,6 @@
 // powers it on again as a fresh camera; SIGINT/SIGTERM stop the rig.
 #include <atomic>
 #include <csignal>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <thread>

@@ -301,8 +301,10 @@ class DatasetLock {
  public:
   explicit DatasetLock(const std::string& dataset_root) : path_(dataset_root + "/.dataset.lock") {
     fd_ = ::open(path_.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
-    if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0)
-      throw DatasetError(path_ + ": cannot lock the dataset: " + std::strerror(errno));
+    if (fd_ >= 0 && ::flock(fd_, LOCK_EX) == 0) return;
+    const std::string why = std::strerror(errno);
+    if (fd_ >= 0) ::close(fd_);  // the destructor does not run when the constructor throws
+    throw DatasetError(path_ + ": cannot lock the dataset: " + why);
   }
   ~DatasetLock() { ::close(fd_); }  // releases the lock
   DatasetLock(const DatasetLock&) = delete;

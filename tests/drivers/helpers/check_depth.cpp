@@ -3,7 +3,6 @@
 // (libIvoaSynthDepth) serves: every depth image exactly (a wall at 2000 mm,
 // a box at 1000 mm moving 1 px per frame), intrinsics, sequence and timing,
 // the colour images and the driver's heartbeat. Writes a JSON summary.
-#include <fstream>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>

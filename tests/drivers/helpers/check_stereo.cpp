@@ -4,7 +4,6 @@
 // right show the same instant (frame stamps), timing, the rig calibration
 // and the driver's heartbeat. Writes a JSON summary for the test script.
 #include <cmath>
-#include <fstream>
 #include <optional>
 #include <set>
 
