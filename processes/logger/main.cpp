@@ -238,7 +238,7 @@ int main(int argc, char** argv) {
                  "kernel receive buffer for LCM's udpm socket, past net.core.rmem_max where permitted "
                  "(CAP_NET_ADMIN); 0 = as LCM sets it")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 1000.0));  // the kernel takes an int of bytes, and books twice that
   app.add_flag("-f,--force", force, "overwrite existing files");
   app.add_flag("--no-sidecar", no_sidecar, "do not write FILE.json next to each log");
   app.add_option("--ready-file", ready_file, "create this file once subscribed (lets scripts start publishers)");

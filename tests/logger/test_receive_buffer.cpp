@@ -40,6 +40,9 @@ TEST(ReceiveBuffer, PortComesFromTheUdpmUrl) {
   EXPECT_EQ(udpm_port("udpm://239.255.76.67"), 7667);
   EXPECT_EQ(udpm_port("memq://"), 0);
   EXPECT_EQ(udpm_port("file:///tmp/x.lcmlog?speed=0"), 0);
+  EXPECT_EQ(udpm_port("udpm://239.255.76.67:99999999999999999999"), 0);
+  EXPECT_EQ(udpm_port("udpm://239.255.76.67:70000"), 0);
+  EXPECT_EQ(udpm_port("udpm://239.255.76.67:0"), 0);
 }
 
 TEST(ReceiveBuffer, TheSocketOnThePortGetsTheSizeWherePermitted) {

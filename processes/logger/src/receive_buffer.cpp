@@ -5,6 +5,7 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 
+#include <charconv>
 #include <filesystem>
 #include <regex>
 
@@ -37,7 +38,13 @@ int udpm_port(const std::string& url) {
   static const std::regex udpm(R"(udpm://[^:/?]*(:(\d+))?.*)");
   std::smatch m;
   if (!std::regex_match(url, m, udpm)) return 0;
-  return m[2].matched ? std::stoi(m[2].str()) : 7667;
+  if (!m[2].matched) return 7667;
+  // from_chars, not stoi: a port too long for an int must not throw here.
+  const std::string digits = m[2].str();
+  int port = 0;
+  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), port);
+  const bool valid = error == std::errc() && end == digits.data() + digits.size() && port > 0 && port <= 65535;
+  return valid ? port : 0;
 }
 
 ReceiveBufferResult force_receive_buffer(int port, int bytes) {

@@ -4,7 +4,9 @@
 // through AlexNet T times, i.e. trunk included in every pass), and training
 // throughput. The reference takes minutes per frame on a CPU, so it is
 // timed on a sample of patches and scaled to the whole grid (its cost is
-// linear in patches); the sample size is printed.
+// linear in patches); the sample size is printed. The architectures are
+// timed with random weights; the trained model (the shipped one unless
+// --model) on its own input, as ivoa-introspection runs it.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -170,6 +172,7 @@ std::vector<cv::Mat> patch_sample(const cv::Mat& frame, int rows, int cols, int 
 struct InferenceTimes {
   int rows = 0, cols = 0, near_cells = 0;
   double ours = 0, two_view = 0, scaled = 0, alex = 0, reference = 0;  // ms per frame
+  std::string model_name;  // the trained model, timed as `scaled`
 };
 
 void print_inference(const InferenceTimes& t, int passes, int threads, int reference_patches) {
@@ -180,8 +183,7 @@ void print_inference(const InferenceTimes& t, int passes, int threads, int refer
   std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours, two views: ground warp + slidenet on 6 channels",
               t.two_view, 1000.0 / t.two_view);
   std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n",
-              ("ours, two views, scaled: + " + std::to_string(t.near_cells) + " near cells' own squares").c_str(),
-              t.scaled, 1000.0 / t.scaled);
+              t.model_name.c_str(), t.scaled, 1000.0 / t.scaled);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "alexnet-224, trunk once per patch, head x T batched",
               t.alex, reference_patches);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "reference: alexnet-224, whole network x T per patch",
@@ -210,61 +212,104 @@ void print_training(int batch, int runs) {
               1000.0 * batch / (two_view_step + fused_ms), 1000.0 * batch / (two_view_step + tensor_ms));
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  ivoa::introspection::prefer_passive_openmp_wait(argv);
-  CLI::App app{"Introspection benchmark: our full-frame MC-dropout inference vs the reference approach"};
+struct BenchOptions {
   int threads = 2, passes = 20, runs = 7, reference_patches = 16, batch = 128;
-  std::string model;
-  app.add_option("--threads", threads)->capture_default_str();
-  app.add_option("--mc-passes", passes)->capture_default_str();
-  app.add_option("--runs", runs, "timed runs (median reported)")->capture_default_str();
-  app.add_option("--reference-patches", reference_patches, "patches the reference is timed on")->capture_default_str();
-  app.add_option("--batch", batch, "training batch")->capture_default_str();
-  app.add_option("--model", model, "time this model file instead of random weights");
-  if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
+  std::string model = IVOA_SHIPPED_MODEL;
+};
 
-  torch::set_num_threads(threads);
-  const cv::Mat frame = test_frame();
-  const std::string dir = std::filesystem::temp_directory_path().string();
-  InferenceConfig config;
-  config.mc_passes = passes;
-  config.threads = threads;
-  config.seed = 1;
-  InferenceTimes t;
-  const auto ours = IntrospectionModel::load(model.empty() ? write_model("slidenet", dir) : model, config);
+void add_bench_options(CLI::App& app, BenchOptions& o) {
+  app.add_option("--threads", o.threads)->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--mc-passes", o.passes)->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--runs", o.runs, "timed runs (median reported)")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--reference-patches", o.reference_patches, "patches the reference is timed on")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--batch", o.batch, "training batch")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--model", o.model,
+                 "the trained model timed on its own input (views, footprint-scaled near cells); the other rows "
+                 "time the architectures with random weights")
+      ->capture_default_str();
+}
+
+// The trained model on the input it was trained for: the right view warped
+// onto the ground if it has two, and the near cells' own squares if its
+// patches are footprint-scaled. Throws ModelError on a bad file.
+void time_trained_model(const cv::Mat& frame, const BenchOptions& o, const InferenceConfig& config, InferenceTimes& t) {
+  const auto model = IntrospectionModel::load(o.model, config);
+  const ModelInfo& info = model->info();
+  const GroundWarp warp(sim::make_sim_rig());
+  std::vector<IntrospectionModel::CellPatch> query_cells;
+  if (info.patch_scale > 0) query_cells = default_query_cells(frame.size());
+  for (const auto& cell : query_cells) t.near_cells += cell.side > 100;
+  t.model_name = std::filesystem::path(o.model).filename().string() + ", " + std::to_string(info.views) + " view" +
+                 (info.views > 1 ? "s" : "") +
+                 (query_cells.empty() ? "" : ", + " + std::to_string(t.near_cells) + " near cells' squares");
   introspection::Heatmaps h;
-  t.ours = time_ms([&] { h = ours->run(frame); }, runs);
+  t.scaled = time_ms(
+      [&] {
+        const cv::Mat input = info.views == 2 ? warp.stack(frame, frame) : frame;
+        h = model->run(input);
+        if (!query_cells.empty()) model->predict_query_cells(input, h, query_cells);
+      },
+      o.runs);
+}
+
+// Our inference: the slidenet architecture with random weights on one and
+// two views, then the trained model.
+InferenceTimes time_ours(const cv::Mat& frame, const BenchOptions& o, const InferenceConfig& config,
+                         const std::string& dir) {
+  InferenceTimes t;
+  introspection::Heatmaps h;
+  const auto one_view = IntrospectionModel::load(write_model("slidenet", dir), config);
+  t.ours = time_ms([&] { h = one_view->run(frame); }, o.runs);
   t.rows = h.rows;
   t.cols = h.cols;
   // Two views (the main job's and the shipped model's input): the right
   // image warped onto the ground, stacked under the left, 6 channels.
   const GroundWarp warp(sim::make_sim_rig());
   const auto two_view = IntrospectionModel::load(write_model("slidenet", dir, 2), config);
-  t.two_view = time_ms([&] { h = two_view->run(warp.stack(frame, frame)); }, runs);
-  // A footprint-scaled two-view model: the heatmaps as above, then the
-  // query cells (near cells from their own squares, the rest from the heatmaps).
-  std::vector<IntrospectionModel::CellPatch> query_cells = default_query_cells(frame.size());
-  for (const auto& cell : query_cells) t.near_cells += cell.side > 100;
-  const auto scaled = IntrospectionModel::load(write_model("slidenet", dir, 2, 1.6), config);
-  t.scaled = time_ms(
-      [&] {
-        const cv::Mat input = warp.stack(frame, frame);
-        h = scaled->run(input);
-        scaled->predict_query_cells(input, h, query_cells);
-      },
-      runs);
+  t.two_view = time_ms([&] { h = two_view->run(warp.stack(frame, frame)); }, o.runs);
+  time_trained_model(frame, o, config, t);
+  return t;
+}
 
-  // The reference and our faithful AlexNet-224 option (trunk once per
-  // patch, head T times batched), both linear in patches: timed on a sample.
-  const std::vector<cv::Mat> sample = patch_sample(frame, t.rows, t.cols, reference_patches);
+// The reference and our faithful AlexNet-224 option (trunk once per patch,
+// head T times batched), both linear in patches: timed on a sample.
+void time_reference(const cv::Mat& frame, const BenchOptions& o, const InferenceConfig& config,
+                    const std::string& dir, InferenceTimes& t) {
+  const std::vector<cv::Mat> sample = patch_sample(frame, t.rows, t.cols, o.reference_patches);
   const int cells = t.rows * t.cols;
-  t.reference = reference_ms_per_patch(sample, passes, std::max(1, runs / 3)) * cells;
+  const int runs = std::max(1, o.runs / 3);
+  t.reference = reference_ms_per_patch(sample, o.passes, runs) * cells;
   const auto alex_model = IntrospectionModel::load(write_model("alexnet", dir), config);
-  t.alex = time_ms([&] { alex_model->run_patches(sample, false); }, std::max(1, runs / 3)) * cells / reference_patches;
+  t.alex = time_ms([&] { alex_model->run_patches(sample, false); }, runs) * cells / o.reference_patches;
+}
 
-  print_inference(t, passes, threads, reference_patches);
-  print_training(batch, runs);
-  return 0;
+}  // namespace
+
+int main(int argc, char** argv) {
+  ivoa::introspection::prefer_passive_openmp_wait(argv);
+  CLI::App app{"Introspection benchmark: our full-frame MC-dropout inference vs the reference approach"};
+  BenchOptions o;
+  add_bench_options(app, o);
+  if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
+
+  torch::set_num_threads(o.threads);
+  const cv::Mat frame = test_frame();
+  const std::string dir = std::filesystem::temp_directory_path().string();
+  InferenceConfig config;
+  config.mc_passes = o.passes;
+  config.threads = o.threads;
+  config.seed = 1;
+  InferenceTimes t;
+  try {
+    t = time_ours(frame, o, config, dir);
+  } catch (const ModelError& e) {
+    std::fprintf(stderr, "ivoa-bench-introspection: %s\n", e.what());
+    return kExitBadInput;
+  }
+  time_reference(frame, o, config, dir, t);
+  print_inference(t, o.passes, o.threads, o.reference_patches);
+  print_training(o.batch, o.runs);
+  return kExitOk;
 }

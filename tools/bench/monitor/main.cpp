@@ -58,48 +58,68 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+struct MonitorTimes {
+  std::vector<double> ours, baseline;  // median ms per frame
+  int cells = 0;
+};
+
+// Times both on `frames` depth frames along the scene's drive. Throws on a
+// scene file that cannot be loaded.
+void time_scene(const std::string& name, int frames, int repeats, MonitorTimes& times) {
+  const sim::Scene scene =
+      sim::generate_scene(sim::load_scene_spec(std::string(IVOA_SCENES_DIR) + "/" + name + ".yaml"), 5);
+  const sim::Simulator simulator(scene);
+  sim::Trajectory trajectory(scene, 5);
+  const QueryGrid grid(QueryGridConfig{}, RigGeometry(simulator.rig()).left);
+  const monitor::DepthMonitor monitor(simulator.rig());
+  times.cells = grid.size();
+  for (int f = 0; f < frames; ++f) {
+    const cv::Mat depth = simulator.render(trajectory.pose_at(3.0 * f + 1), static_cast<uint64_t>(f)).depth_mm;
+    obstacle_grid_t out = make_obstacle_grid(grid, "depth_monitor", 0);
+    std::vector<double> a, b;
+    std::vector<int> counts;
+    for (int r = 0; r < repeats; ++r) {
+      double t = monotonic_ms();
+      monitor.evaluate(depth, grid, out);
+      a.push_back(monotonic_ms() - t);
+      t = monotonic_ms();
+      baseline(depth, simulator.rig(), grid, counts);
+      b.push_back(monotonic_ms() - t);
+    }
+    times.ours.push_back(median(a));
+    times.baseline.push_back(median(b));
+  }
+}
+
+void print_times(const MonitorTimes& t) {
+  const double o = median(t.ours), b = median(t.baseline);
+  std::printf("Depth monitor, 640x480 depth frames from 5 simulated scenes (%zu frames), %d query cells, one core:\n",
+              t.ours.size(), t.cells);
+  std::printf("  %-66s median %6.2f ms, max %6.2f ms\n", "ours: region-cropped cloud, voxel grid, binned disc + ray samples",
+              o, *std::max_element(t.ours.begin(), t.ours.end()));
+  std::printf("  %-66s median %6.2f ms, max %6.2f ms\n", "baseline: whole-image cloud, VoxelGrid, KD-tree radius search",
+              b, *std::max_element(t.baseline.begin(), t.baseline.end()));
+  std::printf("  ratio baseline/ours %.1fx; budget 10 ms: %s (%.2f of budget)\n", b / o, o <= 10 ? "met" : "NOT met", o / 10);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Depth monitor benchmark (one core)"};
   int frames_per_scene = 4, repeats = 5;
-  app.add_option("--frames-per-scene", frames_per_scene)->capture_default_str();
-  app.add_option("--repeats", repeats, "timings per frame (median kept)")->capture_default_str();
+  app.add_option("--frames-per-scene", frames_per_scene)->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--repeats", repeats, "timings per frame (median kept)")->capture_default_str()->check(CLI::PositiveNumber);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
 
-  std::vector<double> ours, base;
-  int cells = 0;
+  MonitorTimes times;
   for (const char* name : {"indoor_office", "corridor", "polished_lobby", "outdoor_campus", "wet_parking_lot"}) {
-    const sim::Scene scene = sim::generate_scene(sim::load_scene_spec(std::string(IVOA_SCENES_DIR) + "/" + name + ".yaml"), 5);
-    const sim::Simulator simulator(scene);
-    sim::Trajectory trajectory(scene, 5);
-    const QueryGrid grid(QueryGridConfig{}, RigGeometry(simulator.rig()).left);
-    const monitor::DepthMonitor monitor(simulator.rig());
-    cells = grid.size();
-    for (int f = 0; f < frames_per_scene; ++f) {
-      const cv::Mat depth = simulator.render(trajectory.pose_at(3.0 * f + 1), static_cast<uint64_t>(f)).depth_mm;
-      obstacle_grid_t out = make_obstacle_grid(grid, "depth_monitor", 0);
-      std::vector<double> a, b;
-      std::vector<int> counts;
-      for (int r = 0; r < repeats; ++r) {
-        double t = monotonic_ms();
-        monitor.evaluate(depth, grid, out);
-        a.push_back(monotonic_ms() - t);
-        t = monotonic_ms();
-        baseline(depth, simulator.rig(), grid, counts);
-        b.push_back(monotonic_ms() - t);
-      }
-      ours.push_back(median(a));
-      base.push_back(median(b));
+    try {
+      time_scene(name, frames_per_scene, repeats, times);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "ivoa-bench-monitor: scene '%s': %s\n", name, e.what());
+      return kExitBadInput;
     }
   }
-  const double o = median(ours), b = median(base);
-  std::printf("Depth monitor, 640x480 depth frames from 5 simulated scenes (%zu frames), %d query cells, one core:\n",
-              ours.size(), cells);
-  std::printf("  %-66s median %6.2f ms, max %6.2f ms\n", "ours: region-cropped cloud, voxel grid, binned disc + ray samples",
-              o, *std::max_element(ours.begin(), ours.end()));
-  std::printf("  %-66s median %6.2f ms, max %6.2f ms\n", "baseline: whole-image cloud, VoxelGrid, KD-tree radius search",
-              b, *std::max_element(base.begin(), base.end()));
-  std::printf("  ratio baseline/ours %.1fx; budget 10 ms: %s (%.2f of budget)\n", b / o, o <= 10 ? "met" : "NOT met", o / 10);
-  return 0;
+  print_times(times);
+  return kExitOk;
 }

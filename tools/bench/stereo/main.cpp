@@ -93,84 +93,116 @@ void print(const std::string& name, const Timing& t) {
   std::printf("  (constructed in %.1f ms)\n", t.construct_ms);
 }
 
+struct BenchOptions {
+  std::string scene_path = std::string(IVOA_SIM_SCENES_DIR) + "/indoor_office.yaml";
+  std::string json_path;
+  uint64_t seed = 1;
+  int frames = 20, repeats = 5, threads = 1;
+  bool jppc_only = false;
+  ivoa::QueryGridConfig grid;
+  ivoa::stereo::DetectorConfig detector;
+};
+
+void add_bench_options(CLI::App& app, BenchOptions& o) {
+  app.add_option("--scene", o.scene_path, "simulator scene file")->capture_default_str();
+  app.add_option("--seed", o.seed, "scene and trajectory seed")->capture_default_str();
+  app.add_option("--frames", o.frames, "frames along a simulated drive (0.5 s apart)")->capture_default_str();
+  app.add_option("--repeats", o.repeats, "passes over the frames")->capture_default_str();
+  app.add_option("--threads", o.threads, "OpenCV threads (1: one core, as the budget says)")->capture_default_str();
+  app.add_option("--json", o.json_path, "also write the results as JSON");
+  app.add_flag("--jppc-only", o.jppc_only, "time JPP-C alone (for profiling)");
+  ivoa::add_query_grid_options(app, o.grid);
+  ivoa::stereo::add_detector_options(app, o.detector);
+}
+
+struct RenderedDrive {
+  std::vector<ivoa::sim::SimFrame> frames;
+  ivoa::RigCalibration rig;
+  double render_ms = 0;  // per frame
+};
+
+// Throws on a bad scene file.
+RenderedDrive render_drive(const BenchOptions& o) {
+  const ivoa::sim::Scene scene = ivoa::sim::generate_scene(ivoa::sim::load_scene_spec(o.scene_path), o.seed);
+  const ivoa::sim::Simulator simulator(scene);
+  ivoa::sim::Trajectory drive(scene, o.seed);
+  RenderedDrive out;
+  out.rig = simulator.rig();
+  const double start = wall_ms();
+  for (int i = 0; i < o.frames; ++i)
+    out.frames.push_back(simulator.render(drive.pose_at(0.5 * i), static_cast<uint64_t>(i)));
+  out.render_ms = (wall_ms() - start) / o.frames;
+  return out;
+}
+
+void print_setup(const BenchOptions& o, const RenderedDrive& drive, const ivoa::QueryGrid& grid, double load) {
+  int projecting = 0;
+  for (const auto& c : grid.cells()) projecting += c.projects ? 1 : 0;
+  std::printf("stereo detector benchmark: %d simulator frames (%s, seed %llu, %dx%d BGR, render %.0f ms/frame), "
+              "%d repeats, %d OpenCV thread(s), load average %.2f\n",
+              o.frames, o.scene_path.c_str(), static_cast<unsigned long long>(o.seed), drive.rig.left.width,
+              drive.rig.left.height, drive.render_ms, o.repeats, o.threads, load);
+  std::printf("query grid: x %.2f..%.2f, y %.2f..%.2f, spacing %.2f, r %.2f: %d cells, all %d that project are "
+              "evaluated (%d have the whole patch in view)\n",
+              o.grid.x_min, o.grid.x_max, o.grid.y_min, o.grid.y_max, o.grid.spacing, o.grid.safety_radius,
+              grid.size(), projecting, grid.count_in_image());
+}
+
+// The ratio, and the budget verdict on JPP-C's CPU time. On one core the
+// thread's CPU time is the work per frame; wall time also counts the time
+// other processes took the core (a busy build machine).
+double print_comparison(const Timing& jppc, const Timing& dense) {
+  const double jppc_cpu = Timing::quantile(jppc.cpu, 0.5);
+  const double ratio = Timing::quantile(dense.cpu, 0.5) / jppc_cpu;
+  std::printf("dense / jppc: %.1fx (CPU median per frame; wall medians: %.1fx)\n", ratio, dense.median() / jppc.median());
+  std::printf("budget: JPP-C <= 5 ms per frame on one core: CPU median %.2f ms (wall median %.2f, best %.2f) -> %s\n",
+              jppc_cpu, jppc.median(), Timing::quantile(jppc.wall, 0.0), jppc_cpu <= 5.0 ? "within" : "OVER");
+  return ratio;
+}
+
+bool write_json(const BenchOptions& o, double load, const Timing& jppc, const Timing& dense, double ratio) {
+  std::ofstream out(o.json_path);
+  out << "{\"frames\": " << o.frames << ", \"repeats\": " << o.repeats << ", \"threads\": " << o.threads
+      << ", \"load_average\": " << load << ", \"jppc_median_ms\": " << jppc.median()
+      << ", \"jppc_cpu_median_ms\": " << Timing::quantile(jppc.cpu, 0.5)
+      << ", \"jppc_best_ms\": " << Timing::quantile(jppc.wall, 0.0) << ", \"dense_median_ms\": " << dense.median()
+      << ", \"ratio\": " << ratio << "}\n";
+  return static_cast<bool>(out);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Benchmark: JPP-C vs the dense SGBM detector per stereo frame on simulator frames"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
-  std::string scene_path = std::string(IVOA_SIM_SCENES_DIR) + "/indoor_office.yaml", json_path;
-  uint64_t seed = 1;
-  int frames_count = 20, repeats = 5, threads = 1;
-  ivoa::QueryGridConfig grid_config;
-  ivoa::stereo::DetectorConfig config;
-  app.add_option("--scene", scene_path, "simulator scene file")->capture_default_str();
-  app.add_option("--seed", seed, "scene and trajectory seed")->capture_default_str();
-  app.add_option("--frames", frames_count, "frames along a simulated drive (0.5 s apart)")->capture_default_str();
-  app.add_option("--repeats", repeats, "passes over the frames")->capture_default_str();
-  app.add_option("--threads", threads, "OpenCV threads (1: one core, as the budget says)")->capture_default_str();
-  app.add_option("--json", json_path, "also write the results as JSON");
-  bool jppc_only = false;
-  app.add_flag("--jppc-only", jppc_only, "time JPP-C alone (for profiling)");
-  ivoa::add_query_grid_options(app, grid_config);
-  ivoa::stereo::add_detector_options(app, config);
+  BenchOptions o;
+  add_bench_options(app, o);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("bench-stereo", common.log_level);
-  cv::setNumThreads(threads);
+  cv::setNumThreads(o.threads);
 
-  std::vector<ivoa::sim::SimFrame> frames;
-  ivoa::RigCalibration rig;
-  double render_ms = 0;
+  RenderedDrive drive;
   try {
-    const ivoa::sim::Scene scene = ivoa::sim::generate_scene(ivoa::sim::load_scene_spec(scene_path), seed);
-    const ivoa::sim::Simulator simulator(scene);
-    ivoa::sim::Trajectory drive(scene, seed);
-    rig = simulator.rig();
-    const double start = wall_ms();
-    for (int i = 0; i < frames_count; ++i)
-      frames.push_back(simulator.render(drive.pose_at(0.5 * i), static_cast<uint64_t>(i)));
-    render_ms = (wall_ms() - start) / frames_count;
+    drive = render_drive(o);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitBadInput;
   }
-  const ivoa::QueryGrid grid(grid_config, ivoa::CameraModel(rig.left, rig.left_to_robot));
-  int projecting = 0;
-  for (const auto& c : grid.cells()) projecting += c.projects ? 1 : 0;
+  const ivoa::QueryGrid grid(o.grid, ivoa::CameraModel(drive.rig.left, drive.rig.left_to_robot));
   double load[3] = {0, 0, 0};
   getloadavg(load, 3);
+  print_setup(o, drive, grid, load[0]);
 
-  std::printf("stereo detector benchmark: %d simulator frames (%s, seed %llu, %dx%d BGR, render %.0f ms/frame), "
-              "%d repeats, %d OpenCV thread(s), load average %.2f\n",
-              frames_count, scene_path.c_str(), static_cast<unsigned long long>(seed), rig.left.width, rig.left.height,
-              render_ms, repeats, threads, load[0]);
-  std::printf("query grid: x %.2f..%.2f, y %.2f..%.2f, spacing %.2f, r %.2f: %d cells, all %d that project are "
-              "evaluated (%d have the whole patch in view)\n",
-              grid_config.x_min, grid_config.x_max, grid_config.y_min, grid_config.y_max, grid_config.spacing,
-              grid_config.safety_radius, grid.size(), projecting, grid.count_in_image());
-  const Timing jppc = run("jppc", rig, config, grid, frames, repeats);
+  const Timing jppc = run("jppc", drive.rig, o.detector, grid, drive.frames, o.repeats);
   print("jppc", jppc);
-  if (jppc_only) return ivoa::kExitOk;
-  const Timing dense = run("dense", rig, config, grid, frames, repeats);
+  if (o.jppc_only) return ivoa::kExitOk;
+  const Timing dense = run("dense", drive.rig, o.detector, grid, drive.frames, o.repeats);
   print("dense", dense);
-  const double ratio = Timing::quantile(dense.cpu, 0.5) / Timing::quantile(jppc.cpu, 0.5);
-  std::printf("dense / jppc: %.1fx (CPU median per frame; wall medians: %.1fx)\n", ratio, dense.median() / jppc.median());
-  // On one core the thread's CPU time is the work per frame; wall time also
-  // counts the time other processes took the core (a busy build machine).
-  const double cpu_median = Timing::quantile(jppc.cpu, 0.5);
-  std::printf("budget: JPP-C <= 5 ms per frame on one core: CPU median %.2f ms (wall median %.2f, best %.2f) -> %s\n",
-              cpu_median, jppc.median(), Timing::quantile(jppc.wall, 0.0), cpu_median <= 5.0 ? "within" : "OVER");
-  if (!json_path.empty()) {
-    std::ofstream out(json_path);
-    out << "{\"frames\": " << frames_count << ", \"repeats\": " << repeats << ", \"threads\": " << threads
-        << ", \"load_average\": " << load[0] << ", \"jppc_median_ms\": " << jppc.median()
-        << ", \"jppc_cpu_median_ms\": " << Timing::quantile(jppc.cpu, 0.5)
-        << ", \"jppc_best_ms\": " << Timing::quantile(jppc.wall, 0.0) << ", \"dense_median_ms\": " << dense.median()
-        << ", \"ratio\": " << ratio << "}\n";
-    if (!out) {
-      spdlog::error("cannot write {}", json_path);
-      return ivoa::kExitIoError;
-    }
+  const double ratio = print_comparison(jppc, dense);
+  if (!o.json_path.empty() && !write_json(o, load[0], jppc, dense, ratio)) {
+    spdlog::error("cannot write {}", o.json_path);
+    return ivoa::kExitIoError;
   }
   return ivoa::kExitOk;
 }

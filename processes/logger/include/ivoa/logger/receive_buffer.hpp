@@ -18,7 +18,8 @@ struct ReceiveBufferResult {
   bool as_asked = false;  // the buffer is at least the size asked for
 };
 
-// The port of a udpm:// URL (LCM's default 7667 if it names none); 0 for other URLs.
+// The port of a udpm:// URL (LCM's default 7667 if it names none); 0 for other URLs
+// and for a port outside 1-65535.
 int udpm_port(const std::string& url);
 
 ReceiveBufferResult force_receive_buffer(int port, int bytes);
