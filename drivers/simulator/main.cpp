@@ -51,7 +51,8 @@ std::vector<std::string> pixel_format_names() {
 void add_session_options(CLI::App& app, CommandLine& cl) {
   auto& config = cl.driver;
   app.add_option("--scene", config.scene_file, "scene file (YAML, see libs/sim/scenes)")->capture_default_str();
-  app.add_option("--seed", config.seed, "scene and trajectory seed (one seed + scene = one session)")->capture_default_str();
+  app.add_option("--seed", config.seed, "scene and trajectory seed (one seed + scene = one session)")
+      ->capture_default_str();
   app.add_option("--noise-seed", cl.noise_seed,
                  "sensor noise realisation: 0 keys the noise by frame alone; another value, same session with other "
                  "noise")
@@ -62,8 +63,9 @@ void add_session_options(CLI::App& app, CommandLine& cl) {
       ->excludes(realtime);
   app.add_option("--frames", config.frames, "stop after this many frames (0: no limit)")->capture_default_str();
   app.add_option("--duration", config.duration_s, "stop after this many seconds of session time (0: no limit)");
-  app.add_option("--start-utime", config.start_utime, "utime of frame 0, us since epoch (default: now); frame k is "
-                                                      "at start + k / rate, so sessions are reproducible");
+  app.add_option("--start-utime", config.start_utime,
+                 "utime of frame 0, us since epoch (default: now); frame k is "
+                 "at start + k / rate, so sessions are reproducible");
   app.add_option("--rig", cl.rig_file, "render with this rig calibration file instead of the built-in rig");
   app.add_option("--save-rig", cl.save_rig, "write the rig calibration (OpenCV YAML) to this file and go on");
 }
@@ -73,12 +75,14 @@ void add_output_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--pixel-format", cl.pixel_format, "published pixel format")
       ->capture_default_str()
       ->check(CLI::IsMember(pixel_format_names()));
-  app.add_option("--depth-offset-ms", config.depth_offset_ms, "depth image utime minus stereo utime")->capture_default_str();
+  app.add_option("--depth-offset-ms", config.depth_offset_ms, "depth image utime minus stereo utime")
+      ->capture_default_str();
   app.add_option("--calibration-period", config.calibration_period_s, "seconds between RIG_CALIBRATION messages")
       ->capture_default_str();
   app.add_flag("--no-truth", cl.no_truth, "do not publish SIM_GROUND_TRUTH");
-  app.add_option("--log", config.log_file, "also write every message to this LCM log, timestamped by message utime "
-                                           "(bit-identical for the same session)");
+  app.add_option("--log", config.log_file,
+                 "also write every message to this LCM log, timestamped by message utime "
+                 "(bit-identical for the same session)");
   app.add_option("--stereo-channel", config.stereo_channel)->capture_default_str();
   app.add_option("--depth-channel", config.depth_channel)->capture_default_str();
   app.add_option("--rig-channel", config.rig_channel)->capture_default_str();
@@ -121,8 +125,7 @@ int drive(const ivoa::sim::SimDriverConfig& config, const ivoa::sim::SimulatorCo
     return ivoa::kExitIoError;
   }
   spdlog::info("scene {} seed {} at {} Hz ({}), start utime {}, publishing on {}", config.scene_file, config.seed,
-               config.rate_hz, config.realtime ? "real time" : "as fast as possible", driver->start_utime(),
-               bus.url());
+               config.rate_hz, config.realtime ? "real time" : "as fast as possible", driver->start_utime(), bus.url());
   const int64_t frames = driver->run();
   heartbeat.set_state("stopped");
   heartbeat.publish_now();
@@ -133,8 +136,9 @@ int drive(const ivoa::sim::SimDriverConfig& config, const ivoa::sim::SimulatorCo
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Simulated robot: renders a scene along a joystick-like drive and publishes the stereo pair, the depth "
-               "image, the rig calibration and the simulator's ground truth"};
+  CLI::App app{
+      "Simulated robot: renders a scene along a joystick-like drive and publishes the stereo pair, the depth "
+      "image, the rig calibration and the simulator's ground truth"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
   CommandLine cl;

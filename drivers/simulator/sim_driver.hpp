@@ -24,18 +24,18 @@ class Heartbeat;
 namespace ivoa::sim {
 
 struct SimDriverConfig {
-  std::string scene_file;            // YAML scene
-  uint64_t seed = 1;                 // scene and trajectory seed: one session
-  double rate_hz = 10.0;             // frames per second of session time
-  bool realtime = true;              // pace frames by the wall clock (skip frames when rendering falls behind)
-  int64_t frames = 0;                // stop after this many frames (0: no limit)
-  double duration_s = 0;             // stop after this much session time (0: no limit)
-  int64_t start_utime = -1;          // utime of frame 0 (< 0: now)
-  int32_t pixelformat = 0;           // image_t::PIXEL_FORMAT_* of the published pair (0: BAYER_RGGB)
-  double depth_offset_ms = 4.0;      // depth image utime = stereo utime + this (its own clock)
-  double calibration_period_s = 1.0; // RIG_CALIBRATION period in session time
+  std::string scene_file;             // YAML scene
+  uint64_t seed = 1;                  // scene and trajectory seed: one session
+  double rate_hz = 10.0;              // frames per second of session time
+  bool realtime = true;               // pace frames by the wall clock (skip frames when rendering falls behind)
+  int64_t frames = 0;                 // stop after this many frames (0: no limit)
+  double duration_s = 0;              // stop after this much session time (0: no limit)
+  int64_t start_utime = -1;           // utime of frame 0 (< 0: now)
+  int32_t pixelformat = 0;            // image_t::PIXEL_FORMAT_* of the published pair (0: BAYER_RGGB)
+  double depth_offset_ms = 4.0;       // depth image utime = stereo utime + this (its own clock)
+  double calibration_period_s = 1.0;  // RIG_CALIBRATION period in session time
   bool publish_truth = true;
-  std::string log_file;              // also write every message to this LCM log, timestamped by utime
+  std::string log_file;  // also write every message to this LCM log, timestamped by utime
   std::string stereo_channel{channels::kStereoImages};
   std::string depth_channel{channels::kDepthImage};
   std::string rig_channel{channels::kRigCalibration};

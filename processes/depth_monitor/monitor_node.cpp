@@ -33,9 +33,8 @@ void MonitorNode::on_calibration(const rig_calibration_t& msg) {
     }
     pipeline_ = std::make_unique<monitor::LabelingPipeline>(rig, options_.grid, options_.monitor, options_.pairing);
     calibration_bytes_ = std::move(bytes);
-    spdlog::info("calibration '{}': depth {}x{}, {} query cells ({} with a full patch in the left image)",
-                 rig.rig_name, rig.depth.width, rig.depth.height, pipeline_->grid().size(),
-                 pipeline_->grid().count_in_image());
+    spdlog::info("calibration '{}': depth {}x{}, {} query cells ({} with a full patch in the left image)", rig.rig_name,
+                 rig.depth.width, rig.depth.height, pipeline_->grid().size(), pipeline_->grid().count_in_image());
     heartbeat_.set_state("running");
   } catch (const std::exception& e) {
     heartbeat_.bad_input(options_.calibration_channel + ": unusable calibration: " + e.what());

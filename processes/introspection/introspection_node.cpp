@@ -220,9 +220,9 @@ void IntrospectionNode::process(const Frame& frame) {
     heartbeat_.bad_input(where + ": " + e.what());
     return;
   }
-  introspection_t msg = make_introspection_message(*model_, h, frame.msg.utime, left.cols, left.rows,
-                                                   grid ? &*grid : nullptr, predictions, mc_passes_,
-                                                   grid_is_this_frames);
+  introspection_t msg =
+      make_introspection_message(*model_, h, frame.msg.utime, left.cols, left.rows, grid ? &*grid : nullptr,
+                                 predictions, mc_passes_, grid_is_this_frames);
   msg.compute_ms = monotonic_ms() - frame.received_ms;
   bus_.publish(options_.out_channel, msg);
   heartbeat_.count_out();

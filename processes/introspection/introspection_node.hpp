@@ -103,9 +103,9 @@ class IntrospectionNode {
   LatestMailbox<Frame> frames_;
   RecentGrids grids_;
   std::mutex calibration_mutex_;
-  std::vector<uint8_t> calibration_bytes_;       // the newest calibration's content (utime zeroed)
-  std::optional<RigCalibration> new_rig_;        // handed to the worker, which builds the warp
-  std::unique_ptr<GroundWarp> warp_;             // worker thread only
+  std::vector<uint8_t> calibration_bytes_;  // the newest calibration's content (utime zeroed)
+  std::optional<RigCalibration> new_rig_;   // handed to the worker, which builds the warp
+  std::unique_ptr<GroundWarp> warp_;        // worker thread only
   std::atomic<int64_t> frames_done_{0};
   std::thread worker_;
 };

@@ -38,11 +38,13 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
       ->capture_default_str();
   app.add_option("--grid-wait-ms", cl.grid_wait_ms,
                  "after the CNN, how long to wait for the detector's grid of the frame (its verdicts)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--mean-filter", config.mean_filter, "odd window of the heatmap mean filter (1 = off)")
       ->capture_default_str();
   app.add_option("--lookup", cl.lookup, "query cell -> heatmap: nearest cell or bilinear")
-      ->capture_default_str()->check(CLI::IsMember({"nearest", "bilinear"}));
+      ->capture_default_str()
+      ->check(CLI::IsMember({"nearest", "bilinear"}));
   app.add_option("--threads", config.threads, "LibTorch threads")->capture_default_str();
   app.add_option("--device", config.device, "cpu or cuda")->capture_default_str();
   app.add_option("--seed", config.seed, "dropout masks (0 = from the clock)")->capture_default_str();
@@ -51,9 +53,11 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
 void add_channel_options(CLI::App& app, ivoa::IntrospectionNodeOptions& options) {
   app.add_option("--stereo-channel", options.stereo_channel)->capture_default_str()->group("Channels");
   app.add_option("--grid-channel", options.grid_channel, "obstacle grid giving the query cells (\"\" = none)")
-      ->capture_default_str()->group("Channels");
+      ->capture_default_str()
+      ->group("Channels");
   app.add_option("--out-channel", options.out_channel)->capture_default_str()->group("Channels");
-  app.add_option("--calibration-channel", options.calibration_channel, "rig calibration (two-view models warp the right image with it)")
+  app.add_option("--calibration-channel", options.calibration_channel,
+                 "rig calibration (two-view models warp the right image with it)")
       ->capture_default_str()
       ->group("Channels");
 }

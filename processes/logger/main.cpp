@@ -85,10 +85,11 @@ void enlarge_receive_buffer(const std::string& url, double buffer_mb) {
     spdlog::info("kernel receive buffer of LCM's socket: {:.0f} MB ({:.0f} MB as the kernel books it)", buffer_mb,
                  r.bytes / 1e6);
   else
-    spdlog::warn("kernel receive buffer of LCM's socket is {:.0f} MB as the kernel books it, less than the {:.0f} MB "
-                 "asked: raise net.core.rmem_max, or give the logger CAP_NET_ADMIN; a logger kept off the CPU for "
-                 "long can lose images in the kernel",
-                 r.bytes / 1e6, buffer_mb);
+    spdlog::warn(
+        "kernel receive buffer of LCM's socket is {:.0f} MB as the kernel books it, less than the {:.0f} MB "
+        "asked: raise net.core.rmem_max, or give the logger CAP_NET_ADMIN; a logger kept off the CPU for "
+        "long can lose images in the kernel",
+        r.bytes / 1e6, buffer_mb);
 }
 
 void handle_what_lcm_already_has(ivoa::Bus& bus) {
@@ -110,9 +111,10 @@ int report_end(const Recorder& recorder, double seconds) {
     return ivoa::kExitIoError;
   }
   if (s.dropped > 0)
-    spdlog::error("LOST {} messages ({:.1f} MB) because the disk could not keep up (raise --max-queue-mb or use a "
-                  "faster disk)",
-                  s.dropped, mb(s.dropped_bytes));
+    spdlog::error(
+        "LOST {} messages ({:.1f} MB) because the disk could not keep up (raise --max-queue-mb or use a "
+        "faster disk)",
+        s.dropped, mb(s.dropped_bytes));
   return ivoa::kExitOk;
 }
 
@@ -223,17 +225,20 @@ int main(int argc, char** argv) {
   app.add_option("-x,--exclude", options.exclude,
                  "but not those matching this regex (the default skips the probe every LCM process sends at start)")
       ->capture_default_str();
-  app.add_option("--split-mb", split_mb, "start a new numbered file (FILE.00, FILE.01, ...) before one passes this size")
+  app.add_option("--split-mb", split_mb,
+                 "start a new numbered file (FILE.00, FILE.01, ...) before one passes this size")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--calibration-channel", options.log.calibration_channel,
                  "always recorded, and copied to the start of every split file so each is self-contained "
                  "(empty: none)")
       ->capture_default_str();
-  app.add_option("--max-queue-mb", max_queue_mb, "memory for messages waiting for the disk; beyond it new ones are "
-                                                 "dropped and counted")
+  app.add_option("--max-queue-mb", max_queue_mb,
+                 "memory for messages waiting for the disk; beyond it new ones are "
+                 "dropped and counted")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  app.add_option("--max-write-mb-s", max_write_mb_s, "cap the disk write rate (0 = none)")->check(CLI::NonNegativeNumber);
+  app.add_option("--max-write-mb-s", max_write_mb_s, "cap the disk write rate (0 = none)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--socket-buffer-mb", socket_buffer_mb,
                  "kernel receive buffer for LCM's udpm socket, past net.core.rmem_max where permitted "
                  "(CAP_NET_ADMIN); 0 = as LCM sets it")
@@ -255,8 +260,8 @@ int main(int argc, char** argv) {
   options.log.split_bytes = static_cast<uint64_t>(split_mb * 1e6);
   options.log.overwrite = force;
   options.log.sidecars = !no_sidecar;
-  options.log.identity = {"ivoa-logger", IVOA_VERSION, IVOA_GIT_DESCRIBE, hostname(), "", options.channels,
-                          options.exclude};
+  options.log.identity = {"ivoa-logger",    IVOA_VERSION,   IVOA_GIT_DESCRIBE, hostname(), "",
+                          options.channels, options.exclude};
   options.max_queue_bytes = static_cast<uint64_t>(max_queue_mb * 1e6);
   options.max_write_bytes_per_s = max_write_mb_s * 1e6;
   return record(common, std::move(options), ready_file, socket_buffer_mb);

@@ -16,33 +16,46 @@ void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   auto& out = o.output;
   app.add_flag("--window", o.window, "show a window (OpenCV highgui) when a display is present");
   app.add_option("--out-dir", out.out_dir, "write figures here as frame_<utime>.png");
-  app.add_option("--every", out.every_frames, "a PNG every N figures")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--every", out.every_frames, "a PNG every N figures")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--every-seconds", out.every_seconds, "and at least S seconds apart")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--max-images", out.max_images, "keep only the newest N PNGs this run wrote (0: all)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--video", out.video, "also write every figure to this video (.avi, MJPG)");
   app.add_option("--video-fps", out.video_fps, "frame rate written in the video")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--scale", o.figure.scale, "figure panel size relative to the image")
-      ->capture_default_str()->check(CLI::Range(0.05, 4.0));
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 4.0));
   app.add_flag("--dots-given-verdict", o.figure.dots_given_verdict,
                "dots: the prediction given the detector's verdict (default: from the image alone, as the paper)");
   app.add_flag("--every-frame,!--newest-only", o.every_frame,
                "draw every frame in order, reading waits for the drawing (default for file:// logs)");
   app.add_option("--max-figures", o.max_figures, "exit after this many figures (0: run until stopped)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
 }
 
 void add_matching_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   const char* g = "Matching";
   app.add_option("--settle-ms", o.matcher.settle_ms,
                  "with no frame complete for this long, draw the best one there is, ms")
-      ->capture_default_str()->group(g)->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->group(g)
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--active-ms", o.matcher.active_ms, "a channel seen this recently is expected in every frame, ms")
-      ->capture_default_str()->group(g)->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->group(g)
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--match-frames", o.matcher.max_frames, "frames kept waiting for their parts")
-      ->capture_default_str()->group(g)->check(CLI::Range(1, 256));
+      ->capture_default_str()
+      ->group(g)
+      ->check(CLI::Range(1, 256));
 }
 
 void add_channel_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
@@ -57,9 +70,10 @@ void add_channel_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Viewer: left image with the ground grid (label or stereo verdict rings, introspection prediction dots; "
-               "TP green, TN blue, FP orange, FN red), P(FP)+P(FN) and uncertainty heatmaps, in a window and/or as "
-               "PNG files and video. Exit codes: 0 ok, 1 LCM failure, 2 bad flags, 4 cannot write the output."};
+  CLI::App app{
+      "Viewer: left image with the ground grid (label or stereo verdict rings, introspection prediction dots; "
+      "TP green, TN blue, FP orange, FN red), P(FP)+P(FN) and uncertainty heatmaps, in a window and/or as "
+      "PNG files and video. Exit codes: 0 ok, 1 LCM failure, 2 bad flags, 4 cannot write the output."};
   ivoa::CommonOptions common;
   ivoa::viewer::ViewerOptions options;
   ivoa::add_common_options(app, common);
@@ -83,7 +97,8 @@ int main(int argc, char** argv) {
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "viewer");
     ivoa::viewer::ViewerNode node(bus, heartbeat, options);
-    spdlog::info("listening on {}{}{}{}", bus.url(), options.output.out_dir.empty() ? "" : "; PNGs in " + options.output.out_dir,
+    spdlog::info("listening on {}{}{}{}", bus.url(),
+                 options.output.out_dir.empty() ? "" : "; PNGs in " + options.output.out_dir,
                  options.output.video.empty() ? "" : "; video " + options.output.video, window ? "; window" : "");
     const int code = ivoa::run_until_stopped(
         bus, &heartbeat,

@@ -18,8 +18,8 @@ TEST(ChannelCounts, PairsBecomeCountsPerChannel) {
 }
 
 TEST(ChannelCounts, AnythingElseIsRefusedByName) {
-  for (const std::string bad : {"STEREO_IMAGES", "STEREO_IMAGES=", "STEREO_IMAGES=sixty", "STEREO_IMAGES=6x", "=3", "A=B=3",
-                                "STEREO_IMAGES=-1", "STEREO_IMAGES=99999999999999999999"}) {
+  for (const std::string bad : {"STEREO_IMAGES", "STEREO_IMAGES=", "STEREO_IMAGES=sixty", "STEREO_IMAGES=6x", "=3",
+                                "A=B=3", "STEREO_IMAGES=-1", "STEREO_IMAGES=99999999999999999999"}) {
     try {
       parse_channel_counts({"OK=1", bad}, "--expect");
       ADD_FAILURE() << bad << " was accepted";

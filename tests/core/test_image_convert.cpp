@@ -21,7 +21,8 @@ double max_abs_diff(const cv::Mat& a, const cv::Mat& b) { return cv::norm(a, b, 
 
 TEST(ImageConvert, LosslessFormatsRoundTripExactly) {
   const cv::Mat bgr = test_pattern();
-  for (int32_t f : std::vector<int32_t>{image_t::PIXEL_FORMAT_BGR, image_t::PIXEL_FORMAT_RGB, image_t::PIXEL_FORMAT_PNG}) {
+  for (int32_t f :
+       std::vector<int32_t>{image_t::PIXEL_FORMAT_BGR, image_t::PIXEL_FORMAT_RGB, image_t::PIXEL_FORMAT_PNG}) {
     const image_t msg = encode_image(bgr, f, 1);
     EXPECT_EQ(msg.size, static_cast<int32_t>(msg.data.size()));
     EXPECT_EQ(max_abs_diff(decode_image(msg), bgr), 0) << pixelformat_name(f);
@@ -50,7 +51,7 @@ TEST(ImageConvert, BayerLayoutsDemosaicToTheRightColours) {
   // every layout; swapped red/blue (the classic BayerRG mix-up) fails.
   const cv::Mat flat(40, 40, CV_8UC3, cv::Scalar(30, 120, 220));
   for (int32_t f : std::vector<int32_t>{image_t::PIXEL_FORMAT_BAYER_RGGB, image_t::PIXEL_FORMAT_BAYER_BGGR,
-                    image_t::PIXEL_FORMAT_BAYER_GBRG, image_t::PIXEL_FORMAT_BAYER_GRBG}) {
+                                        image_t::PIXEL_FORMAT_BAYER_GBRG, image_t::PIXEL_FORMAT_BAYER_GRBG}) {
     const image_t msg = encode_image(flat, f, 0);
     EXPECT_EQ(msg.row_stride, 40);
     const cv::Mat back = decode_image(msg);

@@ -14,8 +14,8 @@ namespace ivoa::sim_hardware {
 namespace {
 
 TEST(FrameStamp, RoundTripsThroughBayerMosaicAndDemosaic) {
-  for (const FrameStamp stamp : {FrameStamp{0, false}, FrameStamp{1, true}, FrameStamp{0x2BCDEF, false},
-                                  FrameStamp{0x7FFFFF, true}}) {
+  for (const FrameStamp stamp :
+       {FrameStamp{0, false}, FrameStamp{1, true}, FrameStamp{0x2BCDEF, false}, FrameStamp{0x7FFFFF, true}}) {
     cv::Mat image(64, 320, CV_8UC3, cv::Scalar(10, 200, 90));
     write_stamp(image, stamp);
     cv::Mat demosaiced;

@@ -102,9 +102,12 @@ TEST(BatchAugmenter, EveryValueFollowsThePhotometricModel) {
       for (int rgb = 0; rgb < 3; ++rgb)
         for (int y = 0; y < kSize; y += 7)
           for (int x = 0; x < kSize; x += 5) {
-            const float want = expected_value(patches[static_cast<size_t>(i)], params[static_cast<size_t>(i)], info, view, rgb, y, x);
-            ASSERT_NEAR(values[i][3 * view + rgb][y][x], want, 1e-5) << "sample " << i << " view " << view << " rgb " << rgb;
-            clamped += want == static_cast<float>((1.0 - info.mean[static_cast<size_t>(rgb)]) / info.std[static_cast<size_t>(rgb)]);
+            const float want =
+                expected_value(patches[static_cast<size_t>(i)], params[static_cast<size_t>(i)], info, view, rgb, y, x);
+            ASSERT_NEAR(values[i][3 * view + rgb][y][x], want, 1e-5)
+                << "sample " << i << " view " << view << " rgb " << rgb;
+            clamped += want == static_cast<float>((1.0 - info.mean[static_cast<size_t>(rgb)]) /
+                                                  info.std[static_cast<size_t>(rgb)]);
           }
   EXPECT_GT(clamped, 0);  // the strong gain of sample b saturates some values: the clamp was exercised
 }

@@ -75,9 +75,11 @@ TEST(IntrospectionNode, TwoViewModelWaitsForTheCalibrationThenRuns) {
   config.seed = 1;
   IntrospectionNodeOptions options;
   options.grid_channel = "";
-  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 2), config), options, 2);
+  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 2), config), options,
+                         2);
   std::vector<introspection_t> out;
-  bus.subscribe<introspection_t>(channels::kIntrospection, [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
+  bus.subscribe<introspection_t>(channels::kIntrospection,
+                                 [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
   auto wait_for = [&](auto done) { return deliver_until(bus, done); };
   const RigCalibration rig = test::make_test_rig();
   stereo_image_t early = stereo_frame(rig, 1000), frame = stereo_frame(rig, 2000);
@@ -155,9 +157,11 @@ TEST(IntrospectionNode, QueryCellsAreGivenTheVerdictsOfTheirOwnFrame) {
   config.verdict_uncertainty_threshold = 1.0;  // every verdict prediction announced
   IntrospectionNodeOptions options;
   options.grid_wait = std::chrono::milliseconds(50);
-  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 1), config), options, 4);
+  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 1), config), options,
+                         4);
   std::vector<introspection_t> out;
-  bus.subscribe<introspection_t>(channels::kIntrospection, [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
+  bus.subscribe<introspection_t>(channels::kIntrospection,
+                                 [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
   auto wait_for = [&](auto done) { return deliver_until(bus, done); };
   const RigCalibration rig = test::make_test_rig();
   const QueryGrid query_grid(QueryGridConfig{}, RigGeometry(rig).left);

@@ -65,7 +65,8 @@ TEST(ModelFile, SavedAndLoadedModelGivesIdenticalOutputsAndMetadata) {
   const cv::Mat image = random_image(300, 220);
   const Heatmaps ha = a->run(image), hb = b->run(image);
   for (int k = 0; k < kNumClasses; ++k)
-    EXPECT_EQ(cv::norm(ha.probability[static_cast<size_t>(k)], hb.probability[static_cast<size_t>(k)], cv::NORM_INF), 0);
+    EXPECT_EQ(cv::norm(ha.probability[static_cast<size_t>(k)], hb.probability[static_cast<size_t>(k)], cv::NORM_INF),
+              0);
 }
 
 TEST(ModelFile, HeatmapCellsEqualTheirPatches) {
@@ -110,7 +111,8 @@ TEST(ModelFile, CellPredictionsComeFromTheirOwnResizedSquares) {
     cv::vconcat(views, stacked);
     const auto want = model->run_patches({stacked}, false).predictions[0];
     for (int k = 0; k < kNumClasses; ++k)
-      EXPECT_NEAR(predictions[i].probability[static_cast<size_t>(k)], want.probability[static_cast<size_t>(k)], 1e-6) << i;
+      EXPECT_NEAR(predictions[i].probability[static_cast<size_t>(k)], want.probability[static_cast<size_t>(k)], 1e-6)
+          << i;
   }
   // The 100 px square at a heatmap cell's centre is that cell's patch.
   const Heatmaps h = model->run(image);
@@ -182,7 +184,8 @@ TEST(ModelFile, TwoViewHeatmapCellsEqualTheirStackedPatches) {
   for (int r = 0; r < h.rows; ++r)
     for (int col = 0; col < h.cols; ++col) {
       cv::Mat stacked;
-      cv::vconcat(image(cv::Rect(col * 20, r * 20, 100, 100)), image(cv::Rect(col * 20, 180 + r * 20, 100, 100)), stacked);
+      cv::vconcat(image(cv::Rect(col * 20, r * 20, 100, 100)), image(cv::Rect(col * 20, 180 + r * 20, 100, 100)),
+                  stacked);
       patches.push_back(stacked);
     }
   const PatchOutputs out = model->run_patches(patches, false);

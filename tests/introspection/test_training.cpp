@@ -27,12 +27,12 @@ cv::Mat pattern(int label, std::mt19937& rng) {
   cv::Mat p(100, 100, CV_8UC3, cv::Scalar(colour(rng), colour(rng), colour(rng)));
   const int ph = phase(rng);
   for (int i = ph; i < 100; i += 10) {
-    if (label == 0) cv::line(p, {0, i}, {99, i}, cv::Scalar(255, 255, 255), 3);    // horizontal stripes
-    if (label == 1) cv::line(p, {i, 0}, {i, 99}, cv::Scalar(0, 0, 0), 3);          // vertical stripes
+    if (label == 0) cv::line(p, {0, i}, {99, i}, cv::Scalar(255, 255, 255), 3);  // horizontal stripes
+    if (label == 1) cv::line(p, {i, 0}, {i, 99}, cv::Scalar(0, 0, 0), 3);        // vertical stripes
   }
   if (label == 2) cv::circle(p, {50, 50}, 20 + ph, cv::Scalar(255, 255, 255), -1);  // a bright blob
   cv::Mat noise(p.size(), CV_8UC3);
-  cv::randn(noise, 0, label == 3 ? 40 : 8);                                         // 3: noise only
+  cv::randn(noise, 0, label == 3 ? 40 : 8);  // 3: noise only
   return p + noise;
 }
 
@@ -56,7 +56,8 @@ void write_session(const std::string& root, const std::string& name, int per_cla
       s.stereo_state = label == 0 || label == 2 ? 1 : 0;  // TP / FP: the detector said obstacle
       std::vector<float> evidence;
       for (int j = 0; j < evidence_size; ++j)
-        evidence.push_back(j == 2 ? std::numeric_limits<float>::quiet_NaN() : 0.5f * static_cast<float>(label) + 0.1f * j);
+        evidence.push_back(j == 2 ? std::numeric_limits<float>::quiet_NaN()
+                                  : 0.5f * static_cast<float>(label) + 0.1f * j);
       w.add_sample(s, pattern(label, rng), evidence);
     }
 }
@@ -149,7 +150,7 @@ TEST_P(TrainingWith, ResumesFromTheCheckpoint) {
   const TrainReport r = train_model(c, [&](const TrainStatus& s) {
     if (first < 0) first = s.step;
   });
-  EXPECT_EQ(first, 11);  // continued after step 10, not from scratch
+  EXPECT_EQ(first, 11);        // continued after step 10, not from scratch
   if (r.best_before_resume) {  // the checkpoint's best stands: its numbers, nothing invented
     EXPECT_EQ(r.best_step, before.best_step);
     EXPECT_NEAR(r.best_val_mean_class_accuracy, before.best_val_mean_class_accuracy, 1e-5);
@@ -262,7 +263,8 @@ TEST(Training, LearnsTheDetectorsEvidenceAsASideTaskWhenTheDatasetHasIt) {
     train_model(c);
     FAIL() << "resumed without the side task from a checkpoint trained with it";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("with the evidence side task, this run without"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("with the evidence side task, this run without"), std::string::npos)
+        << e.what();
   }
 
   // Off, or sessions without evidence among the training ones: no side task.

@@ -103,14 +103,16 @@ std::string error_of(const std::string& text) {
 }
 
 TEST(LauncherConfig, SyntaxErrorsNameFileAndLine) {
-  EXPECT_EQ(error_of("cmd \"a\" {\n  exec = \"x\"\n}\n"), "bad.pmd:3: expected ';' after the value of 'exec', found '}'");
+  EXPECT_EQ(error_of("cmd \"a\" {\n  exec = \"x\"\n}\n"),
+            "bad.pmd:3: expected ';' after the value of 'exec', found '}'");
   EXPECT_EQ(error_of("\n\ncmd \"a\" { exec = \"x;\n"), "bad.pmd:3: unterminated string");
   EXPECT_EQ(error_of("group \"g\" {\n cmd \"a\" { exec = \"x\"; }\n"),
             "bad.pmd:3: expected 'cmd', 'group' or '}' in group \"g\", found end of file");
   EXPECT_EQ(error_of("cmd \"a\" { exec = \"x\"; }\n\ncmd \"a\" { exec = \"y\"; }"),
             "bad.pmd:3: command \"a\" already defined at line 1");
   EXPECT_EQ(error_of("cmd \"a\" {\n exec = \"x\";\n colour = \"red\";\n}"),
-            "bad.pmd:3: unknown attribute 'colour' (known: exec, host, deputy, auto_respawn, stop_signal, stop_time_allowed)");
+            "bad.pmd:3: unknown attribute 'colour' (known: exec, host, deputy, auto_respawn, stop_signal, "
+            "stop_time_allowed)");
   EXPECT_EQ(error_of("cmd \"a\" {\n exec = \"x\";\n auto_respawn = \"yes\";\n}"),
             "bad.pmd:3: auto_respawn must be \"true\" or \"false\", got \"yes\"");
   EXPECT_EQ(error_of("cmd \"a\" { exec = \"x\"; stop_signal = 99; }"),
@@ -138,9 +140,7 @@ TEST(LauncherConfig, ScriptErrorsNameTheStepsLine) {
             "bad.pmd:3: unknown script action 'launch' (start, stop, restart, wait, run_script)");
 }
 
-TEST(LauncherConfig, UnreadableFileIsAConfigError) {
-  EXPECT_THROW(load_config("/nonexistent/x.pmd"), ConfigError);
-}
+TEST(LauncherConfig, UnreadableFileIsAConfigError) { EXPECT_THROW(load_config("/nonexistent/x.pmd"), ConfigError); }
 
 TEST(LauncherConfig, ProcmanAttributesWithoutMeaningHereAreWarnings) {
   const Config c = parse_config("cmd \"a\" {\n exec = \"x\";\n nickname = \"a\";\n}", "old.pmd");

@@ -13,8 +13,9 @@ Supervisor idle_supervisor(const std::string& name) {
   LaunchCommand c;
   c.spec.name = name;
   c.spec.exec = c.shell_command = "true";
-  return Supervisor({c}, SupervisorOptions{}, [](const std::string&, const std::string&) {},
-                    [](const std::string&, const std::string&) {});
+  return Supervisor(
+      {c}, SupervisorOptions{}, [](const std::string&, const std::string&) {},
+      [](const std::string&, const std::string&) {});
 }
 
 process_status_t remote_status(const std::string& name, int64_t out, double latency_mean, double latency_max) {

@@ -69,7 +69,8 @@ group "g" {
   EXPECT_TRUE(contains(r.output, "[greeter] hello world")) << r.output;
   const std::string json = read_file(status);
   EXPECT_TRUE(contains(json, "\"end_reason\": \"--duration reached\"")) << json;
-  EXPECT_TRUE(contains(json, "\"name\": \"sleeper\", \"group\": \"g\", \"host\": \"localhost\", \"auto_respawn\": true"))
+  EXPECT_TRUE(
+      contains(json, "\"name\": \"sleeper\", \"group\": \"g\", \"host\": \"localhost\", \"auto_respawn\": true"))
       << json;
   EXPECT_FALSE(contains(json, "\"state\": \"running\"")) << json;
   EXPECT_TRUE(contains(json, "\"exit_signal\": 15")) << json;
@@ -136,8 +137,9 @@ script "go" {
   EXPECT_LT(a, b);
   EXPECT_FALSE(contains(r.output, "[never]"));
   const std::string json = read_file(status);
-  EXPECT_TRUE(contains(json, "\"name\": \"never\", \"group\": \"\", \"host\": \"localhost\", \"auto_respawn\": false, "
-                             "\"pid\": 0, \"state\": \"idle\""))
+  EXPECT_TRUE(contains(json,
+                       "\"name\": \"never\", \"group\": \"\", \"host\": \"localhost\", \"auto_respawn\": false, "
+                       "\"pid\": 0, \"state\": \"idle\""))
       << json;
   EXPECT_TRUE(contains(json, "\"end_reason\": \"every command has ended\"")) << json;
 }
@@ -213,8 +215,9 @@ int wait_for_exit(pid_t pid, double limit_s) {
 TEST(LaunchCli, SigtermStopsEveryCommandAndExitsCleanly) {
   ivoa::test::TempDir dir;
   const std::string pid_file = dir.file("worker.pid");
-  const auto config = write_file(dir, "t.pmd", "cmd \"worker\" { exec = \"echo $$ > " + pid_file +
-                                                   "; exec sleep 30\"; auto_respawn = \"true\"; }\n");
+  const auto config =
+      write_file(dir, "t.pmd",
+                 "cmd \"worker\" { exec = \"echo $$ > " + pid_file + "; exec sleep 30\"; auto_respawn = \"true\"; }\n");
   const std::string out = dir.file("out.txt");
   const pid_t launcher = spawn_launcher(config, out);
   ASSERT_GT(launcher, 0);
@@ -232,8 +235,9 @@ TEST(LaunchCli, SecondStopSignalKillsAtOnce) {
   ivoa::test::TempDir dir;
   const std::string pid_file = dir.file("stubborn.pid");
   // Ignores the stop signal and would be given 60 s before SIGKILL.
-  const auto config = write_file(dir, "k.pmd", "cmd \"stubborn\" { exec = \"trap '' INT TERM; echo $$ > " + pid_file +
-                                                   "; sleep 60\"; stop_time_allowed = 60; }\n");
+  const auto config = write_file(dir, "k.pmd",
+                                 "cmd \"stubborn\" { exec = \"trap '' INT TERM; echo $$ > " + pid_file +
+                                     "; sleep 60\"; stop_time_allowed = 60; }\n");
   const std::string out = dir.file("out.txt");
   const pid_t launcher = spawn_launcher(config, out);
   ASSERT_GT(launcher, 0);

@@ -96,7 +96,9 @@ TEST(LauncherSupervisor, StopSendsTheCommandsStopSignal) {
   s.start_all();
   ASSERT_TRUE(step_until(s, [&] { return s.status("sleeper").state == RunState::kRunning; }));
   s.stop("sleeper");
-  ASSERT_TRUE(step_until(s, [&] { return !s.busy(); }, 5)) << "SIGTERM ends sleep long before stop_time_allowed";
+  ASSERT_TRUE(step_until(
+      s, [&] { return !s.busy(); }, 5))
+      << "SIGTERM ends sleep long before stop_time_allowed";
   const CommandStatus st = s.status("sleeper");
   EXPECT_EQ(st.exit_signal, SIGTERM);
   EXPECT_FALSE(st.killed);
@@ -113,7 +115,8 @@ TEST(LauncherSupervisor, CommandIgnoringItsStopSignalIsKilledAfterStopTimeAllowe
   ASSERT_TRUE(step_until(s, [&] { return s.status("stubborn").uptime_s > 0.3; }));
   const auto stop_sent = Clock::now();
   s.stop("stubborn");
-  ASSERT_TRUE(step_until(s, [&] { return !s.busy(); }, 10));
+  ASSERT_TRUE(step_until(
+      s, [&] { return !s.busy(); }, 10));
   const double took = std::chrono::duration<double>(Clock::now() - stop_sent).count();
   const CommandStatus st = s.status("stubborn");
   EXPECT_TRUE(st.killed);
@@ -126,7 +129,8 @@ TEST(LauncherSupervisor, RespawnsWithDoublingBackOff) {
   Recorder r;
   Supervisor s({make_command("crasher", "exit 1", true)}, fast_respawn(), r.output(), r.event());
   s.start_all();
-  ASSERT_TRUE(step_until(s, [&] { return s.status("crasher").restarts >= 3; }, 10));
+  ASSERT_TRUE(step_until(
+      s, [&] { return s.status("crasher").restarts >= 3; }, 10));
   s.stop("crasher");
   ASSERT_TRUE(step_until(s, [&] { return !s.busy(); }));
   std::vector<std::string> delays;
@@ -193,8 +197,8 @@ TEST(LauncherSupervisor, StoppingACommandStopsItsWholeProcessGroup) {
   SupervisorOptions o = fast_respawn();
   o.reap_orphans = true;
   // The shell stays (two commands), with a background child in its group.
-  Supervisor s({make_command("family", "sleep 30 & echo $! > " + pid_file + "; wait", false, SIGTERM)}, o,
-               r.output(), r.event());
+  Supervisor s({make_command("family", "sleep 30 & echo $! > " + pid_file + "; wait", false, SIGTERM)}, o, r.output(),
+               r.event());
   s.start_all();
   ASSERT_TRUE(step_until(s, [&] { return std::ifstream(pid_file).peek() != EOF; }));
   const int group = s.status("family").pid;
@@ -216,7 +220,8 @@ TEST(LauncherSupervisor, RestartStartsAgainAfterTheStop) {
   ASSERT_TRUE(step_until(s, [&] { return s.status("svc").state == RunState::kRunning; }));
   const int first = s.status("svc").pid;
   s.restart("svc");
-  ASSERT_TRUE(step_until(s, [&] { return s.status("svc").pid != first && s.status("svc").state == RunState::kRunning; }));
+  ASSERT_TRUE(
+      step_until(s, [&] { return s.status("svc").pid != first && s.status("svc").state == RunState::kRunning; }));
   EXPECT_EQ(s.status("svc").restarts, 1);
   EXPECT_THROW(s.start("nope"), std::out_of_range);
 }

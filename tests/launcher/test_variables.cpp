@@ -173,8 +173,9 @@ TEST(LauncherSelection, ShippedConfigurationsExpandForEveryHost) {
   for (const char* name : {"sim", "record", "deploy", "replay"}) {
     SCOPED_TRACE(name);
     const Config c = load_config(std::string(IVOA_SOURCE_DIR "/procman_configs/") + name + ".pmd");
-    const Variables v(c, {{"LEFT_CAMERA", "10.0.0.1"}, {"RIGHT_CAMERA", "10.0.0.2"}, {"RIG", "rig.yaml"}, {"LOG", "a.lcmlog"}},
-                      {{"IVOA_BIN", "/b"}, {"IVOA_CONFIG_DIR", "/c"}}, fake_environment({}));
+    const Variables v(
+        c, {{"LEFT_CAMERA", "10.0.0.1"}, {"RIGHT_CAMERA", "10.0.0.2"}, {"RIG", "rig.yaml"}, {"LOG", "a.lcmlog"}},
+        {{"IVOA_BIN", "/b"}, {"IVOA_CONFIG_DIR", "/c"}}, fake_environment({}));
     Selection all;
     all.host = kAnyHost;
     const auto selected = select_commands(c, all, v);

@@ -93,9 +93,9 @@ TEST(LiveScorer, MatchesCellsByPositionWhicheverMessageComesFirst) {
                                     {2.0f, 0.5f, kTN, 1, kFree, kTN, 1}}));
   scorer.add(labels_message(1, {{0.75f, 0.0f, kTN, kFree},
                                 {1.0f, 0.25f, kFP, kObstacle},
-                                {2.0f, 0.5f, kNone, kFree},       // no label: not scored
-                                {3.0f, 0.0f, kTN, kFree},       // no query there: out of view
-                                {3.0f, 0.25f, kTN, kFree}}));   // no query there, in view
+                                {2.0f, 0.5f, kNone, kFree},    // no label: not scored
+                                {3.0f, 0.0f, kTN, kFree},      // no query there: out of view
+                                {3.0f, 0.25f, kTN, kFree}}));  // no query there, in view
   obstacle_grid_t grid{};  // the detector's: (3, 0) is outside the image, (3, 0.25) inside
   grid.utime = 1;
   grid.num_cells = 2;
@@ -132,8 +132,8 @@ TEST(LiveScorer, MatchesCellsByPositionWhicheverMessageComesFirst) {
 TEST(LiveScorer, CountsVerdictsThatAreMissingOrNotTheLabelsOwn) {
   LiveScorer scorer;
   scorer.add(labels_message(5, {{1.0f, 0.0f, kTN, kFree}, {1.25f, 0.0f, kFP, kObstacle}}));
-  scorer.add(prediction_message(5, {{1.0f, 0.0f, kTN, 1, obstacle_grid_t::STATE_UNKNOWN, kNone, 0},
-                                    {1.25f, 0.0f, kFP, 1, kFree, kFN, 1}}));
+  scorer.add(prediction_message(
+      5, {{1.0f, 0.0f, kTN, 1, obstacle_grid_t::STATE_UNKNOWN, kNone, 0}, {1.25f, 0.0f, kFP, 1, kFree, kFN, 1}}));
   const LiveScore s = scorer.finish();
   EXPECT_EQ(s.image.all.total(), 2);
   EXPECT_EQ(s.verdict_unknown, 1);
@@ -166,9 +166,9 @@ TEST(ComputeTimes, NearestRankPercentiles) {
 // The tool on a log: the table, the JSON, and refusals that name the problem.
 class LiveScoreTool : public ::testing::Test {
  protected:
-  std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                              ("live_score_" + std::to_string(::getpid()) + "_" +
-                               ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("live_score_" + std::to_string(::getpid()) + "_" +
+                                                ::testing::UnitTest::GetInstance()->current_test_info()->name());
   void SetUp() override { std::filesystem::create_directories(dir); }
   void TearDown() override { std::filesystem::remove_all(dir); }
 
@@ -181,7 +181,8 @@ class LiveScoreTool : public ::testing::Test {
   // Runs the tool; its exit code, and stdout + stderr in `output`.
   int run(const std::string& args, std::string& output) const {
     const std::string out_file = (dir / "out.txt").string();
-    const int status = std::system((std::string(IVOA_LIVE_SCORE_BIN) + " " + args + " > " + out_file + " 2>&1").c_str());
+    const int status =
+        std::system((std::string(IVOA_LIVE_SCORE_BIN) + " " + args + " > " + out_file + " 2>&1").c_str());
     std::stringstream text;
     text << std::ifstream(out_file).rdbuf();
     output = text.str();
@@ -195,8 +196,10 @@ TEST_F(LiveScoreTool, ScoresALogAndWritesJson) {
     logio::LogWriter log(log_path);
     for (int64_t t = 1; t <= 4; ++t) {
       write(log, "INTROSPECTION_LABELS", labels_message(t, {{1.0f, 0.0f, kFP, kObstacle}, {1.5f, 0.0f, kTN, kFree}}));
-      write(log, "INTROSPECTION", prediction_message(t, {{1.0f, 0.0f, t == 4 ? kTN : kFP, 1, kObstacle, kFP, 1},
-                                                         {1.5f, 0.0f, kTN, 1, kFree, kTN, 1}}, 10.0 * t));
+      write(log, "INTROSPECTION",
+            prediction_message(
+                t, {{1.0f, 0.0f, t == 4 ? kTN : kFP, 1, kObstacle, kFP, 1}, {1.5f, 0.0f, kTN, 1, kFree, kTN, 1}},
+                10.0 * t));
     }
     log.close();
   }

@@ -60,7 +60,7 @@ cv::Mat render_depth(const RigCalibration& rig, const DepthScene& scene) {
   for (int v = 0; v < depth.rows; ++v) {
     for (int u = 0; u < depth.cols; ++u) {
       const Eigen::Vector3d dir = camera.unproject({u, v}, 1.0) - o;  // planar depth 1 m
-      const double t = hit(scene, o, dir);  // = planar depth
+      const double t = hit(scene, o, dir);                            // = planar depth
       if (!std::isfinite(t)) continue;
       const double z = t + scene.noise_coefficient * t * t * unit(rng);
       if (z < rig.depth_min_range || z > rig.depth_max_range) continue;

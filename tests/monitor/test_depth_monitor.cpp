@@ -43,8 +43,8 @@ TEST(DepthMonitor, FlatGroundIsFreeWhereSeenAndUnknownWhereNot) {
   for (int i = 0; i < f.grid.size(); ++i) {
     EXPECT_NE(out.state[i], G::STATE_OBSTACLE) << "cell " << i;
     if (f.disc_visible(i)) {
-      EXPECT_EQ(out.state[i], G::STATE_FREE) << "visible cell " << i << " at " << f.grid.cell(i).x << ","
-                                             << f.grid.cell(i).y;
+      EXPECT_EQ(out.state[i], G::STATE_FREE)
+          << "visible cell " << i << " at " << f.grid.cell(i).x << "," << f.grid.cell(i).y;
       ++free;
     }
     const auto px = f.geo.depth.project({f.grid.cell(i).x, f.grid.cell(i).y, 0});
@@ -74,7 +74,7 @@ TEST(DepthMonitor, AgreesWithGeometryAroundABoxAndDoesNotGuessBehindIt) {
   EXPECT_GE(obstacles, 3);
   EXPECT_GT(checked, 30);
   // Directly behind the box the ground is hidden: no verdict.
-  EXPECT_EQ(out.state[f.grid.index(8, 6)], G::STATE_UNKNOWN);  // x = 2.5, y = 0
+  EXPECT_EQ(out.state[f.grid.index(8, 6)], G::STATE_UNKNOWN);   // x = 2.5, y = 0
   EXPECT_EQ(out.state[f.grid.index(10, 6)], G::STATE_UNKNOWN);  // x = 3.0, y = 0
 }
 
@@ -82,7 +82,7 @@ TEST(DepthMonitor, ObstaclesLowerThanTheThresholdAreNeverObstacles) {
   const Fixture f;
   test::DepthScene scene;
   scene.boxes.push_back({1.45, 1.55, -0.05, 0.05, 0.02});  // a 2 cm mat
-  scene.boxes.push_back({2.4, 2.6, 0.4, 0.6, 0.03});        // a 3 cm threshold strip
+  scene.boxes.push_back({2.4, 2.6, 0.4, 0.6, 0.03});       // a 3 cm threshold strip
   const obstacle_grid_t out = f.run(scene);
   // The mat hides a little ground behind it, so the cell may be UNKNOWN, but
   // what can be seen of it is below the obstacle height.

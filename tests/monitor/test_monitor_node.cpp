@@ -24,8 +24,9 @@ struct NodeFixture {
   std::vector<obstacle_grid_t> depth_grids;
 
   NodeFixture() {
-    bus.subscribe<introspection_labels_t>(channels::kIntrospectionLabels,
-                                          [this](const introspection_labels_t& m, const ReceiveInfo&) { labels.push_back(m); });
+    bus.subscribe<introspection_labels_t>(
+        channels::kIntrospectionLabels,
+        [this](const introspection_labels_t& m, const ReceiveInfo&) { labels.push_back(m); });
     bus.subscribe<obstacle_grid_t>(channels::kObstaclesDepth,
                                    [this](const obstacle_grid_t& m, const ReceiveInfo&) { depth_grids.push_back(m); });
   }
@@ -59,7 +60,7 @@ TEST(MonitorNode, LabelsPairedFramesAgainstTheDepthVerdict) {
   test::DepthScene scene;
   scene.boxes.push_back({1.55, 1.9, -0.3, 0.2, 0.4});
   const cv::Mat depth = test::render_depth(f.rig, scene);
-  const int box_cell = f.grid.index(4, 6);   // x = 1.5, y = 0: 5 cm from the box
+  const int box_cell = f.grid.index(4, 6);    // x = 1.5, y = 0: 5 cm from the box
   const int floor_cell = f.grid.index(2, 6);  // x = 1.0, y = 0: clear floor
   f.send_depth(1'000'000, depth);
   f.send_stereo(997'000, floor_cell);  // stereo sees an obstacle on the clear floor, misses the box

@@ -67,17 +67,17 @@ void run_scene(const std::string& scene_file, uint64_t seed, int frames, Tally& 
 TEST(MonitorOnSimulator, AgreesWithSceneGeometryWhereItSpeaks) {
   Tally t;
   const std::string scenes = IVOA_SCENES_DIR;
-  for (const char* name : {"indoor_office", "corridor", "polished_lobby", "warehouse", "outdoor_campus",
-                           "wet_parking_lot", "night_plaza"})
+  for (const char* name :
+       {"indoor_office", "corridor", "polished_lobby", "warehouse", "outdoor_campus", "wet_parking_lot", "night_plaza"})
     run_scene(scenes + "/" + name + ".yaml", 11, 4, t);
   const int labelled = t.agree + t.disagree;
   const double agreement = static_cast<double>(t.agree) / labelled;
   std::printf("monitor vs truth: %d labelled cells (%d free, %d obstacle), %d unknown, agreement %.4f\n", labelled,
               t.free, t.obstacles, t.unknown, agreement);
   EXPECT_GE(agreement, 0.99);
-  EXPECT_GT(t.obstacles, 20);   // the trajectories do meet obstacles
+  EXPECT_GT(t.obstacles, 20);  // the trajectories do meet obstacles
   EXPECT_GT(t.free, 200);
-  EXPECT_GT(t.unknown, 100);    // and there is much it cannot see
+  EXPECT_GT(t.unknown, 100);  // and there is much it cannot see
   EXPECT_EQ(t.unseen_labelled, 0) << "cells whose ground is outside the depth image cannot be FREE";
 }
 

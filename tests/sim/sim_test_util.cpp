@@ -61,7 +61,8 @@ cv::Mat sgbm_disparity(const cv::Mat& left_gray, const cv::Mat& right_gray, int 
 double ground_disparity(const StereoRectification& rect, double u, double v) {
   // The rectified left ray through (u, v), intersected with z = 0.
   const Eigen::Isometry3d& to_robot = rect.rectified_camera_to_robot();
-  const Eigen::Vector3d dir = to_robot.linear() * Eigen::Vector3d((u - rect.cx()) / rect.focal(), (v - rect.cy()) / rect.focal(), 1);
+  const Eigen::Vector3d dir =
+      to_robot.linear() * Eigen::Vector3d((u - rect.cx()) / rect.focal(), (v - rect.cy()) / rect.focal(), 1);
   const Eigen::Vector3d o = to_robot.translation();
   if (dir.z() >= 0) return std::numeric_limits<double>::quiet_NaN();
   const Eigen::Vector3d g = o + dir * (-o.z() / dir.z());

@@ -13,10 +13,10 @@ namespace ivoa::sim::test {
 // the ground truth covers (NaN elsewhere), from truth_depth through core's
 // camera model and rectification.
 struct RectifiedPair {
-  cv::Mat left, right;        // CV_8UC1
-  cv::Mat true_disparity;     // CV_32FC1
-  cv::Mat true_surface;       // CV_8UC1 (255 where unknown)
-  cv::Mat true_phenomena;     // CV_8UC1
+  cv::Mat left, right;     // CV_8UC1
+  cv::Mat true_disparity;  // CV_32FC1
+  cv::Mat true_surface;    // CV_8UC1 (255 where unknown)
+  cv::Mat true_phenomena;  // CV_8UC1
 };
 RectifiedPair rectify_with_truth(const SimFrame& frame, const RigCalibration& rig, const StereoRectification& rect);
 

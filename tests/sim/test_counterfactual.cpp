@@ -69,7 +69,8 @@ TEST(SimCounterfactual, EachTwinTakesAwayItsPhenomenonAndKeepsTheGeometry) {
 TEST(SimCounterfactual, OtherPhenomenaStay) {
   const SceneSpec spec = many_phenomena();
   const SimFrame factual = Simulator(generate_scene(spec, 1)).render(Pose2D{}, 0);
-  const SimFrame no_stripe = Simulator(*generate_scene_without(spec, 1, GT::PHENOMENON_DARK_STRIPE)).render(Pose2D{}, 0);
+  const SimFrame no_stripe =
+      Simulator(*generate_scene_without(spec, 1, GT::PHENOMENON_DARK_STRIPE)).render(Pose2D{}, 0);
   // The black baseboard was texture-less too; it becomes painted wall, still texture-less.
   EXPECT_EQ(pixels_with(no_stripe, GT::PHENOMENON_TEXTURELESS), pixels_with(factual, GT::PHENOMENON_TEXTURELESS));
   EXPECT_EQ(pixels_with(no_stripe, GT::PHENOMENON_REPETITIVE), pixels_with(factual, GT::PHENOMENON_REPETITIVE));

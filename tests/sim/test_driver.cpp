@@ -107,9 +107,13 @@ TEST(SimDriver, SessionsAreReproducible) {
 TEST(SimDriver, ExecutableRunsAndFailsCleanly) {
   test::TempDir dir;
   const std::string driver = IVOA_SIM_DRIVER_PATH;
-  const std::string common = " --lcm-url memq:// --as-fast-as-possible --frames 2 --start-utime 1700000000000000"
-                             " --log-level warn --scene " + std::string(IVOA_SIM_SCENES_DIR) + "/warehouse.yaml";
-  ASSERT_EQ(std::system((driver + common + " --log " + dir.file("a.lcmlog") + " --save-rig " + dir.file("rig.yaml")).c_str()), 0);
+  const std::string common =
+      " --lcm-url memq:// --as-fast-as-possible --frames 2 --start-utime 1700000000000000"
+      " --log-level warn --scene " +
+      std::string(IVOA_SIM_SCENES_DIR) + "/warehouse.yaml";
+  ASSERT_EQ(
+      std::system((driver + common + " --log " + dir.file("a.lcmlog") + " --save-rig " + dir.file("rig.yaml")).c_str()),
+      0);
   ASSERT_EQ(std::system((driver + common + " --log " + dir.file("b.lcmlog")).c_str()), 0);
   EXPECT_EQ(read_file(dir.file("a.lcmlog")), read_file(dir.file("b.lcmlog")));
   EXPECT_NEAR(load_rig_calibration(dir.file("rig.yaml")).baseline(), 0.12, 0.005);
@@ -122,7 +126,8 @@ TEST(SimDriver, ExecutableRunsAndFailsCleanly) {
   EXPECT_EQ(first->timestamp, 1700000000000000);
   // A bad scene file: exit code 3 (unusable input file).
   std::ofstream(dir.file("bad.yaml")) << "obstacles: {kinds: {dragon: 1}}\n";
-  const int status = std::system((driver + " --lcm-url memq:// --log-level off --scene " + dir.file("bad.yaml")).c_str());
+  const int status =
+      std::system((driver + " --lcm-url memq:// --log-level off --scene " + dir.file("bad.yaml")).c_str());
   EXPECT_EQ(WEXITSTATUS(status), 3);
   EXPECT_EQ(WEXITSTATUS(std::system((driver + " --rate -1 --log-level off 2>/dev/null").c_str())), 2);
 }

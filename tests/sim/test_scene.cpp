@@ -14,9 +14,9 @@ using namespace elements;
 
 Scene exact_scene() {
   SceneSpec spec = make_bare_spec(Environment::kIndoor, "carpet_grey");
-  spec.elements.push_back(box({2.0, 0.0}, {0.4, 0.4, 0.5}));              // x in [1.8, 2.2], y in [-0.2, 0.2]
-  spec.elements.push_back(box({2.0, 1.5}, {0.4, 0.4, 0.03}));             // a mat-like slab below min_height
-  spec.elements.push_back(pit({2.0, -1.5}, {0.4, 0.4}, 0.3));              // x in [1.8, 2.2], y in [-1.7, -1.3]
+  spec.elements.push_back(box({2.0, 0.0}, {0.4, 0.4, 0.5}));   // x in [1.8, 2.2], y in [-0.2, 0.2]
+  spec.elements.push_back(box({2.0, 1.5}, {0.4, 0.4, 0.03}));  // a mat-like slab below min_height
+  spec.elements.push_back(pit({2.0, -1.5}, {0.4, 0.4}, 0.3));  // x in [1.8, 2.2], y in [-1.7, -1.3]
   ElementSpec table;
   table.type = ElementSpec::Type::kTable;
   table.position = {4.0, 0.0};

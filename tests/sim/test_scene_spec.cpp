@@ -91,14 +91,17 @@ start: [0, 0, 90]
 TEST(SimSceneSpec, ErrorsNameFileAndKey) {
   EXPECT_NE(error_of("name: x\nobstacles: {cuont: 3}\n").find("test.yaml:2: obstacles.cuont: unknown key"),
             std::string::npos);
-  EXPECT_NE(error_of("walls: {materials: [paint_white, chocolate]}\n").find("walls.materials: unknown material 'chocolate'"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of("walls: {materials: [paint_white, chocolate]}\n").find("walls.materials: unknown material 'chocolate'"),
+      std::string::npos);
   EXPECT_NE(error_of("elements:\n  - {type: box, position: [1, 0], material: unobtainium}\n")
                 .find("elements[0].material: unknown material 'unobtainium'"),
             std::string::npos);
-  EXPECT_NE(error_of("elements:\n  - {type: spaceship, position: [1, 0]}\n").find("elements[0].type: unknown element type"),
+  EXPECT_NE(
+      error_of("elements:\n  - {type: spaceship, position: [1, 0]}\n").find("elements[0].type: unknown element type"),
+      std::string::npos);
+  EXPECT_NE(error_of("layout: {width: [5, 2]}\n").find("layout.width: range [min, max] has min > max"),
             std::string::npos);
-  EXPECT_NE(error_of("layout: {width: [5, 2]}\n").find("layout.width: range [min, max] has min > max"), std::string::npos);
   EXPECT_NE(error_of("phenomena: {glare: 1.5}\n").find("phenomena.glare: must be a probability"), std::string::npos);
   EXPECT_NE(error_of("environment: underwater\n").find("environment: expected indoor or outdoor"), std::string::npos);
   EXPECT_NE(error_of("layout: [1, 2\n").find("test.yaml:"), std::string::npos);

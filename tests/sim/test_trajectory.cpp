@@ -17,7 +17,7 @@ Scene shipped(const std::string& name, uint64_t seed) {
 
 struct DriveStats {
   double min_clearance = 1e9, max_speed = 0, max_yaw_rate = 0, distance = 0;
-  int close_approaches = 0;   // separate times the footprint came within 0.55 m of something
+  int close_approaches = 0;  // separate times the footprint came within 0.55 m of something
   int frames = 0, frames_with_obstacle_ahead = 0;
   double heading_spread = 0;  // |mean of unit heading vectors|: 0 = all directions
 };

@@ -36,12 +36,12 @@ class Feed {
  public:
   Feed(const std::string& url, const std::string& process, double timeout_s)
       : bus_(url), process_(process), timeout_ms_(timeout_s * 1000) {
-    bus_.subscribe<ivoa::obstacle_grid_t>("OBSTACLES_STEREO", [this](const ivoa::obstacle_grid_t& m,
-                                                                      const ivoa::ReceiveInfo&) { grids_.push_back(m); });
-    bus_.subscribe<ivoa::process_status_t>("PROCESS_STATUS", [this](const ivoa::process_status_t& m,
-                                                                     const ivoa::ReceiveInfo&) {
-      if (m.name == process_) status_ = m;
-    });
+    bus_.subscribe<ivoa::obstacle_grid_t>(
+        "OBSTACLES_STEREO", [this](const ivoa::obstacle_grid_t& m, const ivoa::ReceiveInfo&) { grids_.push_back(m); });
+    bus_.subscribe<ivoa::process_status_t>("PROCESS_STATUS",
+                                           [this](const ivoa::process_status_t& m, const ivoa::ReceiveInfo&) {
+                                             if (m.name == process_) status_ = m;
+                                           });
     ivoa::test::SyntheticScene room;
     room.boxes.push_back({{4.0, -4.0, 0.0}, {4.2, 4.0, 2.5}, true, 140, 9, 3.0});
     ivoa::test::render_pair(room, rig_a_, left_, right_, 1);

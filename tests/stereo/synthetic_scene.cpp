@@ -70,7 +70,9 @@ bool hit_boxes(const SyntheticScene& scene, const Ray& ray, double& t_best, doub
     // texture-less box shows its edges.
     const double shade = axis == 0 ? 1.0 : axis == 1 ? 0.85 : 1.15;
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    gray = shade * (box.textured ? texture(p[a1], p[a2], box.seed + 17 * static_cast<uint32_t>(axis), box.gray, box.texture_scale) : box.gray);
+    gray = shade * (box.textured ? texture(p[a1], p[a2], box.seed + 17 * static_cast<uint32_t>(axis), box.gray,
+                                           box.texture_scale)
+                                 : box.gray);
     hit = true;
   }
   return hit;

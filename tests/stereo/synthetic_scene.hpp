@@ -17,9 +17,9 @@ namespace ivoa::test {
 struct SceneBox {
   Eigen::Vector3d min, max;  // robot frame, metres
   bool textured = true;
-  double gray = 150;          // mean (textured) or flat grey level
+  double gray = 150;  // mean (textured) or flat grey level
   uint32_t seed = 7;
-  double texture_scale = 1;   // blob sizes 1.2, 3.5 and 10 cm times this
+  double texture_scale = 1;  // blob sizes 1.2, 3.5 and 10 cm times this
 };
 
 // A floor rectangle that reflects like a wet or polished floor: the pixel is
@@ -46,6 +46,5 @@ void render_pair(const SyntheticScene& scene, const RigCalibration& rig, cv::Mat
 
 // Ground truth: does a box reach within `radius` (horizontal disc) of (x, y)?
 bool footprint_occupied(const SyntheticScene& scene, double x, double y, double radius);
-
 
 }  // namespace ivoa::test

@@ -161,9 +161,9 @@ TEST(JppMatcher, WindowsMostlyOutsideTheImageGiveNoVerdict) {
   const cv::Mat left = test::random_texture(kSize, 6);
   JppMatcher matcher(jpp());  // min_window_fraction 0.5
   matcher.set_images(left, left);
-  EXPECT_FALSE(matcher.cost({0, 0}, {0, 0}));        // 36 of 121 pixels inside
-  EXPECT_TRUE(matcher.cost({3, 150}, {3, 150}));     // 99 of 121
-  EXPECT_FALSE(matcher.cost({-1, 150}, {3, 150}));   // centre outside
+  EXPECT_FALSE(matcher.cost({0, 0}, {0, 0}));       // 36 of 121 pixels inside
+  EXPECT_TRUE(matcher.cost({3, 150}, {3, 150}));    // 99 of 121
+  EXPECT_FALSE(matcher.cost({-1, 150}, {3, 150}));  // centre outside
   EXPECT_EQ(matcher.confident_positive({0, 0}, {0, 0}), PointCheck::kUnobserved);
   EXPECT_EQ(matcher.confident_positive({10, 150}, {500, 150}), PointCheck::kUnobserved);
 }

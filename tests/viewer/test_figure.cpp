@@ -23,7 +23,8 @@ FigureOptions full_size() {
 }
 
 // True if the pixel is within `tolerance` of `colour` in every channel.
-::testing::AssertionResult has_colour(const cv::Mat& image, int x, int y, const cv::Scalar& colour, int tolerance = 12) {
+::testing::AssertionResult has_colour(const cv::Mat& image, int x, int y, const cv::Scalar& colour,
+                                      int tolerance = 12) {
   const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
   for (int c = 0; c < 3; ++c)
     if (std::abs(p[c] - colour[c]) > tolerance)

@@ -40,7 +40,8 @@ const CLI::Option* ignored_with_recorded_labels(const std::vector<CLI::Option*>&
 std::string class_counts(const std::array<int64_t, dataset::kNumClasses>& c) {
   std::string out;
   for (int k = 0; k < dataset::kNumClasses; ++k)
-    out += (k ? "  " : "") + dataset::kLabelNames[static_cast<size_t>(k)] + " " + std::to_string(c[static_cast<size_t>(k)]);
+    out += (k ? "  " : "") + dataset::kLabelNames[static_cast<size_t>(k)] + " " +
+           std::to_string(c[static_cast<size_t>(k)]);
   return out;
 }
 
@@ -110,8 +111,10 @@ int run_info(const std::string& root, const std::string& split_path) {
                 class_counts(i.class_counts).c_str());
     if (i.evidence_size > 0) std::printf("%-28s evidence: %d values per sample\n", "", i.evidence_size);
     if (i.tn_kept < 1)
-      std::printf("%-28s TN thinned to %g: %lld TN cells left out\n", "", i.tn_kept, static_cast<long long>(i.tn_dropped));
-    for (int k = 0; k < dataset::kNumClasses; ++k) total[static_cast<size_t>(k)] += i.class_counts[static_cast<size_t>(k)];
+      std::printf("%-28s TN thinned to %g: %lld TN cells left out\n", "", i.tn_kept,
+                  static_cast<long long>(i.tn_dropped));
+    for (int k = 0; k < dataset::kNumClasses; ++k)
+      total[static_cast<size_t>(k)] += i.class_counts[static_cast<size_t>(k)];
   }
   std::printf("total: %s\n", class_counts(total).c_str());
   for (const auto& [session, split] : split_of)
@@ -141,24 +144,29 @@ void add_build_command(CLI::App& app, BuildCommand& b) {
   CLI::App* build = b.command = app.add_subcommand("build", "logs -> dataset sessions");
   auto& options = b.options;
   build->add_option("--out", b.out, "dataset folder (created; sessions are added to it)")->required();
-  build->add_option("--labels", options.labels,
-                    "'recorded' (the log's INTROSPECTION_LABELS) or a detector to re-run offline: jppc, dense")
+  build
+      ->add_option("--labels", options.labels,
+                   "'recorded' (the log's INTROSPECTION_LABELS) or a detector to re-run offline: jppc, dense")
       ->capture_default_str();
   build->add_option("--session", b.session, "session name for all logs (default: per log, from the file name)");
-  build->add_option("--environment", options.environment, "indoor or outdoor (default: what the simulator logged, else the scene name)");
-  build->add_option("--views", options.views,
-                    "1: left patches (the paper); 2: each with the right image warped onto the ground plane below it")
+  build->add_option("--environment", options.environment,
+                    "indoor or outdoor (default: what the simulator logged, else the scene name)");
+  build
+      ->add_option("--views", options.views,
+                   "1: left patches (the paper); 2: each with the right image warped onto the ground plane below it")
       ->check(CLI::IsMember({1, 2}))
       ->capture_default_str();
-  build->add_option("--patch-scale", options.patch_scale,
-                    "0: fixed --patch-size squares (the paper); k > 0: squares of k footprint-disc widths (at least "
-                    "--patch-size) resized to --patch-size, so near cells show their whole disc")
+  build
+      ->add_option("--patch-scale", options.patch_scale,
+                   "0: fixed --patch-size squares (the paper); k > 0: squares of k footprint-disc widths (at least "
+                   "--patch-size) resized to --patch-size, so near cells show their whole disc")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  build->add_option("--keep-tn", options.keep_tn,
-                    "store this fraction of the TN cells, the same ones on every rebuild (TN is about two thirds of "
-                    "the cells; 0.25 saves about 45 % of the disk); keep 1 for test sessions, whose overall accuracy it "
-                    "would skew")
+  build
+      ->add_option("--keep-tn", options.keep_tn,
+                   "store this fraction of the TN cells, the same ones on every rebuild (TN is about two thirds of "
+                   "the cells; 0.25 saves about 45 % of the disk); keep 1 for test sessions, whose overall accuracy it "
+                   "would skew")
       ->check(CLI::Validator(check_fraction, "in (0, 1]"))
       ->capture_default_str();
   build->add_flag("--no-evidence", b.no_evidence,
@@ -180,9 +188,10 @@ int finish_build_options(BuildCommand& b) {
   if (b.options.labels != dataset::kRecordedLabels) return -1;
   const CLI::Option& patch_size = *b.command->get_option("--patch-size");
   if (const CLI::Option* flag = ignored_with_recorded_labels(b.relabel_flags, patch_size, b.options)) {
-    spdlog::error("{} does not apply to --labels recorded (the labels carry the grid and detector the live "
-                  "processes used); re-label offline with --labels jppc or dense to change them",
-                  flag->get_name());
+    spdlog::error(
+        "{} does not apply to --labels recorded (the labels carry the grid and detector the live "
+        "processes used); re-label offline with --labels jppc or dense to change them",
+        flag->get_name());
     return kExitUsage;
   }
   return -1;

@@ -61,18 +61,20 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
   constexpr size_t kBatch = 256;
   const auto& info = session.info();
   if (info.patch_scale != model.info().patch_scale)
-    throw dataset::DatasetError(fmt::format("session {} has patch scale {}, model {} was trained on {} (build the dataset "
-                                            "with --patch-scale {})",
-                                            info.session, info.patch_scale, model.info().id, model.info().patch_scale,
-                                            model.info().patch_scale));
+    throw dataset::DatasetError(fmt::format(
+        "session {} has patch scale {}, model {} was trained on {} (build the dataset "
+        "with --patch-scale {})",
+        info.session, info.patch_scale, model.info().id, model.info().patch_scale, model.info().patch_scale));
   if (info.views != model.info().views)
-    throw dataset::DatasetError("session " + info.session + " has " + std::to_string(info.views) + " view(s) per patch, model " +
-                                model.info().id + " takes " + std::to_string(model.info().views) +
-                                " (build the dataset with --views " + std::to_string(model.info().views) + ")");
+    throw dataset::DatasetError("session " + info.session + " has " + std::to_string(info.views) +
+                                " view(s) per patch, model " + model.info().id + " takes " +
+                                std::to_string(model.info().views) + " (build the dataset with --views " +
+                                std::to_string(model.info().views) + ")");
   if (info.tn_kept < 1)
-    spdlog::warn("session {} stores {:.0f} % of its TN cells (ivoa-dataset --keep-tn): its per-class accuracies stand, "
-                 "but overall accuracy and failure precision count too few TN; rebuild it with every TN to report those",
-                 info.session, 100 * info.tn_kept);
+    spdlog::warn(
+        "session {} stores {:.0f} % of its TN cells (ivoa-dataset --keep-tn): its per-class accuracies stand, "
+        "but overall accuracy and failure precision count too few TN; rebuild it with every TN to report those",
+        info.session, 100 * info.tn_kept);
   for (size_t begin = 0; begin < session.size(); begin += kBatch) {
     const size_t end = std::min(session.size(), begin + kBatch);
     std::vector<cv::Mat> patches;
@@ -82,16 +84,17 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
       const auto& s = session.samples()[i];
       const auto& p = out.predictions[i - begin];
       // Given the verdict the detector recorded for this cell, as the live process sees it.
-      const auto v = introspection::given_verdict(p, s.stereo_state == obstacle_grid_t::STATE_OBSTACLE,
-                                                  model.verdict_threshold());
-      std::fprintf(csv,
-                   "%s,%s,%s,%zu,%lld,%d,%.3f,%.3f,%.1f,%.1f,%d,%d,%.5f,%.5f,%.5f,%.5f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,"
-                   "%d,%d,%.5f,%.6g\n",
-                   info.session.c_str(), info.environment.c_str(), split.c_str(), i, static_cast<long long>(s.utime),
-                   s.cell, s.x, s.y, s.u, s.v, s.label, p.predicted, p.probability[0], p.probability[1],
-                   p.probability[2], p.probability[3], p.variance, p.uncertainty, p.class_variance[0],
-                   p.class_variance[1], p.class_variance[2], p.class_variance[3], s.phenomena, s.phenomenon, s.surface,
-                   s.stereo_state, v.predicted, v.p_wrong, v.variance);
+      const auto v =
+          introspection::given_verdict(p, s.stereo_state == obstacle_grid_t::STATE_OBSTACLE, model.verdict_threshold());
+      std::fprintf(
+          csv,
+          "%s,%s,%s,%zu,%lld,%d,%.3f,%.3f,%.1f,%.1f,%d,%d,%.5f,%.5f,%.5f,%.5f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,"
+          "%d,%d,%.5f,%.6g\n",
+          info.session.c_str(), info.environment.c_str(), split.c_str(), i, static_cast<long long>(s.utime), s.cell,
+          s.x, s.y, s.u, s.v, s.label, p.predicted, p.probability[0], p.probability[1], p.probability[2],
+          p.probability[3], p.variance, p.uncertainty, p.class_variance[0], p.class_variance[1], p.class_variance[2],
+          p.class_variance[3], s.phenomena, s.phenomenon, s.surface, s.stereo_state, v.predicted, v.p_wrong,
+          v.variance);
       const auto& e = out.embeddings[i - begin];
       std::fwrite(e.data(), sizeof(float), e.size(), emb);
     }
@@ -236,9 +239,9 @@ void write_eval_json(const Options& o, const introspection::IntrospectionModel& 
   std::ofstream json(path);
   json << "{\"model\": " << json_quote(info.id) << ", \"mc_passes\": " << o.inference.mc_passes
        << ", \"uncertainty_threshold\": " << model.threshold()
-       << ", \"verdict_uncertainty_threshold\": " << model.verdict_threshold()
-       << ", \"overlay_dots\": \"" << (o.dots_given_verdict ? "given_verdict" : "image") << "\", \"samples\": " << samples
-       << ", \"sessions\": [" << evaluated << "], \"metadata\": {\"detector\": " << json_quote(info.detector)
+       << ", \"verdict_uncertainty_threshold\": " << model.verdict_threshold() << ", \"overlay_dots\": \""
+       << (o.dots_given_verdict ? "given_verdict" : "image") << "\", \"samples\": " << samples << ", \"sessions\": ["
+       << evaluated << "], \"metadata\": {\"detector\": " << json_quote(info.detector)
        << ", \"architecture\": " << json_quote(info.architecture)
        << ", \"training\": " << (info.training_summary.empty() ? "{}" : info.training_summary) << "}}\n";
   if (!json.flush()) throw OutputError(path + ": cannot write");
@@ -251,7 +254,8 @@ void add_options(CLI::App& app, Options& o) {
   app.add_option("--splits", o.splits, "splits to evaluate")->delimiter(',')->capture_default_str();
   app.add_option("--out", o.out, "output folder")->required();
   app.add_option("--logs", o.logs, "logs of evaluated sessions, for overlay figures")->check(CLI::ExistingFile);
-  app.add_option("--overlay-every", o.overlay_every, "one overlay per this many labelled frames")->capture_default_str();
+  app.add_option("--overlay-every", o.overlay_every, "one overlay per this many labelled frames")
+      ->capture_default_str();
   app.add_option("--max-overlays", o.max_overlays)->capture_default_str();
   app.add_flag("--dots-given-verdict", o.dots_given_verdict,
                "overlay dots: predictions given the detector's recorded verdict (default: from the image alone, as the "

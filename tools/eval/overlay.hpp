@@ -16,7 +16,7 @@ struct LabelledCell {
   int label = -1;      // 0 TP, 1 TN, 2 FP, 3 FN; -1 none
   int predicted = -1;  // idem; -1 not predicted
   bool announced = true;
-  int patch_side = 0;  // the square the model sees around (u, v), pixels
+  int patch_side = 0;     // the square the model sees around (u, v), pixels
   int stereo_state = -1;  // the detector's verdict recorded for the cell (obstacle_grid_t.STATE_*)
 };
 

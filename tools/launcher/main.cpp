@@ -52,10 +52,14 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_flag("--once", l.once, "stop everything once every command without auto_respawn has ended");
   app.add_option("--until", l.until, "stop everything once these commands have ended");
   app.add_option("--grace", l.grace_s, "seconds the others keep running after --once/--until holds")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
-  app.add_option("--status-file", l.status_file, "write the final status here (JSON if it ends in .json, else the table)");
-  app.add_option("--status-every", l.status_every_s, "print the table every S seconds when not on a terminal (0: at the end only)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--status-file", l.status_file,
+                 "write the final status here (JSON if it ends in .json, else the table)");
+  app.add_option("--status-every", l.status_every_s,
+                 "print the table every S seconds when not on a terminal (0: at the end only)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_flag("--plain", o.plain, "on a terminal too: prefixed lines and a periodic table instead of a live table");
   app.add_option("--output-dir", l.output_dir, "also append each command's output to DIR/NAME.log");
   app.add_option("--status-channel", l.status_channel, "heartbeat channel")->capture_default_str();
@@ -63,11 +67,17 @@ void add_options(CLI::App& app, CliOptions& o) {
   const char* g = "Respawn";
   auto& s = l.supervisor;
   app.add_option("--respawn-delay", s.respawn_delay_s, "first back-off, s (doubles while it keeps failing)")
-      ->capture_default_str()->group(g)->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->group(g)
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--respawn-max-delay", s.respawn_max_delay_s, "longest back-off, s")
-      ->capture_default_str()->group(g)->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->group(g)
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--healthy-after", s.healthy_after_s, "a run this long resets the back-off, s")
-      ->capture_default_str()->group(g)->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->group(g)
+      ->check(CLI::NonNegativeNumber);
 }
 
 // IVOA_BIN: where ivoa-launch itself is (build/bin: every executable);
@@ -82,7 +92,8 @@ std::map<std::string, std::string> builtin_variables(const std::string& config_p
 
 void print_commands(const SelectedCommands& selected) {
   for (const auto& c : selected.commands)
-    std::printf("%s%s%s%s\n    %s\n", c.spec.name.c_str(), c.spec.group.empty() ? "" : (" [" + c.spec.group + "]").c_str(),
+    std::printf("%s%s%s%s\n    %s\n", c.spec.name.c_str(),
+                c.spec.group.empty() ? "" : (" [" + c.spec.group + "]").c_str(),
                 c.spec.auto_respawn ? " auto_respawn" : "",
                 (" stop_signal " + std::to_string(c.spec.stop_signal)).c_str(), c.shell_command.c_str());
   for (const auto& o : selected.other_hosts) std::printf("(other host) %s\n", o.c_str());
@@ -110,7 +121,8 @@ SelectedCommands prepare(CliOptions& o, Config& config) {
 // False (with the hosts the configuration has) if nothing runs on this host.
 bool something_to_run(const Config& config, const SelectedCommands& selected, const CliOptions& o) {
   if (!selected.other_hosts.empty())
-    spdlog::info("{} command(s) for other hosts not run here (--host {})", selected.other_hosts.size(), o.selection.host);
+    spdlog::info("{} command(s) for other hosts not run here (--host {})", selected.other_hosts.size(),
+                 o.selection.host);
   if (selected.commands.empty()) {
     std::set<std::string> hosts;
     for (const auto& c : config.commands) hosts.insert(host_of(c));
@@ -127,9 +139,10 @@ bool something_to_run(const Config& config, const SelectedCommands& selected, co
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Run a procman configuration (.pmd) on this machine: the commands for --host, respawned when they die, "
-               "stopped cleanly on Ctrl-C; PROCESS_STATUS heartbeats in the status table (--lcm-url none: without LCM). "
-               "Exit codes: 0 ok, 1 a command without auto_respawn failed, 2 bad flags or configuration."};
+  CLI::App app{
+      "Run a procman configuration (.pmd) on this machine: the commands for --host, respawned when they die, "
+      "stopped cleanly on Ctrl-C; PROCESS_STATUS heartbeats in the status table (--lcm-url none: without LCM). "
+      "Exit codes: 0 ok, 1 a command without auto_respawn failed, 2 bad flags or configuration."};
   ivoa::CommonOptions common;
   CliOptions o;
   ivoa::add_common_options(app, common);

@@ -14,10 +14,10 @@ struct ChannelStats {
   int64_t bytes = 0;
   int64_t first_recv_utime = 0;
   int64_t last_recv_utime = 0;
-  int64_t last_utime = 0;        // message utime
-  int64_t utime_regressions = 0; // message utime went backwards
+  int64_t last_utime = 0;         // message utime
+  int64_t utime_regressions = 0;  // message utime went backwards
   int64_t last_seq = -1;
-  int64_t seq_gaps = 0;          // messages missing according to seq
+  int64_t seq_gaps = 0;  // messages missing according to seq
 
   double rate_hz() const;
 };

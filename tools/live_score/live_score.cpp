@@ -91,12 +91,9 @@ void LiveScorer::score_frame(int64_t utime, const std::vector<LabelledCell>& cel
     const auto key = cell_key(c.x, c.y);
     const auto it = by_cell.find(key);
     if (it == by_cell.end()) {
-      if (grid != outside_view_.end() && grid->second.count(key))
-        ++s.outside_view_cells;
-      else if (queries.empty())
-        ++s.no_grid_cells;
-      else
-        ++s.unmatched_cells;
+      if (grid != outside_view_.end() && grid->second.count(key)) ++s.outside_view_cells;
+      else if (queries.empty()) ++s.no_grid_cells;
+      else ++s.unmatched_cells;
       continue;
     }
     const Query& q = *it->second;

@@ -47,17 +47,17 @@ struct ComputeTimes {
 };
 
 struct LiveScore {
-  PredictionScore image;          // from the image alone (the paper's)
-  PredictionScore given_verdict;  // given the detector's verdict for the cell
-  int64_t labelled_frames = 0;    // INTROSPECTION_LABELS messages
-  int64_t predicted_frames = 0;   // INTROSPECTION messages
-  int64_t scored_frames = 0;      // frames with both
-  int64_t labelled_cells = 0;     // cells of the scored frames with a label (not NONE)
-  int64_t outside_view_cells = 0; // of those, outside the introspection's view (the grid's in_image 0)
-  int64_t no_grid_cells = 0;      // in frames predicted with no query cells (no detector grid had come yet)
-  int64_t unmatched_cells = 0;    // the others with no query cell at the same position: a prediction missing
-  int64_t verdict_unknown = 0;    // matched, but no detector grid reached the introspection
-  int64_t verdict_disagrees = 0;  // the introspection's verdict is not the one the label was made from
+  PredictionScore image;           // from the image alone (the paper's)
+  PredictionScore given_verdict;   // given the detector's verdict for the cell
+  int64_t labelled_frames = 0;     // INTROSPECTION_LABELS messages
+  int64_t predicted_frames = 0;    // INTROSPECTION messages
+  int64_t scored_frames = 0;       // frames with both
+  int64_t labelled_cells = 0;      // cells of the scored frames with a label (not NONE)
+  int64_t outside_view_cells = 0;  // of those, outside the introspection's view (the grid's in_image 0)
+  int64_t no_grid_cells = 0;       // in frames predicted with no query cells (no detector grid had come yet)
+  int64_t unmatched_cells = 0;     // the others with no query cell at the same position: a prediction missing
+  int64_t verdict_unknown = 0;     // matched, but no detector grid reached the introspection
+  int64_t verdict_disagrees = 0;   // the introspection's verdict is not the one the label was made from
   ComputeTimes compute;
   std::set<std::string> models;     // model_id of the INTROSPECTION messages
   std::set<std::string> detectors;  // detector of the labels

@@ -44,12 +44,9 @@ void read_log(const std::string& path, bool resync, tools::LiveScorer& scorer, R
   logio::LogReader reader(path, {resync});
   logio::LogEvent e;
   while (reader.next(e)) {
-    if (e.channel == channels::kIntrospection)
-      feed<introspection_t>(path, e, scorer, counts);
-    else if (e.channel == channels::kIntrospectionLabels)
-      feed<introspection_labels_t>(path, e, scorer, counts);
-    else if (e.channel == channels::kObstaclesStereo)
-      feed<obstacle_grid_t>(path, e, scorer, counts);
+    if (e.channel == channels::kIntrospection) feed<introspection_t>(path, e, scorer, counts);
+    else if (e.channel == channels::kIntrospectionLabels) feed<introspection_labels_t>(path, e, scorer, counts);
+    else if (e.channel == channels::kObstaclesStereo) feed<obstacle_grid_t>(path, e, scorer, counts);
   }
   for (const auto& p : reader.problems()) spdlog::warn("{}: {}", path, p.describe());
   if (!reader.clean()) ++counts.damaged_files;
@@ -65,9 +62,9 @@ std::string fraction(double x) { return std::isnan(x) ? "  n/a" : fmt::format("{
 
 void print_row(const char* name, const ClassCounts& c, int64_t of) {
   std::printf("  %-30s %6lld %5.1f %%  %s  %s  %s  %s  %s  %s\n", name, static_cast<long long>(c.total()),
-              of ? 100.0 * static_cast<double>(c.total()) / static_cast<double>(of) : 0.0, fraction(c.recall(0)).c_str(),
-              fraction(c.recall(1)).c_str(), fraction(c.recall(2)).c_str(), fraction(c.recall(3)).c_str(),
-              fraction(c.mean_per_class()).c_str(), fraction(c.overall()).c_str());
+              of ? 100.0 * static_cast<double>(c.total()) / static_cast<double>(of) : 0.0,
+              fraction(c.recall(0)).c_str(), fraction(c.recall(1)).c_str(), fraction(c.recall(2)).c_str(),
+              fraction(c.recall(3)).c_str(), fraction(c.mean_per_class()).c_str(), fraction(c.overall()).c_str());
 }
 
 void print_score(const LiveScore& s) {
@@ -76,26 +73,30 @@ void print_score(const LiveScore& s) {
               static_cast<long long>(s.labelled_frames), static_cast<long long>(s.predicted_frames),
               static_cast<long long>(s.scored_frames), static_cast<long long>(s.labelled_cells));
   if (s.outside_view_cells || s.no_grid_cells || s.unmatched_cells)
-    std::printf("not scored: %lld outside the introspection's view (patch leaves the image), %lld in frames it "
-                "predicted before any detector grid came, %lld others without a prediction\n",
-                static_cast<long long>(s.outside_view_cells), static_cast<long long>(s.no_grid_cells),
-                static_cast<long long>(s.unmatched_cells));
-  std::printf("\n  %-30s %6s %7s  %5s  %5s  %5s  %5s  %5s  %5s\n", "prediction", "cells", "kept", "TP", "TN", "FP", "FN",
-              "mean", "all");
+    std::printf(
+        "not scored: %lld outside the introspection's view (patch leaves the image), %lld in frames it "
+        "predicted before any detector grid came, %lld others without a prediction\n",
+        static_cast<long long>(s.outside_view_cells), static_cast<long long>(s.no_grid_cells),
+        static_cast<long long>(s.unmatched_cells));
+  std::printf("\n  %-30s %6s %7s  %5s  %5s  %5s  %5s  %5s  %5s\n", "prediction", "cells", "kept", "TP", "TN", "FP",
+              "FN", "mean", "all");
   const int64_t matched = s.image.all.total();
   print_row("from the image alone", s.image.all, matched);
   print_row("  announced (under the gate)", s.image.announced, matched);
   print_row("given the detector's verdict", s.given_verdict.all, matched);
   print_row("  announced (under its gate)", s.given_verdict.announced, matched);
-  std::printf("  (per class: recall; mean: mean per-class accuracy, the paper's; all: overall accuracy; kept: share "
-              "of the %lld matched cells)\n",
-              static_cast<long long>(matched));
+  std::printf(
+      "  (per class: recall; mean: mean per-class accuracy, the paper's; all: overall accuracy; kept: share "
+      "of the %lld matched cells)\n",
+      static_cast<long long>(matched));
   if (s.verdict_unknown || s.verdict_disagrees)
-    std::printf("verdicts: %lld cells without one (no detector grid reached the introspection), %lld where it is not "
-                "the one the label was made from\n",
-                static_cast<long long>(s.verdict_unknown), static_cast<long long>(s.verdict_disagrees));
-  std::printf("\ncompute per frame (compute_ms): median %.1f ms, 90th percentile %.1f ms, max %.1f ms over %lld frames\n",
-              s.compute.median, s.compute.p90, s.compute.max, static_cast<long long>(s.compute.frames));
+    std::printf(
+        "verdicts: %lld cells without one (no detector grid reached the introspection), %lld where it is not "
+        "the one the label was made from\n",
+        static_cast<long long>(s.verdict_unknown), static_cast<long long>(s.verdict_disagrees));
+  std::printf(
+      "\ncompute per frame (compute_ms): median %.1f ms, 90th percentile %.1f ms, max %.1f ms over %lld frames\n",
+      s.compute.median, s.compute.p90, s.compute.max, static_cast<long long>(s.compute.frames));
 }
 
 std::string counts_json(const ClassCounts& c) {
@@ -114,23 +115,25 @@ std::string score_json(const LiveScore& s) {
   for (const auto& d : s.detectors) detectors += (detectors.empty() ? "" : ", ") + json_quote(d);
   return fmt::format(
       "{{\"models\": [{}], \"detectors\": [{}], \"labelled_frames\": {}, \"predicted_frames\": {}, "
-      "\"scored_frames\": {}, \"labelled_cells\": {}, \"outside_view_cells\": {}, \"no_grid_cells\": {}, \"unmatched_cells\": {}, \"verdict_unknown\": {}, "
+      "\"scored_frames\": {}, \"labelled_cells\": {}, \"outside_view_cells\": {}, \"no_grid_cells\": {}, "
+      "\"unmatched_cells\": {}, \"verdict_unknown\": {}, "
       "\"verdict_disagrees\": {},\n \"image\": {{\"all\": {}, \"announced\": {}}},\n \"given_verdict\": {{\"all\": {}, "
-      "\"announced\": {}}},\n \"compute_ms\": {{\"frames\": {}, \"median\": {:.3f}, \"p90\": {:.3f}, \"max\": {:.3f}}}, "
+      "\"announced\": {}}},\n \"compute_ms\": {{\"frames\": {}, \"median\": {:.3f}, \"p90\": {:.3f}, \"max\": "
+      "{:.3f}}}, "
       "\"class_order\": [\"TP\", \"TN\", \"FP\", \"FN\"]}}\n",
       models, detectors, s.labelled_frames, s.predicted_frames, s.scored_frames, s.labelled_cells, s.outside_view_cells,
-      s.no_grid_cells, s.unmatched_cells,
-      s.verdict_unknown, s.verdict_disagrees, counts_json(s.image.all), counts_json(s.image.announced),
-      counts_json(s.given_verdict.all), counts_json(s.given_verdict.announced), s.compute.frames, s.compute.median,
-      s.compute.p90, s.compute.max);
+      s.no_grid_cells, s.unmatched_cells, s.verdict_unknown, s.verdict_disagrees, counts_json(s.image.all),
+      counts_json(s.image.announced), counts_json(s.given_verdict.all), counts_json(s.given_verdict.announced),
+      s.compute.frames, s.compute.median, s.compute.p90, s.compute.max);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Score the introspection a log recorded against the depth monitor's labels of the same frames, and "
-               "how long it took per frame. Exit codes: 0 scored, 3 a log is unreadable or has nothing to score, 4 the "
-               "JSON cannot be written."};
+  CLI::App app{
+      "Score the introspection a log recorded against the depth monitor's labels of the same frames, and "
+      "how long it took per frame. Exit codes: 0 scored, 3 a log is unreadable or has nothing to score, 4 the "
+      "JSON cannot be written."};
   CommonOptions common;
   add_common_options(app, common);
   std::vector<std::string> files;
@@ -152,9 +155,11 @@ int main(int argc, char** argv) {
     return kExitBadInput;
   }
   const LiveScore s = scorer.finish();
-  const std::string logs = files.size() == 1 ? files[0] : files[0] + " (and " + std::to_string(files.size() - 1) + " more)";
+  const std::string logs =
+      files.size() == 1 ? files[0] : files[0] + " (and " + std::to_string(files.size() - 1) + " more)";
   if (s.predicted_frames == 0 || s.labelled_frames == 0) {
-    spdlog::error("{}: no {} messages to score{}", logs, s.predicted_frames == 0 ? "INTROSPECTION" : "INTROSPECTION_LABELS",
+    spdlog::error("{}: no {} messages to score{}", logs,
+                  s.predicted_frames == 0 ? "INTROSPECTION" : "INTROSPECTION_LABELS",
                   s.predicted_frames == 0 ? " (was ivoa-introspection running when it was recorded?)"
                                           : " (was ivoa-depth-monitor running, with a depth sensor?)");
     return kExitBadInput;

@@ -27,7 +27,7 @@ struct FileResult {
   std::string first_channel;
   std::vector<ivoa::logio::LogProblem> problems;
   std::vector<int64_t> events_before_problem;  // per problem
-  std::string error;  // could not be read at all
+  std::string error;                           // could not be read at all
 };
 
 FileResult check_file(const std::string& path, bool resync, LogSummary& summary) {
@@ -118,9 +118,10 @@ bool sequences_complete(const LogSummary& summary) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage.\n"
-               "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 3 a log is damaged or "
-               "unreadable, 4 the --json file cannot be written."};
+  CLI::App app{
+      "Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage.\n"
+      "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 3 a log is damaged or "
+      "unreadable, 4 the --json file cannot be written."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
   std::vector<std::string> files, expect;

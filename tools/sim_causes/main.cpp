@@ -111,7 +111,8 @@ void read_event(const logio::LogEvent& e, bool want_labels, SessionLog& log) {
     if ((ok = logio::decode(e, msg))) log.rig = from_message(msg);
   } else if (e.channel == channels::kSimGroundTruth) {
     sim_ground_truth_t msg;
-    if ((ok = logio::decode(e, msg))) log.truth[msg.utime] = {msg.scene, msg.seed, msg.seq, {msg.robot_x, msg.robot_y, msg.robot_yaw}};
+    if ((ok = logio::decode(e, msg)))
+      log.truth[msg.utime] = {msg.scene, msg.seed, msg.seq, {msg.robot_x, msg.robot_y, msg.robot_yaw}};
   } else if (e.channel == channels::kIntrospectionLabels && want_labels) {
     Labels msg;
     if ((ok = logio::decode(e, msg))) log.labels.push_back(std::move(msg));
@@ -176,7 +177,8 @@ int64_t session_start(const SessionLog& log, const Options& opt, const std::stri
   if (opt.start_utime >= 0) return opt.start_utime;
   for (const auto& [utime, t] : log.truth)
     if (t.seq == 0) return utime;
-  throw std::runtime_error(path + ": the log does not start at the session's first frame (no seq 0); give --start-utime");
+  throw std::runtime_error(path +
+                           ": the log does not start at the session's first frame (no seq 0); give --start-utime");
 }
 
 struct Tally {
@@ -217,8 +219,7 @@ void write_rows(std::ostream& csv, const std::string& session, const Labels& lab
   for (const auto& c : cells) {
     const auto i = static_cast<size_t>(c.cell);
     csv << session << ',' << labels.detector << ',' << labels.utime << ',' << (cell_ids.empty() ? c.cell : cell_ids[i])
-        << ','
-        << (c.label == Labels::LABEL_FP ? "FP" : "FN") << ',' << labels.x[i] << ',' << labels.y[i] << ','
+        << ',' << (c.label == Labels::LABEL_FP ? "FP" : "FN") << ',' << labels.x[i] << ',' << labels.y[i] << ','
         << int{c.stereo_state} << ',' << int{c.replayed_state} << ',' << int{c.tested} << ',' << int{c.causes} << ','
         << int{c.jointly} << ",\"" << causes::describe(c) << "\"," << causes::variant_names(variants, c.fixed_by)
         << '\n';
@@ -301,7 +302,8 @@ std::vector<SessionResult> explain_sessions(const std::vector<std::string>& logs
     }
   };
   std::vector<std::thread> threads;
-  for (int j = 0; j < std::max(1, std::min<int>(jobs, static_cast<int>(logs.size()))); ++j) threads.emplace_back(worker);
+  for (int j = 0; j < std::max(1, std::min<int>(jobs, static_cast<int>(logs.size()))); ++j)
+    threads.emplace_back(worker);
   for (auto& t : threads) t.join();
   return results;
 }
@@ -327,11 +329,12 @@ void print_variants(const Tally& t, const std::vector<causes::DetectorVariant>& 
 }
 
 void print_summary(const Tally& t) {
-  std::printf("%lld failure cells in %lld frames (%lld frames skipped); re-rendered verdict matches the recorded one "
-              "for %lld (%.1f %%)\n",
-              static_cast<long long>(t.failures), static_cast<long long>(t.frames),
-              static_cast<long long>(t.skipped_frames), static_cast<long long>(t.reproduced),
-              t.failures ? 100.0 * static_cast<double>(t.reproduced) / static_cast<double>(t.failures) : 0.0);
+  std::printf(
+      "%lld failure cells in %lld frames (%lld frames skipped); re-rendered verdict matches the recorded one "
+      "for %lld (%.1f %%)\n",
+      static_cast<long long>(t.failures), static_cast<long long>(t.frames), static_cast<long long>(t.skipped_frames),
+      static_cast<long long>(t.reproduced),
+      t.failures ? 100.0 * static_cast<double>(t.reproduced) / static_cast<double>(t.failures) : 0.0);
   if (t.bad_messages > 0) std::printf("%lld undecodable messages skipped\n", static_cast<long long>(t.bad_messages));
   for (const int label : {Labels::LABEL_FP, Labels::LABEL_FN}) {
     int64_t n = 0;
@@ -354,7 +357,8 @@ struct CommandLine {
 
 void add_options(CLI::App& app, CommandLine& cl) {
   Options& opt = cl.opt;
-  app.add_option("--out", opt.out, "CSV to write: one row per FP/FN cell (session, utime, cell, ..., causes)")->required();
+  app.add_option("--out", opt.out, "CSV to write: one row per FP/FN cell (session, utime, cell, ..., causes)")
+      ->required();
   app.add_option("--scene", opt.scene_file, "scene file (default: <scene-dir>/<the logged scene name>.yaml)")
       ->check(CLI::ExistingFile);
   app.add_option("--scene-dir", opt.scene_dir, "where the logged scenes' files are")->capture_default_str();
@@ -362,7 +366,8 @@ void add_options(CLI::App& app, CommandLine& cl) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.add_option("--noise-seed", opt.timing.noise_seed, "the simulator driver's --noise-seed")->capture_default_str();
-  app.add_option("--start-utime", opt.start_utime, "utime of the session's frame 0 (default: the logged frame with seq 0)");
+  app.add_option("--start-utime", opt.start_utime,
+                 "utime of the session's frame 0 (default: the logged frame with seq 0)");
   app.add_option("--dataset", opt.dataset,
                  "take the failure cells from this dataset's sessions (named like the logs) instead of the logs' "
                  "labels: e.g. the dense detector's, labelled offline by ivoa-dataset")
@@ -451,7 +456,8 @@ int explain(const CommandLine& cl) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Failure causes on simulated logs: re-render each failure without each phenomenon and re-run the detector"};
+  CLI::App app{
+      "Failure causes on simulated logs: re-render each failure without each phenomenon and re-run the detector"};
   CommonOptions common;
   add_common_options(app, common);
   CommandLine cl;

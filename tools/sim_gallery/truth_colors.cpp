@@ -24,7 +24,8 @@ const cv::Vec3b kSurfaceColors[] = {
     {0, 0, 140},      // pit
     {225, 225, 210},  // ceiling
 };
-const char* kSurfaceNames[] = {"sky", "floor", "wall", "baseboard", "door", "box", "cylinder", "furniture", "curb", "pit", "ceiling"};
+const char* kSurfaceNames[] = {"sky",      "floor",     "wall", "baseboard", "door",   "box",
+                               "cylinder", "furniture", "curb", "pit",       "ceiling"};
 
 struct PhenomenonStyle {
   int bit;
@@ -32,9 +33,12 @@ struct PhenomenonStyle {
   const char* name;
 };
 const PhenomenonStyle kPhenomena[] = {
-    {GT::PHENOMENON_REFLECTION, {255, 80, 0}, "reflection"},   {GT::PHENOMENON_TEXTURELESS, {0, 220, 120}, "texture-less"},
-    {GT::PHENOMENON_GLARE, {0, 255, 255}, "glare"},            {GT::PHENOMENON_DARK_STRIPE, {255, 0, 255}, "dark stripe"},
-    {GT::PHENOMENON_REPETITIVE, {255, 255, 0}, "repetitive"},  {GT::PHENOMENON_LOW_LIGHT, {0, 0, 0}, "low light"},
+    {GT::PHENOMENON_REFLECTION, {255, 80, 0}, "reflection"},
+    {GT::PHENOMENON_TEXTURELESS, {0, 220, 120}, "texture-less"},
+    {GT::PHENOMENON_GLARE, {0, 255, 255}, "glare"},
+    {GT::PHENOMENON_DARK_STRIPE, {255, 0, 255}, "dark stripe"},
+    {GT::PHENOMENON_REPETITIVE, {255, 255, 0}, "repetitive"},
+    {GT::PHENOMENON_LOW_LIGHT, {0, 0, 0}, "low light"},
     {GT::PHENOMENON_SATURATED, {255, 255, 255}, "saturated"},
 };
 

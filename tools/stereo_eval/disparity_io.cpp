@@ -65,7 +65,9 @@ cv::Mat read_pfm(const std::string& path) {
 void write_pfm(const std::string& path, const cv::Mat& disparity) {
   std::ofstream out(path, std::ios::binary);
   if (!out) throw DisparityFileError(path + ": cannot write");
-  out << "Pf\n" << disparity.cols << " " << disparity.rows << "\n" << (host_is_little_endian() ? "-1.0" : "1.0") << "\n";
+  out << "Pf\n"
+      << disparity.cols << " " << disparity.rows << "\n"
+      << (host_is_little_endian() ? "-1.0" : "1.0") << "\n";
   for (int v = disparity.rows - 1; v >= 0; --v)
     out.write(reinterpret_cast<const char*>(disparity.ptr<float>(v)),
               static_cast<std::streamsize>(static_cast<size_t>(disparity.cols) * sizeof(float)));

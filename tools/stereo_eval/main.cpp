@@ -29,7 +29,8 @@ cv::Mat load_gray(const std::string& path, double scale) {
   if (image.empty()) throw ivoa::stereo_eval::DisparityFileError(path + ": cannot read image");
   if (scale == 1.0) return image;
   cv::Mat out;  // the size rule of scale_disparity, so image and truth agree
-  const cv::Size size(static_cast<int>(std::lround(image.cols * scale)), static_cast<int>(std::lround(image.rows * scale)));
+  const cv::Size size(static_cast<int>(std::lround(image.cols * scale)),
+                      static_cast<int>(std::lround(image.rows * scale)));
   cv::resize(image, out, size, 0, 0, cv::INTER_AREA);
   return out;
 }
@@ -51,7 +52,8 @@ struct CommandLine {
 void add_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--left", cl.left_path, "rectified left image")->capture_default_str();
   app.add_option("--right", cl.right_path, "rectified right image")->capture_default_str();
-  app.add_option("--gt", cl.gt_path, "ground-truth disparity of the left image: PFM, 16- or 8-bit PNG; 0/inf/NaN unknown")
+  app.add_option("--gt", cl.gt_path,
+                 "ground-truth disparity of the left image: PFM, 16- or 8-bit PNG; 0/inf/NaN unknown")
       ->capture_default_str();
   app.add_option("--gt-divisor", cl.gt_divisor, "disparity = stored value / divisor (KITTI 16-bit PNG: 256)")
       ->capture_default_str();
@@ -104,10 +106,8 @@ std::vector<ivoa::stereo_eval::ModelScore> score_models(const CommandLine& cl, c
   std::vector<ivoa::stereo_eval::ModelScore> scores;
   for (const std::string& name : cl.models) {
     std::unique_ptr<ivoa::stereo_eval::PointCheckModel> model;
-    if (name == "jppc")
-      model = std::make_unique<ivoa::stereo_eval::JppPointModel>(cl.jpp);
-    else
-      model = std::make_unique<ivoa::stereo_eval::SgbmPointModel>(cl.sgbm, cl.sgbm_tolerance);
+    if (name == "jppc") model = std::make_unique<ivoa::stereo_eval::JppPointModel>(cl.jpp);
+    else model = std::make_unique<ivoa::stereo_eval::SgbmPointModel>(cl.sgbm, cl.sgbm_tolerance);
     scores.push_back(ivoa::stereo_eval::score(*model, p.left, p.right, p.truth, cl.scoring,
                                               name == "jppc" && !cl.overlay_path.empty() ? &overlay : nullptr));
   }

@@ -81,8 +81,7 @@ ModelScore score(PointCheckModel& model, const cv::Mat& left_gray, const cv::Mat
       if (outcome_overlay) {
         // Green: truth confirmed; red: truth rejected; dimmer where untextured.
         const auto level = static_cast<uint8_t>(textured ? 255 : 110);
-        outcome_overlay->at<cv::Vec3b>(v, u) =
-            truth_check->confirmed ? cv::Vec3b(0, level, 0) : cv::Vec3b(0, 0, level);
+        outcome_overlay->at<cv::Vec3b>(v, u) = truth_check->confirmed ? cv::Vec3b(0, level, 0) : cv::Vec3b(0, 0, level);
       }
     }
   }
@@ -146,10 +145,9 @@ std::string to_table(const std::vector<ModelScore>& scores) {
       std::snprintf(cell, sizeof(cell), "%+d:%.1f%% ", offset, 100.0 * rate.value());
       by_offset += cell;
     }
-    std::snprintf(line, sizeof(line), "%-6s %-11s %8lld %15.1f%% %15.1f%% %13.1f%% %5.2f/%5.2f  %s\n",
-                  model.c_str(), label, static_cast<long long>(c.pixels), 100.0 * c.at_truth.value(),
-                  100.0 * c.wrong.value(), 100.0 * c.truth_cheaper.value(), c.mean_cost_truth(),
-                  c.mean_cost_wrong(), by_offset.c_str());
+    std::snprintf(line, sizeof(line), "%-6s %-11s %8lld %15.1f%% %15.1f%% %13.1f%% %5.2f/%5.2f  %s\n", model.c_str(),
+                  label, static_cast<long long>(c.pixels), 100.0 * c.at_truth.value(), 100.0 * c.wrong.value(),
+                  100.0 * c.truth_cheaper.value(), c.mean_cost_truth(), c.mean_cost_wrong(), by_offset.c_str());
     out << line;
   };
   for (const ModelScore& s : scores) {

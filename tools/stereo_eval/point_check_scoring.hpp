@@ -75,8 +75,8 @@ struct Rate {
 
 struct TextureClassScore {
   int64_t pixels = 0;
-  Rate at_truth;                // hypotheses at the true disparity
-  Rate wrong;                   // every wrong offset together
+  Rate at_truth;                  // hypotheses at the true disparity
+  Rate wrong;                     // every wrong offset together
   std::map<int, Rate> by_offset;  // signed offset -> rate
   // Threshold-free: share of (pixel, wrong offset) pairs whose cost is
   // higher at the wrong disparity than at the true one.
@@ -93,10 +93,10 @@ struct ModelScore {
 };
 
 struct ScoringOptions {
-  int stride = 2;                        // score every stride-th pixel in x and y
+  int stride = 2;                           // score every stride-th pixel in x and y
   std::vector<int> wrong_offsets{2, 4, 8};  // +-k pixels
-  double texture_threshold = 6.0;        // RMS x-gradient, gray levels / px
-  int texture_window = 5;                // half-width of the texture window, pixels
+  double texture_threshold = 6.0;           // RMS x-gradient, gray levels / px
+  int texture_window = 5;                   // half-width of the texture window, pixels
 };
 
 // RMS horizontal central-difference gradient over a (2w+1)^2 window, per pixel.

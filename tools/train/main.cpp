@@ -36,8 +36,12 @@ struct TrainCommandLine {
 };
 
 void add_data_options(CLI::App& app, introspection::TrainConfig& c) {
-  app.add_option("--dataset", c.dataset, "dataset folder (ivoa-dataset build)")->required()->check(CLI::ExistingDirectory);
-  app.add_option("--split", c.split_file, "split file (YAML: train/val/test -> sessions)")->required()->check(CLI::ExistingFile);
+  app.add_option("--dataset", c.dataset, "dataset folder (ivoa-dataset build)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--split", c.split_file, "split file (YAML: train/val/test -> sessions)")
+      ->required()
+      ->check(CLI::ExistingFile);
   app.add_option("--out", c.output, "model file to write")->required();
   app.add_option("--train-split", c.train_split)->capture_default_str();
   app.add_option("--val-split", c.val_split)->capture_default_str();
@@ -65,7 +69,8 @@ void add_optimiser_options(CLI::App& app, TrainCommandLine& cl) {
 void add_model_options(CLI::App& app, TrainCommandLine& cl) {
   auto& c = cl.config;
   app.add_option("--architecture", c.architecture, "slidenet (fast, default) or alexnet (reference, 224x224)")
-      ->capture_default_str()->check(CLI::IsMember({"slidenet", "alexnet"}));
+      ->capture_default_str()
+      ->check(CLI::IsMember({"slidenet", "alexnet"}));
   app.add_option("--init", c.init, "start from this model (fine-tuning)")->check(CLI::ExistingFile);
   app.add_flag("--resume", c.resume, "continue from OUT.checkpoint.* if present");
   app.add_option("--dropout", c.dropout, "dropout before FC1 and FC2")->capture_default_str();
@@ -91,7 +96,8 @@ void add_validation_options(CLI::App& app, TrainCommandLine& cl) {
                "step partly chance)");
   app.add_option("--max-val-samples", c.max_val_samples)->capture_default_str();
   app.add_option("--threshold-retain", c.threshold_retain,
-                 "the stored uncertainty gate keeps this fraction of validation samples")->capture_default_str();
+                 "the stored uncertainty gate keeps this fraction of validation samples")
+      ->capture_default_str();
   app.add_flag("--calibrate-only", cl.calibrate_only,
                "no training: re-calibrate the uncertainty gates of the --init model on the validation split and "
                "write it to --out");
@@ -101,16 +107,16 @@ void add_validation_options(CLI::App& app, TrainCommandLine& cl) {
 void finish_config(TrainCommandLine& cl) {
   auto& c = cl.config;
   c.augment = !cl.no_augment;
-  introspection::use_optimizer(c, cl.optimizer == "sgd" ? introspection::Optimizer::kSgd
-                                                         : introspection::Optimizer::kAdamW);
+  introspection::use_optimizer(
+      c, cl.optimizer == "sgd" ? introspection::Optimizer::kSgd : introspection::Optimizer::kAdamW);
   if (cl.learning_rate_option->count()) c.learning_rate = cl.learning_rate;
   if (cl.weight_decay_option->count()) c.weight_decay = cl.weight_decay;
 }
 
 int calibrate(const introspection::TrainConfig& c) {
   const auto r = introspection::calibrate_model(c);
-  std::printf("model: %s (weights of %s, gates calibrated on %lld validation samples in %.0f s)\n",
-              c.output.c_str(), c.init.c_str(), static_cast<long long>(r.val_samples), r.seconds);
+  std::printf("model: %s (weights of %s, gates calibrated on %lld validation samples in %.0f s)\n", c.output.c_str(),
+              c.init.c_str(), static_cast<long long>(r.val_samples), r.seconds);
   print_gates(r, c);
   return kExitOk;
 }
@@ -130,19 +136,20 @@ void print_training_report(const introspection::TrainReport& r, const introspect
     std::printf("best validation (step %lld, before the resume; not beaten since): mean per-class accuracy %.3f\n",
                 static_cast<long long>(r.best_step), r.best_val_mean_class_accuracy);
   else
-    std::printf("%s (step %lld): mean per-class accuracy %.3f, overall %.3f, per class TP %.3f TN %.3f "
-                "FP %.3f FN %.3f\n",
-                c.keep_last ? "validation of the final model" : "best validation",
-                static_cast<long long>(r.best_step), r.best_val_mean_class_accuracy, r.best_val_accuracy,
-                r.best_val_class_accuracy[0], r.best_val_class_accuracy[1], r.best_val_class_accuracy[2],
-                r.best_val_class_accuracy[3]);
+    std::printf(
+        "%s (step %lld): mean per-class accuracy %.3f, overall %.3f, per class TP %.3f TN %.3f "
+        "FP %.3f FN %.3f\n",
+        c.keep_last ? "validation of the final model" : "best validation", static_cast<long long>(r.best_step),
+        r.best_val_mean_class_accuracy, r.best_val_accuracy, r.best_val_class_accuracy[0], r.best_val_class_accuracy[1],
+        r.best_val_class_accuracy[2], r.best_val_class_accuracy[3]);
   print_gates(r, c);
-  std::printf("training: %lld steps (%s, lr %g, weight decay %g) in %.0f s, %.0f patches/s; train samples TP %lld TN "
-              "%lld FP %lld FN %lld\n",
-              static_cast<long long>(r.last.step), introspection::optimizer_name(c.optimizer), c.learning_rate,
-              c.weight_decay, r.seconds, r.last.patches_per_s,
-              static_cast<long long>(r.train_class_counts[0]), static_cast<long long>(r.train_class_counts[1]),
-              static_cast<long long>(r.train_class_counts[2]), static_cast<long long>(r.train_class_counts[3]));
+  std::printf(
+      "training: %lld steps (%s, lr %g, weight decay %g) in %.0f s, %.0f patches/s; train samples TP %lld TN "
+      "%lld FP %lld FN %lld\n",
+      static_cast<long long>(r.last.step), introspection::optimizer_name(c.optimizer), c.learning_rate, c.weight_decay,
+      r.seconds, r.last.patches_per_s, static_cast<long long>(r.train_class_counts[0]),
+      static_cast<long long>(r.train_class_counts[1]), static_cast<long long>(r.train_class_counts[2]),
+      static_cast<long long>(r.train_class_counts[3]));
 }
 
 int train(const introspection::TrainConfig& c) {

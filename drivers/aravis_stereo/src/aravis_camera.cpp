@@ -115,14 +115,16 @@ struct AravisCamera::Impl {
   void configure_transport() {
     if (!arv_camera_is_gv_device(camera)) return;
     if (config.packet_size > 0) {
-      optional_setting("packet size", [&](GError** e) { arv_camera_gv_set_packet_size(camera, config.packet_size, e); });
+      optional_setting("packet size",
+                       [&](GError** e) { arv_camera_gv_set_packet_size(camera, config.packet_size, e); });
     } else {
       GError* error = nullptr;
       arv_camera_gv_auto_packet_size(camera, &error);
       if (error) spdlog::info("{}: automatic packet size not available: {}", name(), take_error(error));
     }
     if (config.packet_delay_ns > 0)
-      optional_setting("packet delay", [&](GError** e) { arv_camera_gv_set_packet_delay(camera, config.packet_delay_ns, e); });
+      optional_setting("packet delay",
+                       [&](GError** e) { arv_camera_gv_set_packet_delay(camera, config.packet_delay_ns, e); });
     if (config.throughput_limit > 0)
       optional_setting("DeviceLinkThroughputLimit", [&](GError** e) {
         arv_camera_set_integer(camera, "DeviceLinkThroughputLimit", config.throughput_limit, e);
@@ -157,15 +159,18 @@ struct AravisCamera::Impl {
         optional_setting("frame rate", [&](GError** e) { arv_camera_set_frame_rate(camera, config.frame_rate_hz, e); });
     } else {
       const std::string source = config.trigger == "software" ? "Software" : config.trigger;
-      required_setting("trigger source " + source, [&](GError** e) { arv_camera_set_trigger(camera, source.c_str(), e); });
+      required_setting("trigger source " + source,
+                       [&](GError** e) { arv_camera_set_trigger(camera, source.c_str(), e); });
     }
     if (config.exposure_us > 0) {
       GError* ignored = nullptr;
       arv_camera_set_exposure_time_auto(camera, ARV_AUTO_OFF, &ignored);
       take_error(ignored);
-      optional_setting("exposure time", [&](GError** e) { arv_camera_set_exposure_time(camera, config.exposure_us, e); });
+      optional_setting("exposure time",
+                       [&](GError** e) { arv_camera_set_exposure_time(camera, config.exposure_us, e); });
     } else {
-      optional_setting("auto exposure", [&](GError** e) { arv_camera_set_exposure_time_auto(camera, ARV_AUTO_CONTINUOUS, e); });
+      optional_setting("auto exposure",
+                       [&](GError** e) { arv_camera_set_exposure_time_auto(camera, ARV_AUTO_CONTINUOUS, e); });
     }
     if (config.gain >= 0) {
       GError* ignored = nullptr;
@@ -204,7 +209,8 @@ struct AravisCamera::Impl {
     GError* ignored = nullptr;
     const double rate = arv_camera_get_frame_rate(camera, &ignored);
     take_error(ignored);
-    const int packet = arv_camera_is_gv_device(camera) ? static_cast<int>(arv_camera_gv_get_packet_size(camera, nullptr)) : 0;
+    const int packet =
+        arv_camera_is_gv_device(camera) ? static_cast<int>(arv_camera_gv_get_packet_size(camera, nullptr)) : 0;
     spdlog::info("{}: streaming {}x{} {} at {:.1f} Hz, trigger {}, packet size {}", description, w, h,
                  or_empty(arv_camera_get_pixel_format_as_string(camera, nullptr)), rate, config.trigger, packet);
   }

@@ -135,7 +135,8 @@ void CameraWorker::run() {
     }
     const double silent_s = (monotonic_ms() - last_frame_ms_) / 1000.0;
     if (source_->control_lost()) close_camera("lost control of the camera (heartbeat failed)");
-    else if (silent_s > options_.frame_timeout_s) close_camera("no frame for " + fmt::format("{:.1f}", silent_s) + " s");
+    else if (silent_s > options_.frame_timeout_s)
+      close_camera("no frame for " + fmt::format("{:.1f}", silent_s) + " s");
   }
   if (connected_) source_->stop();
   connected_ = false;

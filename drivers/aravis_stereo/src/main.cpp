@@ -34,7 +34,8 @@ void add_options(CLI::App& app, Flags& f) {
   app.add_option("--right", f.right, "right camera: IP address, Aravis id, serial number or MAC")->required();
   app.add_option("--rig", f.rig_path, "rig calibration file (OpenCV YAML, see example_rig.yaml)")->required();
   auto& c = f.camera;
-  app.add_option("--pixel-format", c.pixel_format, "GenICam pixel format: BayerRG8, BayerBG8, BayerGB8, BayerGR8, Mono8")
+  app.add_option("--pixel-format", c.pixel_format,
+                 "GenICam pixel format: BayerRG8, BayerBG8, BayerGB8, BayerGR8, Mono8")
       ->capture_default_str();
   app.add_option("--width", c.width, "image width, pixels (0 = keep the camera's)")->capture_default_str();
   app.add_option("--height", c.height, "image height, pixels (0 = keep the camera's)")->capture_default_str();
@@ -94,9 +95,10 @@ void add_options(CLI::App& app, Flags& f) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Stereo camera driver: two GenICam cameras (FLIR/Point Grey GigE Vision or USB3 Vision) through "
-               "Aravis -> STEREO_IMAGES, RIG_CALIBRATION and PROCESS_STATUS. GigE tuning: " +
-               std::string(kGigeTuningHint) + "."};
+  CLI::App app{
+      "Stereo camera driver: two GenICam cameras (FLIR/Point Grey GigE Vision or USB3 Vision) through "
+      "Aravis -> STEREO_IMAGES, RIG_CALIBRATION and PROCESS_STATUS. GigE tuning: " +
+      std::string(kGigeTuningHint) + "."};
   Flags f;
   add_options(app, f);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;

@@ -61,9 +61,10 @@ struct StereoDriver::State {
     size_checked[i] = true;
     const CameraIntrinsics& cam = frame.side == Side::kLeft ? rig.left : rig.right;
     if (cam.width != frame.width || cam.height != frame.height)
-      spdlog::warn("{} camera delivers {}x{} but the rig calibration {} is for {}x{}: geometry downstream will be "
-                   "wrong; calibrate at this size or set --width/--height",
-                   side_name(frame.side), frame.width, frame.height, options.rig_path, cam.width, cam.height);
+      spdlog::warn(
+          "{} camera delivers {}x{} but the rig calibration {} is for {}x{}: geometry downstream will be "
+          "wrong; calibrate at this size or set --width/--height",
+          side_name(frame.side), frame.width, frame.height, options.rig_path, cam.width, cam.height);
   }
 
   // Sets the time the frame is paired by. Mapped camera time is also the
@@ -105,8 +106,9 @@ struct StereoDriver::State {
   void update_state() {
     if (connected[0] && connected[1]) heartbeat.set_state("running");
     else if (!connected[0] && !connected[1]) heartbeat.set_state("waiting for both cameras");
-    else heartbeat.set_state(std::string("waiting for the ") + side_name(connected[0] ? Side::kRight : Side::kLeft) +
-                             " camera");
+    else
+      heartbeat.set_state(std::string("waiting for the ") + side_name(connected[0] ? Side::kRight : Side::kLeft) +
+                          " camera");
   }
 
   void on_event(CameraEvent& event) {
@@ -178,7 +180,9 @@ int StereoDriver::run() {
   int exit_code = kExitOk;
   spdlog::info("pairing left/right frames within {:.1f} ms; publishing {} on {} and the rig on {} at {:.1f} Hz",
                static_cast<double>(s.pairer.options().tolerance_us) / 1000.0,
-               s.options.output == OutputFormat::kRaw ? "raw" : s.options.output == OutputFormat::kBgr ? "BGR" : "gray",
+               s.options.output == OutputFormat::kRaw   ? "raw"
+               : s.options.output == OutputFormat::kBgr ? "BGR"
+                                                        : "gray",
                s.options.stereo_channel, s.options.rig_channel, s.options.rig_rate_hz);
 
   while (!stop_requested()) {
@@ -202,10 +206,11 @@ int StereoDriver::run() {
     }
     if (s.options.startup_timeout_s > 0 && !(s.ever_connected[0] && s.ever_connected[1]) &&
         now - start_ms > s.options.startup_timeout_s * 1000.0) {
-      spdlog::error("cameras not ready after {:.0f} s (left {}, right {}); check the addresses, cabling and "
-                    "network (see the log above)",
-                    s.options.startup_timeout_s, s.ever_connected[0] ? "open" : "NOT open",
-                    s.ever_connected[1] ? "open" : "NOT open");
+      spdlog::error(
+          "cameras not ready after {:.0f} s (left {}, right {}); check the addresses, cabling and "
+          "network (see the log above)",
+          s.options.startup_timeout_s, s.ever_connected[0] ? "open" : "NOT open",
+          s.ever_connected[1] ? "open" : "NOT open");
       exit_code = kExitFailure;
       break;
     }

@@ -43,7 +43,8 @@ std::optional<StereoPair> StereoPairer::add_by_frame_id(Pending incoming) {
   const bool left = incoming.frame.side == Side::kLeft;
   const int64_t wanted = left ? incoming.sequence + offset_ : incoming.sequence - offset_;
   auto& others = pending_[left ? 1 : 0];
-  const auto partner = std::find_if(others.begin(), others.end(), [&](const Pending& p) { return p.sequence == wanted; });
+  const auto partner =
+      std::find_if(others.begin(), others.end(), [&](const Pending& p) { return p.sequence == wanted; });
   if (partner == others.end()) {
     insert_pending(std::move(incoming));  // its partner may still come
     return std::nullopt;

@@ -89,7 +89,8 @@ class Publisher {
 
   void depth(const DepthFrame& frame) {
     heartbeat_.count_in();
-    if (last_index_ > 0 && frame.frame_index > last_index_ + 1) heartbeat_.count_dropped(frame.frame_index - last_index_ - 1);
+    if (last_index_ > 0 && frame.frame_index > last_index_ + 1)
+      heartbeat_.count_dropped(frame.frame_index - last_index_ - 1);
     last_index_ = frame.frame_index;
     ivoa::depth_image_t msg = ivoa::encode_depth(frame.depth_mm, k_.fx, k_.fy, k_.cx, k_.cy, ivoa::now_utime());
     msg.seq = depth_seq_++;
@@ -160,9 +161,10 @@ int stream(OpenNiCamera& camera, Publisher& publisher, ivoa::Heartbeat& heartbea
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Depth sensor driver: a Kinect-like sensor or an .oni recording through OpenNI2 -> DEPTH_IMAGE "
-               "(millimetres, with intrinsics), optional colour, PROCESS_STATUS. A Kinect v1 needs libfreenect's "
-               "OpenNI2 driver (not packaged by Debian; see drivers/openni2_kinect/README.md)."};
+  CLI::App app{
+      "Depth sensor driver: a Kinect-like sensor or an .oni recording through OpenNI2 -> DEPTH_IMAGE "
+      "(millimetres, with intrinsics), optional colour, PROCESS_STATUS. A Kinect v1 needs libfreenect's "
+      "OpenNI2 driver (not packaged by Debian; see drivers/openni2_kinect/README.md)."};
   Flags f;
   add_options(app, f);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
@@ -178,8 +180,8 @@ int main(int argc, char** argv) {
       std::string origin;
       const PinholeIntrinsics k = choose_intrinsics(camera, f, &origin);
       spdlog::info("{}: publishing {}x{} depth on {} (fx {:.1f}, fy {:.1f}, cx {:.1f}, cy {:.1f} from {}){}",
-                   camera.description(), camera.depth_width(), camera.depth_height(), f.depth_channel, k.fx, k.fy,
-                   k.cx, k.cy, origin, f.camera.color ? " and colour on " + f.color_channel : "");
+                   camera.description(), camera.depth_width(), camera.depth_height(), f.depth_channel, k.fx, k.fy, k.cx,
+                   k.cy, origin, f.camera.color ? " and colour on " + f.color_channel : "");
       Publisher publisher(bus, heartbeat, f, k);
       exit_code = stream(camera, publisher, heartbeat, f);
     } catch (const DeviceError& e) {

@@ -77,12 +77,15 @@ struct OpenNiCamera::Impl {
     if (any) {
       openni::Array<openni::DeviceInfo> devices;
       openni::OpenNI::enumerateDevices(&devices);
-      if (devices.getSize() == 0) throw DeviceError(std::string("no OpenNI2 device found. ") + kNoDeviceHelp, kExitFailure);
+      if (devices.getSize() == 0)
+        throw DeviceError(std::string("no OpenNI2 device found. ") + kNoDeviceHelp, kExitFailure);
     }
     if (device.open(any ? openni::ANY_DEVICE : options.device.c_str()) != openni::STATUS_OK) {
-      if (file) throw DeviceError(options.device + ": not a playable .oni recording: " + extended_error(), kExitBadInput);
-      throw DeviceError("cannot open OpenNI2 device '" + options.device + "': " + extended_error() + ". " + kNoDeviceHelp,
-                        kExitFailure);
+      if (file)
+        throw DeviceError(options.device + ": not a playable .oni recording: " + extended_error(), kExitBadInput);
+      throw DeviceError(
+          "cannot open OpenNI2 device '" + options.device + "': " + extended_error() + ". " + kNoDeviceHelp,
+          kExitFailure);
     }
     const openni::DeviceInfo& info = device.getDeviceInfo();
     description = std::string(info.getVendor()) + " " + info.getName() + " (" + info.getUri() + ")";
@@ -206,8 +209,9 @@ DepthFrame OpenNiCamera::read_depth() {
   DepthFrame out;
   if (format == openni::PIXEL_FORMAT_DEPTH_1_MM) out.depth_mm = wrapped.clone();
   else if (format == openni::PIXEL_FORMAT_DEPTH_100_UM) wrapped.convertTo(out.depth_mm, CV_16U, 0.1);
-  else throw DeviceError("depth stream delivers pixel format " + std::to_string(format) + ", not millimetres",
-                         kExitFailure);
+  else
+    throw DeviceError("depth stream delivers pixel format " + std::to_string(format) + ", not millimetres",
+                      kExitFailure);
   out.frame_index = frame.getFrameIndex();
   out.device_time_us = frame.getTimestamp();
   return out;

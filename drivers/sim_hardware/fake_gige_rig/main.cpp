@@ -113,8 +113,9 @@ void serve(const StereoScene& scene, const Flags& f, std::unique_ptr<FakeGigeCam
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Simulated GigE Vision stereo pair (two Aravis fake cameras serving a known scene). "
-               "SIGUSR1 powers one camera off, SIGUSR2 on again."};
+  CLI::App app{
+      "Simulated GigE Vision stereo pair (two Aravis fake cameras serving a known scene). "
+      "SIGUSR1 powers one camera off, SIGUSR2 on again."};
   Flags f;
   ivoa::add_common_options(app, f.common);
   add_camera_options(app, f);
@@ -144,7 +145,8 @@ int main(int argc, char** argv) {
     return ivoa::kExitFailure;
   }
   for (int i = 0; i < 2; ++i)
-    if (cameras[i]) spdlog::info("{} camera served {} frames ({} off beat: fired over a quarter period late)",
+    if (cameras[i])
+      spdlog::info("{} camera served {} frames ({} off beat: fired over a quarter period late)",
                    rig_camera_name(static_cast<RigCamera>(i)), cameras[i]->frames(), cameras[i]->off_beat_frames());
   return ivoa::kExitOk;
 }

@@ -135,8 +135,7 @@ class SynthStream : public StreamBase {
       if (frame == nullptr) continue;
       if (type_ == ONI_SENSOR_DEPTH)
         scene::render_depth(index, registered(), static_cast<uint16_t*>(frame->data), scene::kWidth);
-      else
-        scene::render_rgb(index, static_cast<uint8_t*>(frame->data), stride_bytes());
+      else scene::render_rgb(index, static_cast<uint8_t*>(frame->data), stride_bytes());
       frame->dataSize = getRequiredFrameSize();
       frame->sensorType = type_;
       frame->frameIndex = index;

@@ -3,9 +3,7 @@
 namespace ivoa::sim_hardware {
 namespace {
 
-uint32_t check_byte(uint32_t payload) {
-  return ((payload >> 16) ^ (payload >> 8) ^ payload ^ 0xA5u) & 0xFFu;
-}
+uint32_t check_byte(uint32_t payload) { return ((payload >> 16) ^ (payload >> 8) ^ payload ^ 0xA5u) & 0xFFu; }
 
 // tick (23 bits), off-beat flag (1 bit), check (8 bits).
 uint32_t stamp_word(const FrameStamp& stamp) {
@@ -14,8 +12,8 @@ uint32_t stamp_word(const FrameStamp& stamp) {
 }
 
 bool fits(const cv::Mat& image) {
-  return image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3) &&
-         image.cols >= kStampWidthPx && image.rows >= kStampBlockPx;
+  return image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3) && image.cols >= kStampWidthPx &&
+         image.rows >= kStampBlockPx;
 }
 
 }  // namespace

@@ -42,8 +42,7 @@ StereoScene::StereoScene(const std::vector<std::string>& left_files, const std::
     : stamp_(stamp) {
   if (left_files.empty() || left_files.size() != right_files.size())
     throw std::invalid_argument("need the same, non-zero number of left and right image files (got " +
-                                std::to_string(left_files.size()) + " and " + std::to_string(right_files.size()) +
-                                ")");
+                                std::to_string(left_files.size()) + " and " + std::to_string(right_files.size()) + ")");
   for (const auto& f : left_files) files_[0].push_back(load_bgr(f));
   for (const auto& f : right_files) files_[1].push_back(load_bgr(f));
 }

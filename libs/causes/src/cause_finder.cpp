@@ -40,7 +40,9 @@ int8_t right_state(int8_t label) {
 sim::SimulatorConfig render_config(const RigCalibration& rig, uint64_t noise_seed) {
   // Aggregate initialisation: the default rig is never built (and GCC 12
   // sees no dangling temporary in its default initialiser).
-  return sim::SimulatorConfig{rig, {}, {},
+  return sim::SimulatorConfig{rig,
+                              {},
+                              {},
                               false,  // no depth image: the labels keep the recorded depth verdicts
                               noise_seed};
 }
@@ -53,7 +55,7 @@ struct Variant {
 // The true state of a labelled cell: the depth monitor's (TP, FN: obstacle).
 int8_t true_state(int8_t label) {
   return label == Labels::LABEL_TP || label == Labels::LABEL_FN ? obstacle_grid_t::STATE_OBSTACLE
-                                                                 : obstacle_grid_t::STATE_FREE;
+                                                                : obstacle_grid_t::STATE_FREE;
 }
 
 }  // namespace
@@ -162,7 +164,8 @@ void CauseFinder::Impl::try_variants(const Labels& labels, std::vector<CellCause
       said_at[static_cast<size_t>(labelled[k])] = said[k];
     }
     for (CellCause& f : failures)
-      if (f.reproduced() && said_at[static_cast<size_t>(f.cell)] == right_state(f.label)) f.fixed_by |= static_cast<uint8_t>(1u << v);
+      if (f.reproduced() && said_at[static_cast<size_t>(f.cell)] == right_state(f.label))
+        f.fixed_by |= static_cast<uint8_t>(1u << v);
   }
 }
 
@@ -200,7 +203,8 @@ std::vector<CellCause> CauseFinder::explain(const introspection_labels_t& labels
     for (size_t k = 0; k < cells.size(); ++k)
       if (out[k].reproduced() && without[k] == right_state(out[k].label)) out[k].causes |= twin.phenomenon;
   }
-  const bool unexplained = std::any_of(out.begin(), out.end(), [](const CellCause& c) { return c.reproduced() && !c.causes; });
+  const bool unexplained =
+      std::any_of(out.begin(), out.end(), [](const CellCause& c) { return c.reproduced() && !c.causes; });
   if (impl_->all_removed && unexplained) {
     impl_->show(*impl_->all_removed, request, labels, pixelformat, {impl_->detector.get()});
     const std::vector<int8_t> without = Impl::states(*impl_->detector, labels, cells);

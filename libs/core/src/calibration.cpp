@@ -22,8 +22,8 @@ void validate_rotation(const Eigen::Matrix3d& R, const std::string& where, const
 }
 
 void validate_camera(const CameraIntrinsics& cam, const std::string& where, const std::string& key) {
-  check(cam.width > 0 && cam.height > 0, where, key + " image size must be positive, got " +
-                                                    std::to_string(cam.width) + "x" + std::to_string(cam.height));
+  check(cam.width > 0 && cam.height > 0, where,
+        key + " image size must be positive, got " + std::to_string(cam.width) + "x" + std::to_string(cam.height));
   check(cam.K.allFinite() && cam.K(0, 0) > 0 && cam.K(1, 1) > 0, where,
         key + " focal lengths must be positive and finite");
   check(cam.K(2, 0) == 0 && cam.K(2, 1) == 0 && cam.K(2, 2) == 1, where, key + " last row must be [0 0 1]");

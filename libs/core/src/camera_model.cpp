@@ -60,13 +60,14 @@ bool CameraModel::in_image(const Eigen::Vector2d& pixel, double margin) const {
 RigGeometry::RigGeometry(const RigCalibration& rig)
     : calibration(rig),
       left(rig.left, rig.left_to_robot),
-      right(rig.right, [&] {
-        // right -> robot = (left -> robot) * (right -> left)
-        Eigen::Isometry3d left_to_right = Eigen::Isometry3d::Identity();
-        left_to_right.linear() = rig.stereo_R;
-        left_to_right.translation() = rig.stereo_T;
-        return Eigen::Isometry3d(rig.left_to_robot * left_to_right.inverse());
-      }()),
+      right(rig.right,
+            [&] {
+              // right -> robot = (left -> robot) * (right -> left)
+              Eigen::Isometry3d left_to_right = Eigen::Isometry3d::Identity();
+              left_to_right.linear() = rig.stereo_R;
+              left_to_right.translation() = rig.stereo_T;
+              return Eigen::Isometry3d(rig.left_to_robot * left_to_right.inverse());
+            }()),
       depth(rig.depth, rig.depth_to_robot) {}
 
 }  // namespace ivoa

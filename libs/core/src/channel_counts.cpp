@@ -15,7 +15,8 @@ std::map<std::string, int64_t> parse_channel_counts(const std::vector<std::strin
     errno = 0;
     const long long n = count.empty() ? -1 : std::strtoll(count.c_str(), &end, 10);
     if (eq == 0 || count.empty() || *end != '\0' || errno == ERANGE || n < 0)
-      throw std::invalid_argument((option.empty() ? "" : option + " ") + arg + ": use CHANNEL=N, N a whole number of messages");
+      throw std::invalid_argument((option.empty() ? "" : option + " ") + arg +
+                                  ": use CHANNEL=N, N a whole number of messages");
     counts[arg.substr(0, eq)] = n;
   }
   return counts;

@@ -65,7 +65,8 @@ cv::Mat cut_patch(const cv::Mat& stacked, int views, double u, double v, int sid
     const cv::Mat square = stacked(rect + cv::Point(0, k * height));
     cv::Mat part;
     if (side == out_size) part = square.clone();
-    else cv::resize(square, part, cv::Size(out_size, out_size), 0, 0, side > out_size ? cv::INTER_AREA : cv::INTER_LINEAR);
+    else
+      cv::resize(square, part, cv::Size(out_size, out_size), 0, 0, side > out_size ? cv::INTER_AREA : cv::INTER_LINEAR);
     parts.push_back(std::move(part));
   }
   if (views == 1) return parts[0];

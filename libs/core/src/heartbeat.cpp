@@ -31,9 +31,18 @@ Heartbeat::Heartbeat(Bus& bus, std::string process_name, std::string channel, do
       pid_(static_cast<int>(getpid())),
       start_utime_(now_utime()) {}
 
-void Heartbeat::count_in(int64_t n) { std::lock_guard<std::mutex> l(mutex_); in_ += n; }
-void Heartbeat::count_out(int64_t n) { std::lock_guard<std::mutex> l(mutex_); out_ += n; }
-void Heartbeat::count_dropped(int64_t n) { std::lock_guard<std::mutex> l(mutex_); dropped_ += n; }
+void Heartbeat::count_in(int64_t n) {
+  std::lock_guard<std::mutex> l(mutex_);
+  in_ += n;
+}
+void Heartbeat::count_out(int64_t n) {
+  std::lock_guard<std::mutex> l(mutex_);
+  out_ += n;
+}
+void Heartbeat::count_dropped(int64_t n) {
+  std::lock_guard<std::mutex> l(mutex_);
+  dropped_ += n;
+}
 
 void Heartbeat::bad_input(const std::string& what) {
   std::lock_guard<std::mutex> l(mutex_);
@@ -46,8 +55,7 @@ void Heartbeat::bad_input(const std::string& what) {
   }
   if (suppressed_warnings_ > 0)
     spdlog::warn("bad input (skipped): {} [{} similar warnings suppressed]", what, suppressed_warnings_);
-  else
-    spdlog::warn("bad input (skipped): {}", what);
+  else spdlog::warn("bad input (skipped): {}", what);
   suppressed_warnings_ = 0;
   last_warning_ms_ = now;
 }

@@ -17,14 +17,14 @@ void require(bool ok, const std::string& what) {
 
 // Wraps the raw pixels of msg (no copy) after checking sizes.
 cv::Mat wrap_raw(const image_t& msg, int type, int bytes_per_pixel) {
-  require(msg.width > 0 && msg.height > 0, "image has non-positive size " + std::to_string(msg.width) + "x" +
-                                               std::to_string(msg.height));
+  require(msg.width > 0 && msg.height > 0,
+          "image has non-positive size " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
   require(msg.row_stride >= msg.width * bytes_per_pixel,
           "row_stride " + std::to_string(msg.row_stride) + " is smaller than width * " +
               std::to_string(bytes_per_pixel) + " for " + pixelformat_name(msg.pixelformat));
   const size_t needed = static_cast<size_t>(msg.row_stride) * static_cast<size_t>(msg.height);
-  require(msg.data.size() >= needed, pixelformat_name(msg.pixelformat) + " image " + std::to_string(msg.width) +
-                                         "x" + std::to_string(msg.height) + " needs " + std::to_string(needed) +
+  require(msg.data.size() >= needed, pixelformat_name(msg.pixelformat) + " image " + std::to_string(msg.width) + "x" +
+                                         std::to_string(msg.height) + " needs " + std::to_string(needed) +
                                          " bytes, message has " + std::to_string(msg.data.size()));
   return cv::Mat(msg.height, msg.width, type, const_cast<uint8_t*>(msg.data.data()),
                  static_cast<size_t>(msg.row_stride));
@@ -76,10 +76,30 @@ cv::Mat mosaic_bayer(const cv::Mat& bgr, int32_t f) {
   // Channel index (B=0, G=1, R=2) of the filter at (row parity, column parity).
   int pattern[2][2];
   switch (f) {
-    case image_t::PIXEL_FORMAT_BAYER_RGGB: pattern[0][0] = 2; pattern[0][1] = 1; pattern[1][0] = 1; pattern[1][1] = 0; break;
-    case image_t::PIXEL_FORMAT_BAYER_BGGR: pattern[0][0] = 0; pattern[0][1] = 1; pattern[1][0] = 1; pattern[1][1] = 2; break;
-    case image_t::PIXEL_FORMAT_BAYER_GBRG: pattern[0][0] = 1; pattern[0][1] = 0; pattern[1][0] = 2; pattern[1][1] = 1; break;
-    case image_t::PIXEL_FORMAT_BAYER_GRBG: pattern[0][0] = 1; pattern[0][1] = 2; pattern[1][0] = 0; pattern[1][1] = 1; break;
+    case image_t::PIXEL_FORMAT_BAYER_RGGB:
+      pattern[0][0] = 2;
+      pattern[0][1] = 1;
+      pattern[1][0] = 1;
+      pattern[1][1] = 0;
+      break;
+    case image_t::PIXEL_FORMAT_BAYER_BGGR:
+      pattern[0][0] = 0;
+      pattern[0][1] = 1;
+      pattern[1][0] = 1;
+      pattern[1][1] = 2;
+      break;
+    case image_t::PIXEL_FORMAT_BAYER_GBRG:
+      pattern[0][0] = 1;
+      pattern[0][1] = 0;
+      pattern[1][0] = 2;
+      pattern[1][1] = 1;
+      break;
+    case image_t::PIXEL_FORMAT_BAYER_GRBG:
+      pattern[0][0] = 1;
+      pattern[0][1] = 2;
+      pattern[1][0] = 0;
+      pattern[1][1] = 1;
+      break;
     default: throw ImageError("not a Bayer pixel format: " + pixelformat_name(f));
   }
   cv::Mat raw(bgr.size(), CV_8UC1);
@@ -93,9 +113,9 @@ cv::Mat mosaic_bayer(const cv::Mat& bgr, int32_t f) {
 }
 
 cv::Mat decode_image(const image_t& msg, ColorOutput output) {
-  require(static_cast<size_t>(msg.size) == msg.data.size(),
-          "image size field " + std::to_string(msg.size) + " disagrees with " + std::to_string(msg.data.size()) +
-              " data bytes");
+  require(static_cast<size_t>(msg.size) == msg.data.size(), "image size field " + std::to_string(msg.size) +
+                                                                " disagrees with " + std::to_string(msg.data.size()) +
+                                                                " data bytes");
   const int32_t f = msg.pixelformat;
   if (f == image_t::PIXEL_FORMAT_GRAY) return to_output(wrap_raw(msg, CV_8UC1, 1), output);
   if (f == image_t::PIXEL_FORMAT_BGR) return to_output(wrap_raw(msg, CV_8UC3, 3), output);
@@ -163,8 +183,8 @@ image_t encode_image(const cv::Mat& image, int32_t f, int64_t utime, int jpeg_qu
 cv::Mat decode_depth(const depth_image_t& msg) {
   require(msg.format == depth_image_t::FORMAT_MM_U16LE,
           "depth image format " + std::to_string(msg.format) + " is not FORMAT_MM_U16LE");
-  require(msg.width > 0 && msg.height > 0, "depth image has non-positive size " + std::to_string(msg.width) + "x" +
-                                               std::to_string(msg.height));
+  require(msg.width > 0 && msg.height > 0,
+          "depth image has non-positive size " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
   const size_t needed = static_cast<size_t>(msg.width) * static_cast<size_t>(msg.height) * 2;
   require(static_cast<size_t>(msg.size) == msg.data.size() && msg.data.size() == needed,
           "depth image " + std::to_string(msg.width) + "x" + std::to_string(msg.height) + " needs " +

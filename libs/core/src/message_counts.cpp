@@ -42,17 +42,16 @@ void set_counts(obstacle_grid_t& m) {
 }
 
 void set_counts(introspection_labels_t& m) {
-  m.num_cells =
-      common_size("introspection_labels_t", m.label, m.stereo_state, m.depth_state, m.x, m.y, m.u, m.v);
+  m.num_cells = common_size("introspection_labels_t", m.label, m.stereo_state, m.depth_state, m.x, m.y, m.u, m.v);
 }
 
 void set_counts(introspection_t& m) {
-  m.num_cells = common_size("introspection_t heatmaps", m.prob_tp, m.prob_tn, m.prob_fp, m.prob_fn,
-                            m.uncertainty, m.class_variance);
-  m.num_queries = common_size("introspection_t queries", m.query_x, m.query_y, m.query_u, m.query_v,
-                              m.query_class, m.query_probability, m.query_uncertainty, m.query_announced,
-                              m.query_verdict, m.query_verdict_class, m.query_p_wrong, m.query_p_wrong_variance,
-                              m.query_verdict_announced);
+  m.num_cells = common_size("introspection_t heatmaps", m.prob_tp, m.prob_tn, m.prob_fp, m.prob_fn, m.uncertainty,
+                            m.class_variance);
+  m.num_queries =
+      common_size("introspection_t queries", m.query_x, m.query_y, m.query_u, m.query_v, m.query_class,
+                  m.query_probability, m.query_uncertainty, m.query_announced, m.query_verdict, m.query_verdict_class,
+                  m.query_p_wrong, m.query_p_wrong_variance, m.query_verdict_announced);
 }
 
 void set_counts(process_status_t& m) {

@@ -13,9 +13,9 @@
 namespace ivoa {
 
 void add_common_options(CLI::App& app, CommonOptions& options) {
-  app.add_option("--lcm-url", options.lcm_url,
-                 "LCM URL (default: $LCM_DEFAULT_URL or " + std::string(kProjectDefaultUrl) +
-                     ", with a 16 MB receive buffer)");
+  app.add_option(
+      "--lcm-url", options.lcm_url,
+      "LCM URL (default: $LCM_DEFAULT_URL or " + std::string(kProjectDefaultUrl) + ", with a 16 MB receive buffer)");
   app.add_option("--log-level", options.log_level, "trace, debug, info, warn, error")
       ->capture_default_str()
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));

@@ -21,8 +21,9 @@ QueryGrid::QueryGrid(const QueryGridConfig& config, const CameraModel& left_came
   num_x_ = grid_count(config.x_min, config.x_max, config.spacing);
   num_y_ = grid_count(config.y_min, config.y_max, config.spacing);
   if (num_x_ == 0 || num_y_ == 0 || config.patch_size <= 0 || !(config.safety_radius > 0))
-    throw std::invalid_argument("query grid: need x_min <= x_max, y_min <= y_max, spacing > 0, "
-                                "safety_radius > 0 and patch_size > 0");
+    throw std::invalid_argument(
+        "query grid: need x_min <= x_max, y_min <= y_max, spacing > 0, "
+        "safety_radius > 0 and patch_size > 0");
   const cv::Rect image(0, 0, left_camera.intrinsics().width, left_camera.intrinsics().height);
   cells_.resize(static_cast<size_t>(num_x_) * static_cast<size_t>(num_y_));
   for (int ix = 0; ix < num_x_; ++ix) {

@@ -52,8 +52,7 @@ void StereoRectification::rectify(const cv::Mat& left_raw, const cv::Mat& right_
   cv::remap(right_raw, right_rect, map_right_x_, map_right_y_, cv::INTER_LINEAR);
 }
 
-bool StereoRectification::project(const Eigen::Vector3d& p_robot, Eigen::Vector2d& left,
-                                  Eigen::Vector2d& right) const {
+bool StereoRectification::project(const Eigen::Vector3d& p_robot, Eigen::Vector2d& left, Eigen::Vector2d& right) const {
   const Eigen::Vector3d p = robot_to_rect_ * p_robot;
   if (p.z() < kMinProjectionDepth) return false;
   const double x = p.x() / p.z(), y = p.y() / p.z();

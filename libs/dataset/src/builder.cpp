@@ -69,12 +69,12 @@ struct SessionBuilder::Impl {
   std::unique_ptr<stereo::ObstacleDetector> detector;
   std::unique_ptr<monitor::LabelingPipeline> pipeline;
 
-  std::unique_ptr<GroundWarp> warp;        // views == 2
-  std::map<int64_t, cv::Mat> left_images;  // utime -> raw left BGR (views == 2: the warped right view below it)
+  std::unique_ptr<GroundWarp> warp;         // views == 2
+  std::map<int64_t, cv::Mat> left_images;   // utime -> raw left BGR (views == 2: the warped right view below it)
   std::map<int64_t, cv::Mat> right_images;  // utime -> raw right BGR, for evidence
   std::unique_ptr<stereo::ObstacleDetector> evidence_detector;  // made for the labels' detector when first needed
   bool evidence_warned = false;
-  std::map<int64_t, Truth> truths;         // utime -> simulator truth
+  std::map<int64_t, Truth> truths;           // utime -> simulator truth
   std::deque<introspection_labels_t> ready;  // labels waiting for their frame's truth
 
   bool rerun() const { return options.labels != kRecordedLabels; }
@@ -107,16 +107,15 @@ void SessionBuilder::Impl::open_writer() {
   info.patch_scale = options.patch_scale;
   info.tn_kept = options.keep_tn;
   // The user's word first, then the simulator's, then the scene name's.
-  if (!options.environment.empty())
-    info.environment = options.environment;
-  else if (info.environment.empty() || info.environment == "unknown")
-    info.environment = environment_of(info.scene);
+  if (!options.environment.empty()) info.environment = options.environment;
+  else if (info.environment.empty() || info.environment == "unknown") info.environment = environment_of(info.scene);
   writer = std::make_unique<SessionWriter>(root, info);
 }
 
 void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
   rig_calibration_t msg;
-  if (!logio::decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.rig_calibration_t");
+  if (!logio::decode(e, msg))
+    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.rig_calibration_t");
   std::vector<uint8_t> bytes = calibration_content(msg);
   if (bytes == calibration_bytes) return;
   try {
@@ -137,7 +136,8 @@ void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
 
 void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
   stereo_image_t msg;
-  if (!logio::decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.stereo_image_t");
+  if (!logio::decode(e, msg))
+    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.stereo_image_t");
   ++report.stereo_frames;
   try {
     cv::Mat left = decode_image(msg.left);
@@ -165,7 +165,8 @@ void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
 void SessionBuilder::Impl::on_depth(const logio::LogEvent& e) {
   if (!rerun()) return;
   depth_image_t msg;
-  if (!logio::decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.depth_image_t");
+  if (!logio::decode(e, msg))
+    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.depth_image_t");
   if (!pipeline) return bad("depth frame " + std::to_string(msg.utime) + " before any calibration");
   try {
     cv::Mat depth = decode_depth(msg);
@@ -179,7 +180,8 @@ void SessionBuilder::Impl::on_depth(const logio::LogEvent& e) {
 void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
   if (rerun()) return;
   introspection_labels_t msg;
-  if (!logio::decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.introspection_labels_t");
+  if (!logio::decode(e, msg))
+    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.introspection_labels_t");
   if (info.detector.empty()) {
     info.detector = msg.detector;
     info.grid = geometry_of(msg);
@@ -192,14 +194,16 @@ void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
 
 void SessionBuilder::Impl::on_truth(const logio::LogEvent& e) {
   sim_ground_truth_t msg;
-  if (!logio::decode(e, msg)) return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.sim_ground_truth_t");
+  if (!logio::decode(e, msg))
+    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.sim_ground_truth_t");
   if (info.scene.empty()) {
     info.scene = msg.scene;
     info.seed = msg.seed;
     info.environment = msg.environment.empty() ? "unknown" : msg.environment;
   }
   try {
-    truths[msg.utime] = {decode_image(msg.phenomena, ColorOutput::kGray), decode_image(msg.surface, ColorOutput::kGray)};
+    truths[msg.utime] = {decode_image(msg.phenomena, ColorOutput::kGray),
+                         decode_image(msg.surface, ColorOutput::kGray)};
   } catch (const ImageError& err) {
     return bad("truth " + std::to_string(msg.utime) + ": " + err.what());
   }
@@ -302,7 +306,8 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
 // cells; NaN where its verdict is not the recorded one, or the frame's right
 // image is gone). The first frame sets info.evidence_size; nothing when the
 // session stores no evidence.
-std::vector<std::vector<float>> SessionBuilder::Impl::evidence_of(const introspection_labels_t& labels, const cv::Mat& views) {
+std::vector<std::vector<float>> SessionBuilder::Impl::evidence_of(const introspection_labels_t& labels,
+                                                                  const cv::Mat& views) {
   if (!options.evidence || !rig || (writer && info.evidence_size == 0)) return {};
   if (!evidence_detector) {
     try {
@@ -314,7 +319,8 @@ std::vector<std::vector<float>> SessionBuilder::Impl::evidence_of(const introspe
     }
   }
   const auto right = right_images.find(labels.utime);
-  if (right != right_images.end()) evidence_detector->set_frame(views.rowRange(0, views.rows / options.views), right->second);
+  if (right != right_images.end())
+    evidence_detector->set_frame(views.rowRange(0, views.rows / options.views), right->second);
   std::vector<std::vector<float>> out(labels.label.size());
   for (size_t i = 0; i < labels.label.size(); ++i) {
     if (labels.label[i] == introspection_labels_t::LABEL_NONE) continue;
@@ -332,11 +338,12 @@ std::vector<std::vector<float>> SessionBuilder::Impl::evidence_of(const introspe
       ++report.evidence_mismatches;
       std::fill(e.values.begin(), e.values.end(), std::numeric_limits<float>::quiet_NaN());
       if (!evidence_warned)
-        spdlog::warn("frame {} cell {}: {} re-run says {}, the labels' verdict is state {}: evidence stored as NaN "
-                     "where they differ (recorded with other detector settings? re-label with --labels {} and those "
-                     "settings)",
-                     labels.utime, i, labels.detector, stereo::to_string(e.verdict),
-                     static_cast<int>(labels.stereo_state[i]), labels.detector);
+        spdlog::warn(
+            "frame {} cell {}: {} re-run says {}, the labels' verdict is state {}: evidence stored as NaN "
+            "where they differ (recorded with other detector settings? re-label with --labels {} and those "
+            "settings)",
+            labels.utime, i, labels.detector, stereo::to_string(e.verdict), static_cast<int>(labels.stereo_state[i]),
+            labels.detector);
       evidence_warned = true;
     }
     out[i] = std::move(e.values);
@@ -358,8 +365,9 @@ SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::strin
     impl_->info.patch_size = impl_->options.grid.patch_size;
   }
   if (impl_->options.recorded_patch_size < 0 || (impl_->rerun() && impl_->options.recorded_patch_size > 0))
-    throw std::invalid_argument("recorded_patch_size must be > 0 and is for recorded labels (re-run labels cut "
-                                "grid.patch_size)");
+    throw std::invalid_argument(
+        "recorded_patch_size must be > 0 and is for recorded labels (re-run labels cut "
+        "grid.patch_size)");
   if (!(impl_->options.patch_scale >= 0))
     throw std::invalid_argument("patch_scale must be >= 0 (0: fixed patches), not " +
                                 std::to_string(impl_->options.patch_scale));

@@ -41,9 +41,8 @@ std::string session_json(const SessionInfo& i) {
     << ",\n  \"environment\": " << json_quote(i.environment) << ",\n  \"rig_name\": " << json_quote(i.rig_name)
     << ",\n  \"patch_size\": " << i.patch_size << ",\n  \"views\": " << i.views
     << ",\n  \"patch_scale\": " << i.patch_scale << ",\n  \"tn_kept\": " << i.tn_kept
-    << ",\n  \"evidence_size\": " << i.evidence_size
-    << ",\n  \"tn_dropped\": " << i.tn_dropped << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples
-    << ",\n  \"class_counts\": {";
+    << ",\n  \"evidence_size\": " << i.evidence_size << ",\n  \"tn_dropped\": " << i.tn_dropped
+    << ",\n  \"frames\": " << i.frames << ",\n  \"samples\": " << i.samples << ",\n  \"class_counts\": {";
   for (int c = 0; c < kNumClasses; ++c) o << (c ? ", " : "") << json_quote(kLabelNames[c]) << ": " << i.class_counts[c];
   const QueryGridConfig& g = i.grid;
   o << "},\n  \"grid\": {\"x_min\": " << g.x_min << ", \"x_max\": " << g.x_max << ", \"y_min\": " << g.y_min
@@ -111,7 +110,8 @@ SampleRecord parse_sample_row(const std::string& line, int columns, const std::s
                       &depth_utime, &s.cell, &s.label, &s.stereo_state, &s.depth_state, &s.x, &s.y, &s.u, &s.v,
                       &s.phenomena, &s.phenomenon, &s.surface, &s.patch_side);
   if (n != columns) throw DatasetError(where + ": malformed row '" + line + "'");
-  if (s.label < 0 || s.label >= kNumClasses) throw DatasetError(where + ": label " + std::to_string(s.label) + " out of range");
+  if (s.label < 0 || s.label >= kNumClasses)
+    throw DatasetError(where + ": label " + std::to_string(s.label) + " out of range");
   s.frame = frame;
   s.utime = utime;
   s.depth_utime = depth_utime;
@@ -131,7 +131,9 @@ struct SessionWriter::Files {
 };
 
 SessionWriter::SessionWriter(const std::string& dataset_root, SessionInfo info)
-    : dir_((fs::path(dataset_root) / info.session).string()), info_(std::move(info)), files_(std::make_unique<Files>()) {
+    : dir_((fs::path(dataset_root) / info.session).string()),
+      info_(std::move(info)),
+      files_(std::make_unique<Files>()) {
   if (info_.session.empty() || info_.session.find('/') != std::string::npos)
     throw DatasetError("session name '" + info_.session + "' must be a non-empty folder name");
   std::error_code ec;
@@ -165,11 +167,12 @@ void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch, const std::
   if (patch.rows != p * info_.views || patch.cols != p || patch.type() != CV_8UC3)
     throw DatasetError("patch must be " + std::to_string(p * info_.views) + "x" + std::to_string(p) + " 8-bit BGR (" +
                        std::to_string(info_.views) + " view(s) of " + std::to_string(p) + " px)");
-  if (s.label < 0 || s.label >= kNumClasses) throw DatasetError("sample label " + std::to_string(s.label) + " out of range");
+  if (s.label < 0 || s.label >= kNumClasses)
+    throw DatasetError("sample label " + std::to_string(s.label) + " out of range");
   if (s.frame < 0 || s.frame >= static_cast<int64_t>(frames_.size())) throw DatasetError("sample refers to no frame");
   if (static_cast<int>(evidence.size()) != info_.evidence_size)
-    throw DatasetError(fmt::format("sample {}: {} evidence values, the session stores {}", info_.samples, evidence.size(),
-                                   info_.evidence_size));
+    throw DatasetError(fmt::format("sample {}: {} evidence values, the session stores {}", info_.samples,
+                                   evidence.size(), info_.evidence_size));
   write_evidence(evidence);
   const cv::Mat contiguous = patch.isContinuous() ? patch : patch.clone();
   const size_t bytes = static_cast<size_t>(p) * p * 3 * info_.views;
@@ -177,9 +180,9 @@ void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch, const std::
     throw DatasetError(dir_ + "/patches.bin: write failed (disk full?)");
   if (s.patch_side == 0) s.patch_side = p;
   std::fprintf(files_->samples, "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%.4f,%.4f,%.2f,%.2f,%d,%d,%d,%d\n",
-               static_cast<long long>(info_.samples), static_cast<long long>(s.frame),
-               static_cast<long long>(s.utime), static_cast<long long>(s.depth_utime), s.cell, s.label,
-               s.stereo_state, s.depth_state, s.x, s.y, s.u, s.v, s.phenomena, s.phenomenon, s.surface, s.patch_side);
+               static_cast<long long>(info_.samples), static_cast<long long>(s.frame), static_cast<long long>(s.utime),
+               static_cast<long long>(s.depth_utime), s.cell, s.label, s.stereo_state, s.depth_state, s.x, s.y, s.u,
+               s.v, s.phenomena, s.phenomenon, s.surface, s.patch_side);
   ++info_.samples;
   ++info_.class_counts[static_cast<size_t>(s.label)];
   ++frames_[static_cast<size_t>(s.frame)].samples;
@@ -237,8 +240,8 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
   mapped_bytes_ = static_cast<size_t>(st.st_size);
   if (mapped_bytes_ != samples_.size() * patch_bytes) {
     ::close(fd);
-    throw DatasetError(patches + ": holds " + std::to_string(mapped_bytes_ / patch_bytes) + " patches, samples.csv lists " +
-                       std::to_string(samples_.size()) + " (truncated dataset?)");
+    throw DatasetError(patches + ": holds " + std::to_string(mapped_bytes_ / patch_bytes) +
+                       " patches, samples.csv lists " + std::to_string(samples_.size()) + " (truncated dataset?)");
   }
   if (mapped_bytes_ > 0) {
     void* m = mmap(nullptr, mapped_bytes_, PROT_READ, MAP_PRIVATE, fd, 0);
@@ -256,8 +259,9 @@ void SessionReader::read_evidence() {
   if (info_.evidence_size == 0) return;
   const std::string path = dir_ + "/evidence.f32";
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw DatasetError(path + ": cannot open (session.json says evidence_size " +
-                              std::to_string(info_.evidence_size) + ")");
+  if (!in)
+    throw DatasetError(path + ": cannot open (session.json says evidence_size " + std::to_string(info_.evidence_size) +
+                       ")");
   evidence_.resize(samples_.size() * static_cast<size_t>(info_.evidence_size));
   in.read(reinterpret_cast<char*>(evidence_.data()), static_cast<std::streamsize>(evidence_.size() * sizeof(float)));
   if (in.gcount() != static_cast<std::streamsize>(evidence_.size() * sizeof(float)) || in.peek() != EOF)
@@ -355,7 +359,8 @@ std::map<std::string, std::vector<std::string>> load_split(const std::string& pa
       throw DatasetError(path + ": split '" + name + "' must be a list of session names");
     }
     for (const auto& s : sessions) {
-      if (owner.count(s)) throw DatasetError(path + ": session '" + s + "' is in both '" + owner[s] + "' and '" + name + "'");
+      if (owner.count(s))
+        throw DatasetError(path + ": session '" + s + "' is in both '" + owner[s] + "' and '" + name + "'");
       owner[s] = name;
     }
     splits[name] = std::move(sessions);

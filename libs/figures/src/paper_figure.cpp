@@ -14,10 +14,10 @@ const char* const kClassNames[] = {"TP", "TN", "FP", "FN"};
 
 cv::Scalar class_colour(int label) {
   switch (label) {
-    case 0: return {60, 180, 60};    // TP green
-    case 1: return {200, 120, 30};   // TN blue
-    case 2: return {0, 150, 255};    // FP orange
-    case 3: return {40, 40, 220};    // FN red
+    case 0: return {60, 180, 60};   // TP green
+    case 1: return {200, 120, 30};  // TN blue
+    case 2: return {0, 150, 255};   // FP orange
+    case 3: return {40, 40, 220};   // FN red
     default: return {160, 160, 160};
   }
 }

@@ -59,14 +59,16 @@ torch::Tensor BatchAugmenter::apply(const std::vector<const uint8_t*>& patches,
   if (params.size() != patches.size()) throw std::invalid_argument("BatchAugmenter: one parameter set per patch");
   for (const auto& p : params)
     if (p.noise_sigma > 0 && (noise_.empty() || p.noise_index < 0 || p.noise_index >= kNoiseBankSize))
-      throw std::invalid_argument("BatchAugmenter: noise asked of an augmenter without a noise bank, or index out of range");
+      throw std::invalid_argument(
+          "BatchAugmenter: noise asked of an augmenter without a noise bank, or index out of range");
   const int64_t b = static_cast<int64_t>(patches.size()), channels = 3 * info_.views;
   auto out = torch::empty({b, channels, size_, size_}, torch::kFloat);
   const size_t sample_floats = static_cast<size_t>(channels) * size_ * size_;
   float* data = out.data_ptr<float>();
   at::parallel_for(0, b, 1, [&](int64_t begin, int64_t end) {
     for (int64_t i = begin; i < end; ++i)
-      fill_sample(patches[static_cast<size_t>(i)], params[static_cast<size_t>(i)], data + static_cast<size_t>(i) * sample_floats);
+      fill_sample(patches[static_cast<size_t>(i)], params[static_cast<size_t>(i)],
+                  data + static_cast<size_t>(i) * sample_floats);
   });
   if (size_ == info_.input_size) return out;
   return torch::nn::functional::interpolate(out, torch::nn::functional::InterpolateFuncOptions()
@@ -96,8 +98,10 @@ void BatchAugmenter::fill_sample(const uint8_t* patch, const PhotometricParams& 
       float* dst = out + static_cast<size_t>(3 * v + c) * plane;
       if (p.noise_sigma > 0) {
         const float sigma = static_cast<float>(p.noise_sigma);
-        const float* noise = noise_.data() + (static_cast<size_t>(p.noise_index) * 3 * static_cast<size_t>(info_.views) +
-                                              static_cast<size_t>(3 * v + c)) * plane;
+        const float* noise =
+            noise_.data() + (static_cast<size_t>(p.noise_index) * 3 * static_cast<size_t>(info_.views) +
+                             static_cast<size_t>(3 * v + c)) *
+                                plane;
         for (size_t q = 0; q < plane; ++q)
           dst[q] = (std::clamp(table[src[3 * q]] + sigma * noise[q], 0.0f, 1.0f) - m) * inv_std;
       } else {

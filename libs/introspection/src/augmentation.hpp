@@ -29,7 +29,7 @@ struct PhotometricRanges {
   std::array<double, 2> white_balance{0.9, 1.1};  // per colour channel gain
   std::array<double, 2> view_gain{0.95, 1.05};    // per view (the right sensor's sensitivity differs)
   std::array<double, 2> gamma{0.8, 1.25};
-  std::array<double, 2> noise_sigma{0.0, 0.03};   // Gaussian sensor noise, per pixel
+  std::array<double, 2> noise_sigma{0.0, 0.03};  // Gaussian sensor noise, per pixel
 };
 
 // One sample's draw. The views of a pair share exposure, contrast, white
@@ -65,7 +65,7 @@ class BatchAugmenter {
   bool augment_;
   PhotometricRanges ranges_;
   std::mt19937_64 rng_;
-  int size_;                 // S
+  int size_;                  // S
   std::vector<float> noise_;  // kNoiseBankSize fields of 3 x views x S x S unit normals
 };
 

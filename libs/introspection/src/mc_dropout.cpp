@@ -47,7 +47,7 @@ McStats mc_dropout_head(IntrospectionNetImpl& net, const torch::Tensor& features
   const auto& w1 = net.fc1->weight;  // [H1, F]
   const int64_t h1 = w1.size(0);
   const auto m1 = sample_masks(passes, f, p, generator, options);  // [T, F]
-  torch::Tensor h;  // [N, T * H1], column t * H1 + j = unit j of pass t
+  torch::Tensor h;                                                 // [N, T * H1], column t * H1 + j = unit j of pass t
   if (passes * f * h1 <= kMaxMaskedWeights) {
     // FC1 with input dropout for all passes in one product:
     // x (m_t * W1) for t = 1..T  ==  x [m_1 W1 | ... | m_T W1].

@@ -60,7 +60,8 @@ Heatmaps make_heatmaps(const McStats& stats, int rows, int cols, const ModelInfo
     for (int c = 0; c < cols; ++c) {
       int best = 0;
       for (int k = 1; k < kNumClasses; ++k)
-        if (h.probability[static_cast<size_t>(k)].at<float>(r, c) > h.probability[static_cast<size_t>(best)].at<float>(r, c))
+        if (h.probability[static_cast<size_t>(k)].at<float>(r, c) >
+            h.probability[static_cast<size_t>(best)].at<float>(r, c))
           best = k;
       h.predicted.at<uint8_t>(r, c) = static_cast<uint8_t>(best);
       h.predicted_variance.at<float>(r, c) = h.variance[static_cast<size_t>(best)].at<float>(r, c);
@@ -74,8 +75,7 @@ Heatmaps make_heatmaps(const McStats& stats, int rows, int cols, const ModelInfo
 }
 
 // mean, var: 4 classes; vmean, vvar: the 2 verdict errors.
-Prediction prediction_of(const float* mean, const float* var, const float* vmean, const float* vvar,
-                         double threshold) {
+Prediction prediction_of(const float* mean, const float* var, const float* vmean, const float* vvar, double threshold) {
   Prediction p;
   for (int k = 0; k < kNumClasses; ++k) {
     p.probability[static_cast<size_t>(k)] = mean[k];
@@ -110,7 +110,8 @@ std::vector<cv::Mat> grid_patches(const cv::Mat& image, const ModelInfo& info, i
     for (int c = 0; c < cols; ++c) {
       std::vector<cv::Mat> views;
       for (int k = 0; k < info.views; ++k)
-        views.push_back(image(cv::Rect(c * info.stride, k * height + r * info.stride, info.patch_size, info.patch_size)));
+        views.push_back(
+            image(cv::Rect(c * info.stride, k * height + r * info.stride, info.patch_size, info.patch_size)));
       cv::Mat stacked;
       if (info.views == 1) stacked = views[0];
       else cv::vconcat(views, stacked);
@@ -132,7 +133,9 @@ void check_image(const cv::Mat& image, const ModelInfo& info) {
 class NativeIntrospectionModel : public IntrospectionModel {
  public:
   NativeIntrospectionModel(NativeModel model, const InferenceConfig& config)
-      : IntrospectionModel(config), model_(std::move(model)), device_(device_of(config.device)),
+      : IntrospectionModel(config),
+        model_(std::move(model)),
+        device_(device_of(config.device)),
         generator_(make_generator(config.seed)) {
     model_.net->to(device_);
     model_.net->eval();
@@ -153,8 +156,8 @@ class NativeIntrospectionModel : public IntrospectionModel {
       rows = r;
       cols = c;
     }
-    Heatmaps h = make_heatmaps(head(features), static_cast<int>(rows), static_cast<int>(cols), model_.info,
-                               config_.mean_filter);
+    Heatmaps h =
+        make_heatmaps(head(features), static_cast<int>(rows), static_cast<int>(cols), model_.info, config_.mean_filter);
     h.compute_ms = monotonic_ms() - start;
     return h;
   }
@@ -163,8 +166,9 @@ class NativeIntrospectionModel : public IntrospectionModel {
     torch::NoGradGuard no_grad;
     PatchOutputs out;
     for (size_t begin = 0; begin < patches.size(); begin += kPatchBatch) {
-      const std::vector<cv::Mat> batch(patches.begin() + static_cast<long>(begin),
-                                       patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
+      const std::vector<cv::Mat> batch(
+          patches.begin() + static_cast<long>(begin),
+          patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
       const auto features = patch_features(batch);
       const McStats s = head(features);
       append_predictions(s, threshold(), out.predictions);
@@ -181,8 +185,9 @@ class NativeIntrospectionModel : public IntrospectionModel {
   torch::Tensor patch_features(const std::vector<cv::Mat>& patches) {
     std::vector<torch::Tensor> parts;
     for (size_t begin = 0; begin < patches.size(); begin += kPatchBatch) {
-      const std::vector<cv::Mat> batch(patches.begin() + static_cast<long>(begin),
-                                       patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
+      const std::vector<cv::Mat> batch(
+          patches.begin() + static_cast<long>(begin),
+          patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
       parts.push_back(model_.net->features(patches_to_tensor(batch, model_.info).to(device_)));
     }
     return torch::cat(parts);
@@ -235,8 +240,9 @@ class ScriptedIntrospectionModel : public IntrospectionModel {
     const int passes = std::max(config_.mc_passes, 1);
     std::vector<torch::Tensor> all;
     for (size_t begin = 0; begin < patches.size(); begin += kPatchBatch) {
-      const std::vector<cv::Mat> batch(patches.begin() + static_cast<long>(begin),
-                                       patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
+      const std::vector<cv::Mat> batch(
+          patches.begin() + static_cast<long>(begin),
+          patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
       const auto x = patches_to_tensor(batch, info_);
       std::vector<torch::Tensor> runs;
       for (int t = 0; t < passes; ++t) runs.push_back(torch::softmax(module_.forward({x}).toTensor(), -1));
@@ -254,16 +260,16 @@ std::unique_ptr<IntrospectionModel> load_scripted(const std::string& path, const
   try {
     module = torch::jit::load(path);
   } catch (const c10::Error& e) {
-    throw ModelError(path + ": not a TorchScript model (" + std::string(e.what_without_backtrace()).substr(0, 200) + ")");
+    throw ModelError(path + ": not a TorchScript model (" + std::string(e.what_without_backtrace()).substr(0, 200) +
+                     ")");
   }
   if (!module.find_method("forward")) throw ModelError(path + ": scripted model has no forward()");
   if (!module.hasattr(kMetadataKey))
     throw ModelError(path + ": scripted model has no '" + std::string(kMetadataKey) +
                      "' buffer (JSON metadata as a uint8 tensor; see README)");
   const auto t = module.attr(kMetadataKey).toTensor().contiguous();
-  ModelInfo info = info_from_json(std::string(reinterpret_cast<const char*>(t.data_ptr<uint8_t>()),
-                                              static_cast<size_t>(t.numel())),
-                                  path);
+  ModelInfo info = info_from_json(
+      std::string(reinterpret_cast<const char*>(t.data_ptr<uint8_t>()), static_cast<size_t>(t.numel())), path);
   info.id = path;
   return std::make_unique<ScriptedIntrospectionModel>(std::move(module), std::move(info), config);
 }

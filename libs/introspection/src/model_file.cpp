@@ -40,8 +40,8 @@ std::string info_to_json(const ModelInfo& i) {
   std::ostringstream o;
   o.precision(8);
   o << "{\"format\": " << json_quote(kFormat) << ", \"version\": 1, \"architecture\": " << json_quote(i.architecture)
-    << ", \"detector\": " << json_quote(i.detector) << ", \"patch_size\": " << i.patch_size << ", \"stride\": " << i.stride
-    << ", \"input_size\": " << i.input_size << ", \"views\": " << i.views
+    << ", \"detector\": " << json_quote(i.detector) << ", \"patch_size\": " << i.patch_size
+    << ", \"stride\": " << i.stride << ", \"input_size\": " << i.input_size << ", \"views\": " << i.views
     << ", \"patch_scale\": " << i.patch_scale << ", \"dropout\": " << i.dropout << ", \"color\": \"RGB\""
     << ", \"mean\": [" << i.mean[0] << ", " << i.mean[1] << ", " << i.mean[2] << "], \"std\": [" << i.std[0] << ", "
     << i.std[1] << ", " << i.std[2] << "], \"classes\": [";
@@ -63,7 +63,7 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
     i.patch_size = n["patch_size"].as<int>();
     i.stride = n["stride"].as<int>();
     i.input_size = n["input_size"].as<int>();
-    i.views = n["views"].as<int>(1);  // models written before views existed see the left image only
+    i.views = n["views"].as<int>(1);                   // models written before views existed see the left image only
     i.patch_scale = n["patch_scale"].as<double>(0.0);  // models written before scaling existed: fixed patches
     i.dropout = n["dropout"].as<double>();
     for (int c = 0; c < 3; ++c) {

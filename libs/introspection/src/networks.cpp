@@ -46,9 +46,7 @@ torch::Tensor IntrospectionNetImpl::head(const torch::Tensor& f) {
   return fc3(h);
 }
 
-torch::Tensor IntrospectionNetImpl::embedding(const torch::Tensor& f) {
-  return torch::relu(fc2(torch::relu(fc1(f))));
-}
+torch::Tensor IntrospectionNetImpl::embedding(const torch::Tensor& f) { return torch::relu(fc2(torch::relu(fc1(f)))); }
 
 SlideNetImpl::SlideNetImpl(double dropout, int64_t in_channels) : IntrospectionNetImpl(64 * 2 * 2, kFc1Width, dropout) {
   nn::Sequential t;
@@ -78,16 +76,16 @@ torch::Tensor SlideNetImpl::cell_features(const torch::Tensor& image, int64_t& r
 }
 
 AlexNet224Impl::AlexNet224Impl(double dropout, int64_t in_channels) : IntrospectionNetImpl(256 * 6 * 6, 2048, dropout) {
-  trunk = register_module(
-      "trunk", nn::Sequential(nn::Conv2d(nn::Conv2dOptions(in_channels, 64, 11).stride(4).padding(2)), nn::ReLU(true),
-                              nn::MaxPool2d(nn::MaxPool2dOptions(3).stride(2)),
-                              nn::Conv2d(nn::Conv2dOptions(64, 192, 5).padding(2)), nn::ReLU(true),
-                              nn::MaxPool2d(nn::MaxPool2dOptions(3).stride(2)),
-                              nn::Conv2d(nn::Conv2dOptions(192, 384, 3).padding(1)), nn::ReLU(true),
-                              nn::Conv2d(nn::Conv2dOptions(384, 256, 3).padding(1)), nn::ReLU(true),
-                              nn::Conv2d(nn::Conv2dOptions(256, 256, 3).padding(1)), nn::ReLU(true),
-                              nn::MaxPool2d(nn::MaxPool2dOptions(3).stride(2)),
-                              nn::AdaptiveAvgPool2d(nn::AdaptiveAvgPool2dOptions({6, 6}))));
+  trunk =
+      register_module("trunk", nn::Sequential(nn::Conv2d(nn::Conv2dOptions(in_channels, 64, 11).stride(4).padding(2)),
+                                              nn::ReLU(true), nn::MaxPool2d(nn::MaxPool2dOptions(3).stride(2)),
+                                              nn::Conv2d(nn::Conv2dOptions(64, 192, 5).padding(2)), nn::ReLU(true),
+                                              nn::MaxPool2d(nn::MaxPool2dOptions(3).stride(2)),
+                                              nn::Conv2d(nn::Conv2dOptions(192, 384, 3).padding(1)), nn::ReLU(true),
+                                              nn::Conv2d(nn::Conv2dOptions(384, 256, 3).padding(1)), nn::ReLU(true),
+                                              nn::Conv2d(nn::Conv2dOptions(256, 256, 3).padding(1)), nn::ReLU(true),
+                                              nn::MaxPool2d(nn::MaxPool2dOptions(3).stride(2)),
+                                              nn::AdaptiveAvgPool2d(nn::AdaptiveAvgPool2dOptions({6, 6}))));
 }
 
 torch::Tensor AlexNet224Impl::features(const torch::Tensor& patches) { return trunk->forward(patches).flatten(1); }

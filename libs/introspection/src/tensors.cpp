@@ -33,7 +33,8 @@ torch::Tensor resized_to_input(const torch::Tensor& x, const ModelInfo& info) {
 // (x - mean) / std per RGB channel of every view.
 torch::Tensor standardize(const torch::Tensor& unit_rgb, const ModelInfo& info) {
   const int64_t views = unit_rgb.size(1) / 3;
-  const auto mean = torch::tensor({info.mean[0], info.mean[1], info.mean[2]}).view({1, 3, 1, 1}).repeat({1, views, 1, 1});
+  const auto mean =
+      torch::tensor({info.mean[0], info.mean[1], info.mean[2]}).view({1, 3, 1, 1}).repeat({1, views, 1, 1});
   const auto std = torch::tensor({info.std[0], info.std[1], info.std[2]}).view({1, 3, 1, 1}).repeat({1, views, 1, 1});
   return (unit_rgb - mean.to(unit_rgb.device())) / std.to(unit_rgb.device());
 }
@@ -83,8 +84,8 @@ torch::Tensor image_to_tensor(const cv::Mat& bgr, const ModelInfo& info) {
     for (int c = 0; c < 3; ++c) {
       cv::Mat plane(rows, bgr.cols, CV_32F, out.data_ptr<float>() + static_cast<size_t>(3 * k + c) * plane_size);
       const double scale = 1.0 / (255.0 * info.std[static_cast<size_t>(c)]);
-      channels[static_cast<size_t>(2 - c)].convertTo(plane, CV_32F, scale,
-                                                     -info.mean[static_cast<size_t>(c)] / info.std[static_cast<size_t>(c)]);
+      channels[static_cast<size_t>(2 - c)].convertTo(
+          plane, CV_32F, scale, -info.mean[static_cast<size_t>(c)] / info.std[static_cast<size_t>(c)]);
     }
   }
   return out;

@@ -60,8 +60,8 @@ SplitData load_split_data(const TrainConfig& c, const std::string& split) {
                                std::to_string(d.views));
     if (d.patch_scale < 0) d.patch_scale = reader->info().patch_scale;
     if (reader->info().patch_scale != d.patch_scale)
-      throw std::runtime_error(fmt::format("{}: patch scale {}, the other sessions {}", name,
-                                           reader->info().patch_scale, d.patch_scale));
+      throw std::runtime_error(
+          fmt::format("{}: patch scale {}, the other sessions {}", name, reader->info().patch_scale, d.patch_scale));
     const int evidence_size = reader->info().evidence_size;  // sessions that disagree cannot share the side task
     d.evidence_size = d.evidence_size < 0 || d.evidence_size == evidence_size ? evidence_size : 0;
     const auto session = static_cast<uint32_t>(d.sessions.size());
@@ -92,7 +92,9 @@ torch::Tensor evidence_targets(const SplitData& d, const std::vector<SampleRef>&
   return torch::from_blob(values.data(), {static_cast<int64_t>(refs.size()), size}, torch::kFloat).clone();
 }
 
-const dataset::SampleRecord& sample_of(const SplitData& d, const SampleRef& r) { return d.sessions[r.session]->samples()[r.index]; }
+const dataset::SampleRecord& sample_of(const SplitData& d, const SampleRef& r) {
+  return d.sessions[r.session]->samples()[r.index];
+}
 int label_of(const SplitData& d, const SampleRef& r) { return sample_of(d, r).label; }
 
 struct Confusion {
@@ -182,8 +184,10 @@ ValOutputs run_validation(IntrospectionNetImpl& net, const SplitData& d, const s
 }
 
 double learning_rate_at(const TrainConfig& c, int64_t step) {
-  if (step < c.warmup_steps) return c.learning_rate * static_cast<double>(step + 1) / static_cast<double>(c.warmup_steps);
-  const double t = static_cast<double>(step - c.warmup_steps) / static_cast<double>(std::max<int64_t>(c.steps - c.warmup_steps, 1));
+  if (step < c.warmup_steps)
+    return c.learning_rate * static_cast<double>(step + 1) / static_cast<double>(c.warmup_steps);
+  const double t =
+      static_cast<double>(step - c.warmup_steps) / static_cast<double>(std::max<int64_t>(c.steps - c.warmup_steps, 1));
   return c.learning_rate * (0.01 + 0.99 * 0.5 * (1.0 + std::cos(M_PI * std::min(t, 1.0))));
 }
 
@@ -197,12 +201,13 @@ std::string training_summary(const TrainConfig& c, const SplitData& train, const
                              int64_t step) {
   std::ostringstream o;
   o.precision(5);
-  o << "{\"dataset\": \"" << c.dataset << "\", \"split_file\": \"" << c.split_file << "\", \"train_sessions\": "
-    << json_list(train.names) << ", \"val_sessions\": " << json_list(val.names) << ", \"train_class_counts\": ["
-    << r.train_class_counts[0] << ", " << r.train_class_counts[1] << ", " << r.train_class_counts[2] << ", "
-    << r.train_class_counts[3] << "], \"steps\": " << step << ", \"batch_size\": " << c.batch_size
-    << ", \"optimizer\": \"" << optimizer_name(c.optimizer) << "\", \"learning_rate\": " << c.learning_rate
-    << ", \"momentum\": " << c.momentum << ", \"weight_decay\": " << c.weight_decay << ", \"seed\": " << c.seed
+  o << "{\"dataset\": \"" << c.dataset << "\", \"split_file\": \"" << c.split_file
+    << "\", \"train_sessions\": " << json_list(train.names) << ", \"val_sessions\": " << json_list(val.names)
+    << ", \"train_class_counts\": [" << r.train_class_counts[0] << ", " << r.train_class_counts[1] << ", "
+    << r.train_class_counts[2] << ", " << r.train_class_counts[3] << "], \"steps\": " << step
+    << ", \"batch_size\": " << c.batch_size << ", \"optimizer\": \"" << optimizer_name(c.optimizer)
+    << "\", \"learning_rate\": " << c.learning_rate << ", \"momentum\": " << c.momentum
+    << ", \"weight_decay\": " << c.weight_decay << ", \"seed\": " << c.seed
     << ", \"augment\": " << (c.augment ? "true" : "false") << ", \"fn_weight\": " << c.fn_weight
     << ", \"evidence_weight\": " << (train.evidence_size > 0 ? c.evidence_weight : 0.0)
     << ", \"best_step\": " << r.best_step << ", \"val_mean_class_accuracy\": " << r.best_val_mean_class_accuracy
@@ -218,7 +223,8 @@ std::pair<double, double> calibrate_threshold(const std::vector<int>& truth, con
   std::vector<float> sorted = variance;
   std::sort(sorted.begin(), sorted.end());
   if (sorted.empty()) return {0.01, 0};
-  const double threshold = sorted[std::min(sorted.size() - 1, static_cast<size_t>(retain * static_cast<double>(sorted.size())))];
+  const double threshold =
+      sorted[std::min(sorted.size() - 1, static_cast<size_t>(retain * static_cast<double>(sorted.size())))];
   Confusion kept;
   for (size_t i = 0; i < truth.size(); ++i)
     if (variance[i] <= threshold) kept.add(truth[i], predicted[i]);
@@ -227,8 +233,8 @@ std::pair<double, double> calibrate_threshold(const std::vector<int>& truth, con
 
 // Both gates (the model's own prediction, and the prediction given the
 // detector's verdict) from one MC-dropout pass over the validation subset.
-void calibrate_gates(NativeModel& model, const SplitData& val, const std::vector<SampleRef>& refs,
-                     const TrainConfig& c, torch::Device device, torch::Generator& generator, TrainReport& report) {
+void calibrate_gates(NativeModel& model, const SplitData& val, const std::vector<SampleRef>& refs, const TrainConfig& c,
+                     torch::Device device, torch::Generator& generator, TrainReport& report) {
   const ValOutputs mc = run_validation(*model.net, val, refs, model.info, device, c.threshold_passes, generator);
   std::tie(report.uncertainty_threshold, report.val_accuracy_retained) =
       calibrate_threshold(mc.truth, mc.predicted, mc.variance, c.threshold_retain);
@@ -247,8 +253,7 @@ void check_can_start_from(const ModelInfo& from, const ModelInfo& wanted, bool r
     why = "architecture " + from.architecture + ", not " + wanted.architecture;
   else if (from.patch_scale != wanted.patch_scale)
     why = fmt::format("patch scale {}, the dataset's {}", from.patch_scale, wanted.patch_scale);
-  else if (from.views != wanted.views)
-    why = fmt::format("{} view(s), the dataset's {}", from.views, wanted.views);
+  else if (from.views != wanted.views) why = fmt::format("{} view(s), the dataset's {}", from.views, wanted.views);
   if (why.empty()) return;
   const std::string remedy = resuming
                                  ? "delete " + output + ".checkpoint.* to train from scratch, or choose another --out"
@@ -262,8 +267,9 @@ std::unique_ptr<EvidenceTask> make_evidence_task(const TrainConfig& c, const Spl
                                                  IntrospectionNetImpl& net, torch::Device device) {
   if (c.evidence_weight <= 0) return nullptr;
   if (train.evidence_size <= 0) {
-    spdlog::warn("the training sessions carry no detector evidence (or not all the same): training without the side "
-                 "task (rebuild them with this ivoa-dataset, or pass --evidence-weight 0 to silence this)");
+    spdlog::warn(
+        "the training sessions carry no detector evidence (or not all the same): training without the side "
+        "task (rebuild them with this ivoa-dataset, or pass --evidence-weight 0 to silence this)");
     return nullptr;
   }
   spdlog::info("side task: regress {} evidence values per sample, weight {}", train.evidence_size, c.evidence_weight);
@@ -276,21 +282,22 @@ void resume_evidence_task(EvidenceTask* evidence, const std::string& checkpoint,
   const bool saved = std::filesystem::exists(checkpoint + ".evidence");
   if (evidence && saved) return evidence->load(checkpoint + ".evidence");
   if (!evidence && !saved) return;
-  throw std::runtime_error(fmt::format(
-      "cannot resume from {}: it was trained {} the evidence side task, this run {} (--evidence-weight {})", checkpoint,
-      saved ? "with" : "without", evidence ? "with" : "without", weight));
+  throw std::runtime_error(
+      fmt::format("cannot resume from {}: it was trained {} the evidence side task, this run {} (--evidence-weight {})",
+                  checkpoint, saved ? "with" : "without", evidence ? "with" : "without", weight));
 }
 
 // What the model file will say about the network, from the training and
 // validation sessions (which must have patches cut the same way).
 ModelInfo model_info_for(const TrainConfig& c, const SplitData& train, const SplitData& val) {
   if (val.views != train.views)
-    throw std::runtime_error("the validation sessions have " + std::to_string(val.views) + " view(s), the training ones " +
-                             std::to_string(train.views));
+    throw std::runtime_error("the validation sessions have " + std::to_string(val.views) +
+                             " view(s), the training ones " + std::to_string(train.views));
   if (val.patch_scale != train.patch_scale || val.patch_size != train.patch_size)
-    throw std::runtime_error(fmt::format("the validation sessions' patches (size {}, scale {}) differ from the "
-                                         "training ones' (size {}, scale {})",
-                                         val.patch_size, val.patch_scale, train.patch_size, train.patch_scale));
+    throw std::runtime_error(
+        fmt::format("the validation sessions' patches (size {}, scale {}) differ from the "
+                    "training ones' (size {}, scale {})",
+                    val.patch_size, val.patch_scale, train.patch_size, train.patch_scale));
   ModelInfo info;
   info.architecture = c.architecture;
   info.patch_size = train.patch_size;
@@ -306,9 +313,12 @@ ModelInfo model_info_for(const TrainConfig& c, const SplitData& train, const Spl
 std::vector<int> classes_present(const SplitData& train, TrainReport& report) {
   std::vector<int> classes;
   for (int k = 0; k < kNumClasses; ++k) {
-    report.train_class_counts[static_cast<size_t>(k)] = static_cast<int64_t>(train.by_class[static_cast<size_t>(k)].size());
+    report.train_class_counts[static_cast<size_t>(k)] =
+        static_cast<int64_t>(train.by_class[static_cast<size_t>(k)].size());
     if (!train.by_class[static_cast<size_t>(k)].empty()) classes.push_back(k);
-    else spdlog::warn("training split has no {} samples: the model cannot learn that class", dataset::kLabelNames[static_cast<size_t>(k)]);
+    else
+      spdlog::warn("training split has no {} samples: the model cannot learn that class",
+                   dataset::kLabelNames[static_cast<size_t>(k)]);
   }
   if (classes.size() < 2) throw std::runtime_error("training split has fewer than two classes");
   return classes;
@@ -361,8 +371,8 @@ void save_checkpoint(const std::string& checkpoint, IntrospectionNetImpl& net, c
 }
 
 // Restores the optimiser and side task of a checkpoint; returns its step.
-int64_t load_checkpoint(const std::string& checkpoint, EvidenceTask* evidence, double evidence_weight,
-                        Optimizer kind, torch::optim::Optimizer& optimizer, TrainReport& report) {
+int64_t load_checkpoint(const std::string& checkpoint, EvidenceTask* evidence, double evidence_weight, Optimizer kind,
+                        torch::optim::Optimizer& optimizer, TrainReport& report) {
   int64_t step = 0;
   std::string saved_kind = "sgd";
   std::ifstream step_file(checkpoint + ".step");
@@ -412,7 +422,7 @@ struct Learner {
 std::string checkpoint_of(const TrainConfig& c) { return c.output + ".checkpoint"; }
 
 std::unique_ptr<torch::optim::Optimizer> make_optimizer(const TrainConfig& c,
-                                                       const std::vector<torch::Tensor>& parameters) {
+                                                        const std::vector<torch::Tensor>& parameters) {
   if (c.optimizer == Optimizer::kAdamW)
     return std::make_unique<torch::optim::AdamW>(
         parameters, torch::optim::AdamWOptions(c.learning_rate).weight_decay(c.weight_decay));
@@ -450,8 +460,7 @@ StepResult train_step(Learner& l, const TrainConfig& c, const SplitData& train, 
   l.net->train();
   const auto labels = labels_of(train, batch).to(device);
   const auto x = make_batch(patch_pointers(train, batch)).to(device);
-  for (auto& group : l.optimizer->param_groups())
-    group.options().set_lr(learning_rate_at(c, step));
+  for (auto& group : l.optimizer->param_groups()) group.options().set_lr(learning_rate_at(c, step));
   l.optimizer->zero_grad();
   const auto features = l.net->features(x);
   const auto logits = l.net->head(features);
@@ -504,7 +513,8 @@ TrainReport calibrate_model(const TrainConfig& c) {
   const torch::Device device = c.device == "cuda" ? torch::kCUDA : torch::kCPU;
   const SplitData val = load_split_data(c, c.val_split);
   NativeModel model = load_native_model(c.init);
-  if (model.info.views != val.views || model.info.patch_scale != val.patch_scale || model.info.patch_size != val.patch_size)
+  if (model.info.views != val.views || model.info.patch_scale != val.patch_scale ||
+      model.info.patch_size != val.patch_size)
     throw std::runtime_error(fmt::format("{}: {} view(s), patch size {}, scale {}; the validation sessions: {}, {}, {}",
                                          model.info.id, model.info.views, model.info.patch_size, model.info.patch_scale,
                                          val.views, val.patch_size, val.patch_scale));
@@ -548,8 +558,9 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   for (int64_t step = first_step; step < c.steps; ++step) {
     const std::vector<SampleRef> batch = sampler.batch(c.batch_size);
     means.add(train_step(learner, c, train, batch, make_batch, step, device));
-    update_status(status, means, c, step, static_cast<bool>(learner.evidence),
-                  static_cast<double>((step + 1 - first_step) * c.batch_size) / ((monotonic_ms() - loop_start) / 1000.0));
+    update_status(
+        status, means, c, step, static_cast<bool>(learner.evidence),
+        static_cast<double>((step + 1 - first_step) * c.batch_size) / ((monotonic_ms() - loop_start) / 1000.0));
 
     const bool last = step + 1 == c.steps;
     if ((step + 1) % c.validate_every == 0 || last) {

@@ -70,7 +70,8 @@ std::string LogReader::check_event_at(uint64_t offset, EventHeader& h, std::stri
   uint8_t head[kEventHeaderBytes];
   read_exactly(head, sizeof(head), offset);
   h = decode_header(head);
-  if (h.sync != kSyncWord) return "no event starts here (sync word " + hex32(h.sync) + ", expected " + hex32(kSyncWord) + ")";
+  if (h.sync != kSyncWord)
+    return "no event starts here (sync word " + hex32(h.sync) + ", expected " + hex32(kSyncWord) + ")";
   if (h.channel_bytes == 0 || h.channel_bytes > kMaxChannelBytes)
     return "corrupt event header: channel name length " + std::to_string(h.channel_bytes);
   if (h.data_bytes > kMaxDataBytes) return "corrupt event header: message length " + std::to_string(h.data_bytes);

@@ -23,7 +23,9 @@ void add_seq(ChannelSummary& s, int64_t seq) {
 
 }  // namespace
 
-void LogSummary::add(const LogEvent& event) { add(event.channel, event.timestamp, event.data.data(), event.data.size()); }
+void LogSummary::add(const LogEvent& event) {
+  add(event.channel, event.timestamp, event.data.data(), event.data.size());
+}
 
 void LogSummary::add(const std::string& channel, int64_t timestamp, const void* data, size_t size) {
   ++events_;
@@ -66,7 +68,6 @@ std::string LogSummary::table() const {
   }
   return out;
 }
-
 
 std::string fingerprint_hex(int64_t fingerprint) {
   char buf[24];

@@ -34,8 +34,8 @@ void LogWriter::fail(const std::string& what, int error) {
     throw LogWriteError(what + " " + path_ + ": " + std::strerror(error) +
                         "; cutting it back to its last whole event also failed: " + std::strerror(trunc_error));
   }
-  throw LogWriteError(what + " " + path_ + ": " + std::strerror(error) + " (the file holds " +
-                      std::to_string(events_) + " whole events, " + std::to_string(bytes_) + " bytes)");
+  throw LogWriteError(what + " " + path_ + ": " + std::strerror(error) + " (the file holds " + std::to_string(events_) +
+                      " whole events, " + std::to_string(bytes_) + " bytes)");
 }
 
 void LogWriter::write(std::string_view channel, int64_t timestamp, const void* data, size_t size) {

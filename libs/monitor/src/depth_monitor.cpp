@@ -77,8 +77,7 @@ struct DepthMonitor::Impl {
   int8_t verdict(const CellEvidence& e) const;
 };
 
-DepthMonitor::DepthMonitor(const RigCalibration& rig, DepthMonitorConfig config)
-    : impl_(std::make_unique<Impl>(rig)) {
+DepthMonitor::DepthMonitor(const RigCalibration& rig, DepthMonitorConfig config) : impl_(std::make_unique<Impl>(rig)) {
   Impl& m = *impl_;
   m.config = config;
   m.size = cv::Size(rig.depth.width, rig.depth.height);
@@ -103,8 +102,10 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr DepthMonitor::Impl::cloud_near(const cv::Mat
                                                                    const QueryGrid& grid) const {
   const QueryGridConfig& g = grid.config();
   const double r = g.safety_radius;
-  const float x_lo = static_cast<float>(g.x_min - r), x_hi = static_cast<float>(g.x_min + (grid.num_x() - 1) * g.spacing + r);
-  const float y_lo = static_cast<float>(g.y_min - r), y_hi = static_cast<float>(g.y_min + (grid.num_y() - 1) * g.spacing + r);
+  const float x_lo = static_cast<float>(g.x_min - r),
+              x_hi = static_cast<float>(g.x_min + (grid.num_x() - 1) * g.spacing + r);
+  const float y_lo = static_cast<float>(g.y_min - r),
+              y_hi = static_cast<float>(g.y_min + (grid.num_y() - 1) * g.spacing + r);
   const float z_lo = -1.0f, z_hi = static_cast<float>(config.obstacle_max_height);
   const uint16_t lo_mm = static_cast<uint16_t>(std::ceil(min_range * 1000.0));
   const uint16_t hi_mm = static_cast<uint16_t>(std::floor(std::min(max_range * 1000.0, 65535.0)));
@@ -131,8 +132,7 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr DepthMonitor::Impl::cloud_near(const cv::Mat
   return filtered;
 }
 
-void DepthMonitor::Impl::count_points(const PointBins& bins, const QueryCell& cell, double r,
-                                      CellEvidence& e) const {
+void DepthMonitor::Impl::count_points(const PointBins& bins, const QueryCell& cell, double r, CellEvidence& e) const {
   bins.for_each_near(cell.x, cell.y, [&](const pcl::PointXYZ& p) {
     const bool high = p.z > config.obstacle_min_height, low = p.z < -config.hole_min_depth;
     if (!high && !low) return;

@@ -56,7 +56,8 @@ CameraRays::CameraRays(const CameraModel& camera, double bin_pixels)
   az_min_ = static_cast<float>(az_lo - 2 * bin_width_);
   num_bins_ = static_cast<int>(std::ceil((az_hi - az_min_) / bin_width_)) + 2;
   for (size_t i = 0; i < rays_.size(); ++i)
-    rays_[i].bin = static_cast<uint16_t>(std::clamp(static_cast<int>((azimuths[i] - az_min_) / bin_width_), 0, num_bins_ - 1));
+    rays_[i].bin =
+        static_cast<uint16_t>(std::clamp(static_cast<int>((azimuths[i] - az_min_) / bin_width_), 0, num_bins_ - 1));
 }
 
 }  // namespace ivoa::sim::detail
@@ -71,7 +72,8 @@ std::shared_ptr<const CameraRays> shared_camera_rays(const CameraModel& camera) 
   for (int i = 0; i < 9; ++i) key << ' ' << in.K(i / 3, i % 3);
   for (double d : in.D) key << ' ' << d;
   const Eigen::Vector3d o = camera.origin();
-  const Eigen::Vector3d ax = camera.ray(Eigen::Vector2d(0, 0)), ay = camera.ray(Eigen::Vector2d(in.width - 1, in.height - 1));
+  const Eigen::Vector3d ax = camera.ray(Eigen::Vector2d(0, 0)),
+                        ay = camera.ray(Eigen::Vector2d(in.width - 1, in.height - 1));
   key << ' ' << o.x() << ' ' << o.y() << ' ' << o.z() << ' ' << ax.x() << ' ' << ax.y() << ' ' << ax.z() << ' '
       << ay.x() << ' ' << ay.y() << ' ' << ay.z();
   static std::mutex mutex;

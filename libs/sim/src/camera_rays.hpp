@@ -18,13 +18,13 @@ struct PixelRay {
   float ux = 1, uy = 0;  // unit horizontal direction, robot frame
   float slope = 0;       // rise per metre of horizontal travel
   float inv_slope = 0;
-  float len = 1;         // 3-D length per metre of horizontal travel
+  float len = 1;  // 3-D length per metre of horizontal travel
   float inv_len = 1;
-  float planar = 1;      // depth along the optical axis per metre of horizontal travel
-  float s_floor = 0;     // horizontal distance to the ground (inf when the ray looks up)
+  float planar = 1;                // depth along the optical axis per metre of horizontal travel
+  float s_floor = 0;               // horizontal distance to the ground (inf when the ray looks up)
   float floor_x = 0, floor_y = 0;  // ground hit, robot frame
   float floor_footprint = 0;       // metres of ground one pixel covers there
-  uint16_t bin = 0;      // azimuth bin (see CameraRays)
+  uint16_t bin = 0;                // azimuth bin (see CameraRays)
 };
 
 class CameraRays {

@@ -133,8 +133,8 @@ CameraImage expose(const std::vector<Rgbf>& radiance_in, int width, int height, 
       for (int x = 0; x < width; ++x)
         for (int ch = 0; ch < 3; ++ch) {
           const int xl = std::max(x - 1, 0) * 3 + ch, xc = x * 3 + ch, xr = std::min(x + 1, W - 1) * 3 + ch;
-          const float v = 0.0625f * (r0[xl] + r0[xr] + r2[xl] + r2[xr]) +
-                          0.125f * (r0[xc] + r2[xc] + r1[xl] + r1[xr]) + 0.25f * r1[xc];
+          const float v = 0.0625f * (r0[xl] + r0[xr] + r2[xl] + r2[xr]) + 0.125f * (r0[xc] + r2[xc] + r1[xl] + r1[xr]) +
+                          0.25f * r1[xc];
           dst[x * 3 + (2 - ch)] = digitise(v, offset + static_cast<uint32_t>(direction * (3 * x + ch)));
         }
     }

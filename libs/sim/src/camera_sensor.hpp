@@ -22,8 +22,8 @@ struct Exposure {
 Exposure auto_exposure(const std::vector<Rgbf>& radiance, const CameraSensorConfig& config, double max_exposure_scale);
 
 struct CameraImage {
-  cv::Mat bgr;         // CV_8UC3
-  cv::Mat saturated;   // CV_8UC1, 1 where a channel clipped
+  cv::Mat bgr;        // CV_8UC3
+  cv::Mat saturated;  // CV_8UC1, 1 where a channel clipped
 };
 
 // stream: distinguishes the cameras' noise; smear_px: horizontal motion blur length.

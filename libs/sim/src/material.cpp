@@ -116,12 +116,15 @@ const std::map<std::string, Material>& library() {
 }
 
 const std::pair<Pattern, const char*> kPatternNames[] = {
-    {Pattern::kUniform, "uniform"},   {Pattern::kPlaster, "plaster"}, {Pattern::kCarpet, "carpet"},
-    {Pattern::kSpeckle, "speckle"},   {Pattern::kAsphalt, "asphalt"}, {Pattern::kTiles, "tiles"},
-    {Pattern::kChecker, "checker"},   {Pattern::kBricks, "bricks"},   {Pattern::kWood, "wood"},
-    {Pattern::kFabric, "fabric"},     {Pattern::kMetal, "metal"},     {Pattern::kCardboard, "cardboard"},
-    {Pattern::kGrass, "grass"},       {Pattern::kStripes, "stripes"}, {Pattern::kFacade, "facade"},
-    {Pattern::kCeilingTiles, "ceiling_tiles"}, {Pattern::kPrinted, "printed"},
+    {Pattern::kUniform, "uniform"}, {Pattern::kPlaster, "plaster"},
+    {Pattern::kCarpet, "carpet"},   {Pattern::kSpeckle, "speckle"},
+    {Pattern::kAsphalt, "asphalt"}, {Pattern::kTiles, "tiles"},
+    {Pattern::kChecker, "checker"}, {Pattern::kBricks, "bricks"},
+    {Pattern::kWood, "wood"},       {Pattern::kFabric, "fabric"},
+    {Pattern::kMetal, "metal"},     {Pattern::kCardboard, "cardboard"},
+    {Pattern::kGrass, "grass"},     {Pattern::kStripes, "stripes"},
+    {Pattern::kFacade, "facade"},   {Pattern::kCeilingTiles, "ceiling_tiles"},
+    {Pattern::kPrinted, "printed"},
 };
 
 }  // namespace
@@ -133,10 +136,8 @@ bool Material::repetitive() const {
     case Pattern::kBricks:
     case Pattern::kStripes:
     case Pattern::kFacade:
-    case Pattern::kCeilingTiles:
-      return contrast >= 0.03;
-    default:
-      return false;
+    case Pattern::kCeilingTiles: return contrast >= 0.03;
+    default: return false;
   }
 }
 

@@ -37,7 +37,8 @@ sim_ground_truth_t make_truth_message(const SimFrame& frame, const Scene& scene,
   msg.robot_x = pose.x;
   msg.robot_y = pose.y;
   msg.robot_yaw = pose.yaw;
-  const int32_t format = png ? static_cast<int32_t>(image_t::PIXEL_FORMAT_PNG) : static_cast<int32_t>(image_t::PIXEL_FORMAT_GRAY);
+  const int32_t format =
+      png ? static_cast<int32_t>(image_t::PIXEL_FORMAT_PNG) : static_cast<int32_t>(image_t::PIXEL_FORMAT_GRAY);
   msg.surface = encode_image(frame.truth_surface, format, utime);
   msg.phenomena = encode_image(frame.truth_phenomena, format, utime);
   return msg;

@@ -15,8 +15,8 @@ class NoiseTable {
   static constexpr uint32_t kMask = kSize - 1;
   static const NoiseTable& instance();
 
-  const float* normals() const { return normals_.data(); }      // N(0, 1)
-  const float* uniforms() const { return uniforms_.data(); }    // U[0, 1)
+  const float* normals() const { return normals_.data(); }    // N(0, 1)
+  const float* uniforms() const { return uniforms_.data(); }  // U[0, 1)
   // Offset of a row's first value for (frame, stream, row).
   static uint32_t offset(uint64_t frame, uint32_t stream, uint32_t row) {
     return static_cast<uint32_t>(hash_combine(hash_combine(frame, stream), row)) & kMask;

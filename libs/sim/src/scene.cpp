@@ -111,7 +111,8 @@ bool blocks_robot(const Prism& p) { return p.z1 > 0.05f && p.z0 < 1.0f; }
 
 double Scene::clearance(const Eigen::Vector2d& p) const {
   const auto& b = data_->bounds;
-  double d = std::min(std::min(p.x() - b.min().x(), b.max().x() - p.x()), std::min(p.y() - b.min().y(), b.max().y() - p.y()));
+  double d =
+      std::min(std::min(p.x() - b.min().x(), b.max().x() - p.x()), std::min(p.y() - b.min().y(), b.max().y() - p.y()));
   for (const Prism& q : data_->prisms)
     if (blocks_robot(q)) d = std::min(d, detail::footprint_distance(q, p.x(), p.y()));
   for (const FloorFeature& f : data_->floor_features)
@@ -219,7 +220,8 @@ std::optional<Scene::Hit> Scene::raycast(const Eigen::Vector3d& origin, const Ei
     const Eigen::Vector3d g = origin + t * d;
     const FloorFeature* pit = nullptr;
     for (const FloorFeature& f : data_->floor_features)
-      if (f.kind == FloorFeature::kPit && detail::feature_contains(f, static_cast<float>(g.x()), static_cast<float>(g.y())))
+      if (f.kind == FloorFeature::kPit &&
+          detail::feature_contains(f, static_cast<float>(g.x()), static_cast<float>(g.y())))
         pit = &f;
     if (!pit) {
       consider(t, GT::SURFACE_FLOOR, Eigen::Vector3d(0, 0, 1));
@@ -234,8 +236,8 @@ std::optional<Scene::Hit> Scene::raycast(const Eigen::Vector3d& origin, const Ei
           break;
         }
       }
-      consider(t_wall, GT::SURFACE_PIT, t_wall < t_bottom ? Eigen::Vector3d(-d.x(), -d.y(), 0).normalized()
-                                                          : Eigen::Vector3d(0, 0, 1));
+      consider(t_wall, GT::SURFACE_PIT,
+               t_wall < t_bottom ? Eigen::Vector3d(-d.x(), -d.y(), 0).normalized() : Eigen::Vector3d(0, 0, 1));
     }
   } else if (d.z() > 1e-12 && data_->has_ceiling) {
     consider((data_->ceiling_height - origin.z()) / d.z(), GT::SURFACE_CEILING, Eigen::Vector3d(0, 0, -1));

@@ -68,7 +68,8 @@ SceneBuilder::SceneBuilder(const SceneSpec& spec, uint64_t seed)
   data_->environment = spec.environment;
   data_->max_exposure_scale = static_cast<float>(spec.lighting.max_exposure_scale);
   data_->has_ceiling = spec.environment == Environment::kIndoor;
-  data_->ceiling_height = static_cast<float>(rng_.uniform(spec.layout.ceiling_height.min, spec.layout.ceiling_height.max));
+  data_->ceiling_height =
+      static_cast<float>(rng_.uniform(spec.layout.ceiling_height.min, spec.layout.ceiling_height.max));
 }
 
 const Material& SceneBuilder::resolve(const std::string& name) const {
@@ -98,18 +99,24 @@ std::string SceneBuilder::pick(const std::vector<std::string>& palette,
 std::string SceneBuilder::pick_floor(const std::vector<std::string>& palette) {
   const auto& ph = spec_.phenomena;
   const double r = rng_.uniform();
-  if (r < ph.reflective_floor) return pick(palette, [](const Material& m) { return m.reflective(); }, 1.0);
+  if (r < ph.reflective_floor)
+    return pick(
+        palette, [](const Material& m) { return m.reflective(); }, 1.0);
   if (r < ph.reflective_floor + ph.repetitive_floor)
-    return pick(palette, [](const Material& m) { return m.repetitive() && !m.reflective(); }, 1.0);
-  return pick(palette, [](const Material& m) { return !m.repetitive() && !m.reflective(); }, 1.0);
+    return pick(
+        palette, [](const Material& m) { return m.repetitive() && !m.reflective(); }, 1.0);
+  return pick(
+      palette, [](const Material& m) { return !m.repetitive() && !m.reflective(); }, 1.0);
 }
 
 std::string SceneBuilder::pick_wall(const std::vector<std::string>& palette) {
-  return pick(palette, [](const Material& m) { return m.textureless(); }, spec_.phenomena.textureless_walls);
+  return pick(
+      palette, [](const Material& m) { return m.textureless(); }, spec_.phenomena.textureless_walls);
 }
 
 std::string SceneBuilder::pick_obstacle(const std::vector<std::string>& palette) {
-  return pick(palette, [](const Material& m) { return m.textureless(); }, spec_.phenomena.textureless_obstacles);
+  return pick(
+      palette, [](const Material& m) { return m.textureless(); }, spec_.phenomena.textureless_obstacles);
 }
 
 Prism& SceneBuilder::add_rect(double cx, double cy, double length, double width, double yaw, double z0, double z1,
@@ -153,8 +160,8 @@ Rgbf jitter_tint(Rng& rng, double amount) {
 
 void SceneBuilder::add_box(const Eigen::Vector2d& p, const Eigen::Vector3d& size, double yaw, double elevation,
                            const std::string& mat, double color_jitter) {
-  Prism& b = add_rect(p.x(), p.y(), size.x(), size.y(), yaw, elevation, elevation + size.z(), material(mat),
-                      GT::SURFACE_BOX);
+  Prism& b =
+      add_rect(p.x(), p.y(), size.x(), size.y(), yaw, elevation, elevation + size.z(), material(mat), GT::SURFACE_BOX);
   b.tint = jitter_tint(rng_, color_jitter);
 }
 
@@ -252,7 +259,8 @@ void SceneBuilder::add_wall(const Eigen::Vector2d& from, const Eigen::Vector2d& 
     if (d0 > s + 1e-3) piece(s, d0, 0, height, wall, GT::SURFACE_WALL, baseboard_height, 0);
     if (d1 > d0 + 1e-3) {
       const double top = std::min(d.height, height);
-      if (!d.open) piece(d0, d1, 0, top, material(d.material.empty() ? "door_wood" : d.material), GT::SURFACE_DOOR, 0, 0.01);
+      if (!d.open)
+        piece(d0, d1, 0, top, material(d.material.empty() ? "door_wood" : d.material), GT::SURFACE_DOOR, 0, 0.01);
       if (height > top + 1e-3) piece(d0, d1, top, height, wall, GT::SURFACE_WALL, 0, 0);
     }
     s = d1;
@@ -276,8 +284,8 @@ void SceneBuilder::add_lamp_post(const Eigen::Vector2d& p, double height, double
   const double yaw = rng_.uniform(0, 2 * M_PI);
   const Eigen::Vector2d head = p + 0.3 * Eigen::Vector2d(std::cos(yaw), std::sin(yaw));
   const bool lit = emission > 0;
-  Prism& h = add_rect(head.x(), head.y(), 0.55, 0.25, yaw, height - 0.15, height, material(lit ? "lamp_head" : "metal_grey"),
-                      GT::SURFACE_CYLINDER);
+  Prism& h = add_rect(head.x(), head.y(), 0.55, 0.25, yaw, height - 0.15, height,
+                      material(lit ? "lamp_head" : "metal_grey"), GT::SURFACE_CYLINDER);
   if (lit) {
     Material m = builtin_material("lamp_head");
     m.name = "lamp_head_" + std::to_string(static_cast<int>(emission));
@@ -285,8 +293,8 @@ void SceneBuilder::add_lamp_post(const Eigen::Vector2d& p, double height, double
     data_->materials.push_back(make_material_data(m));
     h.material = h.top_material = h.base_material = static_cast<uint16_t>(data_->materials.size() - 1);
     PointLight light;
-    light.position = Eigen::Vector3f(static_cast<float>(head.x()), static_cast<float>(head.y()),
-                                     static_cast<float>(height - 0.16));
+    light.position =
+        Eigen::Vector3f(static_cast<float>(head.x()), static_cast<float>(head.y()), static_cast<float>(height - 0.16));
     // A street lamp lights the ground below it to ~10-30 lux: a faint pool
     // next to its glaring head (which the camera and wet floors see directly).
     light.intensity = Rgbf(1.0f, 0.85f, 0.65f) * static_cast<float>(emission * 0.012);
@@ -369,16 +377,12 @@ void SceneBuilder::add_element(const ElementSpec& e) {
     case T::kPole: add_pole(e.position, e.size.x(), e.size.z(), mat_or("pole_metal")); break;
     case T::kLampPost: add_lamp_post(e.position, e.size.z(), e.intensity); break;
     case T::kCurb: add_curb(e.position, e.end, e.size.y(), e.size.z(), mat_or("curb_concrete")); break;
-    case T::kFloorPatch:
-      add_patch(e.position, e.size.head<2>(), e.yaw, e.shape == "ellipse", mat_or("rug_red"));
-      break;
+    case T::kFloorPatch: add_patch(e.position, e.size.head<2>(), e.yaw, e.shape == "ellipse", mat_or("rug_red")); break;
     case T::kPuddle: add_puddle(e.position, e.size.head<2>(), e.yaw, mat_or("water")); break;
     case T::kPit:
       add_pit(e.position, e.size.head<2>(), e.depth, e.yaw, e.shape == "ellipse", mat_or("pit_soil"));
       break;
-    case T::kLight:
-      add_ceiling_light(e.position, e.size.head<2>(), e.intensity > 0 ? e.intensity : 80.0);
-      break;
+    case T::kLight: add_ceiling_light(e.position, e.size.head<2>(), e.intensity > 0 ? e.intensity : 80.0); break;
   }
 }
 

@@ -33,13 +33,13 @@ struct MaterialData {
 struct Prism {
   enum Shape : uint8_t { kRect = 0, kCircle = 1 };
   Shape shape = kRect;
-  uint8_t surface = 0;  // sim_ground_truth_t::SURFACE_*
-  float cx = 0, cy = 0;        // centre, world
-  float hx = 0, hy = 0;        // half extents along the local axes (circle: radius in hx)
+  uint8_t surface = 0;   // sim_ground_truth_t::SURFACE_*
+  float cx = 0, cy = 0;  // centre, world
+  float hx = 0, hy = 0;  // half extents along the local axes (circle: radius in hx)
   float cos_yaw = 1, sin_yaw = 0;
   float z0 = 0, z1 = 0;
   uint16_t material = 0, top_material = 0, base_material = 0;
-  float base_height = 0;       // below this height the side uses base_material (baseboard)
+  float base_height = 0;  // below this height the side uses base_material (baseboard)
   float u_offset = 0, v_offset = 0;
   Rgbf tint{1, 1, 1};
   // Lighting, precomputed at the prism: irradiance(n) = ambient + max(0, n . light_dir) * directional
@@ -56,8 +56,8 @@ struct FloorFeature {
   bool ellipse = false;
   uint16_t material = 0;
   float cx = 0, cy = 0, hx = 0, hy = 0, cos_yaw = 1, sin_yaw = 0;
-  float depth = 0;   // pits
-  int mask = -1;     // puddles: index into SceneData::puddle_masks
+  float depth = 0;  // pits
+  int mask = -1;    // puddles: index into SceneData::puddle_masks
 };
 
 // A puddle's outline: a smooth field over its box, water where > 0.
@@ -69,9 +69,9 @@ struct PuddleMask {
 
 struct PointLight {
   Eigen::Vector3f position;
-  Rgbf intensity;          // radiant intensity straight down (panels) or all around (bulbs)
-  bool downward = true;    // a ceiling panel / lamp head: cosine falloff around -z
-  float glare = 0;         // > 0: small bright source that makes a specular highlight lobe
+  Rgbf intensity;        // radiant intensity straight down (panels) or all around (bulbs)
+  bool downward = true;  // a ceiling panel / lamp head: cosine falloff around -z
+  float glare = 0;       // > 0: small bright source that makes a specular highlight lobe
 };
 
 struct SkyData {
@@ -79,7 +79,7 @@ struct SkyData {
   bool has_sun = false;
   Eigen::Vector3f sun_dir{0, 0, 1};  // towards the sun
   Rgbf sun_irradiance;
-  float sun_radius = 0.0047f;        // radians
+  float sun_radius = 0.0047f;  // radians
 };
 
 // Uniform grid over the floor plan listing the floor features overlapping
@@ -89,9 +89,7 @@ struct PlanGrid {
   int nx = 0, ny = 0;
   std::vector<uint32_t> feature_start;
   std::vector<uint16_t> features;
-  bool inside(float x, float y) const {
-    return x >= x0 && y >= y0 && x < x0 + cell * nx && y < y0 + cell * ny;
-  }
+  bool inside(float x, float y) const { return x >= x0 && y >= y0 && x < x0 + cell * nx && y < y0 + cell * ny; }
   int index(float x, float y) const {
     return static_cast<int>((y - y0) * inv_cell) * nx + static_cast<int>((x - x0) * inv_cell);
   }

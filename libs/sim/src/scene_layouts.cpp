@@ -14,9 +14,7 @@ using GT = sim_ground_truth_t;
 using V2 = Eigen::Vector2d;
 
 double draw(Rng& rng, const Range& r) { return rng.uniform(r.min, r.max); }
-int draw_count(Rng& rng, const Range& r) {
-  return static_cast<int>(std::floor(rng.uniform(r.min, r.max + 0.999)));
-}
+int draw_count(Rng& rng, const Range& r) { return static_cast<int>(std::floor(rng.uniform(r.min, r.max + 0.999))); }
 
 template <class T>
 const T& one_of(Rng& rng, const std::vector<T>& v) {
@@ -149,7 +147,8 @@ void layout_open(SceneBuilder& b) {
   set_bounds(b, r);
   b.data().floor_material = b.material(b.pick_floor(b.spec().floor.materials));
   // Facades or hedges on every side; they are what the horizon shows.
-  const V2 corners[4] = {{r.x0 - 0.5, r.y0 - 0.5}, {r.x1 + 0.5, r.y0 - 0.5}, {r.x1 + 0.5, r.y1 + 0.5}, {r.x0 - 0.5, r.y1 + 0.5}};
+  const V2 corners[4] = {
+      {r.x0 - 0.5, r.y0 - 0.5}, {r.x1 + 0.5, r.y0 - 0.5}, {r.x1 + 0.5, r.y1 + 0.5}, {r.x0 - 0.5, r.y1 + 0.5}};
   for (int i = 0; i < 4; ++i) {
     const V2 a = corners[i], c = corners[(i + 1) % 4];
     if (rng.chance(0.65) && !b.spec().walls.materials.empty()) {
@@ -264,8 +263,10 @@ bool find_spot(SceneBuilder& b, double r, double min_gap, V2& out) {
   Rng& rng = b.rng();
   const auto& box = b.data().bounds;
   for (int attempt = 0; attempt < 60; ++attempt) {
-    const double px = rng.uniform(box.min().x() + r + 0.05, std::max(box.min().x() + r + 0.06, box.max().x() - r - 0.05));
-    const double py = rng.uniform(box.min().y() + r + 0.05, std::max(box.min().y() + r + 0.06, box.max().y() - r - 0.05));
+    const double px =
+        rng.uniform(box.min().x() + r + 0.05, std::max(box.min().x() + r + 0.06, box.max().x() - r - 0.05));
+    const double py =
+        rng.uniform(box.min().y() + r + 0.05, std::max(box.min().y() + r + 0.06, box.max().y() - r - 0.05));
     const V2 p(px, py);
     const double wall_gap = b.gap_to_placed(p, r, SceneBuilder::Placed::kWalls);
     if (wall_gap < 0.02 || b.gap_to_placed(p, r, SceneBuilder::Placed::kNotWalls) < min_gap) continue;
@@ -427,8 +428,9 @@ void set_sky(SceneBuilder& b) {
     const bool low_sun = rng.chance(b.spec().phenomena.glare);
     const double elev = (low_sun ? rng.uniform(4, 12) : draw(rng, l.sun_elevation_deg)) * M_PI / 180;
     const double az = draw(rng, l.sun_azimuth_deg) * M_PI / 180;
-    sky.sun_dir = Eigen::Vector3f(static_cast<float>(std::cos(elev) * std::cos(az)),
-                                  static_cast<float>(std::cos(elev) * std::sin(az)), static_cast<float>(std::sin(elev)));
+    sky.sun_dir =
+        Eigen::Vector3f(static_cast<float>(std::cos(elev) * std::cos(az)),
+                        static_cast<float>(std::cos(elev) * std::sin(az)), static_cast<float>(std::sin(elev)));
     const float e = static_cast<float>(draw(rng, l.sun_irradiance));
     sky.sun_irradiance = Rgbf(e, e * 0.96f, e * 0.88f) * (low_sun ? 0.7f : 1.0f);
   }
@@ -470,8 +472,9 @@ void choose_start(SceneBuilder& b) {
     const double px = rng.uniform(box.min().x() + 0.4, box.max().x() - 0.4);
     const double py = rng.uniform(box.min().y() + 0.4, box.max().y() - 0.4);
     const V2 p(px, py);
-    const double gap = std::min(b.gap_to_placed(p, 0), std::min(std::min(p.x() - box.min().x(), box.max().x() - p.x()),
-                                                                std::min(p.y() - box.min().y(), box.max().y() - p.y())));
+    const double gap =
+        std::min(b.gap_to_placed(p, 0), std::min(std::min(p.x() - box.min().x(), box.max().x() - p.x()),
+                                                 std::min(p.y() - box.min().y(), box.max().y() - p.y())));
     if (gap > best) {
       best = gap;
       d.start = Pose2D{p.x(), p.y(), rng.uniform(-M_PI, M_PI)};
@@ -489,7 +492,8 @@ void build_ceiling(SceneBuilder& b) {
   const auto box = d.bounds;
   const float margin = 1.0f;
   const float x0 = static_cast<float>(box.min().x()) - margin, y0 = static_cast<float>(box.min().y()) - margin;
-  const float w = static_cast<float>(box.sizes().x()) + 2 * margin, h = static_cast<float>(box.sizes().y()) + 2 * margin;
+  const float w = static_cast<float>(box.sizes().x()) + 2 * margin,
+              h = static_cast<float>(box.sizes().y()) + 2 * margin;
   const float cell = std::max(0.03f, std::max(w, h) / 1024.0f);
   const int nx = static_cast<int>(std::ceil(w / cell)), ny = static_cast<int>(std::ceil(h / cell));
   std::vector<Rgbf> values(static_cast<size_t>(nx) * ny);

@@ -106,8 +106,10 @@ std::vector<float> sun_visibility(const SceneData& s, const FloorGrid& g) {
     const float r = p.radius(), reach = p.z1 / tan_e;
     const float xa = std::min(p.cx - r, p.cx - r - ux * reach), xb = std::max(p.cx + r, p.cx + r - ux * reach);
     const float ya = std::min(p.cy - r, p.cy - r - uy * reach), yb = std::max(p.cy + r, p.cy + r - uy * reach);
-    const int i0 = std::max(0, static_cast<int>((xa - g.x0) / g.cell)), i1 = std::min(g.nx - 1, static_cast<int>((xb - g.x0) / g.cell));
-    const int j0 = std::max(0, static_cast<int>((ya - g.y0) / g.cell)), j1 = std::min(g.ny - 1, static_cast<int>((yb - g.y0) / g.cell));
+    const int i0 = std::max(0, static_cast<int>((xa - g.x0) / g.cell)),
+              i1 = std::min(g.nx - 1, static_cast<int>((xb - g.x0) / g.cell));
+    const int j0 = std::max(0, static_cast<int>((ya - g.y0) / g.cell)),
+              j1 = std::min(g.ny - 1, static_cast<int>((yb - g.y0) / g.cell));
     for (int j = j0; j <= j1; ++j)
       for (int i = i0; i <= i1; ++i) {
         float& v = vis[static_cast<size_t>(j) * g.nx + i];
@@ -131,8 +133,10 @@ void light_floor(SceneData& s) {
   for (const Prism& p : s.prisms) {
     const bool standing = p.z0 < 0.05f;
     const float reach = standing ? 0.45f : 0.0f, r = p.radius() + reach;
-    const int i0 = std::max(0, static_cast<int>((p.cx - r - g.x0) / g.cell)), i1 = std::min(g.nx - 1, static_cast<int>((p.cx + r - g.x0) / g.cell));
-    const int j0 = std::max(0, static_cast<int>((p.cy - r - g.y0) / g.cell)), j1 = std::min(g.ny - 1, static_cast<int>((p.cy + r - g.y0) / g.cell));
+    const int i0 = std::max(0, static_cast<int>((p.cx - r - g.x0) / g.cell)),
+              i1 = std::min(g.nx - 1, static_cast<int>((p.cx + r - g.x0) / g.cell));
+    const int j0 = std::max(0, static_cast<int>((p.cy - r - g.y0) / g.cell)),
+              j1 = std::min(g.ny - 1, static_cast<int>((p.cy + r - g.y0) / g.cell));
     for (int j = j0; j <= j1; ++j)
       for (int i = i0; i <= i1; ++i) {
         const Eigen::Vector2f c = g.centre(i, j);

@@ -46,7 +46,8 @@ class Reader {
       if (!ok.count(key)) {
         std::string list;
         for (const auto& k : ok) list += (list.empty() ? "" : ", ") + k;
-        Reader(kv.first, path_.empty() ? key : path_ + "." + key, file_).fail("unknown key (expected one of: " + list + ")");
+        Reader(kv.first, path_.empty() ? key : path_ + "." + key, file_)
+            .fail("unknown key (expected one of: " + list + ")");
       }
     }
   }
@@ -174,12 +175,18 @@ Material parse_material(const Reader& r, const std::vector<Material>& earlier) {
 
 ElementSpec::Type parse_element_type(const Reader& r) {
   static const std::pair<const char*, ElementSpec::Type> kTypes[] = {
-      {"box", ElementSpec::Type::kBox},         {"cylinder", ElementSpec::Type::kCylinder},
-      {"chair", ElementSpec::Type::kChair},     {"table", ElementSpec::Type::kTable},
-      {"wall", ElementSpec::Type::kWall},       {"pole", ElementSpec::Type::kPole},
-      {"lamp_post", ElementSpec::Type::kLampPost}, {"curb", ElementSpec::Type::kCurb},
-      {"floor_patch", ElementSpec::Type::kFloorPatch}, {"puddle", ElementSpec::Type::kPuddle},
-      {"pit", ElementSpec::Type::kPit},         {"light", ElementSpec::Type::kLight},
+      {"box", ElementSpec::Type::kBox},
+      {"cylinder", ElementSpec::Type::kCylinder},
+      {"chair", ElementSpec::Type::kChair},
+      {"table", ElementSpec::Type::kTable},
+      {"wall", ElementSpec::Type::kWall},
+      {"pole", ElementSpec::Type::kPole},
+      {"lamp_post", ElementSpec::Type::kLampPost},
+      {"curb", ElementSpec::Type::kCurb},
+      {"floor_patch", ElementSpec::Type::kFloorPatch},
+      {"puddle", ElementSpec::Type::kPuddle},
+      {"pit", ElementSpec::Type::kPit},
+      {"light", ElementSpec::Type::kLight},
   };
   const std::string s = r.string();
   for (const auto& [name, type] : kTypes)
@@ -289,7 +296,7 @@ ElementSpec parse_element(const Reader& r) {
 }
 
 void parse_kinds(const Reader& r, std::vector<std::pair<std::string, double>>& kinds) {
-  static const std::set<std::string> kKnown = {"box",   "cylinder", "chair", "table", "bin",       "pole", "bollard",
+  static const std::set<std::string> kKnown = {"box",   "cylinder", "chair", "table",   "bin",       "pole", "bollard",
                                                "bench", "planter",  "car",   "cabinet", "lamp_post", "curb"};
   if (!r.is_map()) r.fail("expected a mapping of kind: weight");
   kinds.clear();
@@ -432,9 +439,8 @@ bool resolves(const SceneSpec& spec, const std::string& name) {
 
 void check_range(const SceneSpec& spec, const std::string& key, const Range& r, double lo, double hi) {
   if (r.min > r.max || r.min < lo || r.max > hi)
-    throw SceneSpecError(spec.source + ": " + key + ": range [" + std::to_string(r.min) + ", " +
-                         std::to_string(r.max) + "] must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                         "] with min <= max");
+    throw SceneSpecError(spec.source + ": " + key + ": range [" + std::to_string(r.min) + ", " + std::to_string(r.max) +
+                         "] must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] with min <= max");
 }
 
 void check_materials(const SceneSpec& spec, const std::string& key, const std::vector<std::string>& names,
@@ -501,8 +507,8 @@ void validate(const SceneSpec& spec) {
     if (!e.material.empty() && !resolves(spec, e.material))
       throw SceneSpecError(spec.source + ": " + key + ".material: unknown material '" + e.material + "'");
     if (!e.baseboard_material.empty() && !resolves(spec, e.baseboard_material))
-      throw SceneSpecError(spec.source + ": " + key + ".baseboard.material: unknown material '" +
-                           e.baseboard_material + "'");
+      throw SceneSpecError(spec.source + ": " + key + ".baseboard.material: unknown material '" + e.baseboard_material +
+                           "'");
     for (const auto& d : e.doors)
       if (!d.material.empty() && !resolves(spec, d.material))
         throw SceneSpecError(spec.source + ": " + key + ".doors.material: unknown material '" + d.material + "'");

@@ -36,9 +36,10 @@ RigCalibration make_sim_rig(const SimRigParams& p) {
     rig.left.D = {-0.090, 0.035, 0.0004, -0.0003, 0.0};
     rig.right.D = {-0.086, 0.031, -0.0002, 0.0004, 0.0};
   }
-  rig.stereo_R = (Eigen::AngleAxisd(0.0025, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(-0.0015, Eigen::Vector3d::UnitX()) *
-                  Eigen::AngleAxisd(0.001, Eigen::Vector3d::UnitZ()))
-                     .toRotationMatrix();
+  rig.stereo_R =
+      (Eigen::AngleAxisd(0.0025, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(-0.0015, Eigen::Vector3d::UnitX()) *
+       Eigen::AngleAxisd(0.001, Eigen::Vector3d::UnitZ()))
+          .toRotationMatrix();
   rig.stereo_T = Eigen::Vector3d(-p.baseline, 0.0006, 0.0011);
   const double pitch = p.pitch_deg * M_PI / 180.0;
   rig.left_to_robot.linear() = optical_to_robot(pitch);

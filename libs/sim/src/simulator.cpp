@@ -17,8 +17,8 @@ namespace ivoa::sim {
 
 using detail::CameraRays;
 using detail::Ranged;
-using detail::Shaded;
 using detail::SceneData;
+using detail::Shaded;
 using detail::Tracer;
 using GT = sim_ground_truth_t;
 

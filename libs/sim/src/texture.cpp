@@ -56,7 +56,8 @@ Texture::Texture(int size, double texel_m, const std::vector<Rgbf>& linear)
     lv.stride = n + 1;
     for (int y = 0; y <= n; ++y)
       for (int x = 0; x <= n; ++x)
-        data_[base + static_cast<size_t>(y) * (n + 1) + x] = encode_texel(level[static_cast<size_t>(y % n) * n + (x % n)]);
+        data_[base + static_cast<size_t>(y) * (n + 1) + x] =
+            encode_texel(level[static_cast<size_t>(y % n) * n + (x % n)]);
     base += static_cast<size_t>(n + 1) * (n + 1);
     ++levels_;
     if (n == 1) break;
@@ -79,7 +80,8 @@ std::vector<Rgbf> padded(const std::vector<Rgbf>& v, int nx, int ny) {
   std::vector<Rgbf> out(static_cast<size_t>(nx + 1) * (ny + 1));
   for (int y = 0; y <= ny; ++y)
     for (int x = 0; x <= nx; ++x)
-      out[static_cast<size_t>(y) * (nx + 1) + x] = v[static_cast<size_t>(std::min(y, ny - 1)) * nx + std::min(x, nx - 1)];
+      out[static_cast<size_t>(y) * (nx + 1) + x] =
+          v[static_cast<size_t>(std::min(y, ny - 1)) * nx + std::min(x, nx - 1)];
   return out;
 }
 

@@ -75,8 +75,8 @@ class Texture {
     const uint32_t t00 = t[0], t10 = t[1], t01 = t[lv.stride], t11 = t[lv.stride + 1];
     const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
 #if defined(__SSE2__)
-    const __m128i packed = _mm_set_epi32(static_cast<int>(t11), static_cast<int>(t01), static_cast<int>(t10),
-                                         static_cast<int>(t00));
+    const __m128i packed =
+        _mm_set_epi32(static_cast<int>(t11), static_cast<int>(t01), static_cast<int>(t10), static_cast<int>(t00));
     const __m128i zero = _mm_setzero_si128();
     const __m128i lo = _mm_unpacklo_epi8(packed, zero), hi = _mm_unpackhi_epi8(packed, zero);
     __m128 c = _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(lo, zero)), _mm_set1_ps(w00));
@@ -89,7 +89,8 @@ class Texture {
     return {out[0], out[1], out[2]};
 #else
     auto channel = [&](int shift) {
-      const float c = w00 * static_cast<float>((t00 >> shift) & 0xff) + w10 * static_cast<float>((t10 >> shift) & 0xff) +
+      const float c = w00 * static_cast<float>((t00 >> shift) & 0xff) +
+                      w10 * static_cast<float>((t10 >> shift) & 0xff) +
                       w01 * static_cast<float>((t01 >> shift) & 0xff) + w11 * static_cast<float>((t11 >> shift) & 0xff);
       return c * c * (1.0f / (255.0f * 255.0f));
     };
@@ -111,9 +112,9 @@ class Texture {
  private:
   struct Level {
     const uint32_t* texels = nullptr;  // (side + 1) x (side + 1), the last row and column repeat the first
-    float scale = 1;  // texels per metre
-    int mask = 0;     // side - 1
-    int stride = 1;   // side + 1
+    float scale = 1;                   // texels per metre
+    int mask = 0;                      // side - 1
+    int stride = 1;                    // side + 1
   };
   int size_ = 0, levels_ = 0;  // levels down to 1 x 1 texel
   float inv_texel_ = 1, lod_scale_ = 1;

@@ -29,7 +29,8 @@ class PeriodicNoise {
         const double x = (i + 0.5) * cx / n;
         const int x0 = static_cast<int>(x);
         const double t = x - x0, s = t * t * (3 - 2 * t);
-        const float a = lattice[static_cast<size_t>(j) * cx + x0 % cx], b = lattice[static_cast<size_t>(j) * cx + (x0 + 1) % cx];
+        const float a = lattice[static_cast<size_t>(j) * cx + x0 % cx],
+                    b = lattice[static_cast<size_t>(j) * cx + (x0 + 1) % cx];
         rows[static_cast<size_t>(j) * n + i] = static_cast<float>(a + (b - a) * s);
       }
     for (int k = 0; k < n; ++k) {
@@ -129,10 +130,10 @@ using Painter = std::function<Srgb(double u, double v)>;  // metres within one p
 
 // What every painter reads of its material, captured by value in the painters.
 struct Look {
-  double P;          // texture period, metres
-  double c;          // contrast
-  double s;          // the material's feature scale, metres
-  Rgb a, b;          // colour and secondary colour
+  double P;            // texture period, metres
+  double c;            // contrast
+  double s;            // the material's feature scale, metres
+  Rgb a, b;            // colour and secondary colour
   uint64_t cell_seed;  // per-tile / per-brick variation
 };
 
@@ -215,8 +216,8 @@ Painter paint_tiles(const Look& k, NoiseMaker& noise, bool checker) {
     const int64_t n_per = static_cast<int64_t>(std::llround(k.P / s));
     const double jitter = cell_random(k.cell_seed, wrapped(i, n_per), wrapped(j, n_per)) - 0.5;
     Srgb tile = checker && ((i + j) & 1) ? k.b : k.a;
-    tile = scaled(tile, 1.0 + 0.25 * k.c * jitter + 0.06 * shading->at(u / k.P, v / k.P) +
-                            0.04 * fine->at(u / k.P, v / k.P));
+    tile = scaled(tile,
+                  1.0 + 0.25 * k.c * jitter + 0.06 * shading->at(u / k.P, v / k.P) + 0.04 * fine->at(u / k.P, v / k.P));
     const Srgb grout_colour = scaled(k.b, checker ? 2.5 : 1.0);
     return mix(tile, grout_colour, in_grout * (checker ? 0.5 : 1.0));
   };
@@ -233,7 +234,8 @@ Painter paint_bricks(const Look& k, NoiseMaker& noise) {
     const double fu = u + shift - col * len, fv = v - row * h;
     const double edge = std::min(std::min(fu, len - fu), std::min(fv, h - fv));
     const double in_mortar = std::clamp((mortar / 2 - edge) / 0.002 + 0.5, 0.0, 1.0);
-    const int64_t cols = static_cast<int64_t>(std::llround(k.P / len)), rows = static_cast<int64_t>(std::llround(k.P / h));
+    const int64_t cols = static_cast<int64_t>(std::llround(k.P / len)),
+                  rows = static_cast<int64_t>(std::llround(k.P / h));
     const double jitter = cell_random(k.cell_seed, wrapped(col, cols), wrapped(row, rows)) - 0.5;
     const Srgb brick = scaled(k.a, 1.0 + 0.45 * k.c * jitter + 0.25 * k.c * shading->at(u / k.P, v / k.P));
     return mix(brick, k.b, in_mortar);
@@ -410,7 +412,8 @@ Texture synthesize_texture(const Material& m, uint64_t seed) {
   for (int j = 0; j < plan.n; ++j)
     for (int i = 0; i < plan.n; ++i) {
       const Srgb s = paint((i + 0.5) * texel, (j + 0.5) * texel);
-      pixels[static_cast<size_t>(j) * plan.n + i] = Rgbf(to_linear_fast(s[0]), to_linear_fast(s[1]), to_linear_fast(s[2]));
+      pixels[static_cast<size_t>(j) * plan.n + i] =
+          Rgbf(to_linear_fast(s[0]), to_linear_fast(s[1]), to_linear_fast(s[2]));
     }
   return Texture(plan.n, texel, pixels);
 }

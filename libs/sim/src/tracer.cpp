@@ -173,7 +173,9 @@ void Tracer::fill_bins(const std::vector<Candidate>& all, const std::vector<std:
   // Nearest first; ties by index, so the order does not depend on the sort.
   for (size_t b = 0; b < num_bins; ++b)
     std::sort(candidates_.begin() + bin_start_[b], candidates_.begin() + bin_start_[b + 1],
-              [](const Candidate& x, const Candidate& y) { return x.s_min < y.s_min || (x.s_min == y.s_min && x.prism < y.prism); });
+              [](const Candidate& x, const Candidate& y) {
+                return x.s_min < y.s_min || (x.s_min == y.s_min && x.prism < y.prism);
+              });
 }
 
 inline Tracer::Ray Tracer::make_ray(const PixelRay& r) const {
@@ -219,8 +221,8 @@ void Tracer::nearest(const Ray& ray, float s_lo, float s_hi, bool mirrored, Hit&
     }
     entry = std::max(entry, s_lo);
     if (entry > std::min(t_out, std::max(a, b))) continue;
-    const bool better = entry < best.s ||
-                        (entry == best.s && best.candidate >= 0 && c.prism < candidates_[static_cast<size_t>(best.candidate)].prism);
+    const bool better = entry < best.s || (entry == best.s && best.candidate >= 0 &&
+                                           c.prism < candidates_[static_cast<size_t>(best.candidate)].prism);
     if (better) {
       best.s = entry;
       best.candidate = static_cast<int>(k);
@@ -285,16 +287,19 @@ void Tracer::shade_solid(const Ray& ray, const Hit& hit, bool mirrored, float ex
   const float s = hit.s;
   const float dx = c.c * ray.ux - c.s * ray.uy, dy = c.s * ray.ux + c.c * ray.uy;
   const float zr = oz_ + ray.slope * s;
-  const SolidPoint sp = solid_point(p, c.lox + s * dx, c.loy + s * dy, mirrored ? -zr : zr, static_cast<Face>(hit.face));
+  const SolidPoint sp =
+      solid_point(p, c.lox + s * dx, c.loy + s * dy, mirrored ? -zr : zr, static_cast<Face>(hit.face));
   const MaterialData& m = scene_.materials[sp.material];
   const float dz = mirrored ? -ray.slope : ray.slope;
   const float cos_i = std::abs(sp.nx * ray.wx + sp.ny * ray.wy + sp.nz * dz) * ray.inv_len;
   const float footprint = s * ray.len * rays_.pixel_angle() * approx_rsqrt(std::max(cos_i, 0.05f)) + extra_blur;
   const Rgbf albedo = m.texture->sample(sp.u, sp.v, footprint) * p.tint * m.diffuse_scale;
-  Rgbf e = p.ambient + p.directional * std::max(0.0f, sp.nx * p.light_dir.x() + sp.ny * p.light_dir.y() + sp.nz * p.light_dir.z());
+  Rgbf e = p.ambient +
+           p.directional * std::max(0.0f, sp.nx * p.light_dir.x() + sp.ny * p.light_dir.y() + sp.nz * p.light_dir.z());
   if (scene_.sky.has_sun) {
     const Eigen::Vector3f& sun = scene_.sky.sun_dir;
-    e += scene_.sky.sun_irradiance * (std::max(0.0f, sp.nx * sun.x() + sp.ny * sun.y() + sp.nz * sun.z()) * p.sun_visibility);
+    e += scene_.sky.sun_irradiance *
+         (std::max(0.0f, sp.nx * sun.x() + sp.ny * sun.y() + sp.nz * sun.z()) * p.sun_visibility);
   }
   if (sp.nz == 0 && p.z0 < 0.05f && sp.z < 0.3f) {  // contact shade near the ground
     const float t = sp.z * (1.0f / 0.3f);
@@ -312,7 +317,8 @@ inline const FloorFeature* Tracer::floor_feature(float x, float y, uint16_t& mat
   const PlanGrid& g = scene_.grid;
   if (!g.inside(x, y)) return nullptr;
   const int cell = g.index(x, y);
-  const uint32_t begin = g.feature_start[static_cast<size_t>(cell)], end = g.feature_start[static_cast<size_t>(cell) + 1];
+  const uint32_t begin = g.feature_start[static_cast<size_t>(cell)],
+                 end = g.feature_start[static_cast<size_t>(cell) + 1];
   if (begin == end) return nullptr;
   for (uint32_t k = end; k > begin; --k) {
     const FloorFeature& f = scene_.floor_features[g.features[k - 1]];
@@ -323,7 +329,8 @@ inline const FloorFeature* Tracer::floor_feature(float x, float y, uint16_t& mat
       float lx, ly;
       to_local(f, x, y, lx, ly);
       const float gx = (lx + f.hx) / mask.cell, gy = (ly + f.hy) / mask.cell;
-      const int ix = std::clamp(static_cast<int>(gx), 0, mask.nx - 2), iy = std::clamp(static_cast<int>(gy), 0, mask.ny - 2);
+      const int ix = std::clamp(static_cast<int>(gx), 0, mask.nx - 2),
+                iy = std::clamp(static_cast<int>(gy), 0, mask.ny - 2);
       const float fx = gx - static_cast<float>(ix), fy = gy - static_cast<float>(iy);
       const float* row0 = mask.field.data() + static_cast<size_t>(iy) * mask.nx + ix;
       const float* row1 = row0 + mask.nx;
@@ -436,7 +443,8 @@ void Tracer::finish_floor(const FloorSample& f, Shaded& out, float& fresnel, flo
   const PixelRay& pr = rays_.ray(f.pixel);
   const MaterialData& m = scene_.materials[f.material];
   const Rgbf albedo = m.texture->sample(f.x, f.y, pr.floor_footprint) * m.diffuse_scale;
-  const Rgbf e = scene_.floor_irradiance.empty() ? scene_.floor_irradiance_outside : scene_.floor_irradiance.sample(f.x, f.y);
+  const Rgbf e =
+      scene_.floor_irradiance.empty() ? scene_.floor_irradiance_outside : scene_.floor_irradiance.sample(f.x, f.y);
   out.radiance = albedo * e;
   out.depth = pr.s_floor * pr.planar;
   out.specular = 0;
@@ -522,9 +530,9 @@ namespace {
 // sparsely and interpolated; a still water surface is traced at every pixel.
 int reflection_step(float fresnel, float roughness) {
   if (fresnel <= 0) return 0;
-  if (roughness >= 0.01f) return 4;   // polished stone and rougher: >= 6 px of blur far out
+  if (roughness >= 0.01f) return 4;  // polished stone and rougher: >= 6 px of blur far out
   if (roughness >= 0.005f) return 2;
-  return 1;                            // still water
+  return 1;  // still water
 }
 
 }  // namespace
@@ -622,7 +630,8 @@ void Tracer::blend_reflections(int y0, int y1, const uint8_t* step, const float*
       const float inv_s = 1.0f / static_cast<float>(s);  // exact: s is a power of two
       const float fx = static_cast<float>(x - x0) * inv_s, fy = static_cast<float>(y - ys) * inv_s;
       const size_t a = static_cast<size_t>(ys) * width + x0, b = a + static_cast<size_t>(s) * width;
-      add_reflection(out[i], fresnel[i], lerp(lerp(reflected[a], reflected[a + s], fx), lerp(reflected[b], reflected[b + s], fx), fy));
+      add_reflection(out[i], fresnel[i],
+                     lerp(lerp(reflected[a], reflected[a + s], fx), lerp(reflected[b], reflected[b + s], fx), fy));
     }
 }
 
@@ -640,7 +649,8 @@ Ranged Tracer::range(int pixel) const {
     const Candidate& c = candidates_[static_cast<size_t>(hit.candidate)];
     const Prism& p = scene_.prisms[c.prism];
     const float dx = c.c * ray.ux - c.s * ray.uy, dy = c.s * ray.ux + c.c * ray.uy;
-    const SolidPoint sp = solid_point(p, c.lox + hit.s * dx, c.loy + hit.s * dy, oz_ + ray.slope * hit.s, static_cast<Face>(hit.face));
+    const SolidPoint sp =
+        solid_point(p, c.lox + hit.s * dx, c.loy + hit.s * dy, oz_ + ray.slope * hit.s, static_cast<Face>(hit.face));
     const MaterialData& m = scene_.materials[sp.material];
     const float cos_i = std::abs(sp.nx * ray.wx + sp.ny * ray.wy + sp.nz * ray.slope) * ray.inv_len;
     out.depth = hit.s * pr.planar;

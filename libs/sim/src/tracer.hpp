@@ -22,19 +22,19 @@ namespace ivoa::sim::detail {
 // What a camera pixel sees.
 struct Shaded {
   Rgbf radiance;
-  float depth = 0;       // planar depth of the first surface (inf: sky)
-  float specular = 0;    // luminance of the mirror / highlight part of the radiance
-  uint8_t surface = 0;   // SURFACE_*
-  uint8_t phenomena = 0; // PHENOMENON_* known from the geometry and materials
-  uint16_t padding = 0;  // keeps the struct 24 bytes: copies without overlapping stores
+  float depth = 0;        // planar depth of the first surface (inf: sky)
+  float specular = 0;     // luminance of the mirror / highlight part of the radiance
+  uint8_t surface = 0;    // SURFACE_*
+  uint8_t phenomena = 0;  // PHENOMENON_* known from the geometry and materials
+  uint16_t padding = 0;   // keeps the struct 24 bytes: copies without overlapping stores
 };
 
 // What a depth-sensor pixel sees.
 struct Ranged {
-  float depth = 0;       // planar depth (inf: nothing)
-  float ir_return = 0;   // IR albedo x cosine of incidence
-  float specular = 0;    // mirror reflectance (and smoothness) of the surface
-  float sunlit = 0;      // direct sun on the surface, 0..1 scaled by irradiance
+  float depth = 0;      // planar depth (inf: nothing)
+  float ir_return = 0;  // IR albedo x cosine of incidence
+  float specular = 0;   // mirror reflectance (and smoothness) of the surface
+  float sunlit = 0;     // direct sun on the surface, 0..1 scaled by irradiance
 };
 
 class Tracer {
@@ -53,21 +53,21 @@ class Tracer {
 
  private:
   struct Candidate {
-    float s_min;          // horizontal distance from the camera to the footprint
+    float s_min;  // horizontal distance from the camera to the footprint
     uint32_t prism;
     uint8_t circle;
-    float lox, loy;       // camera origin in the footprint's frame (circle: origin - centre, world)
-    float c, s;           // robot-frame direction -> footprint frame
+    float lox, loy;  // camera origin in the footprint's frame (circle: origin - centre, world)
+    float c, s;      // robot-frame direction -> footprint frame
     float hx, hy, z0, z1;
   };
   struct Hit {
-    float s = kInf;       // horizontal distance along the ray
+    float s = kInf;  // horizontal distance along the ray
     int candidate = -1;
     int face = kFaceRound;  // a Face; int-sized so the struct is copied without partial stores
   };
-  struct Ray {            // one pixel's ray in this frame
-    float ux, uy;         // robot frame horizontal direction
-    float wx, wy;         // world frame
+  struct Ray {     // one pixel's ray in this frame
+    float ux, uy;  // robot frame horizontal direction
+    float wx, wy;  // world frame
     float slope, inv_slope, len, inv_len;
     int bin;
   };
@@ -103,10 +103,12 @@ class Tracer {
   // reflection lattice spacing; the reflections traced on the lattice; the
   // interpolated ones and the blend into the radiance.
   static constexpr int kBandRows = 8;  // a multiple of the widest lattice spacing (4)
-  void shade_band(int y0, int y1, Shaded* out, float* fresnel, float* roughness, uint8_t* step, FloorSample* floor) const;
+  void shade_band(int y0, int y1, Shaded* out, float* fresnel, float* roughness, uint8_t* step,
+                  FloorSample* floor) const;
   bool interpolated(const uint8_t* step, int x, int y) const;
   void trace_reflections(int y0, int y1, uint8_t* step, const float* roughness, Rgbf* reflected) const;
-  void blend_reflections(int y0, int y1, const uint8_t* step, const float* fresnel, const Rgbf* reflected, Shaded* out) const;
+  void blend_reflections(int y0, int y1, const uint8_t* step, const float* fresnel, const Rgbf* reflected,
+                         Shaded* out) const;
   // Mirror image plus highlight lobes seen in the floor at a pixel.
   Rgbf floor_reflection(int pixel, float roughness) const;
   static void add_reflection(Shaded& out, float fresnel, const Rgbf& reflected);
@@ -118,8 +120,8 @@ class Tracer {
 
   const SceneData& scene_;
   const CameraRays& rays_;
-  float ox_, oy_, oz_;    // camera origin, world
-  float px_, py_;         // robot position, world
+  float ox_, oy_, oz_;  // camera origin, world
+  float px_, py_;       // robot position, world
   float cos_yaw_, sin_yaw_;
   Pose2D pose_;
   float s_ceiling_up_ = kInf;  // (ceiling - oz): divide by slope

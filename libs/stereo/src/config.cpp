@@ -11,7 +11,8 @@ void require(bool ok, const std::string& what) {
 
 void validate(const SgbmConfig& c) {
   require(c.rect_scale > 0 && c.rect_scale <= 1, "sgbm_rect_scale must be in (0, 1]");
-  require(c.num_disparities > 0 && c.num_disparities % 16 == 0, "sgbm_num_disparities must be a positive multiple of 16");
+  require(c.num_disparities > 0 && c.num_disparities % 16 == 0,
+          "sgbm_num_disparities must be a positive multiple of 16");
   require(c.block_size >= 1 && c.block_size % 2 == 1, "sgbm_block_size must be odd and positive");
   require(c.p2 == 0 || c.p2 > c.p1, "sgbm_p2 must exceed sgbm_p1");
   require(c.mode == "3way" || c.mode == "sgbm" || c.mode == "hh", "sgbm_mode must be 3way, sgbm or hh");
@@ -38,7 +39,8 @@ void validate(const DenseConfig& c) {
           "need 0 < dense_min_obstacle_height < dense_max_obstacle_height");
   require(c.hole_depth > 0, "dense_hole_depth must be positive");
   require(c.min_obstacle_points >= 1 && c.min_ground_points >= 1, "dense point counts must be >= 1");
-  require(c.min_obstacle_fraction >= 0 && c.min_obstacle_fraction <= 1, "dense_min_obstacle_fraction must be in [0, 1]");
+  require(c.min_obstacle_fraction >= 0 && c.min_obstacle_fraction <= 1,
+          "dense_min_obstacle_fraction must be in [0, 1]");
   require(c.max_range > 0 && c.max_range <= 100, "dense_max_range must be in (0, 100] m");
 }
 

@@ -144,7 +144,8 @@ float DaisyDescriptors::sample(const Tap& tap, int h, int x, int y) const {
 }
 
 void DaisyDescriptors::compute_run(int y, int x0, int x1) {
-  uint8_t* row = &cache_[static_cast<size_t>(y) * static_cast<size_t>(image_size_.width) * static_cast<size_t>(stride_)];
+  uint8_t* row =
+      &cache_[static_cast<size_t>(y) * static_cast<size_t>(image_size_.width) * static_cast<size_t>(stride_)];
   auto compute_each = [&](int from, int to) {
     for (int x = from; x <= to; ++x) compute(x, y, row + static_cast<size_t>(x) * static_cast<size_t>(stride_));
   };
@@ -172,8 +173,8 @@ void DaisyDescriptors::compute_row_taps(int y, int x0, int x1) {
     w1[k] = taps_[k].w10;
   }
   const auto stride = static_cast<size_t>(stride_);
-  uint8_t* out = &cache_[(static_cast<size_t>(y) * static_cast<size_t>(image_size_.width) + static_cast<size_t>(x0)) *
-                         stride];
+  uint8_t* out =
+      &cache_[(static_cast<size_t>(y) * static_cast<size_t>(image_size_.width) + static_cast<size_t>(x0)) * stride];
   int x = x0;
 #if defined(__SSE2__)
   if (n == 3 && stride == 4 && kLittleEndian) {

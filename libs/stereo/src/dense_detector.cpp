@@ -59,7 +59,8 @@ void DenseDetector::build_point_bins() {
   for (size_t b = 1; b < bin_start_.size(); ++b) bin_start_[b] += bin_start_[b - 1];
   std::vector<int> next(bin_start_.begin(), bin_start_.end() - 1);
   points_.resize(unsorted.size());
-  for (size_t i = 0; i < unsorted.size(); ++i) points_[static_cast<size_t>(next[static_cast<size_t>(bins[i])]++)] = unsorted[i];
+  for (size_t i = 0; i < unsorted.size(); ++i)
+    points_[static_cast<size_t>(next[static_cast<size_t>(bins[i])]++)] = unsorted[i];
 }
 
 DenseDetector::Counts DenseDetector::count_points(double x, double y, double radius) const {
@@ -77,12 +78,9 @@ DenseDetector::Counts DenseDetector::count_points(double x, double y, double rad
         const Point& p = points_[static_cast<size_t>(k)];
         const double dx = p.x - x, dy = p.y - y;
         if (dx * dx + dy * dy > r2) continue;
-        if (p.z < -config_.hole_depth)
-          ++counts.below;
-        else if (p.z < config_.min_obstacle_height)
-          ++counts.ground;
-        else if (p.z <= config_.max_obstacle_height)
-          ++counts.above;
+        if (p.z < -config_.hole_depth) ++counts.below;
+        else if (p.z < config_.min_obstacle_height) ++counts.ground;
+        else if (p.z <= config_.max_obstacle_height) ++counts.above;
       }
     }
   }
@@ -91,8 +89,8 @@ DenseDetector::Counts DenseDetector::count_points(double x, double y, double rad
 
 Verdict DenseDetector::check(double x, double y, double radius) {
   const Counts c = count_points(x, y, radius);
-  const double needed = std::max<double>(config_.min_obstacle_points,
-                                         config_.min_obstacle_fraction * (c.ground + c.above + c.below));
+  const double needed =
+      std::max<double>(config_.min_obstacle_points, config_.min_obstacle_fraction * (c.ground + c.above + c.below));
   if (c.above >= needed || c.below >= needed) return Verdict::kObstacle;
   if (c.ground >= config_.min_ground_points) return Verdict::kFree;
   return Verdict::kUnknown;

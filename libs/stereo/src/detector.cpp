@@ -23,10 +23,8 @@ void check_image(const cv::Mat& in, const CameraIntrinsics& camera, const std::s
 
 void to_gray(const cv::Mat& in, cv::Mat& out, const CameraIntrinsics& camera, const std::string& side) {
   check_image(in, camera, side);
-  if (in.channels() == 3)
-    cv::cvtColor(in, out, cv::COLOR_BGR2GRAY);
-  else
-    out = in;
+  if (in.channels() == 3) cv::cvtColor(in, out, cv::COLOR_BGR2GRAY);
+  else out = in;
 }
 
 }  // namespace
@@ -38,7 +36,8 @@ void ObstacleDetector::evaluate(const QueryGrid& grid, obstacle_grid_t& out) {
   const double radius = grid.config().safety_radius;
   for (int i = 0; i < grid.size(); ++i) {
     const QueryCell& cell = grid.cell(i);
-    out.state[static_cast<size_t>(i)] = cell.projects ? to_state(check(cell.x, cell.y, radius)) : to_state(Verdict::kUnknown);
+    out.state[static_cast<size_t>(i)] =
+        cell.projects ? to_state(check(cell.x, cell.y, radius)) : to_state(Verdict::kUnknown);
   }
 }
 

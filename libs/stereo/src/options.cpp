@@ -70,9 +70,11 @@ void add_dense_options(CLI::App& app, DenseConfig& c) {
   auto add = [&](const char* flag, auto& value, const char* help) {
     app.add_option(flag, value, help)->capture_default_str()->group(kSgbmGroup);
   };
-  add("--dense_min_obstacle_height", c.min_obstacle_height, "points higher than this above the ground are obstacles, m");
+  add("--dense_min_obstacle_height", c.min_obstacle_height,
+      "points higher than this above the ground are obstacles, m");
   add("--dense_max_obstacle_height", c.max_obstacle_height, "points higher than this are above the robot, ignored, m");
-  add("--dense_hole_depth", c.hole_depth, "points lower than this below the ground are obstacles (holes, reflections), m");
+  add("--dense_hole_depth", c.hole_depth,
+      "points lower than this below the ground are obstacles (holes, reflections), m");
   add("--dense_min_obstacle_points", c.min_obstacle_points, "obstacle (or below-ground) points within r for OBSTACLE");
   add("--dense_min_obstacle_fraction", c.min_obstacle_fraction, "and at least this share of the valid points within r");
   add("--dense_min_ground_points", c.min_ground_points, "ground points within r for FREE");

@@ -28,7 +28,7 @@ class RegionRemap {
 
   static constexpr int kFracBits = 5;  // 1/32 pixel, as OpenCV's remap
   cv::Size raw_size_, rect_size_;
-  std::vector<int32_t> offset_;       // raw index of the top-left tap; -1: outside the raw image (black)
+  std::vector<int32_t> offset_;  // raw index of the top-left tap; -1: outside the raw image (black)
   std::vector<uint8_t> frac_x_, frac_y_;
   std::vector<int> first_row_, last_row_;  // raw rows each rectified row reads
   cv::Mat gray_;                           // raw gray rows (BGR input)

@@ -18,8 +18,8 @@ int sgbm_mode(const std::string& mode) {
 SgbmMatcher::SgbmMatcher(const SgbmConfig& c) {
   const int area = c.block_size * c.block_size;
   sgbm_ = cv::StereoSGBM::create(c.min_disparity, c.num_disparities, c.block_size, c.p1 > 0 ? c.p1 : 8 * area,
-                                 c.p2 > 0 ? c.p2 : 32 * area, c.disp12_max_diff, c.pre_filter_cap,
-                                 c.uniqueness_ratio, c.speckle_window_size, c.speckle_range, sgbm_mode(c.mode));
+                                 c.p2 > 0 ? c.p2 : 32 * area, c.disp12_max_diff, c.pre_filter_cap, c.uniqueness_ratio,
+                                 c.speckle_window_size, c.speckle_range, sgbm_mode(c.mode));
 }
 
 cv::Mat SgbmMatcher::compute(const cv::Mat& left_gray, const cv::Mat& right_gray) const {

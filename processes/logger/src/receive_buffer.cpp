@@ -20,8 +20,7 @@ bool is_udp_socket_on_port(int fd, int port) {
   if (getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &len) != 0 || type != SOCK_DGRAM) return false;
   sockaddr_in address{};
   len = sizeof(address);
-  if (getsockname(fd, reinterpret_cast<sockaddr*>(&address), &len) != 0 || address.sin_family != AF_INET)
-    return false;
+  if (getsockname(fd, reinterpret_cast<sockaddr*>(&address), &len) != 0 || address.sin_family != AF_INET) return false;
   return ntohs(address.sin_port) == port;
 }
 

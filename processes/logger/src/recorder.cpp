@@ -83,8 +83,8 @@ void Recorder::fail(const std::string& error) {
 // Keeps the average write rate under the cap by sleeping after writes.
 void Recorder::throttle(double start_ms) {
   if (options_.max_write_bytes_per_s <= 0) return;
-  const double due_ms = start_ms + static_cast<double>(counters_.bytes_written.load()) /
-                                       options_.max_write_bytes_per_s * 1000.0;
+  const double due_ms =
+      start_ms + static_cast<double>(counters_.bytes_written.load()) / options_.max_write_bytes_per_s * 1000.0;
   const double wait_ms = due_ms - monotonic_ms();
   if (wait_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(wait_ms));
 }

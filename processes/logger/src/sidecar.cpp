@@ -13,8 +13,8 @@
 namespace ivoa::logger {
 namespace {
 
-using logio::fingerprint_hex;
 using ivoa::json_quote;
+using logio::fingerprint_hex;
 
 std::string base_name(const std::string& path) {
   const auto slash = path.rfind('/');

@@ -29,7 +29,8 @@ void draw_marks(cv::Mat& out, const std::vector<CellMark>& cells, const std::vec
 }
 
 std::string legend_caption(bool verdict_rings, bool dots_given_verdict) {
-  const std::string rings = verdict_rings ? "ring: stereo verdict (white free, magenta obstacle)" : "ring: label (stereo vs depth)";
+  const std::string rings =
+      verdict_rings ? "ring: stereo verdict (white free, magenta obstacle)" : "ring: label (stereo vs depth)";
   const std::string dots = dots_given_verdict ? "dot: prediction given the verdict (hollow: withheld)"
                                               : "dot: prediction (hollow: withheld)";
   return rings + "   " + dots;
@@ -39,7 +40,8 @@ std::string status_line(const FrameSet& f) {
   char text[320];
   int n = std::snprintf(text, sizeof(text), "t %.3f", static_cast<double>(f.utime) * 1e-6);
   auto add = [&](const char* fmt, auto... args) {
-    if (n < static_cast<int>(sizeof(text))) n += std::snprintf(text + n, sizeof(text) - static_cast<size_t>(n), fmt, args...);
+    if (n < static_cast<int>(sizeof(text)))
+      n += std::snprintf(text + n, sizeof(text) - static_cast<size_t>(n), fmt, args...);
   };
   if (f.stereo) add("  stereo %s %.0f ms", f.stereo->detector.c_str(), f.stereo->compute_ms);
   if (f.labels) {
@@ -113,8 +115,7 @@ std::vector<PredictionMark> prediction_marks(const FrameSet& f, bool given_verdi
   for (size_t i = 0; i < static_cast<size_t>(h.num_queries); ++i) {
     if (given_verdict && h.query_verdict_class[i] >= 0)
       out.push_back({h.query_u[i], h.query_v[i], h.query_verdict_class[i], h.query_verdict_announced[i] != 0});
-    else
-      out.push_back({h.query_u[i], h.query_v[i], h.query_class[i], h.query_announced[i] != 0});
+    else out.push_back({h.query_u[i], h.query_v[i], h.query_class[i], h.query_announced[i] != 0});
   }
   return out;
 }
@@ -160,7 +161,8 @@ cv::Mat draw_frame_figure(const cv::Mat& left, const FrameSet& f, const FigureOp
   }
   cv::Mat row;
   cv::hconcat(std::vector<cv::Mat>{grid, failure, uncertainty}, row);
-  if (options.scale > 0 && options.scale != 1.0) cv::resize(row, row, cv::Size(), options.scale, options.scale, cv::INTER_AREA);
+  if (options.scale > 0 && options.scale != 1.0)
+    cv::resize(row, row, cv::Size(), options.scale, options.scale, cv::INTER_AREA);
   return row;
 }
 

@@ -94,8 +94,10 @@ std::optional<FrameSet> FrameMatcher::take_oldest(double now_ms, bool flush) {
   if (oldest == frames_.end()) return std::nullopt;
   // Messages come in time order: once a newer frame is complete, this one's
   // parts have all come that ever will.
-  bool ready = flush || complete(oldest->second, now_ms) || now_ms - oldest->second.image_received_ms >= options_.settle_ms;
-  for (auto it = std::next(oldest); !ready && it != frames_.end(); ++it) ready = it->second.left && complete(it->second, now_ms);
+  bool ready =
+      flush || complete(oldest->second, now_ms) || now_ms - oldest->second.image_received_ms >= options_.settle_ms;
+  for (auto it = std::next(oldest); !ready && it != frames_.end(); ++it)
+    ready = it->second.left && complete(it->second, now_ms);
   if (!ready) return std::nullopt;
   return hand_out(oldest, now_ms);
 }

@@ -53,14 +53,15 @@ void ViewerNode::subscribe() {
                                            heartbeat_.count_in();
                                            matcher_.add_labels(msg, monotonic_ms());
                                          });
-  bus_.subscribe<introspection_t>(options_.introspection_channel, [this](const introspection_t& msg, const ReceiveInfo& info) {
-    heartbeat_.count_in();
-    if (const std::string problem = check_introspection(msg); !problem.empty()) {
-      heartbeat_.bad_input(info.channel + " utime " + std::to_string(msg.utime) + ": " + problem);
-      return;
-    }
-    matcher_.add_introspection(msg, monotonic_ms());
-  });
+  bus_.subscribe<introspection_t>(
+      options_.introspection_channel, [this](const introspection_t& msg, const ReceiveInfo& info) {
+        heartbeat_.count_in();
+        if (const std::string problem = check_introspection(msg); !problem.empty()) {
+          heartbeat_.bad_input(info.channel + " utime " + std::to_string(msg.utime) + ": " + problem);
+          return;
+        }
+        matcher_.add_introspection(msg, monotonic_ms());
+      });
   bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
 }
 
@@ -98,8 +99,7 @@ void ViewerNode::finish() {
 }
 
 bool ViewerNode::done() const {
-  return output_failed_.load() || quit_.load() ||
-         (options_.max_figures > 0 && figures_.load() >= options_.max_figures);
+  return output_failed_.load() || quit_.load() || (options_.max_figures > 0 && figures_.load() >= options_.max_figures);
 }
 
 void ViewerNode::work() {
@@ -115,7 +115,8 @@ void ViewerNode::draw(const FrameSet& frame) {
   try {
     left = decode_image(*frame.left);
   } catch (const ImageError& e) {
-    heartbeat_.bad_input(options_.stereo_channel + " utime " + std::to_string(frame.utime) + ": left image: " + e.what());
+    heartbeat_.bad_input(options_.stereo_channel + " utime " + std::to_string(frame.utime) +
+                         ": left image: " + e.what());
     return;
   }
   const cv::Mat figure = draw_frame_figure(left, frame, options_.figure);

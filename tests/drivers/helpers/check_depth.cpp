@@ -109,7 +109,8 @@ class DepthChecker {
   void check(const ivoa::depth_image_t& msg) {
     const cv::Mat depth = ivoa::decode_depth(msg);
     if (depth.cols != sd::kWidth || depth.rows != sd::kHeight)
-      return fail("seq " + std::to_string(msg.seq) + ": " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows));
+      return fail("seq " + std::to_string(msg.seq) + ": " + std::to_string(depth.cols) + "x" +
+                  std::to_string(depth.rows));
     const int x = box_left_edge(depth);
     if (x < 0) return fail("seq " + std::to_string(msg.seq) + ": no box at 1000 mm");
     // The frame whose box is here; the scene repeats every kBoxTravel frames.
@@ -117,8 +118,9 @@ class DepthChecker {
     cv::Mat want(sd::kHeight, sd::kWidth, CV_16UC1);
     sd::render_depth(phase, flags_.registered, want.ptr<uint16_t>(), sd::kWidth);
     if (cv::norm(depth, want, cv::NORM_INF) == 0) ++exact_;
-    else fail("seq " + std::to_string(msg.seq) + ": depth differs from the synthetic scene with the box at x=" +
-              std::to_string(x));
+    else
+      fail("seq " + std::to_string(msg.seq) +
+           ": depth differs from the synthetic scene with the box at x=" + std::to_string(x));
     if (last_x_ >= 0 && msg.seq == last_seq_ + 1) {
       // 1 px per sensor frame; a few more when the host skipped frames (the
       // driver counts those as dropped); anything else is wrong.
@@ -166,12 +168,10 @@ int main(int argc, char** argv) {
   ivoa::Bus bus(f.common.lcm_url);
   DepthChecker checker(f);
   ivoa::test::StatusWatcher status(bus, f.status_name);
-  bus.subscribe<ivoa::depth_image_t>(f.channel, [&](const ivoa::depth_image_t& m, const ivoa::ReceiveInfo& i) {
-    checker.on_depth(m, i);
-  });
-  bus.subscribe<ivoa::image_t>(f.color_channel, [&](const ivoa::image_t& m, const ivoa::ReceiveInfo& i) {
-    checker.on_color(m, i);
-  });
+  bus.subscribe<ivoa::depth_image_t>(
+      f.channel, [&](const ivoa::depth_image_t& m, const ivoa::ReceiveInfo& i) { checker.on_depth(m, i); });
+  bus.subscribe<ivoa::image_t>(f.color_channel,
+                               [&](const ivoa::image_t& m, const ivoa::ReceiveInfo& i) { checker.on_color(m, i); });
   ivoa::install_stop_handlers();
   bus.handle(0);
   if (!ivoa::write_ready_file(f.ready_file)) return ivoa::kExitIoError;

@@ -47,7 +47,8 @@ struct Flags {
 
 // The pixels of a raw image message, without conversion.
 cv::Mat raw_pixels(const image_t& msg) {
-  const int channels = msg.pixelformat == image_t::PIXEL_FORMAT_BGR || msg.pixelformat == image_t::PIXEL_FORMAT_RGB ? 3 : 1;
+  const int channels =
+      msg.pixelformat == image_t::PIXEL_FORMAT_BGR || msg.pixelformat == image_t::PIXEL_FORMAT_RGB ? 3 : 1;
   return cv::Mat(msg.height, msg.width, channels == 3 ? CV_8UC3 : CV_8UC1, const_cast<uint8_t*>(msg.data.data()),
                  static_cast<size_t>(msg.row_stride))
       .clone();
@@ -268,19 +269,16 @@ int main(int argc, char** argv) {
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("check_stereo", f.common.log_level);
 
-  const auto scene = f.left_images.empty()
-                         ? ivoa::sim_hardware::StereoScene(f.pattern, true)
-                         : ivoa::sim_hardware::StereoScene(f.left_images, f.right_images, true);
+  const auto scene = f.left_images.empty() ? ivoa::sim_hardware::StereoScene(f.pattern, true)
+                                           : ivoa::sim_hardware::StereoScene(f.left_images, f.right_images, true);
   ivoa::Bus bus(f.common.lcm_url);
   StereoChecker checker(f, scene);
   ivoa::test::StatusWatcher status(bus, f.status_name);
-  bus.subscribe<ivoa::stereo_image_t>(f.channel, [&](const ivoa::stereo_image_t& m, const ivoa::ReceiveInfo& i) {
-    checker.on_pair(m, i);
-  });
-  bus.subscribe<ivoa::rig_calibration_t>(ivoa::channels::kRigCalibration,
-                                         [&](const ivoa::rig_calibration_t& m, const ivoa::ReceiveInfo& i) {
-                                           checker.on_rig(m, i);
-                                         });
+  bus.subscribe<ivoa::stereo_image_t>(
+      f.channel, [&](const ivoa::stereo_image_t& m, const ivoa::ReceiveInfo& i) { checker.on_pair(m, i); });
+  bus.subscribe<ivoa::rig_calibration_t>(
+      ivoa::channels::kRigCalibration,
+      [&](const ivoa::rig_calibration_t& m, const ivoa::ReceiveInfo& i) { checker.on_rig(m, i); });
   ivoa::install_stop_handlers();
   bus.handle(0);  // udpm joins the group on the first handle
   if (!ivoa::write_ready_file(f.ready_file)) return ivoa::kExitIoError;

@@ -64,7 +64,8 @@ double time_ms(F f, int runs) {
   return median(t);
 }
 
-std::string write_model(const std::string& architecture, const std::string& dir, int views = 1, double patch_scale = 0) {
+std::string write_model(const std::string& architecture, const std::string& dir, int views = 1,
+                        double patch_scale = 0) {
   auto net = make_network(architecture, 0.5, views);
   ModelInfo info;
   info.architecture = architecture;
@@ -99,13 +100,20 @@ double train_step_ms(const std::string& architecture, int batch, int runs, int v
 // if anything a little cheaper): the baseline for the fused pass.
 torch::Tensor tensor_pass_batch(const torch::Tensor& raw, const torch::Tensor& noise_bank, const ModelInfo& info) {
   const int64_t b = raw.size(0), s = raw.size(2), views = raw.size(1) / s;
-  auto x = raw.view({b, views, s, s, 3}).flip({4}).permute({0, 1, 4, 2, 3}).reshape({b, 3 * views, s, s}).to(torch::kFloat).div_(255.0);
+  auto x = raw.view({b, views, s, s, 3})
+               .flip({4})
+               .permute({0, 1, 4, 2, 3})
+               .reshape({b, 3 * views, s, s})
+               .to(torch::kFloat)
+               .div_(255.0);
   const auto mean = x.mean({1, 2, 3}, true);
   const auto contrast = torch::rand({b, 1, 1, 1}) * 0.6 + 0.7;
-  const auto gain = (contrast * (torch::rand({b, 1, 1, 1}) * 0.8 + 0.6) * (torch::rand({b, 3, 1, 1}) * 0.2 + 0.9)).repeat({1, views, 1, 1});
+  const auto gain = (contrast * (torch::rand({b, 1, 1, 1}) * 0.8 + 0.6) * (torch::rand({b, 3, 1, 1}) * 0.2 + 0.9))
+                        .repeat({1, views, 1, 1});
   auto y = torch::addcmul(mean * (1 - contrast) * gain / contrast, x, gain).clamp_(0, 1);
   y.pow_(torch::rand({b, 1, 1, 1}) * 0.45 + 0.8);
-  y.add_(noise_bank.index_select(0, torch::randint(noise_bank.size(0), {b}, torch::kLong)).mul_(torch::rand({b, 1, 1, 1}) * 0.03));
+  y.add_(noise_bank.index_select(0, torch::randint(noise_bank.size(0), {b}, torch::kLong))
+             .mul_(torch::rand({b, 1, 1, 1}) * 0.03));
   y.clamp_(0, 1);
   const auto m = torch::tensor({info.mean[0], info.mean[1], info.mean[2]}).view({1, 3, 1, 1}).repeat({1, views, 1, 1});
   const auto sd = torch::tensor({info.std[0], info.std[1], info.std[2]}).view({1, 3, 1, 1}).repeat({1, views, 1, 1});
@@ -172,7 +180,7 @@ std::vector<cv::Mat> patch_sample(const cv::Mat& frame, int rows, int cols, int 
 struct InferenceTimes {
   int rows = 0, cols = 0, near_cells = 0;
   double ours = 0, two_view = 0, scaled = 0, alex = 0, reference = 0;  // ms per frame
-  std::string model_name;  // the trained model, timed as `scaled`
+  std::string model_name;                                              // the trained model, timed as `scaled`
 };
 
 void print_inference(const InferenceTimes& t, int passes, int threads, int reference_patches) {
@@ -182,15 +190,15 @@ void print_inference(const InferenceTimes& t, int passes, int threads, int refer
               t.ours, 1000.0 / t.ours);
   std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours, two views: ground warp + slidenet on 6 channels",
               t.two_view, 1000.0 / t.two_view);
-  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n",
-              t.model_name.c_str(), t.scaled, 1000.0 / t.scaled);
+  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", t.model_name.c_str(), t.scaled, 1000.0 / t.scaled);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "alexnet-224, trunk once per patch, head x T batched",
               t.alex, reference_patches);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "reference: alexnet-224, whole network x T per patch",
               t.reference, reference_patches);
   const double worst_ms = std::max({t.ours, t.two_view, t.scaled});
-  std::printf("  speed-up over the reference: %.0fx (one view), %.0fx (two views); budget 100 ms: %s (%.2f of budget)\n",
-              t.reference / t.ours, t.reference / t.two_view, worst_ms <= 100.0 ? "met" : "NOT met", worst_ms / 100.0);
+  std::printf(
+      "  speed-up over the reference: %.0fx (one view), %.0fx (two views); budget 100 ms: %s (%.2f of budget)\n",
+      t.reference / t.ours, t.reference / t.two_view, worst_ms <= 100.0 ? "met" : "NOT met", worst_ms / 100.0);
 }
 
 void print_training(int batch, int runs) {
@@ -275,8 +283,8 @@ InferenceTimes time_ours(const cv::Mat& frame, const BenchOptions& o, const Infe
 
 // The reference and our faithful AlexNet-224 option (trunk once per patch,
 // head T times batched), both linear in patches: timed on a sample.
-void time_reference(const cv::Mat& frame, const BenchOptions& o, const InferenceConfig& config,
-                    const std::string& dir, InferenceTimes& t) {
+void time_reference(const cv::Mat& frame, const BenchOptions& o, const InferenceConfig& config, const std::string& dir,
+                    InferenceTimes& t) {
   const std::vector<cv::Mat> sample = patch_sample(frame, t.rows, t.cols, o.reference_patches);
   const int cells = t.rows * t.cols;
   const int runs = std::max(1, o.runs / 3);

@@ -95,11 +95,14 @@ void print_times(const MonitorTimes& t) {
   const double o = median(t.ours), b = median(t.baseline);
   std::printf("Depth monitor, 640x480 depth frames from 5 simulated scenes (%zu frames), %d query cells, one core:\n",
               t.ours.size(), t.cells);
-  std::printf("  %-66s median %6.2f ms, max %6.2f ms\n", "ours: region-cropped cloud, voxel grid, binned disc + ray samples",
-              o, *std::max_element(t.ours.begin(), t.ours.end()));
-  std::printf("  %-66s median %6.2f ms, max %6.2f ms\n", "baseline: whole-image cloud, VoxelGrid, KD-tree radius search",
-              b, *std::max_element(t.baseline.begin(), t.baseline.end()));
-  std::printf("  ratio baseline/ours %.1fx; budget 10 ms: %s (%.2f of budget)\n", b / o, o <= 10 ? "met" : "NOT met", o / 10);
+  std::printf("  %-66s median %6.2f ms, max %6.2f ms\n",
+              "ours: region-cropped cloud, voxel grid, binned disc + ray samples", o,
+              *std::max_element(t.ours.begin(), t.ours.end()));
+  std::printf("  %-66s median %6.2f ms, max %6.2f ms\n",
+              "baseline: whole-image cloud, VoxelGrid, KD-tree radius search", b,
+              *std::max_element(t.baseline.begin(), t.baseline.end()));
+  std::printf("  ratio baseline/ours %.1fx; budget 10 ms: %s (%.2f of budget)\n", b / o, o <= 10 ? "met" : "NOT met",
+              o / 10);
 }
 
 }  // namespace
@@ -108,7 +111,9 @@ int main(int argc, char** argv) {
   CLI::App app{"Depth monitor benchmark (one core)"};
   int frames_per_scene = 4, repeats = 5;
   app.add_option("--frames-per-scene", frames_per_scene)->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--repeats", repeats, "timings per frame (median kept)")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--repeats", repeats, "timings per frame (median kept)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
 
   MonitorTimes times;

@@ -61,7 +61,7 @@ Stats time_frames(const Simulator& sim, const std::vector<RenderRequest>& reques
 }
 
 struct BenchOptions {
-  std::vector<std::string> scenes = {"indoor_office", "home",     "corridor",        "polished_lobby", "warehouse",
+  std::vector<std::string> scenes = {"indoor_office",  "home",     "corridor",        "polished_lobby", "warehouse",
                                      "outdoor_campus", "sidewalk", "wet_parking_lot", "night_plaza"};
   int frames = 8, repeats = 2, baseline_frames = 1, cpu = 0;
   uint64_t seed = 1;
@@ -93,11 +93,14 @@ void pin_to_cpu(int cpu) {
 }
 
 void print_header(const BenchOptions& o) {
-  std::printf("ivoa-bench-simulator: one frame = stereo pair (2 x 960x600, raw, distorted) + depth (640x480) + truth\n");
-  std::printf("single thread%s, OpenCV threads off; times: this thread's CPU ms (wall ms), best and median of %d x %d frames\n\n",
-              o.cpu >= 0 ? (", pinned to CPU " + std::to_string(o.cpu)).c_str() : "", o.frames, o.repeats);
-  std::printf("%-16s %6s | %17s %8s | %9s %9s %9s %9s | %14s %8s | %9s\n", "scene", "solids", "accelerated best", "median",
-              "left", "right", "sensors", "depth", "brute force", "speed-up", "vs budget");
+  std::printf(
+      "ivoa-bench-simulator: one frame = stereo pair (2 x 960x600, raw, distorted) + depth (640x480) + truth\n");
+  std::printf(
+      "single thread%s, OpenCV threads off; times: this thread's CPU ms (wall ms), best and median of %d x %d "
+      "frames\n\n",
+      o.cpu >= 0 ? (", pinned to CPU " + std::to_string(o.cpu)).c_str() : "", o.frames, o.repeats);
+  std::printf("%-16s %6s | %17s %8s | %9s %9s %9s %9s | %14s %8s | %9s\n", "scene", "solids", "accelerated best",
+              "median", "left", "right", "sensors", "depth", "brute force", "speed-up", "vs budget");
 }
 
 // Poses 4 s apart along the scene's trajectory, the depth camera 4 ms later.
@@ -136,9 +139,10 @@ Stats bench_scene(const std::string& name, const BenchOptions& o) {
   double a_few = 1e18;
   for (size_t i = 0; i < a.cpu.size(); ++i)
     if (static_cast<int>(i % requests.size()) < baseline_frames) a_few = std::min(a_few, a.cpu[i]);
-  std::printf("%-16s %6d | %7.1f (%7.1f) %8.1f | %9.1f %9.1f %9.1f %9.1f | %14.1f %7.1fx | %8.2fx\n", scene.name().c_str(),
-              scene.num_solids(), a.best(), a.best_wall(), a.median(), a.best_parts.left_ms, a.best_parts.right_ms,
-              a.best_parts.sensor_ms, a.best_parts.depth_ms, b.best(), b.best() / a_few, a.median() / o.budget_ms);
+  std::printf("%-16s %6d | %7.1f (%7.1f) %8.1f | %9.1f %9.1f %9.1f %9.1f | %14.1f %7.1fx | %8.2fx\n",
+              scene.name().c_str(), scene.num_solids(), a.best(), a.best_wall(), a.median(), a.best_parts.left_ms,
+              a.best_parts.right_ms, a.best_parts.sensor_ms, a.best_parts.depth_ms, b.best(), b.best() / a_few,
+              a.median() / o.budget_ms);
   std::fflush(stdout);
   return a;
 }
@@ -167,7 +171,7 @@ int main(int argc, char** argv) {
       return ivoa::kExitBadInput;
     }
   }
-  std::printf("\nworst scene: best %.1f ms, median %.1f ms per frame = %.2f x the %.0f ms budget (median)\n", worst_best,
-              worst_median, worst_median / o.budget_ms, o.budget_ms);
+  std::printf("\nworst scene: best %.1f ms, median %.1f ms per frame = %.2f x the %.0f ms budget (median)\n",
+              worst_best, worst_median, worst_median / o.budget_ms, o.budget_ms);
   return ivoa::kExitOk;
 }

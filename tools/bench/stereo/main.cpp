@@ -85,10 +85,11 @@ Timing run(const std::string& name, const ivoa::RigCalibration& rig, const ivoa:
 }
 
 void print(const std::string& name, const Timing& t) {
-  std::printf("%-6s  median %7.2f ms  p90 %7.2f  best %7.2f  (cpu median %7.2f; set_frame median %6.2f)  cells free %.1f "
-              "obstacle %.1f unknown %.1f",
-              name.c_str(), t.median(), Timing::quantile(t.wall, 0.9), Timing::quantile(t.wall, 0.0),
-              Timing::quantile(t.cpu, 0.5), Timing::quantile(t.set_frame, 0.5), t.free, t.obstacle, t.unknown);
+  std::printf(
+      "%-6s  median %7.2f ms  p90 %7.2f  best %7.2f  (cpu median %7.2f; set_frame median %6.2f)  cells free %.1f "
+      "obstacle %.1f unknown %.1f",
+      name.c_str(), t.median(), Timing::quantile(t.wall, 0.9), Timing::quantile(t.wall, 0.0),
+      Timing::quantile(t.cpu, 0.5), Timing::quantile(t.set_frame, 0.5), t.free, t.obstacle, t.unknown);
   if (t.cp_tests > 0) std::printf("  CP tests %.0f, descriptors %.0f", t.cp_tests, t.descriptors);
   std::printf("  (constructed in %.1f ms)\n", t.construct_ms);
 }
@@ -138,14 +139,16 @@ RenderedDrive render_drive(const BenchOptions& o) {
 void print_setup(const BenchOptions& o, const RenderedDrive& drive, const ivoa::QueryGrid& grid, double load) {
   int projecting = 0;
   for (const auto& c : grid.cells()) projecting += c.projects ? 1 : 0;
-  std::printf("stereo detector benchmark: %d simulator frames (%s, seed %llu, %dx%d BGR, render %.0f ms/frame), "
-              "%d repeats, %d OpenCV thread(s), load average %.2f\n",
-              o.frames, o.scene_path.c_str(), static_cast<unsigned long long>(o.seed), drive.rig.left.width,
-              drive.rig.left.height, drive.render_ms, o.repeats, o.threads, load);
-  std::printf("query grid: x %.2f..%.2f, y %.2f..%.2f, spacing %.2f, r %.2f: %d cells, all %d that project are "
-              "evaluated (%d have the whole patch in view)\n",
-              o.grid.x_min, o.grid.x_max, o.grid.y_min, o.grid.y_max, o.grid.spacing, o.grid.safety_radius,
-              grid.size(), projecting, grid.count_in_image());
+  std::printf(
+      "stereo detector benchmark: %d simulator frames (%s, seed %llu, %dx%d BGR, render %.0f ms/frame), "
+      "%d repeats, %d OpenCV thread(s), load average %.2f\n",
+      o.frames, o.scene_path.c_str(), static_cast<unsigned long long>(o.seed), drive.rig.left.width,
+      drive.rig.left.height, drive.render_ms, o.repeats, o.threads, load);
+  std::printf(
+      "query grid: x %.2f..%.2f, y %.2f..%.2f, spacing %.2f, r %.2f: %d cells, all %d that project are "
+      "evaluated (%d have the whole patch in view)\n",
+      o.grid.x_min, o.grid.x_max, o.grid.y_min, o.grid.y_max, o.grid.spacing, o.grid.safety_radius, grid.size(),
+      projecting, grid.count_in_image());
 }
 
 // The ratio, and the budget verdict on JPP-C's CPU time. On one core the
@@ -154,7 +157,8 @@ void print_setup(const BenchOptions& o, const RenderedDrive& drive, const ivoa::
 double print_comparison(const Timing& jppc, const Timing& dense) {
   const double jppc_cpu = Timing::quantile(jppc.cpu, 0.5);
   const double ratio = Timing::quantile(dense.cpu, 0.5) / jppc_cpu;
-  std::printf("dense / jppc: %.1fx (CPU median per frame; wall medians: %.1fx)\n", ratio, dense.median() / jppc.median());
+  std::printf("dense / jppc: %.1fx (CPU median per frame; wall medians: %.1fx)\n", ratio,
+              dense.median() / jppc.median());
   std::printf("budget: JPP-C <= 5 ms per frame on one core: CPU median %.2f ms (wall median %.2f, best %.2f) -> %s\n",
               jppc_cpu, jppc.median(), Timing::quantile(jppc.wall, 0.0), jppc_cpu <= 5.0 ? "within" : "OVER");
   return ratio;

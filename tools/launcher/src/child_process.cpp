@@ -31,8 +31,7 @@ std::vector<std::string> merged_environment(const std::map<std::string, std::str
 }
 
 // Runs in the forked child: only async-signal-safe calls until exec.
-[[noreturn]] void exec_child(const char* command, char* const* envp, int output_fd, int death_signal,
-                             pid_t launcher) {
+[[noreturn]] void exec_child(const char* command, char* const* envp, int output_fd, int death_signal, pid_t launcher) {
   setsid();
   prctl(PR_SET_PDEATHSIG, death_signal);
   if (getppid() != launcher) _exit(127);  // the launcher died before prctl
@@ -107,8 +106,7 @@ ChildProcess spawn_shell_command(const std::string& command, const std::map<std:
 
 std::string exec_form(const std::string& command) {
   static const char* kControl = ";&|()`\n{}<>";
-  if (command.find_first_of(kControl) != std::string::npos || command.find("$(") != std::string::npos)
-    return command;
+  if (command.find_first_of(kControl) != std::string::npos || command.find("$(") != std::string::npos) return command;
   size_t i = command.find_first_not_of(" \t");
   if (i == std::string::npos) return command;
   while (const size_t n = assignment_length(command, i)) {
@@ -117,9 +115,10 @@ std::string exec_form(const std::string& command) {
   }
   // Keywords and special builtins cannot follow exec ("exec exit 3" fails).
   static const std::set<std::string> kShellWords = {
-      "!", ".", ":", "[", "alias", "break", "case", "cd", "command", "continue", "eval", "exec", "exit", "export",
-      "for", "getopts", "hash", "if", "local", "read", "readonly", "return", "set", "shift", "source", "test",
-      "times", "trap", "type", "ulimit", "umask", "unalias", "unset", "until", "wait", "while"};
+      "!",        ".",    ":",        "[",      "alias",   "break", "case",    "cd",   "command",
+      "continue", "eval", "exec",     "exit",   "export",  "for",   "getopts", "hash", "if",
+      "local",    "read", "readonly", "return", "set",     "shift", "source",  "test", "times",
+      "trap",     "type", "ulimit",   "umask",  "unalias", "unset", "until",   "wait", "while"};
   const std::string first = command.substr(i, command.find_first_of(" \t", i) - i);
   if (kShellWords.count(first)) return command;
   return command.substr(0, i) + "exec " + command.substr(i);

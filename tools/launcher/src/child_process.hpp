@@ -9,8 +9,8 @@
 namespace ivoa::launcher {
 
 struct ChildProcess {
-  pid_t pid = -1;     // also the process group id
-  int output_fd = -1; // read end, non-blocking, close-on-exec
+  pid_t pid = -1;      // also the process group id
+  int output_fd = -1;  // read end, non-blocking, close-on-exec
 };
 
 // Throws std::system_error if the pipe or fork fails. `environment` is added

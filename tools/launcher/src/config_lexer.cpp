@@ -45,7 +45,8 @@ class Lexer {
         ++pos_;
       } else if (c == '#') {
         const auto end = text_.find('\n', pos_);
-        const std::string body = trim(text_.substr(pos_ + 1, end == std::string::npos ? std::string::npos : end - pos_ - 1));
+        const std::string body =
+            trim(text_.substr(pos_ + 1, end == std::string::npos ? std::string::npos : end - pos_ - 1));
         if (body.rfind("@default", 0) == 0) tokens.push_back({TokenKind::kDefault, trim(body.substr(8)), line_});
         pos_ = end == std::string::npos ? text_.size() : end;
       } else {

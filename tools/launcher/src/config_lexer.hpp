@@ -11,7 +11,7 @@ enum class TokenKind { kIdentifier, kString, kNumber, kLeftBrace, kRightBrace, k
 
 struct Token {
   TokenKind kind = TokenKind::kEnd;
-  std::string text;   // identifier, string contents (unescaped), number, or the default's "NAME=VALUE" body
+  std::string text;  // identifier, string contents (unescaped), number, or the default's "NAME=VALUE" body
   int line = 0;
 };
 

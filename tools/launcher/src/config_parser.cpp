@@ -67,9 +67,8 @@ class Parser {
     std::string name = t.text.substr(0, eq);
     name.erase(name.find_last_not_of(" \t") + 1);
     const bool valid_name = !name.empty() && (std::isalpha(static_cast<unsigned char>(name[0])) || name[0] == '_') &&
-                            std::all_of(name.begin(), name.end(), [](char c) {
-                              return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
-                            });
+                            std::all_of(name.begin(), name.end(),
+                                        [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
     if (eq == std::string::npos || !valid_name) fail(t.line, "expected '# @default NAME = VALUE'");
     std::string value = t.text.substr(eq + 1);
     value.erase(0, value.find_first_not_of(" \t"));
@@ -136,7 +135,8 @@ class Parser {
       cmd.auto_respawn = parse_bool(value, k);
     } else if (k == "stop_signal") {
       const double s = parse_number(value, k);
-      if (s != std::floor(s) || s < 1 || s > 64) fail(value.line, "stop_signal must be a signal number 1-64, got " + value.text);
+      if (s != std::floor(s) || s < 1 || s > 64)
+        fail(value.line, "stop_signal must be a signal number 1-64, got " + value.text);
       cmd.stop_signal = static_cast<int>(s);
     } else if (k == "stop_time_allowed") {
       cmd.stop_time_allowed_s = parse_number(value, k);
@@ -144,8 +144,8 @@ class Parser {
     } else if (kIgnoredAttributes.count(k)) {
       config_.warnings.push_back(path_ + ":" + std::to_string(key.line) + ": attribute '" + k + "' ignored");
     } else {
-      fail(key.line, "unknown attribute '" + k +
-                         "' (known: exec, host, deputy, auto_respawn, stop_signal, stop_time_allowed)");
+      fail(key.line,
+           "unknown attribute '" + k + "' (known: exec, host, deputy, auto_respawn, stop_signal, stop_time_allowed)");
     }
   }
 
@@ -178,8 +178,9 @@ class Parser {
     step.line = peek().line;
     const Token& verb = expect(TokenKind::kIdentifier, "a script action (start, stop, restart, wait, run_script)");
     if (verb.text == "start" || verb.text == "stop" || verb.text == "restart") {
-      step.action = verb.text == "start" ? StepAction::kStart
-                    : verb.text == "stop" ? StepAction::kStop : StepAction::kRestart;
+      step.action = verb.text == "start"  ? StepAction::kStart
+                    : verb.text == "stop" ? StepAction::kStop
+                                          : StepAction::kRestart;
       target(step);
       if (accept_keyword("wait")) step.wait_status = status_word();
     } else if (verb.text == "wait") {
@@ -191,7 +192,8 @@ class Parser {
       } else {
         step.action = StepAction::kWaitStatus;
         target(step);
-        if (!accept_keyword("status")) fail(peek().line, "expected 'status' after the wait target, found " + describe(peek()));
+        if (!accept_keyword("status"))
+          fail(peek().line, "expected 'status' after the wait target, found " + describe(peek()));
         step.wait_status = status_word();
       }
     } else if (verb.text == "run_script") {
@@ -220,7 +222,8 @@ class Parser {
 
   std::string status_word() {
     const Token& t = expect(TokenKind::kString, "\"running\" or \"stopped\"");
-    if (t.text != "running" && t.text != "stopped") fail(t.line, "status must be \"running\" or \"stopped\", got " + describe(t));
+    if (t.text != "running" && t.text != "stopped")
+      fail(t.line, "status must be \"running\" or \"stopped\", got " + describe(t));
     return t.text;
   }
 
@@ -244,7 +247,8 @@ void flatten_into(const Config& config, const ScriptSpec& script, std::vector<st
       flatten_into(config, *inner, stack, out);
       continue;
     }
-    if (step.target_kind == TargetKind::kCommand && step.action != StepAction::kWaitMs && !config.find_command(step.target))
+    if (step.target_kind == TargetKind::kCommand && step.action != StepAction::kWaitMs &&
+        !config.find_command(step.target))
       throw ConfigError(at(config, step.line) + "no cmd \"" + step.target + "\"");
     if (step.target_kind == TargetKind::kGroup && step.action != StepAction::kWaitMs && !config.has_group(step.target))
       throw ConfigError(at(config, step.line) + "no group \"" + step.target + "\"");

@@ -94,18 +94,21 @@ class OutputPrinter {
 
 class Run {
  public:
-  Run(const Config& config, std::vector<LaunchCommand> commands, const std::string& host, const LauncherOptions& options)
+  Run(const Config& config, std::vector<LaunchCommand> commands, const std::string& host,
+      const LauncherOptions& options)
       : config_(config),
         host_(host),
         options_(options),
         printer_(options, names_of(commands)),
-        supervisor_(std::move(commands), options.supervisor,
-                    [this](const std::string& n, const std::string& l) { printer_.line(n, l); },
-                    [this](const std::string& n, const std::string& e) { printer_.event(n, e); }) {
+        supervisor_(
+            std::move(commands), options.supervisor,
+            [this](const std::string& n, const std::string& l) { printer_.line(n, l); },
+            [this](const std::string& n, const std::string& e) { printer_.event(n, e); }) {
     connect_lcm();
     if (!options_.script.empty())
-      script_ = std::make_unique<ScriptRunner>(flatten_script(config_, options_.script), supervisor_,
-                                               [this](const std::string& n, const std::string& e) { printer_.event(n, e); });
+      script_ =
+          std::make_unique<ScriptRunner>(flatten_script(config_, options_.script), supervisor_,
+                                         [this](const std::string& n, const std::string& e) { printer_.event(n, e); });
   }
 
   int run() {
@@ -240,8 +243,9 @@ class Run {
     int code = 0;
     for (const auto& s : supervisor_.statuses())
       if (!s.auto_respawn && s.failed) {
-        spdlog::error("{} failed ({})", s.name, s.exit_signal ? "signal " + std::to_string(s.exit_signal)
-                                                              : "exit code " + std::to_string(s.exit_code));
+        spdlog::error(
+            "{} failed ({})", s.name,
+            s.exit_signal ? "signal " + std::to_string(s.exit_signal) : "exit code " + std::to_string(s.exit_code));
         code = 1;
       }
     return code;

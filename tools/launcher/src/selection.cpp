@@ -33,7 +33,8 @@ SelectedCommands select_commands(const Config& config, const Selection& selectio
       out.other_hosts.push_back(c.name + " (" + host_of(c) + ")");
       continue;
     }
-    LaunchCommand launch{c, variables.expand(c.exec, config.path + ":" + std::to_string(c.line) + ": cmd \"" + c.name + "\"")};
+    LaunchCommand launch{
+        c, variables.expand(c.exec, config.path + ":" + std::to_string(c.line) + ": cmd \"" + c.name + "\"")};
     out.commands.push_back(std::move(launch));
   }
   return out;

@@ -23,9 +23,7 @@ std::string state_text(const CommandStatus& c) {
   return s;
 }
 
-std::string clip(const std::string& s, size_t width) {
-  return s.size() <= width ? s : s.substr(0, width - 1) + "~";
-}
+std::string clip(const std::string& s, size_t width) { return s.size() <= width ? s : s.substr(0, width - 1) + "~"; }
 
 }  // namespace
 
@@ -40,8 +38,8 @@ std::string describe_exit(const CommandStatus& c) {
 std::string format_status_table(const std::vector<StatusRow>& rows) {
   std::ostringstream out;
   char line[256];
-  std::snprintf(line, sizeof(line), "%-20s %7s %-15s %4s %-8s %8s %8s %6s %5s %8s  %s\n", "NAME", "PID", "STATE",
-                "RST", "EXIT", "IN", "OUT", "DROP", "BAD", "LAT ms", "PROCESS STATE");
+  std::snprintf(line, sizeof(line), "%-20s %7s %-15s %4s %-8s %8s %8s %6s %5s %8s  %s\n", "NAME", "PID", "STATE", "RST",
+                "EXIT", "IN", "OUT", "DROP", "BAD", "LAT ms", "PROCESS STATE");
   out << line;
   for (const auto& r : rows) {
     const auto& c = r.command;

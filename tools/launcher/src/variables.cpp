@@ -96,8 +96,7 @@ std::map<std::string, std::string> Variables::exported() const {
 std::pair<std::string, std::string> parse_assignment(const std::string& text) {
   const auto eq = text.find('=');
   const std::string name = text.substr(0, eq);
-  if (eq == std::string::npos || !valid_name(name))
-    throw std::invalid_argument("'" + text + "' is not NAME=VALUE");
+  if (eq == std::string::npos || !valid_name(name)) throw std::invalid_argument("'" + text + "' is not NAME=VALUE");
   return {name, text.substr(eq + 1)};
 }
 

@@ -13,17 +13,17 @@ struct AravisCameraConfig {
   std::string pixel_format = "BayerRG8";  // GenICam PixelFormat: BayerRG8, BayerBG8, BayerGB8, BayerGR8, Mono8, RGB8
   int width = 0;                          // region of interest, pixels; 0 = keep the camera's
   int height = 0;
-  int offset_x = 0;                       // region origin, pixels
+  int offset_x = 0;  // region origin, pixels
   int offset_y = 0;
-  double frame_rate_hz = 30;              // free-running rate; 0 = keep the camera's
-  double exposure_us = 0;                 // fixed exposure, microseconds; 0 = continuous auto exposure
-  double gain = -1;                       // fixed gain (camera units, dB on FLIR); < 0 = continuous auto gain
-  int packet_size = 0;                    // GigE Vision packet size, bytes (9000 with jumbo frames); 0 = negotiate
-  int64_t packet_delay_ns = 0;            // GigE Vision inter-packet delay; 0 = keep the camera's
-  bool packet_resend = true;              // ask a GigE camera to resend lost packets
-  int64_t throughput_limit = 0;           // DeviceLinkThroughputLimit, bytes/s, for cameras sharing a link; 0 = keep
-  std::string trigger = "none";           // none | software | a hardware input line, e.g. Line0
-  int buffers = 8;                        // stream buffers in flight
+  double frame_rate_hz = 30;     // free-running rate; 0 = keep the camera's
+  double exposure_us = 0;        // fixed exposure, microseconds; 0 = continuous auto exposure
+  double gain = -1;              // fixed gain (camera units, dB on FLIR); < 0 = continuous auto gain
+  int packet_size = 0;           // GigE Vision packet size, bytes (9000 with jumbo frames); 0 = negotiate
+  int64_t packet_delay_ns = 0;   // GigE Vision inter-packet delay; 0 = keep the camera's
+  bool packet_resend = true;     // ask a GigE camera to resend lost packets
+  int64_t throughput_limit = 0;  // DeviceLinkThroughputLimit, bytes/s, for cameras sharing a link; 0 = keep
+  std::string trigger = "none";  // none | software | a hardware input line, e.g. Line0
+  int buffers = 8;               // stream buffers in flight
 };
 
 class AravisCamera : public CameraSource {

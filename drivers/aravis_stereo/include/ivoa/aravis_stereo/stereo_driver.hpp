@@ -21,17 +21,17 @@ namespace ivoa::aravis_stereo {
 
 struct StereoDriverOptions {
   OutputFormat output = OutputFormat::kRaw;
-  double pair_tolerance_ms = 0;   // max left/right time difference of a pair; 0 = half the frame period
+  double pair_tolerance_ms = 0;                // max left/right time difference of a pair; 0 = half the frame period
   PairingClock clock = PairingClock::kMapped;  // also the published utime, except kDevice (host receive time)
-  double frame_rate_hz = 30;      // camera rate (sets the default tolerance and the software-trigger rate)
-  bool software_trigger = false;  // fire both cameras from this loop at frame_rate_hz
-  WorkerOptions worker;           // frame timeout and reconnect back-off
-  double startup_timeout_s = 15;  // exit if a camera has not opened by then; 0 = wait forever
+  double frame_rate_hz = 30;                   // camera rate (sets the default tolerance and the software-trigger rate)
+  bool software_trigger = false;               // fire both cameras from this loop at frame_rate_hz
+  WorkerOptions worker;                        // frame timeout and reconnect back-off
+  double startup_timeout_s = 15;               // exit if a camera has not opened by then; 0 = wait forever
   std::string stereo_channel = std::string(channels::kStereoImages);
   std::string rig_channel = std::string(channels::kRigCalibration);
-  double rig_rate_hz = 1.0;       // RIG_CALIBRATION publications per second
+  double rig_rate_hz = 1.0;  // RIG_CALIBRATION publications per second
   std::string source_name = "aravis";
-  std::string rig_path;           // for log lines
+  std::string rig_path;  // for log lines
 };
 
 class StereoDriver {

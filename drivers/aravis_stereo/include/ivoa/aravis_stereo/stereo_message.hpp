@@ -28,7 +28,6 @@ std::optional<OutputFormat> parse_output_format(const std::string& name);
 image_t frame_to_image(const CameraFrame& frame, OutputFormat format);
 
 // utime is the left frame's host time.
-stereo_image_t make_stereo_message(const StereoPair& pair, OutputFormat format, int64_t seq,
-                                   const std::string& source);
+stereo_image_t make_stereo_message(const StereoPair& pair, OutputFormat format, int64_t seq, const std::string& source);
 
 }  // namespace ivoa::aravis_stereo

@@ -36,13 +36,13 @@ struct OpenNiOptions {
 };
 
 struct DepthFrame {
-  cv::Mat depth_mm;          // CV_16UC1, millimetres, 0 = no reading
-  int frame_index = 0;       // the device's counter
+  cv::Mat depth_mm;     // CV_16UC1, millimetres, 0 = no reading
+  int frame_index = 0;  // the device's counter
   uint64_t device_time_us = 0;
 };
 
 struct ColorFrame {
-  cv::Mat rgb;               // CV_8UC3, R G B order as the sensor delivers it
+  cv::Mat rgb;  // CV_8UC3, R G B order as the sensor delivers it
   int frame_index = 0;
   uint64_t device_time_us = 0;
 };

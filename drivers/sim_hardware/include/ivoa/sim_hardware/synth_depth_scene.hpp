@@ -21,8 +21,8 @@ inline constexpr uint16_t kBoxMm = 1000;
 inline constexpr int kBoxWidth = 120;
 inline constexpr int kBoxHeight = 100;
 inline constexpr int kBoxTop = 190;
-inline constexpr int kBoxStartX = 60;  // box x at frame index 0
-inline constexpr int kBoxTravel = 400; // the box x repeats every kBoxTravel frames
+inline constexpr int kBoxStartX = 60;   // box x at frame index 0
+inline constexpr int kBoxTravel = 400;  // the box x repeats every kBoxTravel frames
 inline constexpr int kRegistrationShiftPx = 12;
 
 // Kinect v1 fields of view (libfreenect's OpenNI2 driver), radians.

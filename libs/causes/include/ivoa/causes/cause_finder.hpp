@@ -45,19 +45,19 @@ struct SessionTiming {
 // Other settings of the same detector to try on the factual frames, e.g.
 // "full resolution" (--rect_scale 1). At most 8.
 struct DetectorVariant {
-  std::string name;                 // a CSV field: no ',', '"', '+' or line breaks
+  std::string name;  // a CSV field: no ',', '"', '+' or line breaks
   stereo::DetectorConfig config;
 };
 
 struct CellCause {
-  int32_t cell = 0;            // index into the labels message
-  int8_t label = 0;            // LABEL_FP or LABEL_FN
-  int8_t stereo_state = 0;     // recorded obstacle_grid_t::STATE_*
-  int8_t replayed_state = 0;   // the detector on the re-rendered frame
-  uint8_t tested = 0;          // PHENOMENON_* bits the scene carries (a twin was rendered)
-  uint8_t causes = 0;          // PHENOMENON_* bits whose removal (each alone) makes the verdict right
-  bool jointly = false;        // no single removal does, removing all `tested` together does
-  uint8_t fixed_by = 0;        // bit i: variants[i] gives the right verdict on the factual frame
+  int32_t cell = 0;           // index into the labels message
+  int8_t label = 0;           // LABEL_FP or LABEL_FN
+  int8_t stereo_state = 0;    // recorded obstacle_grid_t::STATE_*
+  int8_t replayed_state = 0;  // the detector on the re-rendered frame
+  uint8_t tested = 0;         // PHENOMENON_* bits the scene carries (a twin was rendered)
+  uint8_t causes = 0;         // PHENOMENON_* bits whose removal (each alone) makes the verdict right
+  bool jointly = false;       // no single removal does, removing all `tested` together does
+  uint8_t fixed_by = 0;       // bit i: variants[i] gives the right verdict on the factual frame
   bool reproduced() const { return replayed_state == stereo_state; }
 };
 

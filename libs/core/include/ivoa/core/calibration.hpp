@@ -18,8 +18,8 @@ class rig_calibration_t;
 
 struct CameraIntrinsics {
   std::string name;
-  int width = 0;   // pixels
-  int height = 0;  // pixels
+  int width = 0;                                    // pixels
+  int height = 0;                                   // pixels
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();  // pixels
   std::array<double, 5> D{};                        // k1, k2, p1, p2, k3
 };

@@ -5,16 +5,16 @@
 
 namespace ivoa::channels {
 
-inline constexpr std::string_view kStereoImages = "STEREO_IMAGES";              // ivoa.stereo_image_t
-inline constexpr std::string_view kDepthImage = "DEPTH_IMAGE";                  // ivoa.depth_image_t
-inline constexpr std::string_view kDepthColor = "DEPTH_COLOR";                  // ivoa.image_t (depth sensor's colour camera, optional)
-inline constexpr std::string_view kRigCalibration = "RIG_CALIBRATION";          // ivoa.rig_calibration_t
-inline constexpr std::string_view kObstaclesStereo = "OBSTACLES_STEREO";        // ivoa.obstacle_grid_t
-inline constexpr std::string_view kObstaclesDepth = "OBSTACLES_DEPTH";          // ivoa.obstacle_grid_t
-inline constexpr std::string_view kIntrospectionLabels = "INTROSPECTION_LABELS";// ivoa.introspection_labels_t
-inline constexpr std::string_view kIntrospection = "INTROSPECTION";             // ivoa.introspection_t
-inline constexpr std::string_view kProcessStatus = "PROCESS_STATUS";            // ivoa.process_status_t
-inline constexpr std::string_view kSimGroundTruth = "SIM_GROUND_TRUTH";         // ivoa.sim_ground_truth_t (simulator only)
+inline constexpr std::string_view kStereoImages = "STEREO_IMAGES";  // ivoa.stereo_image_t
+inline constexpr std::string_view kDepthImage = "DEPTH_IMAGE";      // ivoa.depth_image_t
+inline constexpr std::string_view kDepthColor = "DEPTH_COLOR";  // ivoa.image_t (depth sensor's colour camera, optional)
+inline constexpr std::string_view kRigCalibration = "RIG_CALIBRATION";            // ivoa.rig_calibration_t
+inline constexpr std::string_view kObstaclesStereo = "OBSTACLES_STEREO";          // ivoa.obstacle_grid_t
+inline constexpr std::string_view kObstaclesDepth = "OBSTACLES_DEPTH";            // ivoa.obstacle_grid_t
+inline constexpr std::string_view kIntrospectionLabels = "INTROSPECTION_LABELS";  // ivoa.introspection_labels_t
+inline constexpr std::string_view kIntrospection = "INTROSPECTION";               // ivoa.introspection_t
+inline constexpr std::string_view kProcessStatus = "PROCESS_STATUS";              // ivoa.process_status_t
+inline constexpr std::string_view kSimGroundTruth = "SIM_GROUND_TRUTH";  // ivoa.sim_ground_truth_t (simulator only)
 
 // LCM 1.3.1 rejects longer names on udpm but not on memq, so unit tests on
 // memq would not notice: check it at compile time.

@@ -60,8 +60,8 @@ std::string geometry_mismatch(const Msg& msg, const QueryGrid& grid) {
       !near(msg.y_max, c.y_max) || !near(msg.spacing, c.spacing))
     return "grid extents or spacing differ from the configured grid";
   if (!near(msg.safety_radius, c.safety_radius))
-    return "safety radius " + std::to_string(msg.safety_radius) + " m, configured " +
-           std::to_string(c.safety_radius) + " m";
+    return "safety radius " + std::to_string(msg.safety_radius) + " m, configured " + std::to_string(c.safety_radius) +
+           " m";
   return "";
 }
 

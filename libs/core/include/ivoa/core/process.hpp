@@ -16,14 +16,14 @@ class Heartbeat;
 // Exit codes (documented in the README).
 enum ExitCode : int {
   kExitOk = 0,
-  kExitFailure = 1,        // runtime failure (LCM, device, ...)
-  kExitUsage = 2,          // bad flags or config
-  kExitBadInput = 3,       // an input file is unusable (calibration, log, model)
-  kExitIoError = 4,        // cannot write output (disk full, permissions)
+  kExitFailure = 1,   // runtime failure (LCM, device, ...)
+  kExitUsage = 2,     // bad flags or config
+  kExitBadInput = 3,  // an input file is unusable (calibration, log, model)
+  kExitIoError = 4,   // cannot write output (disk full, permissions)
 };
 
 struct CommonOptions {
-  std::string lcm_url;            // empty = default_lcm_url()
+  std::string lcm_url;  // empty = default_lcm_url()
   std::string log_level = "info";
 };
 
@@ -47,7 +47,7 @@ void init_logging(const std::string& process_name, const std::string& level);
 // heartbeat.tick() at least every `poll_ms`. Returns kExitFailure if LCM
 // fails, kExitOk otherwise; with `stop_at_end_of_log` an end of a file://
 // log also ends the loop normally.
-int run_until_stopped(Bus& bus, Heartbeat* heartbeat, const std::function<void()>& periodic = {},
-                      int poll_ms = 50, bool stop_at_end_of_log = false);
+int run_until_stopped(Bus& bus, Heartbeat* heartbeat, const std::function<void()>& periodic = {}, int poll_ms = 50,
+                      bool stop_at_end_of_log = false);
 
 }  // namespace ivoa

@@ -22,10 +22,10 @@ struct QueryGridConfig {
 };
 
 struct QueryCell {
-  double x = 0, y = 0;      // robot frame, metres (z = 0)
-  double u = 0, v = 0;      // raw left image pixel (NaN when behind the camera)
-  bool projects = false;    // in front of the left camera
-  bool in_image = false;    // the whole patch lies inside the left image
+  double x = 0, y = 0;    // robot frame, metres (z = 0)
+  double u = 0, v = 0;    // raw left image pixel (NaN when behind the camera)
+  bool projects = false;  // in front of the left camera
+  bool in_image = false;  // the whole patch lies inside the left image
 };
 
 class QueryGrid {

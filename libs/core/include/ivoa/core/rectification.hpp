@@ -16,17 +16,14 @@ class StereoRectification {
   StereoRectification(const RigCalibration& rig, double scale = 1.0);
 
   // Remaps raw (distorted) images into the rectified pair (bilinear).
-  void rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat& left_rect,
-               cv::Mat& right_rect) const;
+  void rectify(const cv::Mat& left_raw, const cv::Mat& right_raw, cv::Mat& left_rect, cv::Mat& right_rect) const;
 
   // Robot point -> rectified left and right pixels; false if behind the camera.
   bool project(const Eigen::Vector3d& p_robot, Eigen::Vector2d& left, Eigen::Vector2d& right) const;
   // Rectified left pixel and disparity -> robot point.
   Eigen::Vector3d unproject(const Eigen::Vector2d& left, double disparity) const;
   // Robot point -> rectified left camera frame (x right, y down, z forward).
-  Eigen::Vector3d to_rectified_camera(const Eigen::Vector3d& p_robot) const {
-    return robot_to_rect_ * p_robot;
-  }
+  Eigen::Vector3d to_rectified_camera(const Eigen::Vector3d& p_robot) const { return robot_to_rect_ * p_robot; }
   const Eigen::Isometry3d& rectified_camera_to_robot() const { return rect_to_robot_; }
 
   cv::Size size() const { return size_; }

@@ -61,9 +61,9 @@ struct BuildReport {
   int64_t frames_labelled = 0;   // frames that gave samples
   int64_t frames_unmatched = 0;  // no depth frame within the pairing tolerance
   int64_t samples = 0;
-  int64_t tn_dropped = 0;        // TN cells left out (keep_tn < 1)
-  int64_t bad_messages = 0;      // undecodable or inconsistent, skipped
-  int64_t evidence_mismatches = 0;  // samples whose re-run verdict differs from the label's (NaN evidence)
+  int64_t tn_dropped = 0;             // TN cells left out (keep_tn < 1)
+  int64_t bad_messages = 0;           // undecodable or inconsistent, skipped
+  int64_t evidence_mismatches = 0;    // samples whose re-run verdict differs from the label's (NaN evidence)
   std::vector<std::string> problems;  // log damage (with byte offsets) and bad messages
   std::array<int64_t, kNumClasses> class_counts{};
 };

@@ -33,11 +33,11 @@ class ModelError : public std::runtime_error {
 
 // What a model file says about itself.
 struct ModelInfo {
-  std::string architecture;   // "slidenet" (default) or "alexnet" or "scripted"
-  std::string detector;       // the perception model it was trained to introspect
-  int patch_size = 100;       // pixels of the left image per patch
-  int stride = 20;            // heatmap stride, pixels
-  int input_size = 100;       // patches are resized to this before the network
+  std::string architecture;  // "slidenet" (default) or "alexnet" or "scripted"
+  std::string detector;      // the perception model it was trained to introspect
+  int patch_size = 100;      // pixels of the left image per patch
+  int stride = 20;           // heatmap stride, pixels
+  int input_size = 100;      // patches are resized to this before the network
   // 1: the left image (the paper). 2: the left image and, stacked below it,
   // the right image warped onto the ground plane (core's GroundWarp), so
   // the network sees what the stereo matcher compares.
@@ -56,20 +56,20 @@ struct ModelInfo {
   // the variance of P(wrong | verdict) calibrated like uncertainty_threshold;
   // < 0 for models calibrated before it existed (uncertainty_threshold is used).
   double verdict_uncertainty_threshold = -1;
-  std::string training_summary;         // JSON: data, steps, validation metrics
-  std::string id;                       // file name and content hash
+  std::string training_summary;  // JSON: data, steps, validation metrics
+  std::string id;                // file name and content hash
 };
 
 enum class QueryLookup { kNearest, kBilinear };
 
 struct InferenceConfig {
-  int mc_passes = 20;       // T
-  int threads = 2;          // LibTorch intra-op threads (it defaults to 1 on this kind of machine)
-  int mean_filter = 3;      // odd window of the mean filter over each heatmap; 1 = off
-  double uncertainty_threshold = -1;  // < 0: the model's recommended value
+  int mc_passes = 20;                         // T
+  int threads = 2;                            // LibTorch intra-op threads (it defaults to 1 on this kind of machine)
+  int mean_filter = 3;                        // odd window of the mean filter over each heatmap; 1 = off
+  double uncertainty_threshold = -1;          // < 0: the model's recommended value
   double verdict_uncertainty_threshold = -1;  // gate given the verdict; < 0: the model's (verdict_threshold())
   QueryLookup lookup = QueryLookup::kNearest;
-  uint64_t seed = 0;        // dropout masks; 0 = from the clock
+  uint64_t seed = 0;           // dropout masks; 0 = from the clock
   std::string device = "cpu";  // "cpu" or "cuda" (LibTorch built with CUDA)
 };
 
@@ -79,24 +79,22 @@ struct Heatmaps {
   int rows = 0, cols = 0, patch_size = 0, stride = 0;
   std::array<cv::Mat, kNumClasses> probability;  // mean over passes
   std::array<cv::Mat, kNumClasses> variance;     // variance over passes (n - 1)
-  cv::Mat uncertainty;   // mean over classes of the variance (the paper's heatmap)
-  cv::Mat predicted;     // CV_8U, argmax class
-  cv::Mat predicted_variance;  // variance of the predicted class's probability (the gate)
+  cv::Mat uncertainty;                           // mean over classes of the variance (the paper's heatmap)
+  cv::Mat predicted;                             // CV_8U, argmax class
+  cv::Mat predicted_variance;                    // variance of the predicted class's probability (the gate)
   // Prediction::verdict_error and its variance: [0] P(FP | obstacle), [1] P(FN | free).
   std::array<cv::Mat, 2> verdict_error, verdict_error_variance;
   double compute_ms = 0;
-  cv::Point2d cell_centre(int r, int c) const {
-    return {c * stride + patch_size / 2.0, r * stride + patch_size / 2.0};
-  }
+  cv::Point2d cell_centre(int r, int c) const { return {c * stride + patch_size / 2.0, r * stride + patch_size / 2.0}; }
 };
 
 struct Prediction {
-  int predicted = 0;                          // class index
+  int predicted = 0;  // class index
   std::array<float, kNumClasses> probability{};
   std::array<float, kNumClasses> class_variance{};  // per class, over passes
-  float variance = 0;      // of the predicted class (the gate)
-  float uncertainty = 0;   // mean over classes
-  bool announced = false;  // variance <= threshold
+  float variance = 0;                               // of the predicted class (the gate)
+  float uncertainty = 0;                            // mean over classes
+  bool announced = false;                           // variance <= threshold
   // The detector's verdict at the cell is known at run time, and it leaves
   // two of the four classes possible: the question a planner asks is whether
   // that verdict is wrong. Mean and variance over the passes of
@@ -109,10 +107,10 @@ struct Prediction {
 // A prediction given the detector's verdict: TP or FP where it said
 // obstacle, TN or FN where it said free.
 struct VerdictPrediction {
-  int predicted = 0;      // class index
-  float p_wrong = 0;      // P(FP | obstacle) or P(FN | free)
-  float variance = 0;     // of p_wrong over the passes (the gate)
-  bool announced = false; // variance <= threshold
+  int predicted = 0;       // class index
+  float p_wrong = 0;       // P(FP | obstacle) or P(FN | free)
+  float variance = 0;      // of p_wrong over the passes (the gate)
+  bool announced = false;  // variance <= threshold
 };
 VerdictPrediction given_verdict(const Prediction& p, bool said_obstacle, double threshold);
 

@@ -23,29 +23,29 @@ inline constexpr double kAdamWLearningRate = 0.001, kAdamWWeightDecay = 0.05;  /
 inline constexpr double kSgdLearningRate = 0.005, kSgdWeightDecay = 5e-4;      // paper / reference; L2
 
 struct TrainConfig {
-  std::string dataset;            // dataset folder
-  std::string split_file;         // YAML: split name -> sessions
+  std::string dataset;     // dataset folder
+  std::string split_file;  // YAML: split name -> sessions
   std::string train_split = "train";
   std::string val_split = "val";
-  std::string output;             // model file to write (the best model, or the last with keep_last)
+  std::string output;  // model file to write (the best model, or the last with keep_last)
   std::string architecture = "slidenet";
-  std::string init;               // optional model file to start from (fine-tuning)
-  bool resume = false;            // continue from output + ".checkpoint" if present
+  std::string init;     // optional model file to start from (fine-tuning)
+  bool resume = false;  // continue from output + ".checkpoint" if present
 
-  int64_t steps = 4000;           // optimiser steps
+  int64_t steps = 4000;  // optimiser steps
   int batch_size = 128;
   // use_optimizer() sets the optimiser with its own learning rate and
   // weight decay; these are AdamW's.
   Optimizer optimizer = Optimizer::kAdamW;
   double learning_rate = kAdamWLearningRate;
-  double momentum = 0.9;  // paper / reference; SGD only
+  double momentum = 0.9;                    // paper / reference; SGD only
   double weight_decay = kAdamWWeightDecay;  // AdamW: per step times the learning rate; SGD: L2 in the gradient
-  int64_t warmup_steps = 200;     // linear warm-up, then cosine decay to 1% (reference: constant)
+  int64_t warmup_steps = 200;               // linear warm-up, then cosine decay to 1% (reference: constant)
   double dropout = 0.5;
   // Class-balanced sampling: each class is drawn equally often; the FN
   // class's share is multiplied by this (the reference uses 0.1 outdoors).
   double fn_weight = 1.0;
-  bool augment = true;            // photometric: brightness, contrast, gamma, channel gains, noise
+  bool augment = true;  // photometric: brightness, contrast, gamma, channel gains, noise
   // Weight of the side task (evidence_task.hpp) in the loss: regress the
   // detector's evidence stored with each sample; 0 turns it off, and
   // datasets without evidence train without it.
@@ -71,11 +71,11 @@ void use_optimizer(TrainConfig& c, Optimizer o);
 
 struct TrainStatus {
   int64_t step = 0, steps = 0;
-  double loss = 0;           // running mean
-  double accuracy = 0;       // running mean, training batches
+  double loss = 0;      // running mean
+  double accuracy = 0;  // running mean, training batches
   double learning_rate = 0;
   double patches_per_s = 0;
-  double evidence_loss = -1;  // running mean of the side task's loss (-1: off)
+  double evidence_loss = -1;            // running mean of the side task's loss (-1: off)
   double val_mean_class_accuracy = -1;  // last validation (-1 before the first)
   double best_val_mean_class_accuracy = -1;
 };
@@ -92,7 +92,7 @@ struct TrainReport {
   // its step and mean per-class accuracy are known (the checkpoint's).
   bool best_before_resume = false;
   double uncertainty_threshold = 0;
-  double val_accuracy_retained = 0;       // mean per-class accuracy of the retained val samples
+  double val_accuracy_retained = 0;  // mean per-class accuracy of the retained val samples
   // The same for the predictions given the detector's verdict (given_verdict).
   double verdict_uncertainty_threshold = 0;
   double val_verdict_accuracy_retained = 0;

@@ -30,8 +30,8 @@ bool decode(const LogEvent& event, Msg& msg) {
 struct LogProblem {
   uint64_t offset = 0;  // where the bad event (or the garbage) starts
   std::string what;
-  uint64_t skipped_bytes = 0;  // bytes skipped to the next good event, or to the end of the file
-  bool to_end = false;         // no good event follows: reading stopped here
+  uint64_t skipped_bytes = 0;    // bytes skipped to the next good event, or to the end of the file
+  bool to_end = false;           // no good event follows: reading stopped here
   std::string describe() const;  // "byte 123: what (N bytes skipped ...)"
 };
 
@@ -61,7 +61,7 @@ class LogReader {
   const std::vector<LogProblem>& problems() const { return problems_; }
   bool clean() const { return problems_.empty(); }
   const std::string& path() const { return path_; }
-  uint64_t size() const { return size_; }       // the file's size when opened
+  uint64_t size() const { return size_; }          // the file's size when opened
   uint64_t position() const { return position_; }  // bytes read or skipped so far
 
  private:

@@ -28,7 +28,7 @@ struct LogWriterOptions {
 class LogWriter {
  public:
   explicit LogWriter(std::string path, LogWriterOptions options = {});  // throws LogWriteError
-  ~LogWriter();  // closes quietly if close() was not called
+  ~LogWriter();                                                         // closes quietly if close() was not called
   LogWriter(const LogWriter&) = delete;
   LogWriter& operator=(const LogWriter&) = delete;
 

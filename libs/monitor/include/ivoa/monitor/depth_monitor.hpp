@@ -42,28 +42,28 @@
 namespace ivoa::monitor {
 
 struct DepthMonitorConfig {
-  int pixel_step = 2;                 // use every n-th depth pixel in each direction
-  double voxel_size = 0.02;           // m, voxel grid leaf size
-  double obstacle_min_height = 0.05;  // m above the ground: higher points are obstacle points
-  double obstacle_max_height = 1.0;   // m: higher points cannot hit the robot (overhangs ignored)
-  double hole_min_depth = 0.05;       // m below the ground: deeper points are hole points
-  int min_obstacle_points = 3;        // obstacle voxels within r for OBSTACLE (~12 cm^2 of surface)
-  int min_hole_points = 3;            // hole voxels within r for OBSTACLE (negative obstacle)
-  int min_hole_samples = 2;           // sample rays through the ground for OBSTACLE (negative obstacle)
-  double min_seen_fraction = 0.8;     // of the 13 ground samples, seen for FREE
-  double ground_match_tolerance = 0.03;   // m, how far a ground hit may land from its sample ...
+  int pixel_step = 2;                       // use every n-th depth pixel in each direction
+  double voxel_size = 0.02;                 // m, voxel grid leaf size
+  double obstacle_min_height = 0.05;        // m above the ground: higher points are obstacle points
+  double obstacle_max_height = 1.0;         // m: higher points cannot hit the robot (overhangs ignored)
+  double hole_min_depth = 0.05;             // m below the ground: deeper points are hole points
+  int min_obstacle_points = 3;              // obstacle voxels within r for OBSTACLE (~12 cm^2 of surface)
+  int min_hole_points = 3;                  // hole voxels within r for OBSTACLE (negative obstacle)
+  int min_hole_samples = 2;                 // sample rays through the ground for OBSTACLE (negative obstacle)
+  double min_seen_fraction = 0.8;           // of the 13 ground samples, seen for FREE
+  double ground_match_tolerance = 0.03;     // m, how far a ground hit may land from its sample ...
   double depth_noise_coefficient = 1.4e-3;  // ... plus 3 sigma of the sensor noise, sigma = k * range^2 (1/m)
 };
 
 // Evidence behind one cell's verdict (for diagnostics and the viewer).
 struct CellEvidence {
-  int obstacle_points = 0;  // voxels within r (inside the edge band) above the ground
-  int hole_points = 0;      // ... below the ground
+  int obstacle_points = 0;       // voxels within r (inside the edge band) above the ground
+  int hole_points = 0;           // ... below the ground
   int edge_obstacle_points = 0;  // voxels in the edge band around r above the ground
   int edge_hole_points = 0;      // ... below the ground
-  int samples_seen = 0;     // ground samples whose ray hit ground height
-  int samples_hidden = 0;   // ... hit something tall first
-  int samples_holes = 0;    // ... went below the ground
+  int samples_seen = 0;          // ground samples whose ray hit ground height
+  int samples_hidden = 0;        // ... hit something tall first
+  int samples_holes = 0;         // ... went below the ground
   int samples_total = 0;
 };
 

@@ -18,9 +18,9 @@
 namespace ivoa::monitor {
 
 struct PairingConfig {
-  int64_t tolerance_us = 16'667;     // max |stereo - depth| utime (1/60 s)
+  int64_t tolerance_us = 16'667;         // max |stereo - depth| utime (1/60 s)
   int64_t depth_history_us = 2'000'000;  // keep depth frames this long (stream time)
-  int64_t max_wait_us = 500'000;     // decide a pending stereo frame once stereo time moves this far past it
+  int64_t max_wait_us = 500'000;         // decide a pending stereo frame once stereo time moves this far past it
 };
 
 struct PairingCounters {

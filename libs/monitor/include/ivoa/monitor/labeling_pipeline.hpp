@@ -15,9 +15,9 @@
 namespace ivoa::monitor {
 
 struct LabeledFrame {
-  obstacle_grid_t depth_grid;      // the monitor's verdicts for the stereo frame's cells
-  introspection_labels_t labels;   // Algorithm 1
-  double monitor_ms = 0;           // time the depth verdict took
+  obstacle_grid_t depth_grid;     // the monitor's verdicts for the stereo frame's cells
+  introspection_labels_t labels;  // Algorithm 1
+  double monitor_ms = 0;          // time the depth verdict took
 };
 
 struct PipelineOutcome {

@@ -22,10 +22,10 @@ class Scene {
  public:
   // The first surface a ray meets (geometry only: no reflections, no noise).
   struct Hit {
-    double distance = 0;      // metres along the ray
-    int surface = 0;          // sim_ground_truth_t::SURFACE_*
-    Eigen::Vector3d point;    // world frame
-    Eigen::Vector3d normal;   // world frame, facing the ray
+    double distance = 0;     // metres along the ray
+    int surface = 0;         // sim_ground_truth_t::SURFACE_*
+    Eigen::Vector3d point;   // world frame
+    Eigen::Vector3d normal;  // world frame, facing the ray
   };
 
   explicit Scene(std::shared_ptr<const detail::SceneData> data);

@@ -57,47 +57,47 @@ struct ElementSpec {
     kLight,       // a ceiling light panel (indoor): position, size.x/y, intensity
   };
   struct Door {
-    double offset = 0;      // metres from the wall's `from` end to the door's near edge
-    double width = 0.9;     // metres
-    double height = 2.05;   // metres
-    std::string material;   // "" = door_wood
-    bool open = false;      // an open doorway (a gap) instead of a closed door
+    double offset = 0;     // metres from the wall's `from` end to the door's near edge
+    double width = 0.9;    // metres
+    double height = 2.05;  // metres
+    std::string material;  // "" = door_wood
+    bool open = false;     // an open doorway (a gap) instead of a closed door
   };
 
   Type type = Type::kBox;
   Eigen::Vector2d position{0, 0};
   Eigen::Vector2d end{0, 0};
   Eigen::Vector3d size{0.4, 0.4, 0.5};
-  double yaw = 0;             // radians
-  double elevation = 0;       // metres above the ground (boxes only)
-  double depth = 0.3;         // pits: metres below the ground
-  double intensity = 0;       // lights and lamp posts: emitted radiance (0 = default)
-  std::string shape = "rect"; // floor patches and pits: "rect" or "ellipse"
-  std::string material;       // "" = the element type's default
+  double yaw = 0;               // radians
+  double elevation = 0;         // metres above the ground (boxes only)
+  double depth = 0.3;           // pits: metres below the ground
+  double intensity = 0;         // lights and lamp posts: emitted radiance (0 = default)
+  std::string shape = "rect";   // floor patches and pits: "rect" or "ellipse"
+  std::string material;         // "" = the element type's default
   double baseboard_height = 0;  // walls: dark stripe height, metres (0 = none)
   std::string baseboard_material;
-  std::vector<Door> doors;      // walls
+  std::vector<Door> doors;  // walls
 
   static const char* type_name(Type type);
 };
 
 struct LayoutSpec {
   LayoutType type = LayoutType::kNone;
-  Range width{10, 10};            // x extent of the room / area / office block, metres
-  Range depth{8, 8};              // y extent, metres
+  Range width{10, 10};  // x extent of the room / area / office block, metres
+  Range depth{8, 8};    // y extent, metres
   Range corridor_width{1.8, 2.6};
   Range corridor_length{18, 28};
-  Range room_size{3.5, 6.0};      // office: side length of one room
-  Range ceiling_height{2.6, 3.0}; // indoor; also the height of generated walls
-  double door_probability = 0.5;  // chance that a wall piece gets a (closed) door
-  Range facade_height{6, 12};     // outdoor: height of the bounding facades
+  Range room_size{3.5, 6.0};       // office: side length of one room
+  Range ceiling_height{2.6, 3.0};  // indoor; also the height of generated walls
+  double door_probability = 0.5;   // chance that a wall piece gets a (closed) door
+  Range facade_height{6, 12};      // outdoor: height of the bounding facades
 };
 
 struct FloorSpec {
   std::vector<std::string> materials{"carpet_grey"};  // one is drawn per floor area
-  Range patch_count{0, 0};                             // rugs, mats, other pavements
+  Range patch_count{0, 0};                            // rugs, mats, other pavements
   std::vector<std::string> patch_materials;
-  Range patch_size{0.8, 2.5};                          // metres
+  Range patch_size{0.8, 2.5};  // metres
 };
 
 struct WallSpec {
@@ -114,24 +114,24 @@ struct ObstacleSpec {
   // bench, planter, car, cone, lamp_post, curb.
   std::vector<std::pair<std::string, double>> kinds{{"box", 1.0}};
   std::vector<std::string> materials{"cardboard"};  // for boxes, bins, ... (chairs and poles have defaults)
-  double color_jitter = 0.15;  // per-object random tint of the material colour (fraction)
-  double min_gap = 0.8;        // metres of free floor kept between obstacles (the robot must pass)
-  Range box_size{0.25, 0.8};   // metres, footprint side
-  Range box_height{0.15, 1.0}; // metres
+  double color_jitter = 0.15;                       // per-object random tint of the material colour (fraction)
+  double min_gap = 0.8;                             // metres of free floor kept between obstacles (the robot must pass)
+  Range box_size{0.25, 0.8};                        // metres, footprint side
+  Range box_height{0.15, 1.0};                      // metres
 };
 
 struct PitSpec {
   double probability = 0.0;  // chance that the scene has pits at all
   Range count{1, 1};
-  Range size{0.4, 0.9};      // metres, opening side
-  Range depth{0.2, 0.6};     // metres
+  Range size{0.4, 0.9};   // metres, opening side
+  Range depth{0.2, 0.6};  // metres
 };
 
 struct LightingSpec {
-  Range ambient{0.35, 0.6};            // indoor: irradiance from bounced light (diffuse white ~ this bright)
-  Range light_spacing{2.4, 3.6};       // indoor: ceiling panel grid, metres
-  Range light_emission{60, 110};       // indoor panels: emitted radiance
-  Range sun_elevation_deg{20, 60};     // outdoor
+  Range ambient{0.35, 0.6};         // indoor: irradiance from bounced light (diffuse white ~ this bright)
+  Range light_spacing{2.4, 3.6};    // indoor: ceiling panel grid, metres
+  Range light_emission{60, 110};    // indoor panels: emitted radiance
+  Range sun_elevation_deg{20, 60};  // outdoor
   Range sun_azimuth_deg{0, 360};
   Range sun_irradiance{250, 350};      // outdoor: irradiance of direct sun
   Range sky_irradiance{40, 70};        // outdoor: irradiance from the sky
@@ -149,10 +149,10 @@ struct PhenomenaSpec {
   Range wet_patches{0, 0};         // wet patches and puddles on the floor
   double textureless_walls = 0.5;  // a wall uses a uniform paint of the palette
   double textureless_obstacles = 0.3;
-  double dark_stripes = 0.6;       // a wall has a dark baseboard
-  double repetitive_floor = 0.3;   // a floor area uses a periodic (tile) material of the palette
-  double glare = 0.3;              // strong lights: bright panels / low sun in front / lit lamps
-  double low_light = 0.1;          // the whole session is dim (noise-dominated images)
+  double dark_stripes = 0.6;      // a wall has a dark baseboard
+  double repetitive_floor = 0.3;  // a floor area uses a periodic (tile) material of the palette
+  double glare = 0.3;             // strong lights: bright panels / low sun in front / lit lamps
+  double low_light = 0.1;         // the whole session is dim (noise-dominated images)
 };
 
 struct SceneSpec {
@@ -166,9 +166,9 @@ struct SceneSpec {
   PitSpec pits;
   LightingSpec lighting;
   PhenomenaSpec phenomena;
-  std::vector<Material> materials;     // scene-specific materials (added to the library)
-  std::vector<ElementSpec> elements;   // placed exactly, in addition to the generated ones
-  std::optional<Pose2D> start;         // robot start pose (default: drawn from the seed)
+  std::vector<Material> materials;    // scene-specific materials (added to the library)
+  std::vector<ElementSpec> elements;  // placed exactly, in addition to the generated ones
+  std::optional<Pose2D> start;        // robot start pose (default: drawn from the seed)
 };
 
 // Loads a YAML scene file. Throws SceneSpecError naming the file and key

@@ -7,17 +7,17 @@
 namespace ivoa::sim {
 
 struct CameraSensorConfig {
-  double full_well = 9000;         // electrons at saturation
-  double read_noise = 5.0;         // electrons rms
-  double sensitivity = 900;        // electrons per (radiance unit x ms)
+  double full_well = 9000;   // electrons at saturation
+  double read_noise = 5.0;   // electrons rms
+  double sensitivity = 900;  // electrons per (radiance unit x ms)
   double min_exposure_ms = 0.02;
-  double max_exposure_ms = 25.0;   // a 30 Hz camera cannot integrate longer
-  double max_gain = 12.0;          // analog gain reached once exposure is at its maximum
-  double target_level = 0.20;      // auto exposure: mean signal / full well
-  double gamma = 1.0 / 2.2;        // camera output curve
-  double right_sensitivity = 1.03; // right sensor's response relative to the left
-  bool bayer = true;               // RGGB colour filter + bilinear demosaic, as a Bayer camera and its driver
-  bool motion_blur = true;         // smear along rows by yaw rate x exposure time
+  double max_exposure_ms = 25.0;    // a 30 Hz camera cannot integrate longer
+  double max_gain = 12.0;           // analog gain reached once exposure is at its maximum
+  double target_level = 0.20;       // auto exposure: mean signal / full well
+  double gamma = 1.0 / 2.2;         // camera output curve
+  double right_sensitivity = 1.03;  // right sensor's response relative to the left
+  bool bayer = true;                // RGGB colour filter + bilinear demosaic, as a Bayer camera and its driver
+  bool motion_blur = true;          // smear along rows by yaw rate x exposure time
 };
 
 struct DepthSensorConfig {

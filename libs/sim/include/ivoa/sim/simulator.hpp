@@ -18,13 +18,13 @@
 namespace ivoa::sim {
 
 struct SimFrame {
-  cv::Mat left, right;       // CV_8UC3 BGR raw (distorted), rig size (960x600)
-  cv::Mat depth_mm;          // CV_16UC1 depth sensor image, 0 = invalid
-  cv::Mat truth_depth;       // CV_32FC1 left camera planar depth in metres, +inf where nothing
-  cv::Mat truth_surface;     // CV_8UC1 sim_ground_truth_t::SURFACE_*
-  cv::Mat truth_phenomena;   // CV_8UC1 OR of sim_ground_truth_t::PHENOMENON_*
-  double exposure_ms = 0;    // the cameras' exposure time for this frame
-  double gain = 1;           // and analog gain
+  cv::Mat left, right;      // CV_8UC3 BGR raw (distorted), rig size (960x600)
+  cv::Mat depth_mm;         // CV_16UC1 depth sensor image, 0 = invalid
+  cv::Mat truth_depth;      // CV_32FC1 left camera planar depth in metres, +inf where nothing
+  cv::Mat truth_surface;    // CV_8UC1 sim_ground_truth_t::SURFACE_*
+  cv::Mat truth_phenomena;  // CV_8UC1 OR of sim_ground_truth_t::PHENOMENON_*
+  double exposure_ms = 0;   // the cameras' exposure time for this frame
+  double gain = 1;          // and analog gain
   // Where render() spent its time (milliseconds of this thread's CPU time).
   struct Timings {
     double left_ms = 0, right_ms = 0;  // ray casting and shading per camera

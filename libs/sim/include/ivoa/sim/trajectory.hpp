@@ -23,8 +23,8 @@ struct TrajectoryConfig {
   double approach_probability = 0.6;  // chance, when a new cruise leg starts, to head for the nearest obstacle
   double approach_gap_min = 0.30;     // metres between footprint and obstacle where an approach stops
   double approach_gap_max = 0.50;
-  double min_clearance = 0.10;        // metres, hard limit between footprint and anything
-  double step = 0.02;                 // s, integration step
+  double min_clearance = 0.10;  // metres, hard limit between footprint and anything
+  double step = 0.02;           // s, integration step
 };
 
 class Trajectory {

@@ -17,9 +17,9 @@ enum class TruthState {
 // max_height). Otherwise it is kHole if any pit's opening intersects the
 // disc, and kFree if not.
 struct TruthQuery {
-  double radius = 0.10;      // metres, the IVOA safety radius r
-  double min_height = 0.05;  // metres, solids lower than this are traversable
-  double max_height = 1.0e9; // metres, solids entirely above this are ignored
+  double radius = 0.10;       // metres, the IVOA safety radius r
+  double min_height = 0.05;   // metres, solids lower than this are traversable
+  double max_height = 1.0e9;  // metres, solids entirely above this are ignored
 };
 
 const char* to_string(TruthState state);

@@ -59,32 +59,32 @@ struct JppConfig {
 
 // OpenCV StereoSGBM on the rectified pair (data_notes.md §5 settings).
 struct SgbmConfig {
-  double rect_scale = 0.5;      // rectified size relative to the raw image
-  std::string mode = "3way";    // "3way" (fastest), "sgbm", "hh"
-  int min_disparity = 0;        // pixels
-  int num_disparities = 96;     // pixels, multiple of 16; 96 at 480x300 sees the ground down to 0.38 m (0.12 m baseline)
-  int block_size = 5;           // pixels, odd
-  int p1 = 0;                   // smoothness penalties; 0 = 8*block^2 and 32*block^2
+  double rect_scale = 0.5;    // rectified size relative to the raw image
+  std::string mode = "3way";  // "3way" (fastest), "sgbm", "hh"
+  int min_disparity = 0;      // pixels
+  int num_disparities = 96;   // pixels, multiple of 16; 96 at 480x300 sees the ground down to 0.38 m (0.12 m baseline)
+  int block_size = 5;         // pixels, odd
+  int p1 = 0;                 // smoothness penalties; 0 = 8*block^2 and 32*block^2
   int p2 = 0;
-  int uniqueness_ratio = 10;    // percent
+  int uniqueness_ratio = 10;      // percent
   int speckle_window_size = 100;  // pixels
-  int speckle_range = 2;        // disparity units
-  int disp12_max_diff = 1;      // left-right check, pixels (< 0 disables)
+  int speckle_range = 2;          // disparity units
+  int disp12_max_diff = 1;        // left-right check, pixels (< 0 disables)
   int pre_filter_cap = 63;
 };
 
 // Dense detector: SGBM points in the robot frame, classified by height.
 struct DenseConfig {
   SgbmConfig sgbm;
-  double min_obstacle_height = 0.05;  // m: points with z in [min, max] are obstacles
-  double max_obstacle_height = 0.60;  // m: taller points are above the robot, ignored
-  double hole_depth = 0.05;           // m: points below z = -hole_depth (reflections, holes) are obstacles
-  int min_obstacle_points = 10;       // obstacle (or below-ground) points within r for OBSTACLE,
+  double min_obstacle_height = 0.05;   // m: points with z in [min, max] are obstacles
+  double max_obstacle_height = 0.60;   // m: taller points are above the robot, ignored
+  double hole_depth = 0.05;            // m: points below z = -hole_depth (reflections, holes) are obstacles
+  int min_obstacle_points = 10;        // obstacle (or below-ground) points within r for OBSTACLE,
   double min_obstacle_fraction = 0.1;  // and at least this share of the valid points within r
                                        // (near the robot a disc holds ~1000 points; stray mismatches
                                        // at occlusion edges add a few dozen)
-  int min_ground_points = 10;         // ground points within r (and no obstacle) for FREE
-  double max_range = 8.0;             // m: points farther than this from the robot (in x or y) are ignored
+  int min_ground_points = 10;          // ground points within r (and no obstacle) for FREE
+  double max_range = 8.0;              // m: points farther than this from the robot (in x or y) are ignored
 };
 
 struct DetectorConfig {

@@ -85,7 +85,6 @@ class JppcDetector : public ObstacleDetector {
   // (empty: whole image).
   void prepare(cv::Rect left_region, cv::Rect right_region);
 
-
   RigCalibration rig_;
   JppConfig config_;
   StereoRectification rect_;

@@ -13,8 +13,8 @@
 namespace ivoa::logger {
 
 struct ReceiveBufferResult {
-  int sockets = 0;      // UDP sockets found on the port
-  int bytes = 0;        // the kernel's buffer size afterwards (it books double what was asked)
+  int sockets = 0;        // UDP sockets found on the port
+  int bytes = 0;          // the kernel's buffer size afterwards (it books double what was asked)
   bool as_asked = false;  // the buffer is at least the size asked for
 };
 

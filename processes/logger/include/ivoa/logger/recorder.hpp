@@ -21,7 +21,7 @@ namespace ivoa::logger {
 
 struct RecorderOptions {
   SplitLogOptions log;
-  std::string channels = ".*";  // include regex
+  std::string channels = ".*";            // include regex
   std::string exclude = "LCM_SELF_TEST";  // exclude regex, empty = none; LCM_SELF_TEST is LCM's start-up probe
   uint64_t max_queue_bytes = 1024ull << 20;
   double max_write_bytes_per_s = 0;  // cap on the disk write rate, 0 = none

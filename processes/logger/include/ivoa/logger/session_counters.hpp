@@ -8,9 +8,9 @@
 namespace ivoa::logger {
 
 struct SessionCounters {
-  std::atomic<int64_t> received{0};       // messages accepted by the channel filter
-  std::atomic<int64_t> written{0};        // events written to the log (calibration copies excluded)
-  std::atomic<int64_t> dropped{0};        // refused because the queue was full (disk too slow)
+  std::atomic<int64_t> received{0};  // messages accepted by the channel filter
+  std::atomic<int64_t> written{0};   // events written to the log (calibration copies excluded)
+  std::atomic<int64_t> dropped{0};   // refused because the queue was full (disk too slow)
   std::atomic<int64_t> dropped_bytes{0};
   std::atomic<int64_t> bytes_written{0};  // payload and channel bytes, calibration copies included
   std::atomic<int64_t> files{0};          // log files opened

@@ -30,9 +30,9 @@ struct LoggerIdentity {
 struct SidecarContent {
   const LoggerIdentity* identity = nullptr;
   std::string log_path;
-  int part = 0;                    // index of this file in a split session
-  bool complete = false;           // closed normally
-  std::string error;               // why it was closed early, if it was
+  int part = 0;           // index of this file in a split session
+  bool complete = false;  // closed normally
+  std::string error;      // why it was closed early, if it was
   bool starts_with_calibration = false;
   uint64_t file_bytes = 0;
   const logio::LogSummary* summary = nullptr;

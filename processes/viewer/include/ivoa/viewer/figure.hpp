@@ -29,8 +29,8 @@ struct FigureOptions {
 // What the grid panel draws at one cell.
 struct CellMark {
   float u = 0, v = 0;
-  int ring_label = -1;    // introspection_labels_t.LABEL_* (TP 0, TN 1, FP 2, FN 3); -1 none
-  int ring_verdict = -1;  // obstacle_grid_t.STATE_* when only one grid judged the cell; -1 none
+  int ring_label = -1;      // introspection_labels_t.LABEL_* (TP 0, TN 1, FP 2, FN 3); -1 none
+  int ring_verdict = -1;    // obstacle_grid_t.STATE_* when only one grid judged the cell; -1 none
   bool none_label = false;  // the labeller could not judge the cell (LABEL_NONE)
 };
 struct PredictionMark {

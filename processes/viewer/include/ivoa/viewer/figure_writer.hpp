@@ -13,11 +13,11 @@
 namespace ivoa::viewer {
 
 struct OutputOptions {
-  std::string out_dir;        // "" = no PNG files
-  int every_frames = 1;       // a PNG every N figures ...
-  double every_seconds = 0;   // ... and at least S seconds apart
-  int max_images = 100;       // keep the newest N PNGs written (0 = all)
-  std::string video;          // "" = no video; an .avi file (MJPG)
+  std::string out_dir;       // "" = no PNG files
+  int every_frames = 1;      // a PNG every N figures ...
+  double every_seconds = 0;  // ... and at least S seconds apart
+  int max_images = 100;      // keep the newest N PNGs written (0 = all)
+  std::string video;         // "" = no video; an .avi file (MJPG)
   double video_fps = 5;
 };
 

@@ -29,8 +29,8 @@ struct ViewerOptions {
   MatcherOptions matcher;
   FigureOptions figure;
   OutputOptions output;
-  bool window = false;      // show a window where there is a display
-  int64_t max_figures = 0;  // > 0: done() after this many figures
+  bool window = false;       // show a window where there is a display
+  int64_t max_figures = 0;   // > 0: done() after this many figures
   bool every_frame = false;  // logs: draw every frame in order, on the bus thread (reading waits)
 };
 
@@ -47,7 +47,7 @@ class ViewerNode {
   void finish();
 
   int64_t figures() const { return figures_.load(); }
-  bool done() const;              // max_figures reached, the window asked to quit, or an output failed
+  bool done() const;  // max_figures reached, the window asked to quit, or an output failed
   bool output_failed() const { return output_failed_.load(); }
   bool window_shown() const { return window_.open(); }
 
@@ -61,9 +61,9 @@ class ViewerNode {
   Bus& bus_;
   Heartbeat& heartbeat_;
   ViewerOptions options_;
-  FrameMatcher matcher_;         // bus thread only
-  FigureWriter writer_;          // worker thread only (after construction)
-  FigureWindow window_;          // bus thread only
+  FrameMatcher matcher_;  // bus thread only
+  FigureWriter writer_;   // worker thread only (after construction)
+  FigureWindow window_;   // bus thread only
   LatestMailbox<FrameSet> frames_;
   LatestMailbox<cv::Mat> display_;  // drawn figures for the window
   std::atomic<int64_t> figures_{0};

@@ -29,8 +29,8 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-inline constexpr int kDefaultStopSignal = 2;               // SIGINT, as procman
-inline constexpr double kDefaultStopTimeAllowedS = 7.0;    // as procman
+inline constexpr int kDefaultStopSignal = 2;             // SIGINT, as procman
+inline constexpr double kDefaultStopTimeAllowedS = 7.0;  // as procman
 
 struct CommandSpec {
   std::string name;

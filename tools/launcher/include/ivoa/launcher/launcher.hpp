@@ -12,16 +12,16 @@
 namespace ivoa::launcher {
 
 struct LauncherOptions {
-  std::string script;                // run this script instead of starting everything
-  double duration_s = 0;             // > 0: stop everything after this long
-  bool once = false;                 // stop everything once every non-respawn command has ended
-  std::vector<std::string> until;    // stop everything once these commands have ended
-  double grace_s = 1.0;              // after --once/--until holds, let the others finish this long
-  std::string status_file;           // written at exit: JSON if it ends in .json, else the table
-  double status_every_s = 5.0;       // table period when not redrawing a terminal (0: only at the end)
-  bool redraw = false;               // live table on a terminal (else lines + periodic table)
-  std::string output_dir;            // also append each command's output to DIR/NAME.log
-  std::string lcm_url;               // heartbeats; "none" to run without LCM
+  std::string script;              // run this script instead of starting everything
+  double duration_s = 0;           // > 0: stop everything after this long
+  bool once = false;               // stop everything once every non-respawn command has ended
+  std::vector<std::string> until;  // stop everything once these commands have ended
+  double grace_s = 1.0;            // after --once/--until holds, let the others finish this long
+  std::string status_file;         // written at exit: JSON if it ends in .json, else the table
+  double status_every_s = 5.0;     // table period when not redrawing a terminal (0: only at the end)
+  bool redraw = false;             // live table on a terminal (else lines + periodic table)
+  std::string output_dir;          // also append each command's output to DIR/NAME.log
+  std::string lcm_url;             // heartbeats; "none" to run without LCM
   std::string status_channel = "PROCESS_STATUS";
   SupervisorOptions supervisor;
 };

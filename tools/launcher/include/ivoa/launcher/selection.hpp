@@ -15,9 +15,9 @@ inline constexpr const char* kDefaultHost = "localhost";
 inline constexpr const char* kAnyHost = "*";
 
 struct Selection {
-  std::string host = kDefaultHost;   // kAnyHost: every command
-  std::vector<std::string> groups;   // empty: all
-  std::vector<std::string> skip;     // command or group names
+  std::string host = kDefaultHost;  // kAnyHost: every command
+  std::vector<std::string> groups;  // empty: all
+  std::vector<std::string> skip;    // command or group names
 };
 
 struct SelectedCommands {

@@ -17,7 +17,7 @@
 namespace ivoa::launcher {
 
 enum class RunState {
-  kIdle,        // never started
+  kIdle,  // never started
   kRunning,
   kStopping,    // stop signal sent (or what was left of its group is being stopped)
   kRespawning,  // ended; waiting for its back-off before starting again
@@ -34,10 +34,10 @@ struct CommandStatus {
   std::string name, group, host;
   bool auto_respawn = false;
   RunState state = RunState::kIdle;
-  int pid = 0;              // current (or last) process, also its process group
-  int restarts = 0;         // starts after the first
-  int exit_code = -1;       // of the last run; -1 if none yet or it died of a signal
-  int exit_signal = 0;      // signal that ended the last run, 0 if none
+  int pid = 0;                  // current (or last) process, also its process group
+  int restarts = 0;             // starts after the first
+  int exit_code = -1;           // of the last run; -1 if none yet or it died of a signal
+  int exit_signal = 0;          // signal that ended the last run, 0 if none
   bool stop_requested = false;  // the last end was asked for (stop, restart, shutdown)
   bool killed = false;          // a stop needed SIGKILL after stop_time_allowed
   bool failed = false;          // the last run ended on its own with a non-zero code or a signal
@@ -46,11 +46,11 @@ struct CommandStatus {
 };
 
 struct SupervisorOptions {
-  double respawn_delay_s = 1.0;      // first back-off; doubles on each quick failure
+  double respawn_delay_s = 1.0;  // first back-off; doubles on each quick failure
   double respawn_max_delay_s = 30.0;
-  double healthy_after_s = 60.0;     // a run at least this long resets the back-off
+  double healthy_after_s = 60.0;                   // a run at least this long resets the back-off
   std::map<std::string, std::string> environment;  // added to every command's environment
-  bool reap_orphans = false;  // also reap any child (set when this process is a child subreaper)
+  bool reap_orphans = false;                       // also reap any child (set when this process is a child subreaper)
 };
 
 // A line a command wrote (without its newline), and launcher events about it.
