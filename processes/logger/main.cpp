@@ -205,6 +205,64 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
   return code != ivoa::kExitOk ? code : end_code;
 }
 
+// The flags, in the units a user types (MB, MB/s); RecorderOptions holds bytes.
+struct LoggerFlags {
+  std::string file = "ivoa-%Y%m%d-%H%M%S.lcmlog", ready_file;
+  double split_mb = 0, max_queue_mb = 1024, max_write_mb_s = 0, socket_buffer_mb = 64;
+  bool force = false, no_sidecar = false;
+  RecorderOptions options;
+};
+
+void add_logger_options(CLI::App& app, LoggerFlags& f) {
+  app.add_option("file", f.file, "log file name; strftime patterns (%Y, %H, ...) are expanded at start")
+      ->capture_default_str();
+  app.add_option("-c,--channels", f.options.channels, "record channels matching this regex (whole name)")
+      ->capture_default_str();
+  app.add_option("-x,--exclude", f.options.exclude,
+                 "but not those matching this regex (the default skips the probe every LCM process sends at start)")
+      ->capture_default_str();
+  app.add_option("--split-mb", f.split_mb,
+                 "start a new numbered file (FILE.00, FILE.01, ...) before one passes this size")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--calibration-channel", f.options.log.calibration_channel,
+                 "always recorded, and copied to the start of every split file so each is self-contained "
+                 "(empty: none)")
+      ->capture_default_str();
+  app.add_option("--max-queue-mb", f.max_queue_mb,
+                 "memory for messages waiting for the disk; beyond it new ones are "
+                 "dropped and counted")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-write-mb-s", f.max_write_mb_s, "cap the disk write rate (0 = none)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--socket-buffer-mb", f.socket_buffer_mb,
+                 "kernel receive buffer for LCM's udpm socket, past net.core.rmem_max where permitted "
+                 "(CAP_NET_ADMIN); 0 = as LCM sets it")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1000.0));  // the kernel takes an int of bytes, and books twice that
+  app.add_flag("-f,--force", f.force, "overwrite existing files");
+  app.add_flag("--no-sidecar", f.no_sidecar, "do not write FILE.json next to each log");
+  app.add_option("--ready-file", f.ready_file, "create this file once subscribed (lets scripts start publishers)");
+}
+
+// The recorder's options from the flags; false if the file name pattern
+// expands to nothing.
+bool fill_recorder_options(LoggerFlags& f) {
+  RecorderOptions& o = f.options;
+  o.log.path = expand_time_pattern(f.file);
+  if (o.log.path.empty()) {
+    spdlog::error("the file name pattern '{}' expands to nothing", f.file);
+    return false;
+  }
+  o.log.split_bytes = static_cast<uint64_t>(f.split_mb * 1e6);
+  o.log.overwrite = f.force;
+  o.log.sidecars = !f.no_sidecar;
+  o.log.identity = {"ivoa-logger", IVOA_VERSION, IVOA_GIT_DESCRIBE, hostname(), "", o.channels, o.exclude};
+  o.max_queue_bytes = static_cast<uint64_t>(f.max_queue_mb * 1e6);
+  o.max_write_bytes_per_s = f.max_write_mb_s * 1e6;
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -214,55 +272,12 @@ int main(int argc, char** argv) {
       "2 bad flags, 4 cannot write the log (the file written so far stays readable)."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
-  std::string file = "ivoa-%Y%m%d-%H%M%S.lcmlog", ready_file;
-  RecorderOptions options;
-  double split_mb = 0, max_queue_mb = 1024, max_write_mb_s = 0, socket_buffer_mb = 64;
-  bool force = false, no_sidecar = false;
-  app.add_option("file", file, "log file name; strftime patterns (%Y, %H, ...) are expanded at start")
-      ->capture_default_str();
-  app.add_option("-c,--channels", options.channels, "record channels matching this regex (whole name)")
-      ->capture_default_str();
-  app.add_option("-x,--exclude", options.exclude,
-                 "but not those matching this regex (the default skips the probe every LCM process sends at start)")
-      ->capture_default_str();
-  app.add_option("--split-mb", split_mb,
-                 "start a new numbered file (FILE.00, FILE.01, ...) before one passes this size")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--calibration-channel", options.log.calibration_channel,
-                 "always recorded, and copied to the start of every split file so each is self-contained "
-                 "(empty: none)")
-      ->capture_default_str();
-  app.add_option("--max-queue-mb", max_queue_mb,
-                 "memory for messages waiting for the disk; beyond it new ones are "
-                 "dropped and counted")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  app.add_option("--max-write-mb-s", max_write_mb_s, "cap the disk write rate (0 = none)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--socket-buffer-mb", socket_buffer_mb,
-                 "kernel receive buffer for LCM's udpm socket, past net.core.rmem_max where permitted "
-                 "(CAP_NET_ADMIN); 0 = as LCM sets it")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1000.0));  // the kernel takes an int of bytes, and books twice that
-  app.add_flag("-f,--force", force, "overwrite existing files");
-  app.add_flag("--no-sidecar", no_sidecar, "do not write FILE.json next to each log");
-  app.add_option("--ready-file", ready_file, "create this file once subscribed (lets scripts start publishers)");
+  LoggerFlags flags;
+  add_logger_options(app, flags);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("logger", common.log_level);
   ivoa::install_stop_handlers();
   std::signal(SIGXFSZ, SIG_IGN);  // over a file size limit, write() fails with EFBIG instead
-
-  options.log.path = expand_time_pattern(file);
-  if (options.log.path.empty()) {
-    spdlog::error("the file name pattern '{}' expands to nothing", file);
-    return ivoa::kExitUsage;
-  }
-  options.log.split_bytes = static_cast<uint64_t>(split_mb * 1e6);
-  options.log.overwrite = force;
-  options.log.sidecars = !no_sidecar;
-  options.log.identity = {"ivoa-logger",    IVOA_VERSION,   IVOA_GIT_DESCRIBE, hostname(), "",
-                          options.channels, options.exclude};
-  options.max_queue_bytes = static_cast<uint64_t>(max_queue_mb * 1e6);
-  options.max_write_bytes_per_s = max_write_mb_s * 1e6;
-  return record(common, std::move(options), ready_file, socket_buffer_mb);
+  if (!fill_recorder_options(flags)) return ivoa::kExitUsage;
+  return record(common, std::move(flags.options), flags.ready_file, flags.socket_buffer_mb);
 }

@@ -1,5 +1,7 @@
 // ivoa-stereo-detector: the stereo obstacle detector (JPP-C or dense SGBM)
 // as a process. STEREO_IMAGES + RIG_CALIBRATION in, OBSTACLES_STEREO out.
+#include <optional>
+
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
@@ -12,52 +14,61 @@
 #include "ivoa/stereo/options.hpp"
 #include "stereo_detector_node.hpp"
 
-int main(int argc, char** argv) {
-  CLI::App app{"Stereo obstacle detector: per query-grid cell FREE / OBSTACLE / UNKNOWN from each stereo pair"};
-  ivoa::CommonOptions common;
-  ivoa::add_common_options(app, common);
+namespace {
+
+struct DetectorFlags {
   ivoa::StereoDetectorOptions options;
   std::string calibration_file, status_channel{ivoa::channels::kProcessStatus};
-  app.add_option("--model", options.model, "perception model")
+};
+
+void add_detector_flags(CLI::App& app, DetectorFlags& f) {
+  ivoa::StereoDetectorOptions& o = f.options;
+  app.add_option("--model", o.model, "perception model")
       ->capture_default_str()
       ->check(CLI::IsMember(ivoa::stereo::detector_names()));
-  app.add_option("--calibration", calibration_file,
+  app.add_option("--calibration", f.calibration_file,
                  "rig calibration file to start with (RIG_CALIBRATION messages replace it)");
-  app.add_option("--stereo-channel", options.stereo_channel)->capture_default_str()->group("Channels");
-  app.add_option("--calibration-channel", options.calibration_channel)->capture_default_str()->group("Channels");
-  app.add_option("--output-channel", options.output_channel)->capture_default_str()->group("Channels");
-  app.add_option("--status-channel", status_channel)->capture_default_str()->group("Channels");
-  app.add_option("--max-frames", options.max_frames, "exit after publishing this many grids (0: run until stopped)")
+  app.add_option("--stereo-channel", o.stereo_channel)->capture_default_str()->group("Channels");
+  app.add_option("--calibration-channel", o.calibration_channel)->capture_default_str()->group("Channels");
+  app.add_option("--output-channel", o.output_channel)->capture_default_str()->group("Channels");
+  app.add_option("--status-channel", f.status_channel)->capture_default_str()->group("Channels");
+  app.add_option("--max-frames", o.max_frames, "exit after publishing this many grids (0: run until stopped)")
       ->capture_default_str();
-  ivoa::add_query_grid_options(app, options.grid);
-  ivoa::stereo::add_detector_options(app, options.detector);
-  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
-  ivoa::init_logging("stereo-detector", common.log_level);
+  ivoa::add_query_grid_options(app, o.grid);
+  ivoa::stereo::add_detector_options(app, o.detector);
+}
 
+// Checks the detector's settings and loads the starting calibration, if
+// any; on failure logs why and returns the exit code.
+std::optional<int> prepare(const DetectorFlags& f, std::optional<ivoa::RigCalibration>& initial_rig) {
   try {
-    ivoa::stereo::validate(options.detector.jpp);
-    ivoa::stereo::validate(options.detector.dense);
+    ivoa::stereo::validate(f.options.detector.jpp);
+    ivoa::stereo::validate(f.options.detector.dense);
   } catch (const std::invalid_argument& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;
   }
-  std::optional<ivoa::RigCalibration> initial_rig;
-  if (!calibration_file.empty()) {
-    try {
-      initial_rig = ivoa::load_rig_calibration(calibration_file);
-    } catch (const ivoa::CalibrationError& e) {
-      spdlog::error("{}", e.what());
-      return ivoa::kExitBadInput;
-    }
-  }
+  if (f.calibration_file.empty()) return std::nullopt;
   try {
-    ivoa::Bus bus(common.lcm_url);
-    ivoa::Heartbeat heartbeat(bus, "stereo_detector", status_channel);
+    initial_rig = ivoa::load_rig_calibration(f.calibration_file);
+  } catch (const ivoa::CalibrationError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitBadInput;
+  }
+  return std::nullopt;
+}
+
+int run_detector(const std::string& lcm_url, const DetectorFlags& f,
+                 const std::optional<ivoa::RigCalibration>& initial_rig) {
+  const ivoa::StereoDetectorOptions& o = f.options;
+  try {
+    ivoa::Bus bus(lcm_url);
+    ivoa::Heartbeat heartbeat(bus, "stereo_detector", f.status_channel);
     bus.on_decode_error([&](const std::string& what) { heartbeat.bad_input(what); });
-    ivoa::StereoDetectorNode node(bus, heartbeat, options);
+    ivoa::StereoDetectorNode node(bus, heartbeat, o);
     if (initial_rig) node.set_calibration(*initial_rig);
     node.start();
-    spdlog::info("{} on {} -> {} ({})", options.model, options.stereo_channel, options.output_channel, bus.url());
+    spdlog::info("{} on {} -> {} ({})", o.model, o.stereo_channel, o.output_channel, bus.url());
     const int code = ivoa::run_until_stopped(bus, &heartbeat, [&] {
       if (node.finished()) ivoa::request_stop();
     });
@@ -69,4 +80,19 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
     return ivoa::kExitFailure;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Stereo obstacle detector: per query-grid cell FREE / OBSTACLE / UNKNOWN from each stereo pair"};
+  ivoa::CommonOptions common;
+  ivoa::add_common_options(app, common);
+  DetectorFlags flags;
+  add_detector_flags(app, flags);
+  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  ivoa::init_logging("stereo-detector", common.log_level);
+  std::optional<ivoa::RigCalibration> initial_rig;
+  if (const auto code = prepare(flags, initial_rig)) return *code;
+  return run_detector(common.lcm_url, flags, initial_rig);
 }

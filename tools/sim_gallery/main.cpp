@@ -41,56 +41,68 @@ cv::Mat fit(const cv::Mat& image, int width, int height) {
   return out;
 }
 
+struct GalleryOptions {
+  std::vector<std::string> scenes;
+  std::string output = "docs/sim/gallery.png";
+  uint64_t seed = 1;
+  int tile_width = 400;
+  double start_time = 5.0;
+};
+
+void add_gallery_options(CLI::App& app, GalleryOptions& o) {
+  app.add_option("--scene", o.scenes, "scene files (default: every shipped scene)");
+  app.add_option("--seed", o.seed, "scene and trajectory seed")->capture_default_str();
+  app.add_option("--output", o.output, "PNG to write")->capture_default_str();
+  app.add_option("--tile-width", o.tile_width, "width of each picture in pixels")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 4000));
+  app.add_option("--time", o.start_time, "seconds into the drive to start looking for a frame")->capture_default_str();
+}
+
+// One scene's row: left (with what was rendered), right, depth, truth.
+// Throws on a scene file that cannot be loaded.
+cv::Mat gallery_row(const std::string& file, const GalleryOptions& o) {
+  const int w = o.tile_width, h = o.tile_width * 600 / 960;
+  const Scene scene = generate_scene(load_scene_spec(file), o.seed);
+  const Simulator simulator(scene);
+  Trajectory trajectory(scene, o.seed);
+  const double t = interesting_time(trajectory, scene, o.start_time);
+  RenderRequest request;
+  request.stereo_pose = request.depth_pose = trajectory.pose_at(t);
+  request.frame_index = static_cast<uint64_t>(t * 30);
+  request.motion = trajectory.twist_at(t);
+  const SimFrame f = simulator.render(request);
+  char info[160];
+  std::snprintf(info, sizeof info, "%s seed %llu t=%.1fs  exp %.2f ms gain %.1f", scene.name().c_str(),
+                static_cast<unsigned long long>(o.seed), t, f.exposure_ms, f.gain);
+  spdlog::info("{}", info);
+  const cv::Mat tiles[] = {
+      label(fit(f.left, w, h), std::string(info)), label(fit(f.right, w, h), "right"),
+      label(fit(colorize_depth(f.depth_mm), w, h), "depth sensor (mm)"),
+      label(fit(colorize_truth(f.truth_surface, f.truth_phenomena), w, h), "ground truth: surfaces + phenomena")};
+  cv::Mat row;
+  cv::hconcat(tiles, 4, row);
+  return row;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Writes a gallery picture of simulated frames (left, right, depth, ground truth) from several scenes"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
-  std::vector<std::string> scenes;
-  std::string output = "docs/sim/gallery.png";
-  uint64_t seed = 1;
-  int tile_width = 400;
-  double start_time = 5.0;
-  app.add_option("--scene", scenes, "scene files (default: every shipped scene)");
-  app.add_option("--seed", seed, "scene and trajectory seed")->capture_default_str();
-  app.add_option("--output", output, "PNG to write")->capture_default_str();
-  app.add_option("--tile-width", tile_width, "width of each picture in pixels")->capture_default_str();
-  app.add_option("--time", start_time, "seconds into the drive to start looking for a frame")->capture_default_str();
+  GalleryOptions o;
+  add_gallery_options(app, o);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("sim-gallery", common.log_level);
-  if (scenes.empty())
+  if (o.scenes.empty())
     for (const char* name : {"indoor_office", "home", "corridor", "polished_lobby", "warehouse", "outdoor_campus",
                              "sidewalk", "wet_parking_lot", "night_plaza"})
-      scenes.push_back(std::string(IVOA_SIM_SCENES_DIR) + "/" + name + ".yaml");
+      o.scenes.push_back(std::string(IVOA_SIM_SCENES_DIR) + "/" + name + ".yaml");
 
-  const int tile_height = tile_width * 600 / 960;
   std::vector<cv::Mat> rows;
   try {
-    for (const auto& file : scenes) {
-      const Scene scene = generate_scene(load_scene_spec(file), seed);
-      const Simulator simulator(scene);
-      Trajectory trajectory(scene, seed);
-      const double t = interesting_time(trajectory, scene, start_time);
-      const Pose2D pose = trajectory.pose_at(t);
-      RenderRequest request;
-      request.stereo_pose = request.depth_pose = pose;
-      request.frame_index = static_cast<uint64_t>(t * 30);
-      request.motion = trajectory.twist_at(t);
-      const SimFrame f = simulator.render(request);
-      char info[160];
-      std::snprintf(info, sizeof info, "%s seed %llu t=%.1fs  exp %.2f ms gain %.1f", scene.name().c_str(),
-                    static_cast<unsigned long long>(seed), t, f.exposure_ms, f.gain);
-      const cv::Mat tiles[] = {label(fit(f.left, tile_width, tile_height), std::string(info)),
-                               label(fit(f.right, tile_width, tile_height), "right"),
-                               label(fit(colorize_depth(f.depth_mm), tile_width, tile_height), "depth sensor (mm)"),
-                               label(fit(colorize_truth(f.truth_surface, f.truth_phenomena), tile_width, tile_height),
-                                     "ground truth: surfaces + phenomena")};
-      cv::Mat row;
-      cv::hconcat(tiles, 4, row);
-      rows.push_back(row);
-      spdlog::info("{}", info);
-    }
+    for (const auto& file : o.scenes) rows.push_back(gallery_row(file, o));
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitBadInput;
@@ -98,10 +110,10 @@ int main(int argc, char** argv) {
   rows.push_back(truth_legend(rows.front().cols));
   cv::Mat gallery;
   cv::vconcat(rows, gallery);
-  if (!cv::imwrite(output, gallery)) {
-    spdlog::error("cannot write {}", output);
+  if (!cv::imwrite(o.output, gallery)) {
+    spdlog::error("cannot write {}", o.output);
     return ivoa::kExitIoError;
   }
-  spdlog::info("wrote {} ({}x{})", output, gallery.cols, gallery.rows);
+  spdlog::info("wrote {} ({}x{})", o.output, gallery.cols, gallery.rows);
   return ivoa::kExitOk;
 }
