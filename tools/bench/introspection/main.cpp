@@ -64,16 +64,14 @@ double time_ms(F f, int runs) {
   return median(t);
 }
 
-std::string write_model(const std::string& architecture, const std::string& dir, int views = 1,
-                        double patch_scale = 0) {
+// A network with random weights, saved as a model file.
+std::string write_model(const std::string& architecture, const std::string& dir, int views = 1) {
   auto net = make_network(architecture, 0.5, views);
   ModelInfo info;
   info.architecture = architecture;
   info.input_size = input_size_of(architecture);
   info.views = views;
-  info.patch_scale = patch_scale;
-  const std::string path =
-      dir + "/bench_" + architecture + std::to_string(views) + (patch_scale > 0 ? "_scaled" : "") + ".pt";
+  const std::string path = dir + "/bench_" + architecture + std::to_string(views) + ".pt";
   save_model(*net, info, path);
   return path;
 }
@@ -179,8 +177,8 @@ std::vector<cv::Mat> patch_sample(const cv::Mat& frame, int rows, int cols, int 
 
 struct InferenceTimes {
   int rows = 0, cols = 0, near_cells = 0;
-  double ours = 0, two_view = 0, scaled = 0, alex = 0, reference = 0;  // ms per frame
-  std::string model_name;                                              // the trained model, timed as `scaled`
+  double ours = 0, two_view = 0, trained = 0, alex = 0, reference = 0;  // ms per frame
+  std::string model_name;                                               // the trained model, timed as `trained`
 };
 
 void print_inference(const InferenceTimes& t, int passes, int threads, int reference_patches) {
@@ -190,12 +188,12 @@ void print_inference(const InferenceTimes& t, int passes, int threads, int refer
               t.ours, 1000.0 / t.ours);
   std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", "ours, two views: ground warp + slidenet on 6 channels",
               t.two_view, 1000.0 / t.two_view);
-  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", t.model_name.c_str(), t.scaled, 1000.0 / t.scaled);
+  std::printf("  %-58s %10.1f ms/frame  (%.1f Hz)\n", t.model_name.c_str(), t.trained, 1000.0 / t.trained);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "alexnet-224, trunk once per patch, head x T batched",
               t.alex, reference_patches);
   std::printf("  %-58s %10.1f ms/frame  (from %d patches)\n", "reference: alexnet-224, whole network x T per patch",
               t.reference, reference_patches);
-  const double worst_ms = std::max({t.ours, t.two_view, t.scaled});
+  const double worst_ms = std::max({t.ours, t.two_view, t.trained});
   std::printf(
       "  speed-up over the reference: %.0fx (one view), %.0fx (two views); budget 100 ms: %s (%.2f of budget)\n",
       t.reference / t.ours, t.reference / t.two_view, worst_ms <= 100.0 ? "met" : "NOT met", worst_ms / 100.0);
@@ -253,7 +251,7 @@ void time_trained_model(const cv::Mat& frame, const BenchOptions& o, const Infer
                  (info.views > 1 ? "s" : "") +
                  (query_cells.empty() ? "" : ", + " + std::to_string(t.near_cells) + " near cells' squares");
   introspection::Heatmaps h;
-  t.scaled = time_ms(
+  t.trained = time_ms(
       [&] {
         const cv::Mat input = info.views == 2 ? warp.stack(frame, frame) : frame;
         h = model->run(input);
