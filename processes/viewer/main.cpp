@@ -2,6 +2,9 @@
 // ground grid (label or verdict rings, prediction dots), the P(FP)+P(FN)
 // heatmap and the uncertainty heatmap; shows them in a window where there
 // is a display (--window), and writes PNGs (--out-dir) and/or a video (--video).
+#include <optional>
+#include <string>
+
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
@@ -67,6 +70,39 @@ void add_channel_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   app.add_option("--introspection-channel", o.introspection_channel)->capture_default_str()->group(g);
 }
 
+// Whether to open a window; nullopt (after saying why) when the viewer would
+// show nothing at all.
+std::optional<bool> choose_window(const ivoa::viewer::ViewerOptions& options) {
+  std::string why_no_window;
+  const bool window = options.window && ivoa::viewer::window_possible(&why_no_window);
+  if (options.output.out_dir.empty() && options.output.video.empty() && !window) {
+    spdlog::error("nothing to show{}: give --out-dir DIR and/or --video FILE.avi",
+                  options.window ? " (" + why_no_window + ")" : std::string());
+    return std::nullopt;
+  }
+  return window;
+}
+
+// Draws until stopped (or, offline, until the log ends); the exit code.
+int run_viewer(const std::string& lcm_url, const ivoa::viewer::ViewerOptions& options, bool window, bool offline) {
+  ivoa::Bus bus(lcm_url);
+  ivoa::Heartbeat heartbeat(bus, "viewer");
+  ivoa::viewer::ViewerNode node(bus, heartbeat, options);
+  spdlog::info("listening on {}{}{}{}", bus.url(),
+               options.output.out_dir.empty() ? "" : "; PNGs in " + options.output.out_dir,
+               options.output.video.empty() ? "" : "; video " + options.output.video, window ? "; window" : "");
+  const int code = ivoa::run_until_stopped(
+      bus, &heartbeat,
+      [&] {
+        node.tick();
+        if (node.done()) ivoa::request_stop();
+      },
+      50, offline);
+  node.finish();
+  spdlog::info("{} figures drawn", node.figures());
+  return node.output_failed() ? ivoa::kExitIoError : code;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -86,30 +122,10 @@ int main(int argc, char** argv) {
   if (offline && app.get_option("--every-frame")->count() == 0) options.every_frame = true;
   ivoa::install_stop_handlers();
 
-  std::string why_no_window;
-  const bool window = options.window && ivoa::viewer::window_possible(&why_no_window);
-  if (options.output.out_dir.empty() && options.output.video.empty() && !window) {
-    spdlog::error("nothing to show{}: give --out-dir DIR and/or --video FILE.avi",
-                  options.window ? " (" + why_no_window + ")" : std::string());
-    return ivoa::kExitUsage;
-  }
+  const std::optional<bool> window = choose_window(options);
+  if (!window) return ivoa::kExitUsage;
   try {
-    ivoa::Bus bus(common.lcm_url);
-    ivoa::Heartbeat heartbeat(bus, "viewer");
-    ivoa::viewer::ViewerNode node(bus, heartbeat, options);
-    spdlog::info("listening on {}{}{}{}", bus.url(),
-                 options.output.out_dir.empty() ? "" : "; PNGs in " + options.output.out_dir,
-                 options.output.video.empty() ? "" : "; video " + options.output.video, window ? "; window" : "");
-    const int code = ivoa::run_until_stopped(
-        bus, &heartbeat,
-        [&] {
-          node.tick();
-          if (node.done()) ivoa::request_stop();
-        },
-        50, offline);
-    node.finish();
-    spdlog::info("{} figures drawn", node.figures());
-    return node.output_failed() ? ivoa::kExitIoError : code;
+    return run_viewer(common.lcm_url, options, *window, offline);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitFailure;

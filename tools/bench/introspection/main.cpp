@@ -240,10 +240,10 @@ void add_bench_options(CLI::App& app, BenchOptions& o) {
 // The trained model on the input it was trained for: the right view warped
 // onto the ground if it has two, and the near cells' own squares if its
 // patches are footprint-scaled. Throws ModelError on a bad file.
-void time_trained_model(const cv::Mat& frame, const BenchOptions& o, const InferenceConfig& config, InferenceTimes& t) {
+void time_trained_model(const cv::Mat& frame, const GroundWarp& warp, const BenchOptions& o,
+                        const InferenceConfig& config, InferenceTimes& t) {
   const auto model = IntrospectionModel::load(o.model, config);
   const ModelInfo& info = model->info();
-  const GroundWarp warp(sim::make_sim_rig());
   std::vector<IntrospectionModel::CellPatch> query_cells;
   if (info.patch_scale > 0) query_cells = default_query_cells(frame.size());
   for (const auto& cell : query_cells) t.near_cells += cell.side > 100;
@@ -275,7 +275,7 @@ InferenceTimes time_ours(const cv::Mat& frame, const BenchOptions& o, const Infe
   const GroundWarp warp(sim::make_sim_rig());
   const auto two_view = IntrospectionModel::load(write_model("slidenet", dir, 2), config);
   t.two_view = time_ms([&] { h = two_view->run(warp.stack(frame, frame)); }, o.runs);
-  time_trained_model(frame, o, config, t);
+  time_trained_model(frame, warp, o, config, t);
   return t;
 }
 
