@@ -27,69 +27,112 @@ struct Flags {
   bool no_packet_resend = false;
 };
 
-void add_options(CLI::App& app, Flags& f) {
-  ivoa::add_common_options(app, f.common);
+// Which cameras, and the image they deliver.
+void add_camera_options(CLI::App& app, Flags& f) {
+  const char* g = "Cameras";
   app.add_option("--left", f.left, "left camera: IP address, Aravis id (Vendor-Model-Serial), serial number or MAC")
-      ->required();
-  app.add_option("--right", f.right, "right camera: IP address, Aravis id, serial number or MAC")->required();
-  app.add_option("--rig", f.rig_path, "rig calibration file (OpenCV YAML, see example_rig.yaml)")->required();
+      ->required()
+      ->group(g);
+  app.add_option("--right", f.right, "right camera: IP address, Aravis id, serial number or MAC")->required()->group(g);
+  app.add_option("--rig", f.rig_path, "rig calibration file (OpenCV YAML, see example_rig.yaml)")->required()->group(g);
   auto& c = f.camera;
   app.add_option("--pixel-format", c.pixel_format,
                  "GenICam pixel format: BayerRG8, BayerBG8, BayerGB8, BayerGR8, Mono8")
-      ->capture_default_str();
-  app.add_option("--width", c.width, "image width, pixels (0 = keep the camera's)")->capture_default_str();
-  app.add_option("--height", c.height, "image height, pixels (0 = keep the camera's)")->capture_default_str();
-  app.add_option("--offset-x", c.offset_x, "region of interest origin, pixels")->capture_default_str();
-  app.add_option("--offset-y", c.offset_y, "region of interest origin, pixels")->capture_default_str();
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--width", c.width, "image width, pixels (0 = keep the camera's)")->capture_default_str()->group(g);
+  app.add_option("--height", c.height, "image height, pixels (0 = keep the camera's)")->capture_default_str()->group(g);
+  app.add_option("--offset-x", c.offset_x, "region of interest origin, pixels")->capture_default_str()->group(g);
+  app.add_option("--offset-y", c.offset_y, "region of interest origin, pixels")->capture_default_str()->group(g);
   app.add_option("--frame-rate", c.frame_rate_hz, "frames per second (free-running, or the software-trigger rate)")
       ->capture_default_str()
-      ->check(CLI::Range(0.1, 500.0));
+      ->check(CLI::Range(0.1, 500.0))
+      ->group(g);
   app.add_option("--exposure-us", c.exposure_us, "fixed exposure, microseconds (0 = continuous auto exposure)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::NonNegativeNumber)
+      ->group(g);
   app.add_option("--gain", c.gain, "fixed gain in camera units, dB on FLIR (negative = continuous auto gain)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--trigger", c.trigger, "none (free-running), software, or a hardware line such as Line0")
+      ->capture_default_str()
+      ->group(g);
+}
+
+// How frames travel from the cameras (GigE tuning) and how they are stamped.
+void add_transport_options(CLI::App& app, Flags& f) {
+  const char* g = "Transport";
+  auto& c = f.camera;
   app.add_option("--packet-size", c.packet_size,
                  "GigE packet size, bytes: 9000 with jumbo frames (MTU 9000), 1400 without; 0 = negotiate")
       ->capture_default_str()
-      ->check(CLI::Range(0, 16384));
+      ->check(CLI::Range(0, 16384))
+      ->group(g);
   app.add_option("--packet-delay-ns", c.packet_delay_ns, "GigE inter-packet delay, ns (0 = keep the camera's)")
-      ->capture_default_str();
-  app.add_flag("--no-packet-resend", f.no_packet_resend, "never ask a GigE camera to resend lost packets");
+      ->capture_default_str()
+      ->group(g);
+  app.add_flag("--no-packet-resend", f.no_packet_resend, "never ask a GigE camera to resend lost packets")->group(g);
   app.add_option("--throughput-limit", c.throughput_limit,
                  "DeviceLinkThroughputLimit, bytes/s, when both cameras share one link (0 = keep the camera's)")
-      ->capture_default_str();
-  app.add_option("--trigger", c.trigger, "none (free-running), software, or a hardware line such as Line0")
-      ->capture_default_str();
-  app.add_option("--buffers", c.buffers, "stream buffers per camera")->capture_default_str()->check(CLI::Range(2, 64));
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--buffers", c.buffers, "stream buffers per camera")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 64))
+      ->group(g);
   app.add_option("--timestamps", f.timestamps,
                  "pair by: mapped (each camera's clock mapped onto the host's: no receive jitter), host (receive "
                  "time), device (the cameras' clocks as they are: only for PTP-synchronised cameras)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"mapped", "host", "device"}));
+      ->check(CLI::IsMember({"mapped", "host", "device"}))
+      ->group(g);
+}
+
+// Pairing, recovery from a lost camera, and what is published where.
+void add_driver_options(CLI::App& app, Flags& f) {
+  const char* g = "Pairing, recovery and publishing";
   auto& d = f.driver;
   app.add_option("--output", f.output, "published pixels: raw (the camera's Bayer/mono, smallest), bgr or gray")
       ->capture_default_str()
-      ->check(CLI::IsMember({"raw", "bgr", "gray"}));
+      ->check(CLI::IsMember({"raw", "bgr", "gray"}))
+      ->group(g);
   app.add_option("--pair-tolerance-ms", d.pair_tolerance_ms,
                  "max left/right time difference of a pair, ms (0 = half the frame period)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group(g);
   app.add_option("--frame-timeout", d.worker.frame_timeout_s, "seconds without a frame before a camera is reopened")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(g);
   app.add_option("--reconnect-initial", d.worker.backoff.initial_s, "first wait between reopen attempts, seconds")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group(g);
   app.add_option("--reconnect-max", d.worker.backoff.max_s, "longest wait between reopen attempts, seconds")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group(g);
   app.add_option("--startup-timeout", d.startup_timeout_s,
                  "exit with an error if a camera has not opened after this many seconds (0 = wait forever)")
-      ->capture_default_str();
-  app.add_option("--stereo-channel", d.stereo_channel, "channel for ivoa.stereo_image_t")->capture_default_str();
-  app.add_option("--rig-channel", d.rig_channel, "channel for ivoa.rig_calibration_t")->capture_default_str();
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--stereo-channel", d.stereo_channel, "channel for ivoa.stereo_image_t")
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--rig-channel", d.rig_channel, "channel for ivoa.rig_calibration_t")->capture_default_str()->group(g);
   app.add_option("--rig-rate", d.rig_rate_hz, "RIG_CALIBRATION publications per second")
       ->capture_default_str()
-      ->check(CLI::Range(1.0, 100.0));
-  app.add_option("--source-name", d.source_name, "the 'source' field of published pairs")->capture_default_str();
+      ->check(CLI::Range(1.0, 100.0))
+      ->group(g);
+  app.add_option("--source-name", d.source_name, "the 'source' field of published pairs")
+      ->capture_default_str()
+      ->group(g);
+}
+
+void add_options(CLI::App& app, Flags& f) {
+  ivoa::add_common_options(app, f.common);
+  add_camera_options(app, f);
+  add_transport_options(app, f);
+  add_driver_options(app, f);
 }
 
 }  // namespace
