@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -127,6 +129,61 @@ std::string score_json(const LiveScore& s) {
       s.compute.frames, s.compute.median, s.compute.p90, s.compute.max);
 }
 
+struct ScoreCommandLine {
+  std::vector<std::string> files;
+  std::string json_path;
+  bool resync = false;
+
+  // The logs, for messages: "FILE" or "FILE (and N more)".
+  std::string logs() const {
+    return files.size() == 1 ? files[0] : files[0] + " (and " + std::to_string(files.size() - 1) + " more)";
+  }
+};
+
+void add_score_options(CLI::App& app, ScoreCommandLine& cl) {
+  app.add_option("files", cl.files, "log files, in recording order (a split session is read as one)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_flag("--resync", cl.resync, "skip damaged parts and read on (default: stop at the first damage)");
+  app.add_option("--json", cl.json_path, "also write the counts and figures as JSON to this file");
+}
+
+// Reads every log into `s`; false (after saying why) when one is unreadable
+// or the logs hold nothing to score.
+bool score_logs(const ScoreCommandLine& cl, LiveScore& s, ReadCounts& counts) {
+  tools::LiveScorer scorer;
+  try {
+    for (const auto& path : cl.files) read_log(path, cl.resync, scorer, counts);
+  } catch (const logio::LogReadError& e) {
+    spdlog::error("{}", e.what());
+    return false;
+  }
+  s = scorer.finish();
+  if (s.predicted_frames > 0 && s.labelled_frames > 0) return true;
+  spdlog::error("{}: no {} messages to score{}", cl.logs(),
+                s.predicted_frames == 0 ? "INTROSPECTION" : "INTROSPECTION_LABELS",
+                s.predicted_frames == 0 ? " (was ivoa-introspection running when it was recorded?)"
+                                        : " (was ivoa-depth-monitor running, with a depth sensor?)");
+  return false;
+}
+
+// Prints the score and writes the JSON; the exit code.
+int report(const ScoreCommandLine& cl, const LiveScore& s, const ReadCounts& counts) {
+  print_score(s);
+  if (counts.undecodable || counts.damaged_files)
+    std::printf("skipped: %lld undecodable messages; %lld damaged file(s) (warnings above)\n",
+                static_cast<long long>(counts.undecodable), static_cast<long long>(counts.damaged_files));
+  if (!cl.json_path.empty() && !(std::ofstream(cl.json_path) << score_json(s))) {
+    spdlog::error("{}: cannot write", cl.json_path);
+    return kExitIoError;
+  }
+  if (s.scored_frames == 0) {
+    spdlog::error("{}: no frame has both INTROSPECTION and INTROSPECTION_LABELS (their utimes never match)", cl.logs());
+    return kExitBadInput;
+  }
+  return kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -136,45 +193,12 @@ int main(int argc, char** argv) {
       "JSON cannot be written."};
   CommonOptions common;
   add_common_options(app, common);
-  std::vector<std::string> files;
-  std::string json_path;
-  bool resync = false;
-  app.add_option("files", files, "log files, in recording order (a split session is read as one)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  app.add_flag("--resync", resync, "skip damaged parts and read on (default: stop at the first damage)");
-  app.add_option("--json", json_path, "also write the counts and figures as JSON to this file");
+  ScoreCommandLine cl;
+  add_score_options(app, cl);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("live-score", common.log_level);
-  tools::LiveScorer scorer;
+  LiveScore s;
   ReadCounts counts;
-  try {
-    for (const auto& path : files) read_log(path, resync, scorer, counts);
-  } catch (const logio::LogReadError& e) {
-    spdlog::error("{}", e.what());
-    return kExitBadInput;
-  }
-  const LiveScore s = scorer.finish();
-  const std::string logs =
-      files.size() == 1 ? files[0] : files[0] + " (and " + std::to_string(files.size() - 1) + " more)";
-  if (s.predicted_frames == 0 || s.labelled_frames == 0) {
-    spdlog::error("{}: no {} messages to score{}", logs,
-                  s.predicted_frames == 0 ? "INTROSPECTION" : "INTROSPECTION_LABELS",
-                  s.predicted_frames == 0 ? " (was ivoa-introspection running when it was recorded?)"
-                                          : " (was ivoa-depth-monitor running, with a depth sensor?)");
-    return kExitBadInput;
-  }
-  print_score(s);
-  if (counts.undecodable || counts.damaged_files)
-    std::printf("skipped: %lld undecodable messages; %lld damaged file(s) (warnings above)\n",
-                static_cast<long long>(counts.undecodable), static_cast<long long>(counts.damaged_files));
-  if (!json_path.empty() && !(std::ofstream(json_path) << score_json(s))) {
-    spdlog::error("{}: cannot write", json_path);
-    return kExitIoError;
-  }
-  if (s.scored_frames == 0) {
-    spdlog::error("{}: no frame has both INTROSPECTION and INTROSPECTION_LABELS (their utimes never match)", logs);
-    return kExitBadInput;
-  }
-  return kExitOk;
+  if (!score_logs(cl, s, counts)) return kExitBadInput;
+  return report(cl, s, counts);
 }
