@@ -115,22 +115,17 @@ bool sequences_complete(const LogSummary& summary) {
   return ok;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{
-      "Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage.\n"
-      "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 3 a log is damaged or "
-      "unreadable, 4 the --json file cannot be written."};
-  ivoa::CommonOptions common;
-  ivoa::add_common_options(app, common);
+struct CheckCommandLine {
   std::vector<std::string> files, expect;
   std::string json_path;
   bool resync = false, no_gaps = false;
-  app.add_option("files", files, "log files, in recording order (a split session is checked as one)")->required();
-  app.add_flag("--resync", resync, "skip damaged parts and read on (default: stop at the first damage)");
-  app.add_option("--json", json_path, "also write the results as JSON to this file");
-  app.add_option("--expect", expect, "CHANNEL=N: fail unless the log has exactly N messages on CHANNEL")
+};
+
+void add_check_options(CLI::App& app, CheckCommandLine& cl) {
+  app.add_option("files", cl.files, "log files, in recording order (a split session is checked as one)")->required();
+  app.add_flag("--resync", cl.resync, "skip damaged parts and read on (default: stop at the first damage)");
+  app.add_option("--json", cl.json_path, "also write the results as JSON to this file");
+  app.add_option("--expect", cl.expect, "CHANNEL=N: fail unless the log has exactly N messages on CHANNEL")
       ->delimiter(',')
       ->check([](const std::string& s) {
         try {
@@ -140,25 +135,43 @@ int main(int argc, char** argv) {
           return std::string(e.what());
         }
       });
-  app.add_flag("--no-gaps", no_gaps, "fail if a sequence-numbered channel misses or repeats a message");
-  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
-  ivoa::init_logging("log-check", common.log_level);
+  app.add_flag("--no-gaps", cl.no_gaps, "fail if a sequence-numbered channel misses or repeats a message");
+}
 
+// Reads and prints every file, then the summary, the JSON and the verdict
+// (the exit code).
+int check_logs(const CheckCommandLine& cl) {
   LogSummary summary;
   std::vector<FileResult> results;
   bool damaged = false;
-  for (const auto& path : files) {
-    results.push_back(check_file(path, resync, summary));
+  for (const auto& path : cl.files) {
+    results.push_back(check_file(path, cl.resync, summary));
     print_file(results.back());
     damaged = damaged || !results.back().error.empty() || !results.back().problems.empty();
   }
   std::printf("\n%s", summary.table().c_str());
-  if (!json_path.empty() && !(std::ofstream(json_path) << results_json(results, summary))) {
-    spdlog::error("cannot write {}", json_path);
+  if (!cl.json_path.empty() && !(std::ofstream(cl.json_path) << results_json(results, summary))) {
+    spdlog::error("cannot write {}", cl.json_path);
     return ivoa::kExitIoError;
   }
-  const bool expected = expectations_hold(ivoa::parse_channel_counts(expect, "--expect"), summary);
-  const bool complete = !no_gaps || sequences_complete(summary);
+  const bool expected = expectations_hold(ivoa::parse_channel_counts(cl.expect, "--expect"), summary);
+  const bool complete = !cl.no_gaps || sequences_complete(summary);
   if (damaged) return ivoa::kExitBadInput;
   return expected && complete ? ivoa::kExitOk : ivoa::kExitFailure;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage.\n"
+      "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 3 a log is damaged or "
+      "unreadable, 4 the --json file cannot be written."};
+  ivoa::CommonOptions common;
+  ivoa::add_common_options(app, common);
+  CheckCommandLine cl;
+  add_check_options(app, cl);
+  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  ivoa::init_logging("log-check", common.log_level);
+  return check_logs(cl);
 }
