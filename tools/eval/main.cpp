@@ -56,25 +56,46 @@ struct OutputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& session, const std::string& split,
-                introspection::IntrospectionModel& model, Progress& progress, double& done) {
-  constexpr size_t kBatch = 256;
-  const auto& info = session.info();
-  if (info.patch_scale != model.info().patch_scale)
-    throw dataset::DatasetError(fmt::format(
-        "session {} has patch scale {}, model {} was trained on {} (build the dataset "
-        "with --patch-scale {})",
-        info.session, info.patch_scale, model.info().id, model.info().patch_scale, model.info().patch_scale));
-  if (info.views != model.info().views)
+// Refuses a session whose patches the model was not trained on; warns
+// where thinned TN cells bias the overall figures.
+void check_session_fits(const dataset::SessionInfo& info, const introspection::ModelInfo& model) {
+  if (info.patch_scale != model.patch_scale)
+    throw dataset::DatasetError(
+        fmt::format("session {} has patch scale {}, model {} was trained on {} (build the dataset "
+                    "with --patch-scale {})",
+                    info.session, info.patch_scale, model.id, model.patch_scale, model.patch_scale));
+  if (info.views != model.views)
     throw dataset::DatasetError("session " + info.session + " has " + std::to_string(info.views) +
-                                " view(s) per patch, model " + model.info().id + " takes " +
-                                std::to_string(model.info().views) + " (build the dataset with --views " +
-                                std::to_string(model.info().views) + ")");
+                                " view(s) per patch, model " + model.id + " takes " + std::to_string(model.views) +
+                                " (build the dataset with --views " + std::to_string(model.views) + ")");
   if (info.tn_kept < 1)
     spdlog::warn(
         "session {} stores {:.0f} % of its TN cells (ivoa-dataset --keep-tn): its per-class accuracies stand, "
         "but overall accuracy and failure precision count too few TN; rebuild it with every TN to report those",
         info.session, 100 * info.tn_kept);
+}
+
+// One predictions.csv row (kHeader's columns).
+void write_row(std::FILE* csv, const dataset::SessionInfo& info, const std::string& split, size_t index,
+               const dataset::SampleRecord& s, const introspection::Prediction& p,
+               const introspection::VerdictPrediction& v) {
+  std::fprintf(
+      csv,
+      "%s,%s,%s,%zu,%lld,%d,%.3f,%.3f,%.1f,%.1f,%d,%d,%.5f,%.5f,%.5f,%.5f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,"
+      "%d,%d,%.5f,%.6g\n",
+      info.session.c_str(), info.environment.c_str(), split.c_str(), index, static_cast<long long>(s.utime), s.cell,
+      s.x, s.y, s.u, s.v, s.label, p.predicted, p.probability[0], p.probability[1], p.probability[2], p.probability[3],
+      p.variance, p.uncertainty, p.class_variance[0], p.class_variance[1], p.class_variance[2], p.class_variance[3],
+      s.phenomena, s.phenomenon, s.surface, s.stereo_state, v.predicted, v.p_wrong, v.variance);
+}
+
+// Every sample of the session through the model, in batches: a row each in
+// the CSV and its FC2 embedding in the embeddings file.
+void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& session, const std::string& split,
+                introspection::IntrospectionModel& model, Progress& progress, double& done) {
+  constexpr size_t kBatch = 256;
+  const auto& info = session.info();
+  check_session_fits(info, model.info());
   for (size_t begin = 0; begin < session.size(); begin += kBatch) {
     const size_t end = std::min(session.size(), begin + kBatch);
     std::vector<cv::Mat> patches;
@@ -86,15 +107,7 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
       // Given the verdict the detector recorded for this cell, as the live process sees it.
       const auto v =
           introspection::given_verdict(p, s.stereo_state == obstacle_grid_t::STATE_OBSTACLE, model.verdict_threshold());
-      std::fprintf(
-          csv,
-          "%s,%s,%s,%zu,%lld,%d,%.3f,%.3f,%.1f,%.1f,%d,%d,%.5f,%.5f,%.5f,%.5f,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%d,"
-          "%d,%d,%.5f,%.6g\n",
-          info.session.c_str(), info.environment.c_str(), split.c_str(), i, static_cast<long long>(s.utime), s.cell,
-          s.x, s.y, s.u, s.v, s.label, p.predicted, p.probability[0], p.probability[1], p.probability[2],
-          p.probability[3], p.variance, p.uncertainty, p.class_variance[0], p.class_variance[1], p.class_variance[2],
-          p.class_variance[3], s.phenomena, s.phenomenon, s.surface, s.stereo_state, v.predicted, v.p_wrong,
-          v.variance);
+      write_row(csv, info, split, i, s, p, v);
       const auto& e = out.embeddings[i - begin];
       std::fwrite(e.data(), sizeof(float), e.size(), emb);
     }
