@@ -2,7 +2,6 @@
 // lcm-spy shows, for ssh sessions and CI). Can also wait for expected
 // message counts and fail if they do not arrive.
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -65,10 +64,7 @@ int watch(const std::string& lcm_url, const Watch& w) {
     }
   }
   std::printf("%s", stats.table().c_str());
-  if (!w.json_path.empty() && !(std::ofstream(w.json_path) << stats.json())) {
-    spdlog::error("cannot write {}", w.json_path);
-    return ivoa::kExitIoError;
-  }
+  if (!ivoa::write_text_file(w.json_path, stats.json())) return ivoa::kExitIoError;
   if (!met) {
     spdlog::error("expected message counts did not arrive");
     return ivoa::kExitFailure;

@@ -3,7 +3,6 @@
 // README.md). Several files (a split session, in order) are one recording.
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -173,10 +172,7 @@ int report(const ScoreCommandLine& cl, const LiveScore& s, const ReadCounts& cou
   if (counts.undecodable || counts.damaged_files)
     std::printf("skipped: %lld undecodable messages; %lld damaged file(s) (warnings above)\n",
                 static_cast<long long>(counts.undecodable), static_cast<long long>(counts.damaged_files));
-  if (!cl.json_path.empty() && !(std::ofstream(cl.json_path) << score_json(s))) {
-    spdlog::error("{}: cannot write", cl.json_path);
-    return kExitIoError;
-  }
+  if (!write_text_file(cl.json_path, score_json(s))) return kExitIoError;
   if (s.scored_frames == 0) {
     spdlog::error("{}: no frame has both INTROSPECTION and INTROSPECTION_LABELS (their utimes never match)", cl.logs());
     return kExitBadInput;

@@ -3,7 +3,6 @@
 // For a damaged or truncated log: the byte offset of the first bad event
 // and how many good events come before it. Several files (a split
 // session, in order) are checked as one recording.
-#include <fstream>
 #include <map>
 #include <stdexcept>
 
@@ -150,10 +149,7 @@ int check_logs(const CheckCommandLine& cl) {
     damaged = damaged || !results.back().error.empty() || !results.back().problems.empty();
   }
   std::printf("\n%s", summary.table().c_str());
-  if (!cl.json_path.empty() && !(std::ofstream(cl.json_path) << results_json(results, summary))) {
-    spdlog::error("cannot write {}", cl.json_path);
-    return ivoa::kExitIoError;
-  }
+  if (!ivoa::write_text_file(cl.json_path, results_json(results, summary))) return ivoa::kExitIoError;
   const bool expected = expectations_hold(ivoa::parse_channel_counts(cl.expect, "--expect"), summary);
   const bool complete = !cl.no_gaps || sequences_complete(summary);
   if (damaged) return ivoa::kExitBadInput;

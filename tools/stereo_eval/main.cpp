@@ -3,7 +3,6 @@
 // a rectified pair, e.g. Middlebury "Aloe" from Debian's opencv-doc.
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -117,10 +116,7 @@ std::vector<ivoa::stereo_eval::ModelScore> score_models(const CommandLine& cl, c
 int write_outputs(const CommandLine& cl, const std::vector<ivoa::stereo_eval::ModelScore>& scores,
                   const cv::Mat& overlay) {
   std::printf("%s", ivoa::stereo_eval::to_table(scores).c_str());
-  if (!cl.json_path.empty() && !(std::ofstream(cl.json_path) << ivoa::stereo_eval::to_json(scores, cl.scoring))) {
-    spdlog::error("cannot write {}", cl.json_path);
-    return ivoa::kExitIoError;
-  }
+  if (!ivoa::write_text_file(cl.json_path, ivoa::stereo_eval::to_json(scores, cl.scoring))) return ivoa::kExitIoError;
   if (!overlay.empty() && !cv::imwrite(cl.overlay_path, overlay)) {
     spdlog::error("cannot write {}", cl.overlay_path);
     return ivoa::kExitIoError;

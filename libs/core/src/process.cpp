@@ -60,11 +60,12 @@ int run_until_stopped(Bus& bus, Heartbeat* heartbeat, const std::function<void()
   return kExitOk;
 }
 
-bool write_ready_file(const std::string& path) {
-  if (path.empty()) return true;
-  if (std::ofstream(path) << "ready\n") return true;
-  spdlog::error("cannot write the ready file {}", path);
+bool write_text_file(const std::string& path, const std::string& text) {
+  if (path.empty() || std::ofstream(path) << text) return true;
+  spdlog::error("cannot write {}", path);
   return false;
 }
+
+bool write_ready_file(const std::string& path) { return write_text_file(path, "ready\n"); }
 
 }  // namespace ivoa

@@ -35,9 +35,12 @@ void add_common_options(CLI::App& app, CommonOptions& options);
 // to use, otherwise returns -1 and the caller continues.
 int parse_command_line(CLI::App& app, int argc, char** argv);
 
+// Writes `text` to `path` (nothing if `path` is empty), for outputs such as
+// --json. False, with an error naming the file logged, if it cannot be written.
+bool write_text_file(const std::string& path, const std::string& text);
+
 // --ready-file: creates `path` (nothing if empty) to tell a waiting script
-// that this process has subscribed or is serving. False, with an error
-// logged, if it cannot be written.
+// that this process has subscribed or is serving (write_text_file).
 bool write_ready_file(const std::string& path);
 
 // Sets up spdlog (stderr, one pattern for every process).

@@ -1,0 +1,36 @@
+// The small file outputs every tool shares (--json, --ready-file).
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "ivoa/core/process.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa {
+namespace {
+
+std::string contents(const std::string& path) {
+  std::ostringstream s;
+  s << std::ifstream(path).rdbuf();
+  return s.str();
+}
+
+TEST(WriteTextFile, WritesTheTextOrSaysItCannot) {
+  test::TempDir dir;
+  EXPECT_TRUE(write_text_file(dir.file("out.json"), "{\"a\": 1}\n"));
+  EXPECT_EQ(contents(dir.file("out.json")), "{\"a\": 1}\n");
+  EXPECT_TRUE(write_text_file("", "nothing asked, nothing written"));
+  EXPECT_FALSE(write_text_file(dir.file("no_such_folder/out.json"), "x"));
+}
+
+TEST(WriteReadyFile, CreatesTheFileScriptsWaitFor) {
+  test::TempDir dir;
+  EXPECT_TRUE(write_ready_file(dir.file("ready")));
+  EXPECT_EQ(contents(dir.file("ready")), "ready\n");
+  EXPECT_TRUE(write_ready_file(""));
+  EXPECT_FALSE(write_ready_file(dir.file("no_such_folder/ready")));
+}
+
+}  // namespace
+}  // namespace ivoa
