@@ -35,6 +35,27 @@ void add_verdict(introspection_t& msg, const introspection::Prediction& p, int8_
   msg.query_verdict_announced.push_back(v.announced ? 1 : 0);
 }
 
+// The grid's cells in view, in grid order, with their predictions and,
+// where the grid is this frame's, the prediction given its verdict.
+void add_query_cells(introspection_t& msg, const introspection::IntrospectionModel& model, const obstacle_grid_t& grid,
+                     const std::vector<introspection::Prediction>& predictions, bool grid_is_this_frames) {
+  size_t next = 0;
+  for (size_t i = 0; i < grid.state.size(); ++i) {
+    if (!grid.in_image[i]) continue;
+    const auto& p = predictions.at(next++);
+    msg.query_x.push_back(grid.x[i]);
+    msg.query_y.push_back(grid.y[i]);
+    msg.query_u.push_back(grid.u[i]);
+    msg.query_v.push_back(grid.v[i]);
+    msg.query_class.push_back(static_cast<int8_t>(p.predicted));
+    msg.query_probability.push_back(p.probability[static_cast<size_t>(p.predicted)]);
+    msg.query_uncertainty.push_back(p.variance);
+    msg.query_announced.push_back(p.announced ? 1 : 0);
+    add_verdict(msg, p, grid_is_this_frames ? grid.state[i] : obstacle_grid_t::STATE_UNKNOWN,
+                model.verdict_threshold());
+  }
+}
+
 }  // namespace
 
 void RecentGrids::put(const obstacle_grid_t& grid) {
@@ -102,23 +123,7 @@ introspection_t make_introspection_message(const introspection::IntrospectionMod
   msg.prob_fn = flatten(h.probability[3]);
   msg.uncertainty = flatten(h.uncertainty);
   msg.class_variance = flatten(h.predicted_variance);
-  if (grid) {
-    size_t next = 0;
-    for (size_t i = 0; i < grid->state.size(); ++i) {
-      if (!grid->in_image[i]) continue;
-      const auto& p = predictions.at(next++);
-      msg.query_x.push_back(grid->x[i]);
-      msg.query_y.push_back(grid->y[i]);
-      msg.query_u.push_back(grid->u[i]);
-      msg.query_v.push_back(grid->v[i]);
-      msg.query_class.push_back(static_cast<int8_t>(p.predicted));
-      msg.query_probability.push_back(p.probability[static_cast<size_t>(p.predicted)]);
-      msg.query_uncertainty.push_back(p.variance);
-      msg.query_announced.push_back(p.announced ? 1 : 0);
-      add_verdict(msg, p, grid_is_this_frames ? grid->state[i] : obstacle_grid_t::STATE_UNKNOWN,
-                  model.verdict_threshold());
-    }
-  }
+  if (grid) add_query_cells(msg, model, *grid, predictions, grid_is_this_frames);
   msg.compute_ms = h.compute_ms;
   return msg;
 }
