@@ -22,6 +22,7 @@ TEST(WriteTextFile, WritesTheTextOrSaysItCannot) {
   EXPECT_EQ(contents(dir.file("out.json")), "{\"a\": 1}\n");
   EXPECT_TRUE(write_text_file("", "nothing asked, nothing written"));
   EXPECT_FALSE(write_text_file(dir.file("no_such_folder/out.json"), "x"));
+  EXPECT_FALSE(write_text_file("/dev/full", "a full disk is reported, not lost in the buffer"));
 }
 
 TEST(WriteReadyFile, CreatesTheFileScriptsWaitFor) {

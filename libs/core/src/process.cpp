@@ -61,7 +61,10 @@ int run_until_stopped(Bus& bus, Heartbeat* heartbeat, const std::function<void()
 }
 
 bool write_text_file(const std::string& path, const std::string& text) {
-  if (path.empty() || std::ofstream(path) << text) return true;
+  if (path.empty()) return true;
+  std::ofstream out(path);
+  // Flushed here: a full disk fails the flush, not the buffered <<.
+  if (out << text << std::flush) return true;
   spdlog::error("cannot write {}", path);
   return false;
 }
