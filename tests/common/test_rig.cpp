@@ -1,6 +1,8 @@
 #include "test_rig.hpp"
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <random>
 
 namespace ivoa::test {
@@ -36,6 +38,11 @@ RigCalibration make_test_rig(double pitch_deg, bool with_distortion) {
   rig.depth_to_robot.linear() = optical_to_robot(pitch);
   rig.depth_to_robot.translation() = Eigen::Vector3d(0.0, 0.0, 0.35);
   return rig;
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 TempDir::TempDir(const std::string& prefix) {

@@ -14,6 +14,9 @@ RigCalibration make_test_rig(double pitch_deg = 15.0, bool with_distortion = fal
 // pitched down by `pitch_rad`.
 Eigen::Matrix3d optical_to_robot(double pitch_rad);
 
+// The whole file, byte for byte ("" if it cannot be read).
+std::string read_file(const std::string& path);
+
 // A fresh, empty folder under the system temp dir, removed at destruction.
 class TempDir {
  public:

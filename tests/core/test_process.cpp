@@ -1,6 +1,5 @@
 // The small file outputs every tool shares (--json, --ready-file).
-#include <fstream>
-#include <sstream>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -10,16 +9,10 @@
 namespace ivoa {
 namespace {
 
-std::string contents(const std::string& path) {
-  std::ostringstream s;
-  s << std::ifstream(path).rdbuf();
-  return s.str();
-}
-
 TEST(WriteTextFile, WritesTheTextOrSaysItCannot) {
   test::TempDir dir;
   EXPECT_TRUE(write_text_file(dir.file("out.json"), "{\"a\": 1}\n"));
-  EXPECT_EQ(contents(dir.file("out.json")), "{\"a\": 1}\n");
+  EXPECT_EQ(test::read_file(dir.file("out.json")), "{\"a\": 1}\n");
   EXPECT_TRUE(write_text_file("", "nothing asked, nothing written"));
   EXPECT_FALSE(write_text_file(dir.file("no_such_folder/out.json"), "x"));
   EXPECT_FALSE(write_text_file("/dev/full", "a full disk is reported, not lost in the buffer"));
@@ -28,7 +21,7 @@ TEST(WriteTextFile, WritesTheTextOrSaysItCannot) {
 TEST(WriteReadyFile, CreatesTheFileScriptsWaitFor) {
   test::TempDir dir;
   EXPECT_TRUE(write_ready_file(dir.file("ready")));
-  EXPECT_EQ(contents(dir.file("ready")), "ready\n");
+  EXPECT_EQ(test::read_file(dir.file("ready")), "ready\n");
   EXPECT_TRUE(write_ready_file(""));
   EXPECT_FALSE(write_ready_file(dir.file("no_such_folder/ready")));
 }

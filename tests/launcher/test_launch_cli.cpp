@@ -8,7 +8,6 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -18,6 +17,8 @@
 extern char** environ;
 
 namespace {
+
+using ivoa::test::read_file;
 
 struct Result {
   int exit_code = -1;
@@ -41,13 +42,6 @@ std::string write_file(const ivoa::test::TempDir& dir, const std::string& name, 
   const std::string path = dir.file(name);
   std::ofstream(path) << text;
   return path;
-}
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }

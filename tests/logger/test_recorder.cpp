@@ -5,8 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "ivoa/core/calibration.hpp"
 #include "ivoa/core/message_counts.hpp"
@@ -20,6 +18,7 @@ namespace {
 
 using test::numbered_bytes;
 using test::read_back;
+using test::read_file;
 
 RecorderOptions options_in(const test::TempDir& dir, const std::string& name = "rec.lcmlog") {
   RecorderOptions o;
@@ -40,13 +39,6 @@ void offer(Recorder& r, const std::string& channel, const std::vector<uint8_t>& 
   r.on_message(channel, timestamp, data.data(), data.size());
 }
 
-std::string file_text(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
 TEST(Recorder, LogsEveryChannelIncludingOnesOfNoKnownType) {
   test::TempDir dir;
   Recorder recorder(options_in(dir));
@@ -62,7 +54,7 @@ TEST(Recorder, LogsEveryChannelIncludingOnesOfNoKnownType) {
   EXPECT_EQ(r.events[1].channel, "SOMEONE_ELSES_CHANNEL");
   EXPECT_EQ(r.events[1].timestamp, 11);
   EXPECT_EQ(r.events[1].data, foreign);
-  const std::string sidecar = file_text(sidecar_path(dir.file("rec.lcmlog")));
+  const std::string sidecar = read_file(sidecar_path(dir.file("rec.lcmlog")));
   EXPECT_NE(sidecar.find("\"SOMEONE_ELSES_CHANNEL\": {\"type\": \"unknown\""), std::string::npos) << sidecar;
   EXPECT_NE(sidecar.find("\"RIG_CALIBRATION\": {\"type\": \"ivoa.rig_calibration_t\""), std::string::npos);
   EXPECT_NE(sidecar.find("\"complete\": true"), std::string::npos);
@@ -117,7 +109,7 @@ TEST(Recorder, SplitFilesEachStartWithTheNewestCalibration) {
       blobs += e.channel == "BLOB";
       second_seen = second_seen || (e.channel == "RIG_CALIBRATION" && e.data == second);
     }
-    EXPECT_NE(file_text(sidecar_path(path)).find("\"starts_with_calibration\": true"), std::string::npos) << path;
+    EXPECT_NE(read_file(sidecar_path(path)).find("\"starts_with_calibration\": true"), std::string::npos) << path;
   }
   EXPECT_TRUE(second_seen);
   EXPECT_EQ(blobs, 24);
@@ -154,7 +146,7 @@ TEST(Recorder, MessagesRefusedByAFullQueueAreCounted) {
   EXPECT_EQ(s.dropped_bytes, s.dropped * 100'000);
   EXPECT_EQ(s.received, s.written + s.dropped);
   EXPECT_EQ(static_cast<int64_t>(read_back(dir.file("rec.lcmlog")).events.size()), s.written);
-  EXPECT_NE(file_text(sidecar_path(dir.file("rec.lcmlog"))).find("\"dropped\": " + std::to_string(s.dropped)),
+  EXPECT_NE(read_file(sidecar_path(dir.file("rec.lcmlog"))).find("\"dropped\": " + std::to_string(s.dropped)),
             std::string::npos);
 }
 
@@ -177,7 +169,7 @@ TEST(Recorder, AWriteErrorLeavesAReadableLogAndSaysWhy) {
   const auto r = read_back(path);
   EXPECT_TRUE(r.problems.empty());
   EXPECT_EQ(r.events.size(), 3u);
-  const std::string sidecar = file_text(sidecar_path(path));
+  const std::string sidecar = read_file(sidecar_path(path));
   EXPECT_NE(sidecar.find("\"complete\": false"), std::string::npos) << sidecar;
   EXPECT_NE(sidecar.find(std::strerror(EFBIG)), std::string::npos) << sidecar;
 }

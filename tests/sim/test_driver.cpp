@@ -2,7 +2,6 @@
 // channels, with reproducible times; two runs of one session are identical.
 #include <cstdlib>
 #include <fstream>
-#include <iterator>
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
@@ -21,6 +20,8 @@
 namespace ivoa::sim {
 namespace {
 
+using test::read_file;
+
 constexpr int64_t kStart = 1700000000000000;
 
 SimDriverConfig config(const std::string& log = "") {
@@ -33,11 +34,6 @@ SimDriverConfig config(const std::string& log = "") {
   c.start_utime = kStart;
   c.log_file = log;
   return c;
-}
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 TEST(SimDriver, PublishesWhatRealDriversPublish) {
