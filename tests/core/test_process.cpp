@@ -1,6 +1,9 @@
-// The small file outputs every tool shares (--json, --ready-file).
+// What every executable shares: its common flags and the small file outputs
+// (--json, --ready-file).
 #include <string>
+#include <vector>
 
+#include <CLI/CLI.hpp>
 #include <gtest/gtest.h>
 
 #include "ivoa/core/process.hpp"
@@ -8,6 +11,27 @@
 
 namespace ivoa {
 namespace {
+
+// Parses `args` after a program name with the given common flags added.
+int parse(void (*add)(CLI::App&, CommonOptions&), std::vector<const char*> args, CommonOptions& options) {
+  CLI::App app;
+  add(app, options);
+  args.insert(args.begin(), "tool");
+  return parse_command_line(app, static_cast<int>(args.size()), const_cast<char**>(args.data()));
+}
+
+TEST(CommonOptions, ProcessesTakeAnLcmUrlAndOfflineToolsRefuseOne) {
+  CommonOptions process;
+  EXPECT_EQ(parse(add_common_options, {"--lcm-url", "memq://", "--log-level", "warn"}, process), -1);
+  EXPECT_EQ(process.lcm_url, "memq://");
+  EXPECT_EQ(process.log_level, "warn");
+
+  CommonOptions offline;
+  EXPECT_EQ(parse(add_offline_options, {"--log-level", "error"}, offline), -1);
+  EXPECT_EQ(offline.log_level, "error");
+  EXPECT_EQ(parse(add_offline_options, {"--lcm-url", "memq://"}, offline), kExitUsage);
+  EXPECT_EQ(parse(add_offline_options, {"--log-level", "loud"}, offline), kExitUsage);
+}
 
 TEST(WriteTextFile, WritesTheTextOrSaysItCannot) {
   test::TempDir dir;

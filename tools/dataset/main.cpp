@@ -203,7 +203,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Build introspection datasets from LCM logs, and summarise them"};
   app.require_subcommand(1);
   CommonOptions common;
-  add_common_options(app, common);
+  add_offline_options(app, common);
   BuildCommand build;
   add_build_command(app, build);
   auto* info = app.add_subcommand("info", "sessions, class counts and splits of a dataset");

@@ -269,12 +269,13 @@ void add_options(CLI::App& app, Options& o) {
   app.add_option("--logs", o.logs, "logs of evaluated sessions, for overlay figures")->check(CLI::ExistingFile);
   app.add_option("--overlay-every", o.overlay_every, "one overlay per this many labelled frames")
       ->capture_default_str();
-  app.add_option("--max-overlays", o.max_overlays)->capture_default_str();
+  app.add_option("--max-overlays", o.max_overlays, "at most this many overlay figures in all")->capture_default_str();
   app.add_flag("--dots-given-verdict", o.dots_given_verdict,
                "overlay dots: predictions given the detector's recorded verdict (default: from the image alone, as the "
                "paper)");
-  app.add_option("--mc-passes", o.inference.mc_passes, "T")->capture_default_str();
-  app.add_option("--threads", o.inference.threads)->capture_default_str();
+  app.add_option("--mc-passes", o.inference.mc_passes, "Monte-Carlo dropout passes per sample (the paper's T)")
+      ->capture_default_str();
+  app.add_option("--threads", o.inference.threads, "LibTorch threads")->capture_default_str();
   app.add_option("--seed", o.inference.seed, "dropout masks")->capture_default_str();
 }
 
@@ -298,7 +299,7 @@ int main(int argc, char** argv) {
   introspection::prefer_passive_openmp_wait(argv);
   CLI::App app{"Run a model on dataset sessions: predictions, uncertainties, embeddings, overlay figures"};
   CommonOptions common;
-  add_common_options(app, common);
+  add_offline_options(app, common);
   Options o;
   o.inference.seed = 1;
   add_options(app, o);

@@ -188,7 +188,7 @@ int main(int argc, char** argv) {
       "how long it took per frame. Exit codes: 0 scored, 3 a log is unreadable or has nothing to score, 4 the "
       "JSON cannot be written."};
   CommonOptions common;
-  add_common_options(app, common);
+  add_offline_options(app, common);
   ScoreCommandLine cl;
   add_score_options(app, cl);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;

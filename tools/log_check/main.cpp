@@ -164,7 +164,7 @@ int main(int argc, char** argv) {
       "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 3 a log is damaged or "
       "unreadable, 4 the --json file cannot be written."};
   ivoa::CommonOptions common;
-  ivoa::add_common_options(app, common);
+  ivoa::add_offline_options(app, common);
   CheckCommandLine cl;
   add_check_options(app, cl);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;

@@ -459,7 +459,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Failure causes on simulated logs: re-render each failure without each phenomenon and re-run the detector"};
   CommonOptions common;
-  add_common_options(app, common);
+  add_offline_options(app, common);
   CommandLine cl;
   add_options(app, cl);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;

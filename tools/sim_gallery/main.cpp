@@ -90,7 +90,7 @@ cv::Mat gallery_row(const std::string& file, const GalleryOptions& o) {
 int main(int argc, char** argv) {
   CLI::App app{"Writes a gallery picture of simulated frames (left, right, depth, ground truth) from several scenes"};
   ivoa::CommonOptions common;
-  ivoa::add_common_options(app, common);
+  ivoa::add_offline_options(app, common);
   GalleryOptions o;
   add_gallery_options(app, o);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;

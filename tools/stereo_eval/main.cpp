@@ -129,7 +129,7 @@ int write_outputs(const CommandLine& cl, const std::vector<ivoa::stereo_eval::Mo
 int main(int argc, char** argv) {
   CLI::App app{"Score stereo point checks (JPP-C CP, SGBM) against ground-truth disparity on a rectified pair"};
   ivoa::CommonOptions common;
-  ivoa::add_common_options(app, common);
+  ivoa::add_offline_options(app, common);
   CommandLine cl;
   add_options(app, cl);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;

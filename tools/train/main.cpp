@@ -43,14 +43,16 @@ void add_data_options(CLI::App& app, introspection::TrainConfig& c) {
       ->required()
       ->check(CLI::ExistingFile);
   app.add_option("--out", c.output, "model file to write")->required();
-  app.add_option("--train-split", c.train_split)->capture_default_str();
-  app.add_option("--val-split", c.val_split)->capture_default_str();
+  app.add_option("--train-split", c.train_split, "split file entry whose sessions are trained on")
+      ->capture_default_str();
+  app.add_option("--val-split", c.val_split, "split file entry that validates (and calibrates the uncertainty gate)")
+      ->capture_default_str();
 }
 
 void add_optimiser_options(CLI::App& app, TrainCommandLine& cl) {
   auto& c = cl.config;
   app.add_option("--steps", c.steps, "optimiser steps")->capture_default_str();
-  app.add_option("--batch-size", c.batch_size)->capture_default_str();
+  app.add_option("--batch-size", c.batch_size, "patches per step, drawn class-balanced")->capture_default_str();
   app.add_option("--optimizer", cl.optimizer, "adamw or sgd (the paper's)")
       ->check(CLI::IsMember({"adamw", "sgd"}))
       ->capture_default_str();
@@ -82,19 +84,23 @@ void add_model_options(CLI::App& app, TrainCommandLine& cl) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_flag("--no-augment", cl.no_augment, "no photometric augmentation");
-  app.add_option("--seed", c.seed)->capture_default_str();
+  app.add_option("--seed", c.seed, "initial weights, batch draws, augmentation and dropout")->capture_default_str();
   app.add_option("--threads", c.threads, "LibTorch threads")->capture_default_str();
   app.add_option("--device", c.device, "cpu or cuda")->capture_default_str();
 }
 
 void add_validation_options(CLI::App& app, TrainCommandLine& cl) {
   auto& c = cl.config;
-  app.add_option("--validate-every", c.validate_every)->capture_default_str();
-  app.add_option("--checkpoint-every", c.checkpoint_every)->capture_default_str();
+  app.add_option("--validate-every", c.validate_every, "steps between validations (and at the last step)")
+      ->capture_default_str();
+  app.add_option("--checkpoint-every", c.checkpoint_every, "steps between checkpoints that --resume continues from")
+      ->capture_default_str();
   app.add_flag("--keep-last", c.keep_last,
                "write the final step's model, not the best-validated one (a few validation sessions make the best "
                "step partly chance)");
-  app.add_option("--max-val-samples", c.max_val_samples)->capture_default_str();
+  app.add_option("--max-val-samples", c.max_val_samples,
+                 "validate on at most this many samples, spread over the sessions")
+      ->capture_default_str();
   app.add_option("--threshold-retain", c.threshold_retain,
                  "the stored uncertainty gate keeps this fraction of validation samples")
       ->capture_default_str();
@@ -167,7 +173,7 @@ int main(int argc, char** argv) {
   ivoa::introspection::prefer_passive_openmp_wait(argv);
   CLI::App app{"Train an introspection model on a dataset, validating on held-out sessions"};
   CommonOptions common;
-  add_common_options(app, common);
+  add_offline_options(app, common);
   TrainCommandLine cl;
   add_data_options(app, cl.config);
   add_model_options(app, cl);

@@ -16,6 +16,10 @@ void add_common_options(CLI::App& app, CommonOptions& options) {
   app.add_option(
       "--lcm-url", options.lcm_url,
       "LCM URL (default: $LCM_DEFAULT_URL or " + std::string(kProjectDefaultUrl) + ", with a 16 MB receive buffer)");
+  add_offline_options(app, options);
+}
+
+void add_offline_options(CLI::App& app, CommonOptions& options) {
   app.add_option("--log-level", options.log_level, "trace, debug, info, warn, error")
       ->capture_default_str()
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));

@@ -224,8 +224,10 @@ struct BenchOptions {
 };
 
 void add_bench_options(CLI::App& app, BenchOptions& o) {
-  app.add_option("--threads", o.threads)->capture_default_str()->check(CLI::PositiveNumber);
-  app.add_option("--mc-passes", o.passes)->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--threads", o.threads, "LibTorch threads")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--mc-passes", o.passes, "Monte-Carlo dropout passes (the paper's T)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--runs", o.runs, "timed runs (median reported)")->capture_default_str()->check(CLI::PositiveNumber);
   app.add_option("--reference-patches", o.reference_patches, "patches the reference is timed on")
       ->capture_default_str()

@@ -110,7 +110,9 @@ void print_times(const MonitorTimes& t) {
 int main(int argc, char** argv) {
   CLI::App app{"Depth monitor benchmark (one core)"};
   int frames_per_scene = 4, repeats = 5;
-  app.add_option("--frames-per-scene", frames_per_scene)->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--frames-per-scene", frames_per_scene, "frames timed in each of the five scenes")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--repeats", repeats, "timings per frame (median kept)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);

@@ -79,9 +79,11 @@ void add_bench_options(CLI::App& app, BenchOptions& o) {
   app.add_option("--baseline-frames", o.baseline_frames, "poses rendered by the brute-force baseline")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  app.add_option("--seed", o.seed)->capture_default_str();
+  app.add_option("--seed", o.seed, "scene and trajectory seed")->capture_default_str();
   app.add_option("--cpu", o.cpu, "core to pin to (-1: do not pin)")->capture_default_str();
-  app.add_option("--budget-ms", o.budget_ms)->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--budget-ms", o.budget_ms, "per-frame budget the worst scene's median is compared with, ms")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
 }
 
 void pin_to_cpu(int cpu) {
@@ -152,7 +154,7 @@ Stats bench_scene(const std::string& name, const BenchOptions& o) {
 int main(int argc, char** argv) {
   CLI::App app{"Simulator frame time on one core, accelerated vs brute force, against the 150 ms budget"};
   ivoa::CommonOptions common;
-  ivoa::add_common_options(app, common);
+  ivoa::add_offline_options(app, common);
   BenchOptions o;
   add_bench_options(app, o);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;

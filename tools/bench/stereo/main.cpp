@@ -179,7 +179,7 @@ bool write_json(const BenchOptions& o, double load, const Timing& jppc, const Ti
 int main(int argc, char** argv) {
   CLI::App app{"Benchmark: JPP-C vs the dense SGBM detector per stereo frame on simulator frames"};
   ivoa::CommonOptions common;
-  ivoa::add_common_options(app, common);
+  ivoa::add_offline_options(app, common);
   BenchOptions o;
   add_bench_options(app, o);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;

@@ -31,6 +31,10 @@ struct CommonOptions {
 // flag by its long name, e.g. `conf_pos_thresh = 0.75`).
 void add_common_options(CLI::App& app, CommonOptions& options);
 
+// For tools that talk no LCM: --log-level and --config only, so that an
+// --lcm-url is refused rather than accepted and ignored.
+void add_offline_options(CLI::App& app, CommonOptions& options);
+
 // Parses argv; on --help or a usage error prints and returns the exit code
 // to use, otherwise returns -1 and the caller continues.
 int parse_command_line(CLI::App& app, int argc, char** argv);
