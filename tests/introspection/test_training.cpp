@@ -305,20 +305,43 @@ TEST(Training, CalibrationOnlyRewritesTheGatesNotTheWeights) {
   EXPECT_THROW(calibrate_model(c), std::runtime_error);
 }
 
-TEST(Training, MissingSplitIsNamed) {
-  test::TempDir dir;
+// What train_model refuses `split_yaml` with, over the sessions "a" and
+// "b" (two samples a class) and "empty" (none); "accepted" if it trains.
+std::string refusal_of_split(test::TempDir& dir, const std::string& split_yaml) {
   write_session(dir.file("data"), "a", 2, 1);
-  std::ofstream(dir.file("split.yaml")) << "train: [a]\n";
+  write_session(dir.file("data"), "b", 2, 2);
+  write_session(dir.file("data"), "empty", 0, 3);
+  std::ofstream(dir.file("split.yaml")) << split_yaml;
   TrainConfig c;
   c.dataset = dir.file("data");
   c.split_file = dir.file("split.yaml");
   c.output = dir.file("m.pt");
+  c.steps = 2;
   try {
     train_model(c);
-    FAIL();
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("'val'"), std::string::npos) << e.what();
+    return e.what();
   }
+  return "accepted";
+}
+
+TEST(Training, MissingSplitIsNamed) {
+  test::TempDir dir;
+  const std::string why = refusal_of_split(dir, "train: [a]\n");
+  EXPECT_NE(why.find("'val'"), std::string::npos) << why;
+}
+
+// A validation split whose sessions have no labels would give no model to
+// keep and no gate: refused before any training step, naming the sessions.
+TEST(Training, ValidationSessionsWithoutSamplesAreNamedBeforeTraining) {
+  test::TempDir dir;
+  const std::string why = refusal_of_split(dir, "train: [a]\nval: [empty]\n");
+  EXPECT_NE(why.find("\"empty\""), std::string::npos) << why;
+  EXPECT_NE(why.find("no labelled samples"), std::string::npos) << why;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m.pt")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("m.pt.checkpoint.step")));
+  test::TempDir control;
+  EXPECT_EQ(refusal_of_split(control, "train: [a]\nval: [b]\n"), "accepted");
 }
 
 }  // namespace

@@ -1,6 +1,5 @@
 #include "live_score.hpp"
 
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -69,22 +68,6 @@ introspection_t prediction_message(int64_t utime, const std::vector<Query>& quer
   return m;
 }
 
-TEST(ClassCounts, MeanPerClassIsOverTheLabelsPresent) {
-  ClassCounts c;
-  for (int i = 0; i < 3; ++i) c.add(kTN, kTN);
-  c.add(kTN, kFP);
-  c.add(kFN, kFN);
-  c.add(kFN, kTN);
-  c.add(kNone, kTN);  // no label: not counted
-  EXPECT_EQ(c.total(), 6);
-  EXPECT_DOUBLE_EQ(c.recall(kTN), 0.75);
-  EXPECT_DOUBLE_EQ(c.recall(kFN), 0.5);
-  EXPECT_TRUE(std::isnan(c.recall(kTP)));
-  EXPECT_DOUBLE_EQ(c.mean_per_class(), 0.625);
-  EXPECT_DOUBLE_EQ(c.overall(), 4.0 / 6.0);
-  EXPECT_TRUE(std::isnan(ClassCounts{}.mean_per_class()));
-}
-
 TEST(LiveScorer, MatchesCellsByPositionWhicheverMessageComesFirst) {
   LiveScorer scorer;
   // Frame 1: the prediction before the labels, queries in another order.
@@ -117,11 +100,11 @@ TEST(LiveScorer, MatchesCellsByPositionWhicheverMessageComesFirst) {
   EXPECT_EQ(s.unmatched_cells, 1);
   EXPECT_EQ(s.no_grid_cells, 0);
   EXPECT_EQ(s.image.all.total(), 2);
-  EXPECT_EQ(s.image.all.confusion[kTN][kTN], 1);
-  EXPECT_EQ(s.image.all.confusion[kFP][kFP], 1);
+  EXPECT_EQ(s.image.all.counts[kTN][kTN], 1);
+  EXPECT_EQ(s.image.all.counts[kFP][kFP], 1);
   EXPECT_EQ(s.image.announced.total(), 1);  // the TN cell was not announced
-  EXPECT_EQ(s.given_verdict.all.confusion[kTN][kFN], 1);
-  EXPECT_EQ(s.given_verdict.announced.confusion[kFP][kFP], 1);
+  EXPECT_EQ(s.given_verdict.all.counts[kTN][kFN], 1);
+  EXPECT_EQ(s.given_verdict.announced.counts[kFP][kFP], 1);
   EXPECT_EQ(s.given_verdict.announced.total(), 1);
   EXPECT_EQ(s.verdict_unknown, 0);
   EXPECT_EQ(s.verdict_disagrees, 0);
@@ -138,7 +121,7 @@ TEST(LiveScorer, CountsVerdictsThatAreMissingOrNotTheLabelsOwn) {
   EXPECT_EQ(s.image.all.total(), 2);
   EXPECT_EQ(s.verdict_unknown, 1);
   EXPECT_EQ(s.verdict_disagrees, 1);
-  EXPECT_EQ(s.given_verdict.all.confusion[kFP][kFN], 1);
+  EXPECT_EQ(s.given_verdict.all.counts[kFP][kFN], 1);
 }
 
 TEST(LiveScorer, CellsOfAFramePredictedBeforeAnyGridCountApart) {

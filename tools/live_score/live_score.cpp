@@ -2,57 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <utility>
 
 namespace ivoa::tools {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-bool is_class(int c) { return c >= 0 && c < kClasses; }
+bool is_class(int c) { return c >= 0 && c < LabelConfusion::kLabels; }
 
 // Labels and queries come from grids of the same geometry: a cell is the
 // same cell when its position agrees to the millimetre.
 std::pair<long, long> cell_key(float x, float y) { return {std::lround(x * 1000.0f), std::lround(y * 1000.0f)}; }
 
 }  // namespace
-
-void ClassCounts::add(int label, int predicted) {
-  if (is_class(label) && is_class(predicted)) ++confusion[label][predicted];
-}
-
-int64_t ClassCounts::count(int label) const {
-  int64_t n = 0;
-  for (const int64_t c : confusion[label]) n += c;
-  return n;
-}
-
-int64_t ClassCounts::total() const {
-  int64_t n = 0;
-  for (int label = 0; label < kClasses; ++label) n += count(label);
-  return n;
-}
-
-double ClassCounts::recall(int label) const {
-  const int64_t n = count(label);
-  return n ? static_cast<double>(confusion[label][label]) / static_cast<double>(n) : kNaN;
-}
-
-double ClassCounts::mean_per_class() const {
-  double sum = 0;
-  int present = 0;
-  for (int label = 0; label < kClasses; ++label)
-    if (count(label)) sum += recall(label), ++present;
-  return present ? sum / present : kNaN;
-}
-
-double ClassCounts::overall() const {
-  int64_t right = 0;
-  for (int label = 0; label < kClasses; ++label) right += confusion[label][label];
-  const int64_t n = total();
-  return n ? static_cast<double>(right) / static_cast<double>(n) : kNaN;
-}
 
 void LiveScorer::add(const introspection_labels_t& m) {
   ++labelled_frames_;

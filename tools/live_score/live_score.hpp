@@ -8,36 +8,22 @@
 // detector's grids, where the log has them, tell a labelled cell the
 // introspection does not look at (its patch leaves the image: the grid's
 // in_image is 0) from one it should have predicted and did not.
-#include <array>
 #include <cstdint>
 #include <map>
 #include <set>
 #include <string>
 #include <vector>
 
+#include "ivoa/core/label_confusion.hpp"
 #include "ivoa/introspection_labels_t.hpp"
 #include "ivoa/introspection_t.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
 
 namespace ivoa::tools {
 
-inline constexpr int kClasses = 4;  // introspection_labels_t.LABEL_TP .. LABEL_FN
-
-// A confusion matrix over the four labels, rows the true label.
-struct ClassCounts {
-  std::array<std::array<int64_t, kClasses>, kClasses> confusion{};  // [label][predicted]
-
-  void add(int label, int predicted);
-  int64_t total() const;
-  int64_t count(int label) const;  // samples with this true label
-  double recall(int label) const;  // NaN if there are none
-  double mean_per_class() const;   // mean recall over the labels present; NaN if empty
-  double overall() const;          // NaN if empty
-};
-
 struct PredictionScore {
-  ClassCounts all;        // every labelled cell with a prediction
-  ClassCounts announced;  // those whose uncertainty passed the model's gate
+  LabelConfusion all;        // every labelled cell with a prediction
+  LabelConfusion announced;  // those whose uncertainty passed the model's gate
 };
 
 // compute_ms over the INTROSPECTION messages, milliseconds.

@@ -18,7 +18,6 @@
 namespace {
 
 using namespace ivoa;
-using tools::ClassCounts;
 using tools::LiveScore;
 
 struct ReadCounts {
@@ -61,7 +60,7 @@ std::string join(const std::set<std::string>& items) {
 
 std::string fraction(double x) { return std::isnan(x) ? "  n/a" : fmt::format("{:5.3f}", x); }
 
-void print_row(const char* name, const ClassCounts& c, int64_t of) {
+void print_row(const char* name, const LabelConfusion& c, int64_t of) {
   std::printf("  %-30s %6lld %5.1f %%  %s  %s  %s  %s  %s  %s\n", name, static_cast<long long>(c.total()),
               of ? 100.0 * static_cast<double>(c.total()) / static_cast<double>(of) : 0.0,
               fraction(c.recall(0)).c_str(), fraction(c.recall(1)).c_str(), fraction(c.recall(2)).c_str(),
@@ -100,11 +99,11 @@ void print_score(const LiveScore& s) {
       s.compute.median, s.compute.p90, s.compute.max, static_cast<long long>(s.compute.frames));
 }
 
-std::string counts_json(const ClassCounts& c) {
+std::string counts_json(const LabelConfusion& c) {
   std::string rows;
-  for (int label = 0; label < tools::kClasses; ++label)
-    rows += fmt::format("{}[{}, {}, {}, {}]", label ? ", " : "", c.confusion[label][0], c.confusion[label][1],
-                        c.confusion[label][2], c.confusion[label][3]);
+  for (int label = 0; label < LabelConfusion::kLabels; ++label)
+    rows += fmt::format("{}[{}, {}, {}, {}]", label ? ", " : "", c.counts[label][0], c.counts[label][1],
+                        c.counts[label][2], c.counts[label][3]);
   const auto num = [](double x) { return std::isnan(x) ? std::string("null") : fmt::format("{:.6f}", x); };
   return fmt::format("{{\"cells\": {}, \"mean_per_class\": {}, \"overall\": {}, \"confusion\": [{}]}}", c.total(),
                      num(c.mean_per_class()), num(c.overall()), rows);

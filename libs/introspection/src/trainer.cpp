@@ -10,6 +10,7 @@
 #include <spdlog/spdlog.h>
 #include <torch/torch.h>
 
+#include "ivoa/core/label_confusion.hpp"
 #include "ivoa/core/time.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
@@ -97,38 +98,17 @@ const dataset::SampleRecord& sample_of(const SplitData& d, const SampleRef& r) {
 }
 int label_of(const SplitData& d, const SampleRef& r) { return sample_of(d, r).label; }
 
-struct Confusion {
-  std::array<std::array<int64_t, kNumClasses>, kNumClasses> m{};  // [true][predicted]
-  void add(int truth, int predicted) { ++m[static_cast<size_t>(truth)][static_cast<size_t>(predicted)]; }
-  double class_accuracy(int c) const {
-    int64_t n = 0;
-    for (auto v : m[static_cast<size_t>(c)]) n += v;
-    return n ? static_cast<double>(m[static_cast<size_t>(c)][static_cast<size_t>(c)]) / static_cast<double>(n) : -1;
-  }
-  // Mean over the classes present: the paper's headline metric.
-  double mean_class_accuracy() const {
-    double sum = 0;
-    int present = 0;
-    for (int c = 0; c < kNumClasses; ++c)
-      if (class_accuracy(c) >= 0) {
-        sum += class_accuracy(c);
-        ++present;
-      }
-    return present ? sum / present : 0;
-  }
-  double accuracy() const {
-    int64_t right = 0, all = 0;
-    for (int t = 0; t < kNumClasses; ++t)
-      for (int p = 0; p < kNumClasses; ++p) {
-        all += m[static_cast<size_t>(t)][static_cast<size_t>(p)];
-        right += t == p ? m[static_cast<size_t>(t)][static_cast<size_t>(p)] : 0;
-      }
-    return all ? static_cast<double>(right) / static_cast<double>(all) : 0;
-  }
-};
+std::string json_list(const std::vector<std::string>& v) {
+  std::string s = "[";
+  for (size_t k = 0; k < v.size(); ++k) s += (k ? ", \"" : "\"") + v[k] + "\"";
+  return s + "]";
+}
 
 // A fixed, deterministic validation subset spread over all sessions and classes.
 std::vector<SampleRef> validation_subset(const SplitData& d, int64_t max_samples) {
+  if (d.size() == 0)
+    throw std::runtime_error("the validation sessions (" + json_list(d.names) +
+                             ") have no labelled samples: nothing to validate or calibrate on");
   std::vector<SampleRef> all;
   for (const auto& c : d.by_class) all.insert(all.end(), c.begin(), c.end());
   if (static_cast<int64_t>(all.size()) <= max_samples) return all;
@@ -139,7 +119,7 @@ std::vector<SampleRef> validation_subset(const SplitData& d, int64_t max_samples
 }
 
 struct ValOutputs {
-  Confusion confusion;
+  LabelConfusion confusion;
   std::vector<int> truth, predicted;
   std::vector<float> variance;  // predicted-class variance (MC only)
   // given_verdict() of the detector's verdict the sample recorded (stereo_state).
@@ -191,12 +171,6 @@ double learning_rate_at(const TrainConfig& c, int64_t step) {
   return c.learning_rate * (0.01 + 0.99 * 0.5 * (1.0 + std::cos(M_PI * std::min(t, 1.0))));
 }
 
-std::string json_list(const std::vector<std::string>& v) {
-  std::string s = "[";
-  for (size_t k = 0; k < v.size(); ++k) s += (k ? ", \"" : "\"") + v[k] + "\"";
-  return s + "]";
-}
-
 std::string training_summary(const TrainConfig& c, const SplitData& train, const SplitData& val, const TrainReport& r,
                              int64_t step) {
   std::ostringstream o;
@@ -225,10 +199,10 @@ std::pair<double, double> calibrate_threshold(const std::vector<int>& truth, con
   if (sorted.empty()) return {0.01, 0};
   const double threshold =
       sorted[std::min(sorted.size() - 1, static_cast<size_t>(retain * static_cast<double>(sorted.size())))];
-  Confusion kept;
+  LabelConfusion kept;
   for (size_t i = 0; i < truth.size(); ++i)
     if (variance[i] <= threshold) kept.add(truth[i], predicted[i]);
-  return {threshold, kept.mean_class_accuracy()};
+  return {threshold, kept.mean_per_class()};
 }
 
 // Both gates (the model's own prediction, and the prediction given the
@@ -488,10 +462,10 @@ void update_status(TrainStatus& status, const RunningMeans& means, const TrainCo
 }
 
 // The report's record of the model kept: the best so far, or the last.
-void record_kept(TrainReport& report, const Confusion& val, int64_t step) {
-  report.best_val_mean_class_accuracy = val.mean_class_accuracy();
-  report.best_val_accuracy = val.accuracy();
-  for (int k = 0; k < kNumClasses; ++k) report.best_val_class_accuracy[static_cast<size_t>(k)] = val.class_accuracy(k);
+void record_kept(TrainReport& report, const LabelConfusion& val, int64_t step) {
+  report.best_val_mean_class_accuracy = val.mean_per_class();
+  report.best_val_accuracy = val.overall();
+  for (int k = 0; k < kNumClasses; ++k) report.best_val_class_accuracy[static_cast<size_t>(k)] = val.recall(k);
   report.best_step = step;
   report.best_before_resume = false;
 }
@@ -565,7 +539,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     const bool last = step + 1 == c.steps;
     if ((step + 1) % c.validate_every == 0 || last) {
       const ValOutputs v = run_validation(*learner.net, val, val_refs, info, device, 1, generator);
-      status.val_mean_class_accuracy = v.confusion.mean_class_accuracy();
+      status.val_mean_class_accuracy = v.confusion.mean_per_class();
       const bool better = status.val_mean_class_accuracy > report.best_val_mean_class_accuracy;
       if (c.keep_last ? last : better) {
         record_kept(report, v.confusion, step + 1);

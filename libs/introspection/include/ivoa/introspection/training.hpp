@@ -87,7 +87,7 @@ struct TrainReport {
   int64_t best_step = 0;
   double best_val_mean_class_accuracy = 0;
   double best_val_accuracy = 0;
-  std::array<double, 4> best_val_class_accuracy{};
+  std::array<double, 4> best_val_class_accuracy{};  // NaN for a class the validation samples lack
   // The best model is from before a --resume (this run never beat it): only
   // its step and mean per-class accuracy are known (the checkpoint's).
   bool best_before_resume = false;
