@@ -17,6 +17,14 @@ Eigen::Matrix3d optical_to_robot(double pitch_rad);
 // The whole file, byte for byte ("" if it cannot be read).
 std::string read_file(const std::string& path);
 
+// What a shell command printed, stdout and stderr together, and its exit
+// code (-1 if it did not exit normally, e.g. killed by a signal).
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;
+};
+CommandResult run_command(const std::string& command);
+
 // A fresh, empty folder under the system temp dir, removed at destruction.
 class TempDir {
  public:

@@ -1,18 +1,18 @@
 // Training mechanics on a small synthetic dataset whose four classes look
-// different: the loss falls and held-out sessions are classified far above
-// chance. (Training on simulated sessions is tested end to end elsewhere.)
+// different (synthetic_sessions.hpp): the loss falls and held-out sessions
+// are classified far above chance. (Training on simulated sessions is
+// tested end to end elsewhere.)
 #include <filesystem>
 #include <fstream>
-#include <limits>
-#include <random>
 
-#include <opencv2/imgproc.hpp>
+#include <opencv2/core.hpp>
 
 #include <gtest/gtest.h>
 
 #include "ivoa/dataset/dataset_format.hpp"
 #include "ivoa/introspection/model.hpp"
 #include "ivoa/introspection/training.hpp"
+#include "synthetic_sessions.hpp"
 #include "test_rig.hpp"
 
 namespace ivoa::introspection {
@@ -22,44 +22,13 @@ void PrintTo(Optimizer o, std::ostream* os) { *os << optimizer_name(o); }
 
 namespace {
 
-cv::Mat pattern(int label, std::mt19937& rng) {
-  std::uniform_int_distribution<int> colour(40, 215), phase(0, 9);
-  cv::Mat p(100, 100, CV_8UC3, cv::Scalar(colour(rng), colour(rng), colour(rng)));
-  const int ph = phase(rng);
-  for (int i = ph; i < 100; i += 10) {
-    if (label == 0) cv::line(p, {0, i}, {99, i}, cv::Scalar(255, 255, 255), 3);  // horizontal stripes
-    if (label == 1) cv::line(p, {i, 0}, {i, 99}, cv::Scalar(0, 0, 0), 3);        // vertical stripes
-  }
-  if (label == 2) cv::circle(p, {50, 50}, 20 + ph, cv::Scalar(255, 255, 255), -1);  // a bright blob
-  cv::Mat noise(p.size(), CV_8UC3);
-  cv::randn(noise, 0, label == 3 ? 40 : 8);  // 3: noise only
-  return p + noise;
-}
-
-// `evidence_size` > 0: each sample carries evidence that follows its class
-// (NaN in the third value, as if not measured).
 void write_session(const std::string& root, const std::string& name, int per_class, unsigned seed,
                    int evidence_size = 0) {
-  std::mt19937 rng(seed);
-  dataset::SessionInfo info;
-  info.session = name;
-  info.detector = "jppc";
-  info.labels_from = "rerun";
-  info.evidence_size = evidence_size;
-  dataset::SessionWriter w(root, info);
-  const int64_t frame = w.add_frame(0, 0, 4 * per_class);
-  for (int k = 0; k < per_class; ++k)
-    for (int label = 0; label < 4; ++label) {
-      dataset::SampleRecord s;
-      s.frame = frame;
-      s.label = label;
-      s.stereo_state = label == 0 || label == 2 ? 1 : 0;  // TP / FP: the detector said obstacle
-      std::vector<float> evidence;
-      for (int j = 0; j < evidence_size; ++j)
-        evidence.push_back(j == 2 ? std::numeric_limits<float>::quiet_NaN()
-                                  : 0.5f * static_cast<float>(label) + 0.1f * j);
-      w.add_sample(s, pattern(label, rng), evidence);
-    }
+  test::SyntheticSession s;
+  s.per_class = per_class;
+  s.seed = seed;
+  s.evidence_size = evidence_size;
+  test::write_synthetic_session(root, name, s);
 }
 
 // The tests that hold for either optimiser.

@@ -6,7 +6,6 @@
 #include <sys/wait.h>
 
 #include <chrono>
-#include <cstdio>
 #include <fstream>
 #include <thread>
 
@@ -20,22 +19,11 @@ namespace {
 
 using ivoa::test::read_file;
 
-struct Result {
-  int exit_code = -1;
-  std::string output;
-};
+using Result = ivoa::test::CommandResult;
 
 // Runs ivoa-launch (bounded by timeout(1)) with stdout and stderr captured.
 Result launch(const std::string& args) {
-  const std::string command = "timeout 60 " IVOA_LAUNCH_EXE " --lcm-url none --log-level warn " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  Result r;
-  char buffer[4096];
-  size_t n;
-  while ((n = fread(buffer, 1, sizeof(buffer), pipe)) > 0) r.output.append(buffer, n);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return ivoa::test::run_command("timeout 60 " IVOA_LAUNCH_EXE " --lcm-url none --log-level warn " + args);
 }
 
 std::string write_file(const ivoa::test::TempDir& dir, const std::string& name, const std::string& text) {

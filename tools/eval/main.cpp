@@ -221,8 +221,18 @@ SessionList list_sessions(const Options& o) {
 // number of rows.
 double write_predictions(const Options& o, const SessionList& sessions, introspection::IntrospectionModel& model) {
   double total = 0;
-  for (const auto& [split, name] : sessions)
-    total += static_cast<double>(dataset::SessionReader(o.dataset + "/" + name).size());
+  std::vector<std::pair<std::string, std::string>> other_detector;  // (session, detector) unlike the model's
+  for (const auto& [split, name] : sessions) {
+    const dataset::SessionReader session(o.dataset + "/" + name);
+    total += static_cast<double>(session.size());
+    if (session.info().detector != model.info().detector) other_detector.push_back({name, session.info().detector});
+  }
+  if (!other_detector.empty())
+    spdlog::warn(
+        "model {} introspects the '{}' detector, but {} of the {} sessions are labelled from another (the first, "
+        "{}, from '{}'): their figures say how well it predicts that detector's failures, not its own",
+        model.info().id, model.info().detector, other_detector.size(), sessions.size(), other_detector.front().first,
+        other_detector.front().second);
   const std::string csv_path = o.out + "/predictions.csv", emb_path = o.out + "/embeddings.f32";
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> csv(std::fopen(csv_path.c_str(), "w"), &std::fclose);
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> emb(std::fopen(emb_path.c_str(), "wb"), &std::fclose);

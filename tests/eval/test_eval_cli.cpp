@@ -1,0 +1,101 @@
+// ivoa-eval as a user runs it, on a small synthetic dataset and a model
+// trained on it for a few steps: what it writes, what it warns about, what
+// it refuses and with which exit code.
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "ivoa/core/process.hpp"
+#include "ivoa/introspection/training.hpp"
+#include "synthetic_sessions.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa {
+namespace {
+
+constexpr int kPerClass = 3;
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+size_t count_lines(const std::string& text) {
+  size_t n = 0;
+  for (const char c : text) n += c == '\n';
+  return n;
+}
+
+// A JPP-C model, and sessions beside its training ones: "t" (test split,
+// JPP-C's labels), "d" (split "dense": the dense detector's labels) and
+// "s" (split "scaled": footprint-scaled patches the model never saw).
+class EvalCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    test::SyntheticSession s;
+    s.per_class = kPerClass;
+    for (const char* name : {"a", "v", "t"}) {
+      test::write_synthetic_session(dir_.file("data"), name, s);
+      ++s.seed;
+    }
+    s.detector = "dense";
+    test::write_synthetic_session(dir_.file("data"), "d", s);
+    s.detector = "jppc";
+    s.patch_scale = 1.6;
+    test::write_synthetic_session(dir_.file("data"), "s", s);
+    std::ofstream(dir_.file("split.yaml")) << "train: [a]\nval: [v]\ntest: [t]\ndense: [d]\nscaled: [s]\n";
+
+    introspection::TrainConfig c;
+    c.dataset = dir_.file("data");
+    c.split_file = dir_.file("split.yaml");
+    c.output = dir_.file("model.pt");
+    c.steps = 2;
+    c.batch_size = 8;
+    c.threads = 1;
+    introspection::train_model(c);
+  }
+
+  test::CommandResult eval(const std::string& splits) const {
+    return test::run_command("timeout 120 " IVOA_EVAL_EXE " --model " + dir_.file("model.pt") + " --dataset " +
+                             dir_.file("data") + " --split " + dir_.file("split.yaml") + " --out " + out() +
+                             " --mc-passes 2 --threads 1 --splits " + splits);
+  }
+  std::string out() const { return dir_.file("eval"); }
+
+  test::TempDir dir_;
+};
+
+TEST_F(EvalCli, WritesARowAndAnEmbeddingPerSampleOfTheSplitsAsked) {
+  const auto r = eval("test");
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_FALSE(contains(r.output, "warning")) << r.output;
+  const std::string csv = test::read_file(out() + "/predictions.csv");
+  EXPECT_EQ(count_lines(csv), 1u + 4 * kPerClass) << "a header and a row per sample";
+  EXPECT_EQ(csv.rfind("session,environment,split,sample,", 0), 0u);
+  EXPECT_EQ(test::read_file(out() + "/embeddings.f32").size(), 4u * kPerClass * 256 * sizeof(float));
+  const std::string json = test::read_file(out() + "/eval.json");
+  EXPECT_TRUE(contains(json, "{\"split\": \"test\", \"session\": \"t\"}")) << json;
+  EXPECT_TRUE(contains(json, "\"detector\": \"jppc\"")) << json;
+}
+
+TEST_F(EvalCli, WarnsWhenTheSessionsAreLabelledFromAnotherDetector) {
+  const auto r = eval("test,dense");
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_TRUE(contains(r.output, "introspects the 'jppc' detector, but 1 of the 2 sessions")) << r.output;
+  EXPECT_TRUE(contains(r.output, "d, from 'dense'")) << r.output;
+  EXPECT_EQ(count_lines(test::read_file(out() + "/predictions.csv")), 1u + 8 * kPerClass);
+}
+
+TEST_F(EvalCli, RefusesPatchesCutUnlikeTheModelsNamingTheSessionAndTheFix) {
+  const auto r = eval("scaled");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "session s has patch scale 1.6")) << r.output;
+  EXPECT_TRUE(contains(r.output, "--patch-scale 0")) << r.output;
+}
+
+TEST_F(EvalCli, UnknownSplitIsBadInput) {
+  const auto r = eval("nosuch");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "no split 'nosuch'")) << r.output;
+}
+
+}  // namespace
+}  // namespace ivoa
