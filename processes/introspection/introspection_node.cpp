@@ -1,5 +1,6 @@
 #include "introspection_node.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <utility>
 
@@ -142,7 +143,7 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
                                       [this](const rig_calibration_t& m, const ReceiveInfo&) { on_calibration(m); });
   if (!options_.grid_channel.empty())
     bus_.subscribe<obstacle_grid_t>(options_.grid_channel,
-                                    [this](const obstacle_grid_t& m, const ReceiveInfo&) { grids_.put(m); });
+                                    [this](const obstacle_grid_t& m, const ReceiveInfo&) { on_grid(m); });
   heartbeat_.set_state("running");
   worker_ = std::thread([this] { work(); });
 }
@@ -173,6 +174,20 @@ void IntrospectionNode::on_calibration(const rig_calibration_t& msg) {
     return;
   }
   calibration_bytes_ = std::move(bytes);
+}
+
+void IntrospectionNode::on_grid(obstacle_grid_t grid) {
+  const std::string& own = model_->info().detector;
+  if (!grid.detector.empty() && !own.empty() && grid.detector != own) {
+    if (!std::exchange(warned_other_detector_, true))
+      spdlog::warn(
+          "{}: grids from the '{}' detector, but model {} was trained for '{}': no predictions given "
+          "their verdicts (counted as grids_other_detector)",
+          options_.grid_channel, grid.detector, model_->info().id, own);
+    heartbeat_.add_to_counter("grids_other_detector", 1);
+    std::fill(grid.state.begin(), grid.state.end(), obstacle_grid_t::STATE_UNKNOWN);
+  }
+  grids_.put(grid);
 }
 
 cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& where, cv::Mat& left) {

@@ -7,6 +7,9 @@
 // same frame, from its obstacle grid; the CNN is slower than the detector,
 // so that grid is normally in by the time the CNN is done, and the worker
 // waits a bounded time for it otherwise (then the verdict is unknown, counted).
+// A grid from another detector than the model was trained for gives the
+// query cells' geometry but no verdicts (counted, warned about once): the
+// model knows when its own detector errs, not another's.
 // A two-view model also needs the rig calibration, to warp the right image
 // onto the ground plane; frames before the first calibration are skipped
 // (counted as bad input).
@@ -91,6 +94,7 @@ class IntrospectionNode {
   void work();
   void process(const Frame& frame);
   void on_calibration(const rig_calibration_t& msg);
+  void on_grid(obstacle_grid_t grid);
   // The image the model runs on (left, or left over the ground-warped
   // right); empty after reporting bad input.
   cv::Mat model_input(const Frame& frame, const std::string& where, cv::Mat& left);
@@ -102,6 +106,7 @@ class IntrospectionNode {
   int mc_passes_;
   LatestMailbox<Frame> frames_;
   RecentGrids grids_;
+  bool warned_other_detector_ = false;  // LCM thread only
   std::mutex calibration_mutex_;
   std::vector<uint8_t> calibration_bytes_;  // the newest calibration's content (utime zeroed)
   std::optional<RigCalibration> new_rig_;   // handed to the worker, which builds the warp

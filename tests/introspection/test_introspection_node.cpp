@@ -55,6 +55,15 @@ bool deliver_until(Bus& bus, Done done) {
   return done();
 }
 
+// A heartbeat counter's value (-1 if it has none of that name).
+int64_t counter(Heartbeat& heartbeat, const std::string& name) {
+  const process_status_t status = heartbeat.snapshot();
+  const auto it = std::find(status.counter_names.begin(), status.counter_names.end(), name);
+  return it == status.counter_names.end()
+             ? -1
+             : status.counter_values[static_cast<size_t>(it - status.counter_names.begin())];
+}
+
 stereo_image_t stereo_frame(const RigCalibration& rig, int64_t utime) {
   cv::Mat left(rig.left.height, rig.left.width, CV_8UC3), right(rig.right.height, rig.right.width, CV_8UC3);
   cv::randu(left, 0, 255);
@@ -200,10 +209,23 @@ TEST(IntrospectionNode, QueryCellsAreGivenTheVerdictsOfTheirOwnFrame) {
   ASSERT_TRUE(wait_for([&] { return out.size() == 2; }));
   ASSERT_EQ(out[1].query_verdict.size(), verdicts.size());
   for (size_t q = 0; q < verdicts.size(); ++q) EXPECT_EQ(out[1].query_verdict[q], obstacle_grid_t::STATE_UNKNOWN);
-  const process_status_t status = heartbeat.snapshot();
-  const auto name = std::find(status.counter_names.begin(), status.counter_names.end(), "grids_missing");
-  ASSERT_NE(name, status.counter_names.end());
-  EXPECT_EQ(status.counter_values[static_cast<size_t>(name - status.counter_names.begin())], 1);
+  EXPECT_EQ(counter(heartbeat, "grids_missing"), 1);
+
+  // Another detector's grid of the frame: its geometry, not its verdicts.
+  grid.utime = 4000;
+  grid.detector = "dense";
+  bus.publish(channels::kObstaclesStereo, grid);
+  bus.handle(5);
+  stereo_image_t third = stereo_frame(rig, 4000);
+  bus.publish(channels::kStereoImages, third);
+  ASSERT_TRUE(wait_for([&] { return out.size() == 3; }));
+  ASSERT_EQ(out[2].query_verdict.size(), verdicts.size());
+  for (size_t q = 0; q < verdicts.size(); ++q) {
+    EXPECT_EQ(out[2].query_verdict[q], obstacle_grid_t::STATE_UNKNOWN);
+    EXPECT_EQ(out[2].query_verdict_class[q], introspection_labels_t::LABEL_NONE);
+  }
+  EXPECT_EQ(counter(heartbeat, "grids_other_detector"), 1);
+  EXPECT_EQ(counter(heartbeat, "grids_missing"), 1) << "the frame's grid came";
 }
 
 TEST(RecentGrids, FindsTheFrameOrStopsWaitingOnceANewerOneIsIn) {
