@@ -101,8 +101,16 @@ int run_info(const std::string& root, const std::string& split_path) {
   if (!split_path.empty())
     for (const auto& [split, sessions] : dataset::load_split(split_path))
       for (const auto& s : sessions) split_of[s] = split;
+  const std::vector<std::string> sessions = dataset::list_sessions(root);
+  if (sessions.empty()) {
+    spdlog::error(
+        "{}: not a dataset, or one without sessions (no dataset.json listing any: ivoa-dataset build "
+        "--out writes it)",
+        root);
+    return kExitBadInput;
+  }
   std::array<int64_t, dataset::kNumClasses> total{};
-  for (const auto& name : dataset::list_sessions(root)) {
+  for (const auto& name : sessions) {
     const dataset::SessionReader r(root + "/" + name);
     const auto& i = r.info();
     std::printf("%-28s %-6s %-8s %-8s frames %5lld samples %7lld  %s\n", name.c_str(),
@@ -208,7 +216,9 @@ int main(int argc, char** argv) {
   add_build_command(app, build);
   auto* info = app.add_subcommand("info", "sessions, class counts and splits of a dataset");
   std::string root, split;
-  info->add_option("dataset", root, "dataset folder")->required()->check(CLI::ExistingDirectory);
+  info->add_option("dataset,--dataset", root, "dataset folder (as ivoa-train and ivoa-eval take it)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
   info->add_option("--split", split, "a split file to check against the dataset")->check(CLI::ExistingFile);
 
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;

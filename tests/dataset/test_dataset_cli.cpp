@@ -1,0 +1,47 @@
+// `ivoa-dataset info` as a user runs it: sessions, splits and class counts;
+// a folder that is not a dataset is bad input.
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "ivoa/core/process.hpp"
+#include "synthetic_sessions.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa {
+namespace {
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+test::CommandResult dataset_info(const std::string& args) {
+  return test::run_command("timeout 60 " IVOA_DATASET_EXE " info " + args);
+}
+
+TEST(DatasetInfo, ListsSessionsWithTheirSplitDetectorAndClassCounts) {
+  test::TempDir dir;
+  test::SyntheticSession s;
+  s.per_class = 2;
+  test::write_synthetic_session(dir.file("data"), "a", s);
+  s.detector = "dense";
+  test::write_synthetic_session(dir.file("data"), "b", s);
+  std::ofstream(dir.file("split.yaml")) << "train: [a]\ntest: [b, gone]\n";
+
+  const auto r = dataset_info("--dataset " + dir.file("data") + " --split " + dir.file("split.yaml"));
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_TRUE(contains(r.output, "train")) << r.output;
+  EXPECT_TRUE(contains(r.output, "dense")) << r.output;
+  EXPECT_TRUE(contains(r.output, "total: TP 4  TN 4  FP 4  FN 4")) << r.output;
+  EXPECT_TRUE(contains(r.output, "names session 'gone', which is not in")) << r.output;
+  EXPECT_EQ(dataset_info(dir.file("data")).exit_code, kExitOk) << "the folder may also be given bare";
+}
+
+TEST(DatasetInfo, FolderWithoutADatasetIsBadInput) {
+  test::TempDir dir;
+  const auto r = dataset_info(dir.path().string());
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "not a dataset")) << r.output;
+}
+
+}  // namespace
+}  // namespace ivoa
