@@ -275,11 +275,16 @@ TEST(Training, CalibrationOnlyRewritesTheGatesNotTheWeights) {
 }
 
 // What train_model refuses `split_yaml` with, over the sessions "a" and
-// "b" (two samples a class) and "empty" (none); "accepted" if it trains.
+// "b" (two samples a class), "empty" (none) and "dense" (two samples a
+// class, the dense detector's labels); "accepted" if it trains.
 std::string refusal_of_split(test::TempDir& dir, const std::string& split_yaml) {
   write_session(dir.file("data"), "a", 2, 1);
   write_session(dir.file("data"), "b", 2, 2);
   write_session(dir.file("data"), "empty", 0, 3);
+  test::SyntheticSession dense;
+  dense.per_class = 2;
+  dense.detector = "dense";
+  test::write_synthetic_session(dir.file("data"), "dense", dense);
   std::ofstream(dir.file("split.yaml")) << split_yaml;
   TrainConfig c;
   c.dataset = dir.file("data");
@@ -311,6 +316,17 @@ TEST(Training, ValidationSessionsWithoutSamplesAreNamedBeforeTraining) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("m.pt.checkpoint.step")));
   test::TempDir control;
   EXPECT_EQ(refusal_of_split(control, "train: [a]\nval: [b]\n"), "accepted");
+}
+
+// A model introspects one detector: labels of two are not mixed.
+TEST(Training, SessionsLabelledFromAnotherDetectorAreRefused) {
+  test::TempDir dir;
+  std::string why = refusal_of_split(dir, "train: [a, dense]\nval: [b]\n");
+  EXPECT_NE(why.find("dense: labelled from the 'dense' detector, the other sessions from 'jppc'"), std::string::npos)
+      << why;
+  test::TempDir other;
+  why = refusal_of_split(other, "train: [a]\nval: [dense]\n");
+  EXPECT_NE(why.find("validation sessions are labelled from the 'dense' detector"), std::string::npos) << why;
 }
 
 }  // namespace

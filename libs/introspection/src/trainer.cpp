@@ -36,6 +36,7 @@ struct SplitData {
   int views = 0;
   double patch_scale = -1;  // -1 until the first session is read
   int evidence_size = -1;   // values per sample; 0 if a session has none
+  std::string detector;     // whose failures the labels are: one for all
 
   size_t size() const {
     size_t n = 0;
@@ -59,6 +60,11 @@ SplitData load_split_data(const TrainConfig& c, const std::string& split) {
     if (reader->info().views != d.views)
       throw std::runtime_error(name + ": " + std::to_string(reader->info().views) + " view(s), the other sessions " +
                                std::to_string(d.views));
+    if (d.sessions.empty()) d.detector = reader->info().detector;
+    if (reader->info().detector != d.detector)
+      throw std::runtime_error(fmt::format(
+          "{}: labelled from the '{}' detector, the other sessions from '{}' (a model introspects one detector)", name,
+          reader->info().detector, d.detector));
     if (d.patch_scale < 0) d.patch_scale = reader->info().patch_scale;
     if (reader->info().patch_scale != d.patch_scale)
       throw std::runtime_error(
@@ -228,6 +234,8 @@ void check_can_start_from(const ModelInfo& from, const ModelInfo& wanted, bool r
   else if (from.patch_scale != wanted.patch_scale)
     why = fmt::format("patch scale {}, the dataset's {}", from.patch_scale, wanted.patch_scale);
   else if (from.views != wanted.views) why = fmt::format("{} view(s), the dataset's {}", from.views, wanted.views);
+  else if (resuming && from.detector != wanted.detector)  // fine-tuning for another detector is allowed
+    why = fmt::format("the '{}' detector's labels, the dataset's '{}'", from.detector, wanted.detector);
   if (why.empty()) return;
   const std::string remedy = resuming
                                  ? "delete " + output + ".checkpoint.* to train from scratch, or choose another --out"
@@ -272,6 +280,11 @@ ModelInfo model_info_for(const TrainConfig& c, const SplitData& train, const Spl
         fmt::format("the validation sessions' patches (size {}, scale {}) differ from the "
                     "training ones' (size {}, scale {})",
                     val.patch_size, val.patch_scale, train.patch_size, train.patch_scale));
+  if (val.detector != train.detector)
+    throw std::runtime_error(
+        fmt::format("the validation sessions are labelled from the '{}' detector, the training "
+                    "ones from '{}'",
+                    val.detector, train.detector));
   ModelInfo info;
   info.architecture = c.architecture;
   info.patch_size = train.patch_size;
@@ -279,7 +292,7 @@ ModelInfo model_info_for(const TrainConfig& c, const SplitData& train, const Spl
   info.patch_scale = train.patch_scale;
   info.input_size = input_size_of(c.architecture);
   info.dropout = c.dropout;
-  info.detector = train.sessions[0]->info().detector;
+  info.detector = train.detector;
   return info;
 }
 
@@ -488,10 +501,11 @@ TrainReport calibrate_model(const TrainConfig& c) {
   const SplitData val = load_split_data(c, c.val_split);
   NativeModel model = load_native_model(c.init);
   if (model.info.views != val.views || model.info.patch_scale != val.patch_scale ||
-      model.info.patch_size != val.patch_size)
-    throw std::runtime_error(fmt::format("{}: {} view(s), patch size {}, scale {}; the validation sessions: {}, {}, {}",
-                                         model.info.id, model.info.views, model.info.patch_size, model.info.patch_scale,
-                                         val.views, val.patch_size, val.patch_scale));
+      model.info.patch_size != val.patch_size || model.info.detector != val.detector)
+    throw std::runtime_error(
+        fmt::format("{}: {} view(s), patch size {}, scale {}, detector '{}'; the validation sessions: {}, {}, {}, '{}'",
+                    model.info.id, model.info.views, model.info.patch_size, model.info.patch_scale, model.info.detector,
+                    val.views, val.patch_size, val.patch_scale, val.detector));
   model.net->to(device);
   auto generator = at::detail::createCPUGenerator(c.seed);
   const std::vector<SampleRef> refs = validation_subset(val, c.max_val_samples);
