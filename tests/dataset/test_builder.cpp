@@ -357,5 +357,20 @@ TEST(DatasetBuilder, LogWithoutCalibrationIsRefused) {
   }
 }
 
+TEST(DatasetBuilder, FileThatIsNotALogIsNamedAsSuch) {
+  test::TempDir dir;
+  const std::string path = dir.file("notes.lcmlog");
+  std::ofstream(path) << "these are notes, not an LCM log; long enough to hold an event header\n";
+  SessionBuilder builder(dir.file("data"), "notes", BuildOptions{});
+  try {
+    builder.add_log(path);
+    FAIL();
+  } catch (const DatasetError& e) {
+    const std::string why = e.what();
+    EXPECT_NE(why.find("notes.lcmlog: not an LCM log"), std::string::npos) << why;
+    EXPECT_NE(why.find("byte 0"), std::string::npos) << why;
+  }
+}
+
 }  // namespace
 }  // namespace ivoa::dataset

@@ -387,7 +387,9 @@ void SessionBuilder::add_log(const std::string& path, const ProgressCallback& pr
   logio::LogReader reader(path);  // throws LogReadError for a missing file
   logio::LogEvent e;
   const auto& o = m.options;
+  int64_t events = 0;  // of this log
   while (reader.next(e)) {
+    ++events;
     ++m.report.events;
     if (e.channel == o.calibration_channel) m.on_calibration(e);
     else if (!m.rig) continue;  // nothing is usable before the calibration
@@ -400,9 +402,12 @@ void SessionBuilder::add_log(const std::string& path, const ProgressCallback& pr
   }
   if (progress) progress(reader.position(), reader.size());
   for (const auto& p : reader.problems()) m.report.problems.push_back(path + ": " + p.describe());
-  if (!m.rig)
-    throw DatasetError(path + ": no " + o.calibration_channel +
-                       " message in the log; a log must hold the rig calibration (record it with ivoa-logger)");
+  if (m.rig) return;
+  if (events == 0 && !reader.problems().empty())
+    throw DatasetError(path + ": not an LCM log, or damaged from its start (" + reader.problems().front().describe() +
+                       ")");
+  throw DatasetError(path + ": no " + o.calibration_channel +
+                     " message in the log; a log must hold the rig calibration (record it with ivoa-logger)");
 }
 
 BuildReport SessionBuilder::finish() {
