@@ -150,6 +150,38 @@ TEST(LogReader, ResyncSkipsOnlyTheDamagedEvent) {
   EXPECT_NE(r.problems[0].what.find("channel name length"), std::string::npos) << r.problems[0].what;
 }
 
+// Reads `path` to the end with default options; returns not_a_log().
+std::string not_a_log(const std::string& path, bool resync = false) {
+  LogReader reader(path, {resync});
+  LogEvent e;
+  while (reader.next(e)) {
+  }
+  return reader.not_a_log();
+}
+
+TEST(LogReader, SaysAFileIsNotALogOnlyWhenNothingCouldBeReadFromItsStart) {
+  test::TempDir dir;
+  const std::string text = dir.file("notes.lcmlog");
+  std::ofstream(text) << "notes, not a log: long enough to hold an event header\n";
+  EXPECT_NE(not_a_log(text).find("not an LCM log, or damaged from its start (byte 0: "), std::string::npos)
+      << not_a_log(text);
+
+  const std::string damaged_later = dir.file("later.lcmlog");
+  const auto offsets = write_log(damaged_later, 3, 100);
+  overwrite_byte(damaged_later, offsets[1], 0x00);
+  EXPECT_EQ(not_a_log(damaged_later), "") << "its first event is good";
+
+  const std::string damaged_first = dir.file("first.lcmlog");
+  write_log(damaged_first, 3, 100);
+  overwrite_byte(damaged_first, 0, 0x00);
+  EXPECT_NE(not_a_log(damaged_first), "");
+  EXPECT_EQ(not_a_log(damaged_first, /*resync=*/true), "") << "the events after the first are read";
+
+  const std::string empty = dir.file("empty.lcmlog");
+  std::ofstream{empty};
+  EXPECT_EQ(not_a_log(empty), "") << "an empty log is a log";
+}
+
 TEST(LogReader, MissingFileThrowsNamingIt) {
   try {
     LogReader reader("/nonexistent/x.lcmlog");

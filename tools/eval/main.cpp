@@ -184,6 +184,7 @@ void write_log_overlays(const Options& o, introspection::IntrospectionModel& mod
     if (!cv::imwrite(path, figure)) throw OutputError(path + ": cannot write the overlay figure");
     ++written;
   }
+  if (const std::string why = in.not_a_log(); !why.empty()) spdlog::warn("{}: {}: no overlays from it", log, why);
 }
 
 int write_overlays(const Options& o, introspection::IntrospectionModel& model) {

@@ -48,7 +48,9 @@ void read_log(const std::string& path, bool resync, tools::LiveScorer& scorer, R
     else if (e.channel == channels::kIntrospectionLabels) feed<introspection_labels_t>(path, e, scorer, counts);
     else if (e.channel == channels::kObstaclesStereo) feed<obstacle_grid_t>(path, e, scorer, counts);
   }
-  for (const auto& p : reader.problems()) spdlog::warn("{}: {}", path, p.describe());
+  if (const std::string why = reader.not_a_log(); !why.empty()) spdlog::warn("{}: {}", path, why);
+  else
+    for (const auto& p : reader.problems()) spdlog::warn("{}: {}", path, p.describe());
   if (!reader.clean()) ++counts.damaged_files;
 }
 

@@ -387,9 +387,7 @@ void SessionBuilder::add_log(const std::string& path, const ProgressCallback& pr
   logio::LogReader reader(path);  // throws LogReadError for a missing file
   logio::LogEvent e;
   const auto& o = m.options;
-  int64_t events = 0;  // of this log
   while (reader.next(e)) {
-    ++events;
     ++m.report.events;
     if (e.channel == o.calibration_channel) m.on_calibration(e);
     else if (!m.rig) continue;  // nothing is usable before the calibration
@@ -403,9 +401,7 @@ void SessionBuilder::add_log(const std::string& path, const ProgressCallback& pr
   if (progress) progress(reader.position(), reader.size());
   for (const auto& p : reader.problems()) m.report.problems.push_back(path + ": " + p.describe());
   if (m.rig) return;
-  if (events == 0 && !reader.problems().empty())
-    throw DatasetError(path + ": not an LCM log, or damaged from its start (" + reader.problems().front().describe() +
-                       ")");
+  if (!reader.not_a_log().empty()) throw DatasetError(path + ": " + reader.not_a_log());
   throw DatasetError(path + ": no " + o.calibration_channel +
                      " message in the log; a log must hold the rig calibration (record it with ivoa-logger)");
 }

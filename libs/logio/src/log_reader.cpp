@@ -35,6 +35,11 @@ std::string LogProblem::describe() const {
   return s;
 }
 
+std::string LogReader::not_a_log() const {
+  if (problems_.empty() || problems_.front().offset != 0 || !problems_.front().to_end) return "";
+  return "not an LCM log, or damaged from its start (" + problems_.front().describe() + ")";
+}
+
 LogReader::LogReader(std::string path, LogReaderOptions options) : path_(std::move(path)), options_(options) {
   fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
   struct stat st {};

@@ -60,6 +60,10 @@ class LogReader {
 
   const std::vector<LogProblem>& problems() const { return problems_; }
   bool clean() const { return problems_.empty(); }
+  // After reading: "not an LCM log, or damaged from its start (byte 0: …)"
+  // if no event could be read from its first byte, else "". Tools say this
+  // instead of what the log lacks.
+  std::string not_a_log() const;
   const std::string& path() const { return path_; }
   uint64_t size() const { return size_; }          // the file's size when opened
   uint64_t position() const { return position_; }  // bytes read or skipped so far
