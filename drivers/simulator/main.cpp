@@ -11,6 +11,7 @@
 
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/calibration.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/process.hpp"
@@ -57,7 +58,7 @@ void add_session_options(CLI::App& app, CommandLine& cl) {
                  "sensor noise realisation: 0 keys the noise by frame alone; another value, same session with other "
                  "noise")
       ->capture_default_str();
-  app.add_option("--rate", config.rate_hz, "frames per second")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--rate", config.rate_hz, "frames per second")->capture_default_str()->check(ivoa::positive_number());
   auto* realtime = app.add_flag("--realtime", config.realtime, "pace frames by the wall clock (default)");
   app.add_flag("--as-fast-as-possible", cl.fast, "render frames back to back (session time stays frame / rate)")
       ->excludes(realtime);

@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include "introspection_node.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
 
@@ -39,7 +40,7 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--grid-wait-ms", cl.grid_wait_ms,
                  "after the CNN, how long to wait for the detector's grid of the frame (its verdicts)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_option("--mean-filter", config.mean_filter, "odd window of the heatmap mean filter (1 = off)")
       ->capture_default_str();
   app.add_option("--lookup", cl.lookup, "query cell -> heatmap: nearest cell or bilinear")

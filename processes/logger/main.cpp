@@ -15,6 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
@@ -223,7 +224,7 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
       ->capture_default_str();
   app.add_option("--split-mb", f.split_mb,
                  "start a new numbered file (FILE.00, FILE.01, ...) before one passes this size")
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_option("--calibration-channel", f.options.log.calibration_channel,
                  "always recorded, and copied to the start of every split file so each is self-contained "
                  "(empty: none)")
@@ -232,9 +233,9 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
                  "memory for messages waiting for the disk; beyond it new ones are "
                  "dropped and counted")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
   app.add_option("--max-write-mb-s", f.max_write_mb_s, "cap the disk write rate (0 = none)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_option("--socket-buffer-mb", f.socket_buffer_mb,
                  "kernel receive buffer for LCM's udpm socket, past net.core.rmem_max where permitted "
                  "(CAP_NET_ADMIN); 0 = as LCM sets it")

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/viewer/figure_window.hpp"
@@ -21,17 +22,17 @@ void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   app.add_option("--out-dir", out.out_dir, "write figures here as frame_<utime>.png");
   app.add_option("--every", out.every_frames, "a PNG every N figures")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
   app.add_option("--every-seconds", out.every_seconds, "and at least S seconds apart")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_option("--max-images", out.max_images, "keep only the newest N PNGs this run wrote (0: all)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_option("--video", out.video, "also write every figure to this video (.avi, MJPG)");
   app.add_option("--video-fps", out.video_fps, "frame rate written in the video")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
   app.add_option("--scale", o.figure.scale, "figure panel size relative to the image")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 4.0));
@@ -41,7 +42,7 @@ void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
                "draw every frame in order, reading waits for the drawing (default for file:// logs)");
   app.add_option("--max-figures", o.max_figures, "exit after this many figures (0: run until stopped)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
 }
 
 void add_matching_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
@@ -50,11 +51,11 @@ void add_matching_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
                  "with no frame complete for this long, draw the best one there is, ms")
       ->capture_default_str()
       ->group(g)
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_option("--active-ms", o.matcher.active_ms, "a channel seen this recently is expected in every frame, ms")
       ->capture_default_str()
       ->group(g)
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_option("--match-frames", o.matcher.max_frames, "frames kept waiting for their parts")
       ->capture_default_str()
       ->group(g)

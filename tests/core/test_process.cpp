@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <gtest/gtest.h>
 
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "test_rig.hpp"
 
@@ -31,6 +32,29 @@ TEST(CommonOptions, ProcessesTakeAnLcmUrlAndOfflineToolsRefuseOne) {
   EXPECT_EQ(offline.log_level, "error");
   EXPECT_EQ(parse(add_offline_options, {"--lcm-url", "memq://"}, offline), kExitUsage);
   EXPECT_EQ(parse(add_offline_options, {"--log-level", "loud"}, offline), kExitUsage);
+}
+
+// What a check says of `text` ("" if it passes).
+std::string verdict(const CLI::Validator& check, std::string text) { return check(text); }
+
+TEST(FlagChecks, SayWhatANumericFlagMustBeInAFewWords) {
+  EXPECT_EQ(verdict(positive_number(), "2"), "");
+  EXPECT_EQ(verdict(positive_number(), "0.5"), "");
+  EXPECT_EQ(verdict(positive_number(), "0"), "must be > 0, not 0");
+  EXPECT_EQ(verdict(positive_number(), "-3"), "must be > 0, not -3");
+  EXPECT_EQ(verdict(positive_number(), "many"), "must be a number, not 'many'");
+  EXPECT_EQ(verdict(positive_number(), "nan"), "must be a number, not 'nan'");
+  EXPECT_EQ(verdict(non_negative_number(), "0"), "");
+  EXPECT_EQ(verdict(non_negative_number(), "-0.1"), "must be >= 0, not -0.1");
+
+  CLI::App app;
+  int steps = 1;
+  app.add_option("--steps", steps)->check(positive_number());
+  const char* zero[] = {"tool", "--steps", "0"};
+  EXPECT_EQ(parse_command_line(app, 3, const_cast<char**>(zero)), kExitUsage);
+  const char* five[] = {"tool", "--steps", "5"};
+  EXPECT_EQ(parse_command_line(app, 3, const_cast<char**>(five)), -1);
+  EXPECT_EQ(steps, 5);
 }
 
 TEST(WriteTextFile, WritesTheTextOrSaysItCannot) {

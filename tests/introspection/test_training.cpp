@@ -329,5 +329,23 @@ TEST(Training, SessionsLabelledFromAnotherDetectorAreRefused) {
   EXPECT_NE(why.find("validation sessions are labelled from the 'dense' detector"), std::string::npos) << why;
 }
 
+// The model's folder is made if need be; one that cannot be made is an
+// output error before any step, not a LibTorch backtrace after the first.
+TEST(Training, MakesTheModelsFolderOrSaysItCannot) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 2, 2);
+  c.output = dir.file("models/today/m.pt");
+  train_model(c);
+  EXPECT_TRUE(std::filesystem::exists(c.output));
+
+  c.output = dir.file("split.yaml/m.pt");  // a file where the folder should be
+  try {
+    train_model(c);
+    FAIL();
+  } catch (const TrainOutputError& e) {
+    EXPECT_NE(std::string(e.what()).find("split.yaml/m.pt: cannot create its folder"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace ivoa::introspection

@@ -13,6 +13,7 @@
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/calibration.hpp"
 #include "ivoa/core/channels.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/message_counts.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/time.hpp"
@@ -99,7 +100,7 @@ int main(int argc, char** argv) {
   pub->add_option("--calibrations", p.calibrations)->capture_default_str();
   pub->add_option("--foreign", p.foreign, "messages per foreign channel")->capture_default_str();
   pub->add_option("--foreign-channel", p.foreign_channels)->capture_default_str();
-  pub->add_option("--rate", p.rate_hz)->capture_default_str()->check(CLI::PositiveNumber);
+  pub->add_option("--rate", p.rate_hz)->capture_default_str()->check(ivoa::positive_number());
   WaitOptions w;
   auto* wt = app.add_subcommand("wait", "wait until a process's heartbeat shows a condition");
   wt->add_option("--process", w.process)->capture_default_str();

@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
@@ -168,7 +169,7 @@ void add_build_command(CLI::App& app, BuildCommand& b) {
       ->add_option("--patch-scale", options.patch_scale,
                    "0: fixed --patch-size squares (the paper); k > 0: squares of k footprint-disc widths (at least "
                    "--patch-size) resized to --patch-size, so near cells show their whole disc")
-      ->check(CLI::NonNegativeNumber)
+      ->check(ivoa::non_negative_number())
       ->capture_default_str();
   build
       ->add_option("--keep-tn", options.keep_tn,

@@ -18,6 +18,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/channels.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/launcher/config.hpp"
 #include "ivoa/launcher/launcher.hpp"
@@ -48,18 +49,18 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--set", o.sets, "NAME=VALUE for ${NAME} (before the environment and the file's defaults)");
   app.add_option("--script", l.script, "run this script of the file instead of starting every command");
   app.add_option("--duration", l.duration_s, "stop everything after this many seconds (0: no limit)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_flag("--once", l.once, "stop everything once every command without auto_respawn has ended");
   app.add_option("--until", l.until, "stop everything once these commands have ended");
   app.add_option("--grace", l.grace_s, "seconds the others keep running after --once/--until holds")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_option("--status-file", l.status_file,
                  "write the final status here (JSON if it ends in .json, else the table)");
   app.add_option("--status-every", l.status_every_s,
                  "print the table every S seconds when not on a terminal (0: at the end only)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_flag("--plain", o.plain, "on a terminal too: prefixed lines and a periodic table instead of a live table");
   app.add_option("--output-dir", l.output_dir, "also append each command's output to DIR/NAME.log");
   app.add_option("--status-channel", l.status_channel, "heartbeat channel")->capture_default_str();
@@ -69,15 +70,15 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--respawn-delay", s.respawn_delay_s, "first back-off, s (doubles while it keeps failing)")
       ->capture_default_str()
       ->group(g)
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_option("--respawn-max-delay", s.respawn_max_delay_s, "longest back-off, s")
       ->capture_default_str()
       ->group(g)
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
   app.add_option("--healthy-after", s.healthy_after_s, "a run this long resets the back-off, s")
       ->capture_default_str()
       ->group(g)
-      ->check(CLI::NonNegativeNumber);
+      ->check(ivoa::non_negative_number());
 }
 
 // IVOA_BIN: where ivoa-launch itself is (build/bin: every executable);

@@ -25,6 +25,7 @@
 
 #include "ivoa/causes/cause_finder.hpp"
 #include "ivoa/core/channels.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
@@ -364,7 +365,7 @@ void add_options(CLI::App& app, CommandLine& cl) {
       ->check(CLI::ExistingFile);
   app.add_option("--scene-dir", opt.scene_dir, "where the logged scenes' files are")->capture_default_str();
   app.add_option("--rate", opt.timing.rate_hz, "the simulator driver's --rate (frames per second of session time)")
-      ->check(CLI::PositiveNumber)
+      ->check(ivoa::positive_number())
       ->capture_default_str();
   app.add_option("--noise-seed", opt.timing.noise_seed, "the simulator driver's --noise-seed")->capture_default_str();
   app.add_option("--start-utime", opt.start_utime,
@@ -377,7 +378,7 @@ void add_options(CLI::App& app, CommandLine& cl) {
       ->required()
       ->check(CLI::ExistingFile);
   app.add_option("--jobs", cl.jobs, "sessions explained at once (each on one core)")
-      ->check(CLI::PositiveNumber)
+      ->check(ivoa::positive_number())
       ->capture_default_str();
   app.add_option("--variant", cl.variants,
                  "other settings of the detector to try on the frames as they were, 'NAME: FLAGS' (the detector "

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
 #include "ivoa/introspection/model.hpp"
@@ -51,21 +52,28 @@ void add_data_options(CLI::App& app, introspection::TrainConfig& c) {
 
 void add_optimiser_options(CLI::App& app, TrainCommandLine& cl) {
   auto& c = cl.config;
-  app.add_option("--steps", c.steps, "optimiser steps")->capture_default_str();
-  app.add_option("--batch-size", c.batch_size, "patches per step, drawn class-balanced")->capture_default_str();
+  app.add_option("--steps", c.steps, "optimiser steps")->capture_default_str()->check(ivoa::positive_number());
+  app.add_option("--batch-size", c.batch_size, "patches per step, drawn class-balanced")
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_option("--optimizer", cl.optimizer, "adamw or sgd (the paper's)")
       ->check(CLI::IsMember({"adamw", "sgd"}))
       ->capture_default_str();
   cl.learning_rate_option =
       app.add_option("--lr", cl.learning_rate,
                      fmt::format("learning rate (default: AdamW {}, SGD {}, the paper's)",
-                                 introspection::kAdamWLearningRate, introspection::kSgdLearningRate));
-  app.add_option("--momentum", c.momentum, "SGD momentum (paper: 0.9)")->capture_default_str();
-  cl.weight_decay_option =
-      app.add_option("--weight-decay", cl.weight_decay,
-                     fmt::format("weight decay (default: AdamW {}, decoupled; SGD {}, as L2)",
-                                 introspection::kAdamWWeightDecay, introspection::kSgdWeightDecay));
-  app.add_option("--warmup-steps", c.warmup_steps, "linear warm-up, then cosine decay")->capture_default_str();
+                                 introspection::kAdamWLearningRate, introspection::kSgdLearningRate))
+          ->check(ivoa::positive_number());
+  app.add_option("--momentum", c.momentum, "SGD momentum (paper: 0.9)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  cl.weight_decay_option = app.add_option("--weight-decay", cl.weight_decay,
+                                          fmt::format("weight decay (default: AdamW {}, decoupled; SGD {}, as L2)",
+                                                      introspection::kAdamWWeightDecay, introspection::kSgdWeightDecay))
+                               ->check(ivoa::non_negative_number());
+  app.add_option("--warmup-steps", c.warmup_steps, "linear warm-up, then cosine decay")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
 }
 
 void add_model_options(CLI::App& app, TrainCommandLine& cl) {
@@ -75,35 +83,42 @@ void add_model_options(CLI::App& app, TrainCommandLine& cl) {
       ->check(CLI::IsMember({"slidenet", "alexnet"}));
   app.add_option("--init", c.init, "start from this model (fine-tuning)")->check(CLI::ExistingFile);
   app.add_flag("--resume", c.resume, "continue from OUT.checkpoint.* if present");
-  app.add_option("--dropout", c.dropout, "dropout before FC1 and FC2")->capture_default_str();
+  app.add_option("--dropout", c.dropout, "dropout before FC1 and FC2")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.99));
   app.add_option("--fn-weight", c.fn_weight, "FN share of class-balanced sampling (reference: 0.1 outdoors)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_option("--evidence-weight", c.evidence_weight,
                  "weight of the side task: regress the detector's evidence stored with each sample (JPP-C's window "
                  "costs) from the trunk's features; 0: off")
-      ->check(CLI::NonNegativeNumber)
+      ->check(ivoa::non_negative_number())
       ->capture_default_str();
   app.add_flag("--no-augment", cl.no_augment, "no photometric augmentation");
   app.add_option("--seed", c.seed, "initial weights, batch draws, augmentation and dropout")->capture_default_str();
-  app.add_option("--threads", c.threads, "LibTorch threads")->capture_default_str();
+  app.add_option("--threads", c.threads, "LibTorch threads")->capture_default_str()->check(ivoa::positive_number());
   app.add_option("--device", c.device, "cpu or cuda")->capture_default_str();
 }
 
 void add_validation_options(CLI::App& app, TrainCommandLine& cl) {
   auto& c = cl.config;
   app.add_option("--validate-every", c.validate_every, "steps between validations (and at the last step)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_option("--checkpoint-every", c.checkpoint_every, "steps between checkpoints that --resume continues from")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_flag("--keep-last", c.keep_last,
                "write the final step's model, not the best-validated one (a few validation sessions make the best "
                "step partly chance)");
   app.add_option("--max-val-samples", c.max_val_samples,
                  "validate on at most this many samples, spread over the sessions")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_option("--threshold-retain", c.threshold_retain,
                  "the stored uncertainty gate keeps this fraction of validation samples")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--calibrate-only", cl.calibrate_only,
                "no training: re-calibrate the uncertainty gates of the --init model on the validation split and "
                "write it to --out");
@@ -184,6 +199,9 @@ int main(int argc, char** argv) {
   init_logging("train", common.log_level);
   try {
     return cl.calibrate_only ? calibrate(cl.config) : train(cl.config);
+  } catch (const introspection::TrainOutputError& e) {
+    spdlog::error("{}", e.what());
+    return kExitIoError;
   } catch (const std::exception& e) {  // ModelError and the rest: the message names the file and what is wrong
     spdlog::error("{}", e.what());
     return kExitBadInput;

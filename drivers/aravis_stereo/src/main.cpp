@@ -10,6 +10,7 @@
 #include "ivoa/aravis_stereo/stereo_driver.hpp"
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/calibration.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/process.hpp"
 
@@ -50,7 +51,7 @@ void add_camera_options(CLI::App& app, Flags& f) {
       ->group(g);
   app.add_option("--exposure-us", c.exposure_us, "fixed exposure, microseconds (0 = continuous auto exposure)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber)
+      ->check(ivoa::non_negative_number())
       ->group(g);
   app.add_option("--gain", c.gain, "fixed gain in camera units, dB on FLIR (negative = continuous auto gain)")
       ->capture_default_str()
@@ -103,7 +104,7 @@ void add_driver_options(CLI::App& app, Flags& f) {
       ->group(g);
   app.add_option("--frame-timeout", d.worker.frame_timeout_s, "seconds without a frame before a camera is reopened")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber)
+      ->check(ivoa::positive_number())
       ->group(g);
   app.add_option("--reconnect-initial", d.worker.backoff.initial_s, "first wait between reopen attempts, seconds")
       ->capture_default_str()

@@ -9,6 +9,7 @@
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/calibration.hpp"
 #include "ivoa/core/channels.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/process.hpp"
@@ -55,7 +56,7 @@ void add_options(CLI::App& app, Flags& f) {
   app.add_flag("--loop", f.camera.loop, ".oni only: start again at the end instead of exiting");
   app.add_option("--frame-timeout", f.frame_timeout_s, "exit with an error after this many seconds without depth")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
   app.add_option("--depth-channel", f.depth_channel, "channel for ivoa.depth_image_t")->capture_default_str();
   app.add_option("--color-channel", f.color_channel, "channel for the colour image (ivoa.image_t)")
       ->capture_default_str();

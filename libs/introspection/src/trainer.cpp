@@ -342,19 +342,44 @@ torch::Tensor labels_of(const SplitData& d, const std::vector<SampleRef>& refs) 
   return torch::tensor(labels, torch::kLong);
 }
 
+// Runs `write` of `path`; a failure becomes a TrainOutputError naming the
+// file, without LibTorch's backtrace.
+template <class Write>
+void write_or_throw(const std::string& path, Write&& write) {
+  try {
+    write();
+  } catch (const c10::Error& e) {
+    throw TrainOutputError(path + ": cannot write (" + std::string(e.what_without_backtrace()) + ")");
+  } catch (const std::filesystem::filesystem_error& e) {
+    throw TrainOutputError(path + ": cannot write (" + std::string(e.what()) + ")");
+  }
+}
+
+// The model file's folder, created if need be, before any training.
+void make_output_folder(const std::string& output) {
+  const std::filesystem::path folder = std::filesystem::path(output).parent_path();
+  std::error_code error;
+  if (!folder.empty()) std::filesystem::create_directories(folder, error);
+  if (error) throw TrainOutputError(output + ": cannot create its folder (" + error.message() + ")");
+}
+
+void save_model_or_throw(IntrospectionNetImpl& net, const ModelInfo& info, const std::string& path) {
+  write_or_throw(path, [&] { save_model(net, info, path); });
+}
+
 // A checkpoint: OUT.checkpoint.model, .optimizer, .evidence (side task) and
 // .step ("step best_val best_step optimizer"; checkpoints from before AdamW
 // have no optimiser name and are SGD's).
 void save_checkpoint(const std::string& checkpoint, IntrospectionNetImpl& net, const ModelInfo& info,
                      const EvidenceTask* evidence, Optimizer kind, torch::optim::Optimizer& optimizer, int64_t step,
                      const TrainReport& report) {
-  save_model(net, info, checkpoint + ".model");
-  if (evidence) evidence->save(checkpoint + ".evidence");
-  torch::save(optimizer, checkpoint + ".optimizer");
+  save_model_or_throw(net, info, checkpoint + ".model");
+  if (evidence) write_or_throw(checkpoint + ".evidence", [&] { evidence->save(checkpoint + ".evidence"); });
+  write_or_throw(checkpoint + ".optimizer", [&] { torch::save(optimizer, checkpoint + ".optimizer"); });
   std::ofstream step_file(checkpoint + ".step");
   step_file << step << " " << report.best_val_mean_class_accuracy << " " << report.best_step << " "
             << optimizer_name(kind) << "\n";
-  if (!step_file.flush()) throw std::runtime_error(checkpoint + ".step: cannot write the checkpoint (disk full?)");
+  if (!step_file.flush()) throw TrainOutputError(checkpoint + ".step: cannot write the checkpoint (disk full?)");
 }
 
 // Restores the optimiser and side task of a checkpoint; returns its step.
@@ -497,6 +522,7 @@ TrainReport calibrate_model(const TrainConfig& c) {
   const double start = monotonic_ms();
   torch::set_num_threads(std::max(c.threads, 1));
   if (c.init.empty() || c.output.empty()) throw std::runtime_error("calibration needs a model (--init) and --out");
+  make_output_folder(c.output);
   const torch::Device device = c.device == "cuda" ? torch::kCUDA : torch::kCPU;
   const SplitData val = load_split_data(c, c.val_split);
   NativeModel model = load_native_model(c.init);
@@ -512,7 +538,7 @@ TrainReport calibrate_model(const TrainConfig& c) {
   TrainReport report;
   report.val_samples = static_cast<int64_t>(refs.size());
   calibrate_gates(model, val, refs, c, device, generator, report);
-  save_model(*model.net, model.info, c.output);  // weights and training summary unchanged
+  save_model_or_throw(*model.net, model.info, c.output);  // weights and training summary unchanged
   report.seconds = (monotonic_ms() - start) / 1000.0;
   return report;
 }
@@ -523,6 +549,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   torch::manual_seed(c.seed);
   const torch::Device device = c.device == "cuda" ? torch::kCUDA : torch::kCPU;
   if (c.output.empty()) throw std::runtime_error("no output model file given");
+  make_output_folder(c.output);
   const SplitData train = load_split_data(c, c.train_split);
   const SplitData val = load_split_data(c, c.val_split);
   TrainReport report;
@@ -558,7 +585,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
       if (c.keep_last ? last : better) {
         record_kept(report, v.confusion, step + 1);
         info.training_summary = training_summary(c, train, val, report, step + 1);
-        save_model(*learner.net, info, c.output);  // the best so far (or the last), complete at every moment
+        save_model_or_throw(*learner.net, info, c.output);  // the best so far (or the last), complete at every moment
       }
       status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
     }
@@ -573,7 +600,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   best.net->to(device);
   calibrate_gates(best, val, val_refs, c, device, generator, report);
   best.info.training_summary = training_summary(c, train, val, report, report.best_step);
-  save_model(*best.net, best.info, c.output);
+  save_model_or_throw(*best.net, best.info, c.output);
   report.last = status;
   report.seconds = (monotonic_ms() - start) / 1000.0;
   return report;

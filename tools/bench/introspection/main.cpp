@@ -16,6 +16,7 @@
 #include <opencv2/imgproc.hpp>
 #include <torch/torch.h>
 
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/time.hpp"
 #include "ivoa/core/camera_model.hpp"
@@ -224,15 +225,17 @@ struct BenchOptions {
 };
 
 void add_bench_options(CLI::App& app, BenchOptions& o) {
-  app.add_option("--threads", o.threads, "LibTorch threads")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--threads", o.threads, "LibTorch threads")->capture_default_str()->check(ivoa::positive_number());
   app.add_option("--mc-passes", o.passes, "Monte-Carlo dropout passes (the paper's T)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  app.add_option("--runs", o.runs, "timed runs (median reported)")->capture_default_str()->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
+  app.add_option("--runs", o.runs, "timed runs (median reported)")
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_option("--reference-patches", o.reference_patches, "patches the reference is timed on")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  app.add_option("--batch", o.batch, "training batch")->capture_default_str()->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
+  app.add_option("--batch", o.batch, "training batch")->capture_default_str()->check(ivoa::positive_number());
   app.add_option("--model", o.model,
                  "the trained model timed on its own input (views, footprint-scaled near cells); the other rows "
                  "time the architectures with random weights")

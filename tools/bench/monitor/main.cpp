@@ -11,6 +11,7 @@
 #include <pcl/point_types.h>
 
 #include "ivoa/core/camera_model.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/time.hpp"
@@ -112,10 +113,10 @@ int main(int argc, char** argv) {
   int frames_per_scene = 4, repeats = 5;
   app.add_option("--frames-per-scene", frames_per_scene, "frames timed in each of the five scenes")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
   app.add_option("--repeats", repeats, "timings per frame (median kept)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
 
   MonitorTimes times;

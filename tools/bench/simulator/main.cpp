@@ -15,6 +15,7 @@
 #include <opencv2/core.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/sim/simulator.hpp"
 #include "ivoa/sim/trajectory.hpp"
@@ -72,18 +73,18 @@ void add_bench_options(CLI::App& app, BenchOptions& o) {
   app.add_option("--scene", o.scenes, "scene names (in libs/sim/scenes) or files")->capture_default_str();
   app.add_option("--frames", o.frames, "poses per scene, 4 s apart along its trajectory")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
   app.add_option("--repeats", o.repeats, "renders of each pose (the best counts)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
   app.add_option("--baseline-frames", o.baseline_frames, "poses rendered by the brute-force baseline")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
   app.add_option("--seed", o.seed, "scene and trajectory seed")->capture_default_str();
   app.add_option("--cpu", o.cpu, "core to pin to (-1: do not pin)")->capture_default_str();
   app.add_option("--budget-ms", o.budget_ms, "per-frame budget the worst scene's median is compared with, ms")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(ivoa::positive_number());
 }
 
 void pin_to_cpu(int cpu) {

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -101,8 +102,16 @@ struct TrainReport {
   double seconds = 0;
 };
 
-// Trains and writes config.output. Throws std::runtime_error naming the
-// problem (missing split, empty class, unreadable dataset).
+// A model or checkpoint file that cannot be written (no such folder, disk
+// full, permissions): the tool's exit code says I/O error, not bad input.
+class TrainOutputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Trains and writes config.output, creating its folder. Throws
+// TrainOutputError for a file it cannot write, std::runtime_error naming any
+// other problem (missing split, empty class, unreadable dataset).
 TrainReport train_model(const TrainConfig& config, const std::function<void(const TrainStatus&)>& progress = {});
 
 // Re-calibrates the uncertainty gates of an existing model (config.init) on

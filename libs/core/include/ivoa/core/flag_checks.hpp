@@ -1,0 +1,14 @@
+#pragma once
+// Checks for numeric flags whose errors a user can read. CLI11 2.1's
+// PositiveNumber and NonNegativeNumber name the double range they test
+// against, 300 digits long; these say "--steps: must be > 0, not 0".
+#include <CLI/CLI.hpp>
+
+namespace ivoa {
+
+// A number > 0 (help: POSITIVE).
+const CLI::Validator& positive_number();
+// A number >= 0 (help: NONNEGATIVE).
+const CLI::Validator& non_negative_number();
+
+}  // namespace ivoa
