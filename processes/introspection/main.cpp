@@ -30,7 +30,9 @@ struct CommandLine {
 void add_model_options(CLI::App& app, CommandLine& cl) {
   auto& config = cl.config;
   app.add_option("--model", cl.model_path, "model file (ivoa-train, or a scripted model)")->capture_default_str();
-  app.add_option("--mc-passes", config.mc_passes, "T, Monte-Carlo dropout passes")->capture_default_str();
+  app.add_option("--mc-passes", config.mc_passes, "T, Monte-Carlo dropout passes")
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_option("--threshold", config.uncertainty_threshold,
                  "announce a prediction when its class variance is at most this (< 0: the model's value)")
       ->capture_default_str();
@@ -46,7 +48,9 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--lookup", cl.lookup, "query cell -> heatmap: nearest cell or bilinear")
       ->capture_default_str()
       ->check(CLI::IsMember({"nearest", "bilinear"}));
-  app.add_option("--threads", config.threads, "LibTorch threads")->capture_default_str();
+  app.add_option("--threads", config.threads, "LibTorch threads")
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_option("--device", config.device, "cpu or cuda")->capture_default_str();
   app.add_option("--seed", config.seed, "dropout masks (0 = from the clock)")->capture_default_str();
 }

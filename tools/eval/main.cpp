@@ -17,6 +17,7 @@
 
 #include "ivoa/core/calibration.hpp"
 #include "ivoa/core/channels.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/ground_warp.hpp"
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/json_text.hpp"
@@ -279,14 +280,18 @@ void add_options(CLI::App& app, Options& o) {
   app.add_option("--out", o.out, "output folder")->required();
   app.add_option("--logs", o.logs, "logs of evaluated sessions, for overlay figures")->check(CLI::ExistingFile);
   app.add_option("--overlay-every", o.overlay_every, "one overlay per this many labelled frames")
-      ->capture_default_str();
-  app.add_option("--max-overlays", o.max_overlays, "at most this many overlay figures in all")->capture_default_str();
+      ->capture_default_str()
+      ->check(positive_number());
+  app.add_option("--max-overlays", o.max_overlays, "at most this many overlay figures in all")
+      ->capture_default_str()
+      ->check(non_negative_number());
   app.add_flag("--dots-given-verdict", o.dots_given_verdict,
                "overlay dots: predictions given the detector's recorded verdict (default: from the image alone, as the "
                "paper)");
   app.add_option("--mc-passes", o.inference.mc_passes, "Monte-Carlo dropout passes per sample (the paper's T)")
-      ->capture_default_str();
-  app.add_option("--threads", o.inference.threads, "LibTorch threads")->capture_default_str();
+      ->capture_default_str()
+      ->check(positive_number());
+  app.add_option("--threads", o.inference.threads, "LibTorch threads")->capture_default_str()->check(positive_number());
   app.add_option("--seed", o.inference.seed, "dropout masks")->capture_default_str();
 }
 
