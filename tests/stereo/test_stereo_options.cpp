@@ -45,6 +45,16 @@ TEST(StereoOptions, FlagsUseJppNames) {
   EXPECT_EQ(parse({"--sgbm_mode", "fast"}).code, kExitUsage);
 }
 
+TEST(StereoOptions, QueryGridThatCannotBeBuiltIsAUsageError) {
+  EXPECT_EQ(parse({"--grid-spacing", "0"}).code, kExitUsage);
+  EXPECT_EQ(parse({"--safety-radius", "-0.1"}).code, kExitUsage);
+  EXPECT_EQ(parse({"--grid-x-min", "3", "--grid-x-max", "1"}).code, kExitUsage);
+  EXPECT_EQ(parse({"--grid-y-max", "-2"}).code, kExitUsage);
+  const Parsed one_row = parse({"--grid-x-min", "1", "--grid-x-max", "1"});
+  ASSERT_EQ(one_row.code, -1);
+  EXPECT_EQ(one_row.grid.x_min, 1.0);
+}
+
 TEST(StereoOptions, ConfigFileSetsThemByName) {
   test::TempDir dir;
   std::ofstream(dir.file("jpp.ini")) << "conf_pos_thresh = 0.6\ndaisy_Q = 3\nsgbm_mode = sgbm\ngrid-x-max = 2.0\n";

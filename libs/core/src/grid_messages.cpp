@@ -2,6 +2,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "ivoa/core/flag_checks.hpp"
+
 namespace ivoa {
 
 void add_query_grid_options(CLI::App& app, QueryGridConfig& c) {
@@ -10,11 +12,24 @@ void add_query_grid_options(CLI::App& app, QueryGridConfig& c) {
   app.add_option("--grid-x-max", c.x_max, "farthest grid row, m")->capture_default_str()->group(g);
   app.add_option("--grid-y-min", c.y_min, "rightmost grid column, m")->capture_default_str()->group(g);
   app.add_option("--grid-y-max", c.y_max, "leftmost grid column, m")->capture_default_str()->group(g);
-  app.add_option("--grid-spacing", c.spacing, "distance between grid points, m")->capture_default_str()->group(g);
+  app.add_option("--grid-spacing", c.spacing, "distance between grid points, m")
+      ->capture_default_str()
+      ->check(positive_number())
+      ->group(g);
   app.add_option("--safety-radius", c.safety_radius, "footprint radius r checked around each point, m")
       ->capture_default_str()
+      ->check(positive_number())
       ->group(g);
-  app.add_option("--patch-size", c.patch_size, "introspection patch side, pixels")->capture_default_str()->group(g);
+  app.add_option("--patch-size", c.patch_size, "introspection patch side, pixels")
+      ->capture_default_str()
+      ->check(positive_number())
+      ->group(g);
+  // The bounds' order is known only once all of them are parsed; refused then,
+  // not when the first calibration arrives.
+  app.parse_complete_callback([&c] {
+    if (!(c.x_min <= c.x_max)) throw CLI::ValidationError("--grid-x-min", "must be <= --grid-x-max");
+    if (!(c.y_min <= c.y_max)) throw CLI::ValidationError("--grid-y-min", "must be <= --grid-y-max");
+  });
 }
 
 obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& detector, int64_t utime) {
