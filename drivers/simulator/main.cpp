@@ -62,7 +62,9 @@ void add_session_options(CLI::App& app, CommandLine& cl) {
   auto* realtime = app.add_flag("--realtime", config.realtime, "pace frames by the wall clock (default)");
   app.add_flag("--as-fast-as-possible", cl.fast, "render frames back to back (session time stays frame / rate)")
       ->excludes(realtime);
-  app.add_option("--frames", config.frames, "stop after this many frames (0: no limit)")->capture_default_str();
+  app.add_option("--frames", config.frames, "stop after this many frames (0: no limit)")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_option("--duration", config.duration_s, "stop after this many seconds of session time (0: no limit)");
   app.add_option("--start-utime", config.start_utime,
                  "utime of frame 0, us since epoch (default: now); frame k is "

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
@@ -13,8 +14,14 @@ namespace {
 void add_monitor_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
   const char* g = "Depth monitor";
   auto& m = o.monitor;
-  app.add_option("--pixel-step", m.pixel_step, "use every n-th depth pixel")->capture_default_str()->group(g);
-  app.add_option("--voxel-size", m.voxel_size, "voxel grid leaf, m")->capture_default_str()->group(g);
+  app.add_option("--pixel-step", m.pixel_step, "use every n-th depth pixel")
+      ->capture_default_str()
+      ->check(ivoa::positive_number())
+      ->group(g);
+  app.add_option("--voxel-size", m.voxel_size, "voxel grid leaf, m")
+      ->capture_default_str()
+      ->check(ivoa::positive_number())
+      ->group(g);
   app.add_option("--obstacle-min-height", m.obstacle_min_height, "points higher are obstacles, m")
       ->capture_default_str()
       ->group(g);
@@ -23,21 +30,27 @@ void add_monitor_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
       ->group(g);
   app.add_option("--hole-min-depth", m.hole_min_depth, "points lower than the ground by this are holes, m")
       ->capture_default_str()
+      ->check(ivoa::non_negative_number())
       ->group(g);
   app.add_option("--min-obstacle-points", m.min_obstacle_points, "obstacle voxels within r for OBSTACLE")
       ->capture_default_str()
+      ->check(ivoa::positive_number())
       ->group(g);
   app.add_option("--min-hole-points", m.min_hole_points, "hole voxels within r for OBSTACLE")
       ->capture_default_str()
+      ->check(ivoa::positive_number())
       ->group(g);
   app.add_option("--min-hole-samples", m.min_hole_samples, "ground-sample rays below the ground for OBSTACLE")
       ->capture_default_str()
+      ->check(ivoa::positive_number())
       ->group(g);
   app.add_option("--min-seen-fraction", m.min_seen_fraction, "ground samples seen for FREE (0-1)")
       ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0))
       ->group(g);
   app.add_option("--sync-tolerance-us", o.pairing.tolerance_us, "max |stereo - depth| utime to pair, us")
       ->capture_default_str()
+      ->check(ivoa::non_negative_number())
       ->group(g);
 }
 
