@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 
 #include "channel_stats.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/channel_counts.hpp"
 #include "ivoa/core/message_registry.hpp"
@@ -82,9 +83,11 @@ int main(int argc, char** argv) {
   std::vector<std::string> expect_args;
   bool list_types = false;
   app.add_option("--channels", w.channels, "channel regex")->capture_default_str();
-  app.add_option("--duration", w.duration_s, "stop after this many seconds (0 = until Ctrl-C)");
+  app.add_option("--duration", w.duration_s, "stop after this many seconds (0 = until Ctrl-C)")
+      ->check(ivoa::non_negative_number());
   app.add_option("--print-every", w.print_every_s, "print the table every N seconds (0 = only at the end)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_option("--json", w.json_path, "write the final statistics as JSON to this file");
   app.add_option("--expect", expect_args, "CHANNEL=N: exit 0 as soon as every channel has N messages, 1 on timeout")
       ->delimiter(',');

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/sim/simulator.hpp"
 #include "ivoa/sim/trajectory.hpp"
@@ -56,7 +57,9 @@ void add_gallery_options(CLI::App& app, GalleryOptions& o) {
   app.add_option("--tile-width", o.tile_width, "width of each picture in pixels")
       ->capture_default_str()
       ->check(CLI::Range(16, 4000));
-  app.add_option("--time", o.start_time, "seconds into the drive to start looking for a frame")->capture_default_str();
+  app.add_option("--time", o.start_time, "seconds into the drive to start looking for a frame")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
 }
 
 // One scene's row: left (with what was rendered), right, depth, truth.

@@ -15,6 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "disparity_io.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/stereo/options.hpp"
 #include "point_check_scoring.hpp"
@@ -55,10 +56,14 @@ void add_options(CLI::App& app, CommandLine& cl) {
                  "ground-truth disparity of the left image: PFM, 16- or 8-bit PNG; 0/inf/NaN unknown")
       ->capture_default_str();
   app.add_option("--gt-divisor", cl.gt_divisor, "disparity = stored value / divisor (KITTI 16-bit PNG: 256)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_option("--scale", cl.scale, "resize images and disparities by this factor (aloeGT is full resolution)")
-      ->capture_default_str();
-  app.add_option("--stride", cl.scoring.stride, "score every N-th pixel in x and y")->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
+  app.add_option("--stride", cl.scoring.stride, "score every N-th pixel in x and y")
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_option("--wrong-offsets", cl.scoring.wrong_offsets, "wrong hypotheses at truth +- these offsets, pixels")
       ->delimiter(',')
       ->capture_default_str();
@@ -67,7 +72,8 @@ void add_options(CLI::App& app, CommandLine& cl) {
       ->capture_default_str();
   app.add_option("--models", cl.models, "jppc, sgbm")->delimiter(',')->check(CLI::IsMember({"jppc", "sgbm"}));
   app.add_option("--sgbm-tolerance", cl.sgbm_tolerance, "SGBM confirms a hypothesis within this many pixels")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_option("--json", cl.json_path, "write the scores as JSON");
   app.add_option("--overlay", cl.overlay_path, "write a PNG of JPP-C's truth outcomes (green confirmed, red rejected)");
   ivoa::stereo::add_jpp_matcher_options(app, cl.jpp);

@@ -50,9 +50,11 @@ void add_options(CLI::App& app, Flags& f) {
   app.add_option("--record", f.camera.record_path, "also record the streams to this .oni file");
   app.add_flag("--record-lossless-color", f.lossless_color, "record colour losslessly (about 30x larger)");
   app.add_option("--max-frames", f.max_frames, "stop after this many depth frames (0 = no limit)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_option("--playback-speed", f.camera.playback_speed, ".oni only: 1 = real time, 0 = as fast as possible")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_flag("--loop", f.camera.loop, ".oni only: start again at the end instead of exiting");
   app.add_option("--frame-timeout", f.frame_timeout_s, "exit with an error after this many seconds without depth")
       ->capture_default_str()
