@@ -139,7 +139,7 @@ SessionLog read_log(const std::string& path, bool want_labels) {
       spdlog::warn("{}: {} at byte {}: {}", path, event.channel, event.offset, e.what());
     }
   }
-  if (!reader.not_a_log().empty()) throw std::runtime_error(path + ": " + reader.not_a_log());
+  if (const std::string why = reader.not_a_log(); !why.empty()) throw std::runtime_error(path + ": " + why);
   for (const auto& p : reader.problems()) spdlog::warn("{}: byte {}: {}", path, p.offset, p.what);
   if (!log.rig) throw std::runtime_error(path + ": no " + std::string(channels::kRigCalibration) + " message");
   if (log.truth.empty())

@@ -401,7 +401,7 @@ void SessionBuilder::add_log(const std::string& path, const ProgressCallback& pr
   if (progress) progress(reader.position(), reader.size());
   for (const auto& p : reader.problems()) m.report.problems.push_back(path + ": " + p.describe());
   if (m.rig) return;
-  if (!reader.not_a_log().empty()) throw DatasetError(path + ": " + reader.not_a_log());
+  if (const std::string why = reader.not_a_log(); !why.empty()) throw DatasetError(path + ": " + why);
   throw DatasetError(path + ": no " + o.calibration_channel +
                      " message in the log; a log must hold the rig calibration (record it with ivoa-logger)");
 }
