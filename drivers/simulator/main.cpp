@@ -86,11 +86,16 @@ void add_output_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--log", config.log_file,
                  "also write every message to this LCM log, timestamped by message utime "
                  "(bit-identical for the same session)");
-  app.add_option("--stereo-channel", config.stereo_channel)->capture_default_str();
-  app.add_option("--depth-channel", config.depth_channel)->capture_default_str();
-  app.add_option("--rig-channel", config.rig_channel)->capture_default_str();
-  app.add_option("--truth-channel", config.truth_channel)->capture_default_str();
-  app.add_option("--status-channel", cl.status_channel)->capture_default_str();
+  app.add_option("--stereo-channel", config.stereo_channel, "out: stereo pairs (ivoa.stereo_image_t)")
+      ->capture_default_str();
+  app.add_option("--depth-channel", config.depth_channel, "out: depth images (ivoa.depth_image_t)")
+      ->capture_default_str();
+  app.add_option("--rig-channel", config.rig_channel, "out: rig calibration (ivoa.rig_calibration_t)")
+      ->capture_default_str();
+  app.add_option("--truth-channel", config.truth_channel, "out: what each left pixel shows (ivoa.sim_ground_truth_t)")
+      ->capture_default_str();
+  app.add_option("--status-channel", cl.status_channel, "out: heartbeat (ivoa.process_status_t)")
+      ->capture_default_str();
 }
 
 // The rig to render with (--rig, else the built-in one), written to --save-rig

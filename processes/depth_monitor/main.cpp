@@ -56,11 +56,21 @@ void add_monitor_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
 
 void add_channel_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
   const char* g = "Channels";
-  app.add_option("--depth-channel", o.depth_channel)->capture_default_str()->group(g);
-  app.add_option("--stereo-channel", o.stereo_channel)->capture_default_str()->group(g);
-  app.add_option("--calibration-channel", o.calibration_channel)->capture_default_str()->group(g);
-  app.add_option("--depth-out-channel", o.depth_out_channel)->capture_default_str()->group(g);
-  app.add_option("--labels-out-channel", o.labels_out_channel)->capture_default_str()->group(g);
+  app.add_option("--depth-channel", o.depth_channel, "in: depth images (ivoa.depth_image_t)")
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--stereo-channel", o.stereo_channel, "in: the stereo grid to label (ivoa.obstacle_grid_t)")
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--calibration-channel", o.calibration_channel, "in: rig calibration (ivoa.rig_calibration_t)")
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--depth-out-channel", o.depth_out_channel, "out: the depth grid (ivoa.obstacle_grid_t)")
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--labels-out-channel", o.labels_out_channel, "out: TP/TN/FP/FN labels (ivoa.introspection_labels_t)")
+      ->capture_default_str()
+      ->group(g);
 }
 
 }  // namespace

@@ -43,8 +43,9 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
                  "after the CNN, how long to wait for the detector's grid of the frame (its verdicts)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
-  app.add_option("--mean-filter", config.mean_filter, "odd window of the heatmap mean filter (1 = off)")
-      ->capture_default_str();
+  app.add_option("--mean-filter", config.mean_filter, "odd window of the heatmap mean filter, cells (1 = off)")
+      ->capture_default_str()
+      ->check(ivoa::odd_positive_integer());
   app.add_option("--lookup", cl.lookup, "query cell -> heatmap: nearest cell or bilinear")
       ->capture_default_str()
       ->check(CLI::IsMember({"nearest", "bilinear"}));
@@ -56,11 +57,15 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
 }
 
 void add_channel_options(CLI::App& app, ivoa::IntrospectionNodeOptions& options) {
-  app.add_option("--stereo-channel", options.stereo_channel)->capture_default_str()->group("Channels");
+  app.add_option("--stereo-channel", options.stereo_channel, "in: stereo pairs (ivoa.stereo_image_t)")
+      ->capture_default_str()
+      ->group("Channels");
   app.add_option("--grid-channel", options.grid_channel, "obstacle grid giving the query cells (\"\" = none)")
       ->capture_default_str()
       ->group("Channels");
-  app.add_option("--out-channel", options.out_channel)->capture_default_str()->group("Channels");
+  app.add_option("--out-channel", options.out_channel, "out: predictions (ivoa.introspection_t)")
+      ->capture_default_str()
+      ->group("Channels");
   app.add_option("--calibration-channel", options.calibration_channel,
                  "rig calibration (two-view models warp the right image with it)")
       ->capture_default_str()

@@ -28,10 +28,18 @@ void add_detector_flags(CLI::App& app, DetectorFlags& f) {
       ->check(CLI::IsMember(ivoa::stereo::detector_names()));
   app.add_option("--calibration", f.calibration_file,
                  "rig calibration file to start with (RIG_CALIBRATION messages replace it)");
-  app.add_option("--stereo-channel", o.stereo_channel)->capture_default_str()->group("Channels");
-  app.add_option("--calibration-channel", o.calibration_channel)->capture_default_str()->group("Channels");
-  app.add_option("--output-channel", o.output_channel)->capture_default_str()->group("Channels");
-  app.add_option("--status-channel", f.status_channel)->capture_default_str()->group("Channels");
+  app.add_option("--stereo-channel", o.stereo_channel, "in: stereo pairs (ivoa.stereo_image_t)")
+      ->capture_default_str()
+      ->group("Channels");
+  app.add_option("--calibration-channel", o.calibration_channel, "in: rig calibration (ivoa.rig_calibration_t)")
+      ->capture_default_str()
+      ->group("Channels");
+  app.add_option("--output-channel", o.output_channel, "out: obstacle grid (ivoa.obstacle_grid_t)")
+      ->capture_default_str()
+      ->group("Channels");
+  app.add_option("--status-channel", f.status_channel, "out: heartbeat (ivoa.process_status_t)")
+      ->capture_default_str()
+      ->group("Channels");
   app.add_option("--max-frames", o.max_frames, "exit after publishing this many grids (0: run until stopped)")
       ->capture_default_str();
   ivoa::add_query_grid_options(app, o.grid);

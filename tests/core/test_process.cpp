@@ -46,6 +46,11 @@ TEST(FlagChecks, SayWhatANumericFlagMustBeInAFewWords) {
   EXPECT_EQ(verdict(positive_number(), "nan"), "must be a number, not 'nan'");
   EXPECT_EQ(verdict(non_negative_number(), "0"), "");
   EXPECT_EQ(verdict(non_negative_number(), "-0.1"), "must be >= 0, not -0.1");
+  EXPECT_EQ(verdict(odd_positive_integer(), "1"), "");
+  EXPECT_EQ(verdict(odd_positive_integer(), "5"), "");
+  EXPECT_EQ(verdict(odd_positive_integer(), "4"), "must be an odd whole number >= 1, not 4");
+  EXPECT_EQ(verdict(odd_positive_integer(), "2.5"), "must be an odd whole number >= 1, not 2.5");
+  EXPECT_EQ(verdict(odd_positive_integer(), "-1"), "must be an odd whole number >= 1, not -1");
 
   CLI::App app;
   int steps = 1;

@@ -37,4 +37,14 @@ const CLI::Validator& non_negative_number() {
   return check;
 }
 
+const CLI::Validator& odd_positive_integer() {
+  static const CLI::Validator check(
+      [](std::string& text) {
+        return check_number(
+            text, [](double v) { return v >= 1 && std::fmod(v, 2.0) == 1.0; }, "must be an odd whole number >= 1");
+      },
+      "ODD");
+  return check;
+}
+
 }  // namespace ivoa

@@ -10,5 +10,7 @@ namespace ivoa {
 const CLI::Validator& positive_number();
 // A number >= 0 (help: NONNEGATIVE).
 const CLI::Validator& non_negative_number();
+// A whole number >= 1 that is odd, e.g. a filter window (help: ODD).
+const CLI::Validator& odd_positive_integer();
 
 }  // namespace ivoa
