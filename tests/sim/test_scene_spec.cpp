@@ -91,11 +91,11 @@ start: [0, 0, 90]
 TEST(SimSceneSpec, ErrorsNameFileAndKey) {
   EXPECT_NE(error_of("name: x\nobstacles: {cuont: 3}\n").find("test.yaml:2: obstacles.cuont: unknown key"),
             std::string::npos);
-  EXPECT_NE(
-      error_of("walls: {materials: [paint_white, chocolate]}\n").find("walls.materials: unknown material 'chocolate'"),
-      std::string::npos);
-  EXPECT_NE(error_of("elements:\n  - {type: box, position: [1, 0], material: unobtainium}\n")
-                .find("elements[0].material: unknown material 'unobtainium'"),
+  EXPECT_NE(error_of("walls: {materials: [paint_white, chocolate]}\n")
+                .find("test.yaml:1: walls.materials[1]: unknown material 'chocolate'"),
+            std::string::npos);
+  EXPECT_NE(error_of("name: x\nelements:\n  - {type: box, position: [1, 0], material: unobtainium}\n")
+                .find("test.yaml:3: elements[0].material: unknown material 'unobtainium'"),
             std::string::npos);
   EXPECT_NE(
       error_of("elements:\n  - {type: spaceship, position: [1, 0]}\n").find("elements[0].type: unknown element type"),
@@ -106,6 +106,26 @@ TEST(SimSceneSpec, ErrorsNameFileAndKey) {
   EXPECT_NE(error_of("environment: underwater\n").find("environment: expected indoor or outdoor"), std::string::npos);
   EXPECT_NE(error_of("layout: [1, 2\n").find("test.yaml:"), std::string::npos);
   EXPECT_NE(error_of("elements:\n  - {type: wall, from: [0, 0]}\n").find("wall needs from and to"), std::string::npos);
+}
+
+// Values that parse but do not make a scene (unknown materials, ranges out of
+// bounds) are placed by line too, down to the list entry.
+TEST(SimSceneSpec, ValidationErrorsGiveTheLine) {
+  const std::string floor = "name: x\nfloor:\n  materials:\n    - carpet_grey\n    - wood_flor\n";
+  EXPECT_NE(error_of(floor).find("test.yaml:5: floor.materials[1]: unknown material 'wood_flor'"), std::string::npos)
+      << error_of(floor);
+  EXPECT_NE(error_of("name: x\nobstacles:\n  count: [1, 9000]\n")
+                .find("test.yaml:3: obstacles.count: range [1, 9000] must lie in [0, 5000] with min <= max"),
+            std::string::npos);
+  const std::string door =
+      "elements:\n  - {type: wall, from: [0, 3], to: [6, 3],\n     doors: [{offset: 2}, {offset: 4, material: "
+      "jelly}]}\n";
+  EXPECT_NE(error_of(door).find("test.yaml:3: elements[0].doors[1].material: unknown material 'jelly'"),
+            std::string::npos)
+      << error_of(door);
+  const std::string empty = "name: x\nobstacles: {count: 3, materials: []}\n";
+  EXPECT_NE(error_of(empty).find("test.yaml:2: obstacles.materials: needs at least one material"), std::string::npos)
+      << error_of(empty);
 }
 
 // The format example in the scenes README is a valid scene.
@@ -136,8 +156,9 @@ TEST(SimSceneSpec, MissingFileIsNamed) {
     load_scene_spec(dir.file("bad.yaml"));
     FAIL() << "no exception";
   } catch (const SceneSpecError& e) {
-    EXPECT_NE(std::string(e.what()).find(dir.file("bad.yaml") + ": floor.materials: unknown material 'marshmallow'"),
-              std::string::npos)
+    EXPECT_NE(
+        std::string(e.what()).find(dir.file("bad.yaml") + ":1: floor.materials[0]: unknown material 'marshmallow'"),
+        std::string::npos)
         << e.what();
   }
 }

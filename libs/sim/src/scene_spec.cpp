@@ -437,17 +437,112 @@ bool resolves(const SceneSpec& spec, const std::string& name) {
   return has_builtin_material(name);
 }
 
-void check_range(const SceneSpec& spec, const std::string& key, const Range& r, double lo, double hi) {
+// A value that passed parsing but not validation: its key path
+// ("floor.materials[1]") and what is wrong, for the caller to place.
+struct InvalidKey {
+  std::string key;
+  std::string what;
+};
+
+std::string number_text(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+void check_range(const std::string& key, const Range& r, double lo, double hi) {
   if (r.min > r.max || r.min < lo || r.max > hi)
-    throw SceneSpecError(spec.source + ": " + key + ": range [" + std::to_string(r.min) + ", " + std::to_string(r.max) +
-                         "] must lie in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] with min <= max");
+    throw InvalidKey{key, "range [" + number_text(r.min) + ", " + number_text(r.max) + "] must lie in [" +
+                              number_text(lo) + ", " + number_text(hi) + "] with min <= max"};
+}
+
+void check_material(const SceneSpec& spec, const std::string& key, const std::string& name) {
+  if (!name.empty() && !resolves(spec, name)) throw InvalidKey{key, "unknown material '" + name + "'"};
 }
 
 void check_materials(const SceneSpec& spec, const std::string& key, const std::vector<std::string>& names,
                      bool may_be_empty = true) {
-  if (names.empty() && !may_be_empty) throw SceneSpecError(spec.source + ": " + key + ": needs at least one material");
-  for (const auto& n : names)
-    if (!resolves(spec, n)) throw SceneSpecError(spec.source + ": " + key + ": unknown material '" + n + "'");
+  if (names.empty() && !may_be_empty) throw InvalidKey{key, "needs at least one material"};
+  for (size_t i = 0; i < names.size(); ++i) check_material(spec, key + "[" + std::to_string(i) + "]", names[i]);
+}
+
+void check_layout(const LayoutSpec& l) {
+  check_range("layout.width", l.width, 1, 500);
+  check_range("layout.depth", l.depth, 1, 500);
+  check_range("layout.corridor_width", l.corridor_width, 1.0, 20);
+  check_range("layout.corridor_length", l.corridor_length, 2, 500);
+  check_range("layout.room_size", l.room_size, 2, 50);
+  check_range("layout.ceiling_height", l.ceiling_height, 1.0, 20);
+  check_range("layout.facade_height", l.facade_height, 0.5, 100);
+}
+
+void check_surfaces(const SceneSpec& spec) {
+  check_materials(spec, "floor.materials", spec.floor.materials, false);
+  check_materials(spec, "floor.patch_materials", spec.floor.patch_materials);
+  check_range("floor.patch_count", spec.floor.patch_count, 0, 1000);
+  check_range("floor.patch_size", spec.floor.patch_size, 0.05, 100);
+  check_materials(spec, "walls.materials", spec.walls.materials);
+  check_materials(spec, "walls.baseboard_materials", spec.walls.baseboard_materials);
+  check_materials(spec, "walls.door_materials", spec.walls.door_materials);
+  check_range("walls.baseboard_height", spec.walls.baseboard_height, 0, 1);
+  check_range("walls.thickness", spec.walls.thickness, 0.02, 2);
+}
+
+void check_contents(const SceneSpec& spec) {
+  check_materials(spec, "obstacles.materials", spec.obstacles.materials);
+  check_range("obstacles.count", spec.obstacles.count, 0, 5000);
+  check_range("obstacles.box_size", spec.obstacles.box_size, 0.02, 20);
+  check_range("obstacles.box_height", spec.obstacles.box_height, 0.01, 20);
+  if (spec.obstacles.count.max > 0 && spec.obstacles.materials.empty())
+    throw InvalidKey{"obstacles.materials", "needs at least one material"};
+  check_range("pits.count", spec.pits.count, 0, 100);
+  check_range("pits.size", spec.pits.size, 0.05, 20);
+  check_range("pits.depth", spec.pits.depth, 0.02, 20);
+  check_range("lighting.sun_elevation_deg", spec.lighting.sun_elevation_deg, 1, 90);
+  check_range("lighting.low_light_factor", spec.lighting.low_light_factor, 1e-4, 1);
+  check_range("lighting.light_spacing", spec.lighting.light_spacing, 0.5, 50);
+  check_range("phenomena.wet_patches", spec.phenomena.wet_patches, 0, 1000);
+}
+
+void check_elements(const SceneSpec& spec) {
+  for (size_t i = 0; i < spec.elements.size(); ++i) {
+    const ElementSpec& e = spec.elements[i];
+    const std::string key = "elements[" + std::to_string(i) + "]";
+    check_material(spec, key + ".material", e.material);
+    check_material(spec, key + ".baseboard.material", e.baseboard_material);
+    for (size_t j = 0; j < e.doors.size(); ++j)
+      check_material(spec, key + ".doors[" + std::to_string(j) + "].material", e.doors[j].material);
+  }
+}
+
+// Throws InvalidKey for the first value out of place.
+void check_spec(const SceneSpec& spec) {
+  check_layout(spec.layout);
+  check_surfaces(spec);
+  check_contents(spec);
+  check_elements(spec);
+}
+
+// ":12" for the line of `key` ("a.b[2].c") in `root`, as deep as the path
+// goes in the file; "" if not even its first part is there.
+std::string line_of(const YAML::Node& root, const std::string& key) {
+  std::vector<YAML::Node> path{root};
+  std::istringstream parts(key);
+  std::string part;
+  while (std::getline(parts, part, '.')) {
+    const size_t bracket = part.find('[');
+    const YAML::Node parent = path.back();
+    if (!parent.IsMap()) break;
+    const YAML::Node node = parent[part.substr(0, bracket)];
+    if (!node) break;
+    path.push_back(node);
+    if (bracket == std::string::npos) continue;
+    const size_t index = std::stoul(part.substr(bracket + 1));
+    if (!node.IsSequence() || index >= node.size()) break;
+    path.push_back(node[index]);
+  }
+  if (path.size() == 1 || path.back().Mark().line < 0) return "";
+  return ":" + std::to_string(path.back().Mark().line + 1);
 }
 
 }  // namespace
@@ -471,47 +566,10 @@ const char* ElementSpec::type_name(Type type) {
 }
 
 void validate(const SceneSpec& spec) {
-  const auto& l = spec.layout;
-  check_range(spec, "layout.width", l.width, 1, 500);
-  check_range(spec, "layout.depth", l.depth, 1, 500);
-  check_range(spec, "layout.corridor_width", l.corridor_width, 1.0, 20);
-  check_range(spec, "layout.corridor_length", l.corridor_length, 2, 500);
-  check_range(spec, "layout.room_size", l.room_size, 2, 50);
-  check_range(spec, "layout.ceiling_height", l.ceiling_height, 1.0, 20);
-  check_range(spec, "layout.facade_height", l.facade_height, 0.5, 100);
-  check_materials(spec, "floor.materials", spec.floor.materials, false);
-  check_materials(spec, "floor.patch_materials", spec.floor.patch_materials);
-  check_range(spec, "floor.patch_count", spec.floor.patch_count, 0, 1000);
-  check_range(spec, "floor.patch_size", spec.floor.patch_size, 0.05, 100);
-  check_materials(spec, "walls.materials", spec.walls.materials);
-  check_materials(spec, "walls.baseboard_materials", spec.walls.baseboard_materials);
-  check_materials(spec, "walls.door_materials", spec.walls.door_materials);
-  check_range(spec, "walls.baseboard_height", spec.walls.baseboard_height, 0, 1);
-  check_range(spec, "walls.thickness", spec.walls.thickness, 0.02, 2);
-  check_materials(spec, "obstacles.materials", spec.obstacles.materials);
-  check_range(spec, "obstacles.count", spec.obstacles.count, 0, 5000);
-  check_range(spec, "obstacles.box_size", spec.obstacles.box_size, 0.02, 20);
-  check_range(spec, "obstacles.box_height", spec.obstacles.box_height, 0.01, 20);
-  if (spec.obstacles.count.max > 0 && spec.obstacles.materials.empty())
-    throw SceneSpecError(spec.source + ": obstacles.materials: needs at least one material");
-  check_range(spec, "pits.count", spec.pits.count, 0, 100);
-  check_range(spec, "pits.size", spec.pits.size, 0.05, 20);
-  check_range(spec, "pits.depth", spec.pits.depth, 0.02, 20);
-  check_range(spec, "lighting.sun_elevation_deg", spec.lighting.sun_elevation_deg, 1, 90);
-  check_range(spec, "lighting.low_light_factor", spec.lighting.low_light_factor, 1e-4, 1);
-  check_range(spec, "lighting.light_spacing", spec.lighting.light_spacing, 0.5, 50);
-  check_range(spec, "phenomena.wet_patches", spec.phenomena.wet_patches, 0, 1000);
-  for (size_t i = 0; i < spec.elements.size(); ++i) {
-    const ElementSpec& e = spec.elements[i];
-    const std::string key = "elements[" + std::to_string(i) + "]";
-    if (!e.material.empty() && !resolves(spec, e.material))
-      throw SceneSpecError(spec.source + ": " + key + ".material: unknown material '" + e.material + "'");
-    if (!e.baseboard_material.empty() && !resolves(spec, e.baseboard_material))
-      throw SceneSpecError(spec.source + ": " + key + ".baseboard.material: unknown material '" + e.baseboard_material +
-                           "'");
-    for (const auto& d : e.doors)
-      if (!d.material.empty() && !resolves(spec, d.material))
-        throw SceneSpecError(spec.source + ": " + key + ".doors.material: unknown material '" + d.material + "'");
+  try {
+    check_spec(spec);
+  } catch (const InvalidKey& e) {
+    throw SceneSpecError(spec.source + ": " + e.key + ": " + e.what);
   }
 }
 
@@ -523,7 +581,11 @@ SceneSpec parse_scene_spec(const std::string& yaml_text, const std::string& sour
     throw SceneSpecError(source_name + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
   }
   SceneSpec spec = parse(root, source_name);
-  validate(spec);
+  try {
+    check_spec(spec);
+  } catch (const InvalidKey& e) {
+    throw SceneSpecError(source_name + line_of(root, e.key) + ": " + e.key + ": " + e.what);
+  }
   return spec;
 }
 
