@@ -1,5 +1,6 @@
 // What every executable shares: its common flags and the small file outputs
 // (--json, --ready-file).
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,20 @@ TEST(CommonOptions, ProcessesTakeAnLcmUrlAndOfflineToolsRefuseOne) {
   EXPECT_EQ(offline.log_level, "error");
   EXPECT_EQ(parse(add_offline_options, {"--lcm-url", "memq://"}, offline), kExitUsage);
   EXPECT_EQ(parse(add_offline_options, {"--log-level", "loud"}, offline), kExitUsage);
+}
+
+TEST(CommonOptions, ConfigFileSetsFlagsAndRefusesKeysThatNameNone) {
+  test::TempDir dir;
+  const std::string good = dir.file("good.ini"), typo = dir.file("typo.ini");
+  std::ofstream(good) << "log-level = warn\n";
+  std::ofstream(typo) << "log-levle = warn\n";
+  CommonOptions options;
+  EXPECT_EQ(parse(add_offline_options, {"--config", good.c_str()}, options), -1);
+  EXPECT_EQ(options.log_level, "warn");
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(parse(add_common_options, {"--config", typo.c_str()}, options), kExitUsage);
+  EXPECT_EQ(testing::internal::GetCapturedStderr(),
+            "--config " + typo + ": 'log-levle' is not an option of this program (see --help)\n");
 }
 
 // What a check says of `text` ("" if it passes).

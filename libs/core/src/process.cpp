@@ -1,6 +1,7 @@
 #include "ivoa/core/process.hpp"
 
 #include <fstream>
+#include <iostream>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -24,11 +25,34 @@ void add_offline_options(CLI::App& app, CommonOptions& options) {
       ->capture_default_str()
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
   app.set_config("--config", "", "TOML/INI file setting any option by its long name");
+  // A misspelt key would otherwise be dropped without a word, and the
+  // process run with the default it meant to change.
+  app.allow_config_extras(CLI::config_extras_mode::error);
 }
+
+namespace {
+
+// CLI11 says "INI was not able to parse KEY" of a --config key that names no
+// option; say which file and what to check.
+void explain_config_error(const CLI::App& app, const CLI::ConfigError& e) {
+  const std::string prefix = "INI was not able to parse ";
+  const std::string what = e.what();
+  const CLI::Option* config = app.get_config_ptr();
+  const std::string file = config && !config->results().empty() ? config->results().back() : std::string();
+  if (what.rfind(prefix, 0) == 0)
+    std::cerr << "--config " << file << ": '" << what.substr(prefix.size())
+              << "' is not an option of this program (see --help)\n";
+  else std::cerr << "--config " << file << ": " << what << "\n";
+}
+
+}  // namespace
 
 int parse_command_line(CLI::App& app, int argc, char** argv) {
   try {
     app.parse(argc, argv);
+  } catch (const CLI::ConfigError& e) {
+    explain_config_error(app, e);
+    return kExitUsage;
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? kExitOk : kExitUsage;
