@@ -256,6 +256,29 @@ TEST(DatasetFormat, SplitFileBySessionRejectsOverlap) {
   EXPECT_THROW(load_split(dir.file("missing.yaml")), DatasetError);
 }
 
+// What a split file names must be there: the split in the file, its sessions
+// in the dataset. Both errors name the file.
+TEST(DatasetFormat, SplitSessionsMustBeInTheFileAndTheDataset) {
+  test::TempDir dir;
+  const std::string root = dir.file("data");
+  for (const char* session : {"a", "b"}) {
+    std::filesystem::create_directories(root + "/" + session);
+    std::ofstream(root + "/" + session + "/session.json") << "{}\n";
+  }
+  std::ofstream(dir.file("split.yaml")) << "train: [a]\ntest: [b, c]\n";
+  EXPECT_EQ(split_sessions(dir.file("split.yaml"), "train", root), std::vector<std::string>{"a"});
+  const auto error_of = [&](const std::string& split) -> std::string {
+    try {
+      split_sessions(dir.file("split.yaml"), split, root);
+    } catch (const DatasetError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(error_of("val"), dir.file("split.yaml") + ": no split 'val' (it has: test, train)");
+  EXPECT_EQ(error_of("test"), dir.file("split.yaml") + ": split 'test' names session 'c', which is not in " + root);
+}
+
 TEST(Patch, ExtractsCentredPatchesInsideTheImageOnly) {
   cv::Mat image(600, 960, CV_8UC3);
   cv::randu(image, 0, 255);

@@ -94,7 +94,7 @@ TEST_F(EvalCli, RefusesPatchesCutUnlikeTheModelsNamingTheSessionAndTheFix) {
 TEST_F(EvalCli, UnknownSplitIsBadInput) {
   const auto r = eval("nosuch");
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
-  EXPECT_TRUE(contains(r.output, "no split 'nosuch'")) << r.output;
+  EXPECT_TRUE(contains(r.output, "no split 'nosuch' (it has: ")) << r.output;
 }
 
 }  // namespace

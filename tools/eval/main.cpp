@@ -209,13 +209,9 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
 using SessionList = std::vector<std::pair<std::string, std::string>>;  // (split, session)
 
 SessionList list_sessions(const Options& o) {
-  const auto splits = dataset::load_split(o.split_file);
   SessionList sessions;
-  for (const auto& split : o.splits) {
-    const auto it = splits.find(split);
-    if (it == splits.end()) throw dataset::DatasetError(o.split_file + ": no split '" + split + "'");
-    for (const auto& s : it->second) sessions.push_back({split, s});
-  }
+  for (const auto& split : o.splits)
+    for (const auto& s : dataset::split_sessions(o.split_file, split, o.dataset)) sessions.push_back({split, s});
   return sessions;
 }
 

@@ -368,4 +368,20 @@ std::map<std::string, std::vector<std::string>> load_split(const std::string& pa
   return splits;
 }
 
+std::vector<std::string> split_sessions(const std::string& path, const std::string& split,
+                                        const std::string& dataset_root) {
+  const auto splits = load_split(path);
+  const auto it = splits.find(split);
+  if (it == splits.end()) {
+    std::string names;
+    for (const auto& [name, sessions] : splits) names += (names.empty() ? "" : ", ") + name;
+    throw DatasetError(path + ": no split '" + split + "' (it has: " + (names.empty() ? "none" : names) + ")");
+  }
+  for (const auto& session : it->second)
+    if (!fs::exists(dataset_root + "/" + session + "/session.json"))
+      throw DatasetError(path + ": split '" + split + "' names session '" + session + "', which is not in " +
+                         dataset_root);
+  return it->second;
+}
+
 }  // namespace ivoa::dataset

@@ -46,12 +46,10 @@ struct SplitData {
 };
 
 SplitData load_split_data(const TrainConfig& c, const std::string& split) {
-  const auto splits = dataset::load_split(c.split_file);
-  const auto it = splits.find(split);
-  if (it == splits.end() || it->second.empty())
-    throw std::runtime_error(c.split_file + ": no sessions in split '" + split + "'");
+  const std::vector<std::string> names = dataset::split_sessions(c.split_file, split, c.dataset);
+  if (names.empty()) throw std::runtime_error(c.split_file + ": no sessions in split '" + split + "'");
   SplitData d;
-  for (const auto& name : it->second) {
+  for (const auto& name : names) {
     auto reader = std::make_unique<dataset::SessionReader>(c.dataset + "/" + name);
     if (d.patch_size == 0) d.patch_size = reader->info().patch_size;
     if (reader->info().patch_size != d.patch_size)

@@ -153,4 +153,10 @@ std::vector<std::string> list_sessions(const std::string& dataset_root);
 // or a session listed in two splits.
 std::map<std::string, std::vector<std::string>> load_split(const std::string& path);
 
+// The sessions the split file at `path` lists under `split`, each checked to
+// be in the dataset at `dataset_root`. Throws DatasetError naming the file
+// and the split it lacks (with those it has) or the session the dataset lacks.
+std::vector<std::string> split_sessions(const std::string& path, const std::string& split,
+                                        const std::string& dataset_root);
+
 }  // namespace ivoa::dataset
