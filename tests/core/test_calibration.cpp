@@ -49,6 +49,19 @@ TEST(Calibration, MissingKeyIsNamed) {
   }
 }
 
+TEST(Calibration, FileThatIsNotYamlIsNamedOnOneLine) {
+  test::TempDir dir;
+  std::ofstream(dir.file("garbage.yml")) << "garbage: [\n";
+  try {
+    load_rig_calibration(dir.file("garbage.yml"));
+    FAIL() << "expected CalibrationError";
+  } catch (const CalibrationError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind(dir.file("garbage.yml") + ": not a readable OpenCV YAML file (", 0), 0u) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+}
+
 TEST(Calibration, MissingFileIsNamed) {
   try {
     load_rig_calibration("/nonexistent/rig.yml");

@@ -1,5 +1,6 @@
 #include "ivoa/core/calibration.hpp"
 
+#include <cctype>
 #include <cmath>
 
 #include <opencv2/core.hpp>
@@ -151,7 +152,9 @@ RigCalibration load_rig_calibration(const std::string& path) {
   try {
     fs.open(path, cv::FileStorage::READ);
   } catch (const cv::Exception& e) {
-    throw CalibrationError(path + ": not a readable OpenCV YAML file (" + e.msg + ")");
+    std::string why = e.msg;  // OpenCV ends it with a newline: one log line instead
+    while (!why.empty() && std::isspace(static_cast<unsigned char>(why.back()))) why.pop_back();
+    throw CalibrationError(path + ": not a readable OpenCV YAML file (" + why + ")");
   }
   check(fs.isOpened(), path, "cannot open calibration file");
   RigCalibration rig;
