@@ -65,7 +65,8 @@ void add_session_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--frames", config.frames, "stop after this many frames (0: no limit)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
-  app.add_option("--duration", config.duration_s, "stop after this many seconds of session time (0: no limit)");
+  app.add_option("--duration", config.duration_s, "stop after this many seconds of session time (0: no limit)")
+      ->check(ivoa::non_negative_number());
   app.add_option("--start-utime", config.start_utime,
                  "utime of frame 0, us since epoch (default: now); frame k is "
                  "at start + k / rate, so sessions are reproducible");
@@ -80,8 +81,10 @@ void add_output_options(CLI::App& app, CommandLine& cl) {
       ->check(CLI::IsMember(pixel_format_names()));
   app.add_option("--depth-offset-ms", config.depth_offset_ms, "depth image utime minus stereo utime")
       ->capture_default_str();
-  app.add_option("--calibration-period", config.calibration_period_s, "seconds between RIG_CALIBRATION messages")
-      ->capture_default_str();
+  app.add_option("--calibration-period", config.calibration_period_s,
+                 "seconds between RIG_CALIBRATION messages (0: with every frame)")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_flag("--no-truth", cl.no_truth, "do not publish SIM_GROUND_TRUTH");
   app.add_option("--log", config.log_file,
                  "also write every message to this LCM log, timestamped by message utime "

@@ -7,6 +7,7 @@
 
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/calibration.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/process.hpp"
@@ -41,7 +42,8 @@ void add_detector_flags(CLI::App& app, DetectorFlags& f) {
       ->capture_default_str()
       ->group("Channels");
   app.add_option("--max-frames", o.max_frames, "exit after publishing this many grids (0: run until stopped)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   ivoa::add_query_grid_options(app, o.grid);
   ivoa::stereo::add_detector_options(app, o.detector);
 }

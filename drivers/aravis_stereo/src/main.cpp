@@ -41,10 +41,22 @@ void add_camera_options(CLI::App& app, Flags& f) {
                  "GenICam pixel format: BayerRG8, BayerBG8, BayerGB8, BayerGR8, Mono8")
       ->capture_default_str()
       ->group(g);
-  app.add_option("--width", c.width, "image width, pixels (0 = keep the camera's)")->capture_default_str()->group(g);
-  app.add_option("--height", c.height, "image height, pixels (0 = keep the camera's)")->capture_default_str()->group(g);
-  app.add_option("--offset-x", c.offset_x, "region of interest origin, pixels")->capture_default_str()->group(g);
-  app.add_option("--offset-y", c.offset_y, "region of interest origin, pixels")->capture_default_str()->group(g);
+  app.add_option("--width", c.width, "image width, pixels (0 = keep the camera's)")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number())
+      ->group(g);
+  app.add_option("--height", c.height, "image height, pixels (0 = keep the camera's)")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number())
+      ->group(g);
+  app.add_option("--offset-x", c.offset_x, "region of interest origin, pixels")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number())
+      ->group(g);
+  app.add_option("--offset-y", c.offset_y, "region of interest origin, pixels")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number())
+      ->group(g);
   app.add_option("--frame-rate", c.frame_rate_hz, "frames per second (free-running, or the software-trigger rate)")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 500.0))
@@ -72,11 +84,13 @@ void add_transport_options(CLI::App& app, Flags& f) {
       ->group(g);
   app.add_option("--packet-delay-ns", c.packet_delay_ns, "GigE inter-packet delay, ns (0 = keep the camera's)")
       ->capture_default_str()
+      ->check(ivoa::non_negative_number())
       ->group(g);
   app.add_flag("--no-packet-resend", f.no_packet_resend, "never ask a GigE camera to resend lost packets")->group(g);
   app.add_option("--throughput-limit", c.throughput_limit,
                  "DeviceLinkThroughputLimit, bytes/s, when both cameras share one link (0 = keep the camera's)")
       ->capture_default_str()
+      ->check(ivoa::non_negative_number())
       ->group(g);
   app.add_option("--buffers", c.buffers, "stream buffers per camera")
       ->capture_default_str()
@@ -101,6 +115,7 @@ void add_driver_options(CLI::App& app, Flags& f) {
   app.add_option("--pair-tolerance-ms", d.pair_tolerance_ms,
                  "max left/right time difference of a pair, ms (0 = half the frame period)")
       ->capture_default_str()
+      ->check(ivoa::non_negative_number())
       ->group(g);
   app.add_option("--frame-timeout", d.worker.frame_timeout_s, "seconds without a frame before a camera is reopened")
       ->capture_default_str()
@@ -108,13 +123,16 @@ void add_driver_options(CLI::App& app, Flags& f) {
       ->group(g);
   app.add_option("--reconnect-initial", d.worker.backoff.initial_s, "first wait between reopen attempts, seconds")
       ->capture_default_str()
+      ->check(ivoa::positive_number())
       ->group(g);
   app.add_option("--reconnect-max", d.worker.backoff.max_s, "longest wait between reopen attempts, seconds")
       ->capture_default_str()
+      ->check(ivoa::positive_number())
       ->group(g);
   app.add_option("--startup-timeout", d.startup_timeout_s,
                  "exit with an error if a camera has not opened after this many seconds (0 = wait forever)")
       ->capture_default_str()
+      ->check(ivoa::non_negative_number())
       ->group(g);
   app.add_option("--stereo-channel", d.stereo_channel, "channel for ivoa.stereo_image_t")
       ->capture_default_str()

@@ -16,6 +16,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/core/time.hpp"
@@ -77,7 +78,8 @@ void add_camera_options(CLI::App& app, Flags& f) {
       ->capture_default_str()
       ->check(CLI::IsMember({"left", "right"}));
   app.add_option("--ready-file", f.ready_file, "create this file once the cameras serve");
-  app.add_option("--duration", f.duration_s, "stop after this many seconds (0 = until SIGINT/SIGTERM)");
+  app.add_option("--duration", f.duration_s, "stop after this many seconds (0 = until SIGINT/SIGTERM)")
+      ->check(ivoa::non_negative_number());
 }
 
 void add_scene_options(CLI::App& app, Flags& f) {

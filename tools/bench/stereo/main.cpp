@@ -17,6 +17,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/camera_model.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/sim/scene_spec.hpp"
@@ -107,9 +108,16 @@ struct BenchOptions {
 void add_bench_options(CLI::App& app, BenchOptions& o) {
   app.add_option("--scene", o.scene_path, "simulator scene file")->capture_default_str();
   app.add_option("--seed", o.seed, "scene and trajectory seed")->capture_default_str();
-  app.add_option("--frames", o.frames, "frames along a simulated drive (0.5 s apart)")->capture_default_str();
-  app.add_option("--repeats", o.repeats, "passes over the frames")->capture_default_str();
-  app.add_option("--threads", o.threads, "OpenCV threads (1: one core, as the budget says)")->capture_default_str();
+  // Zero frames or passes leave no timings, whose medians were read out of range.
+  app.add_option("--frames", o.frames, "frames along a simulated drive (0.5 s apart)")
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
+  app.add_option("--repeats", o.repeats, "passes over the frames")
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
+  app.add_option("--threads", o.threads, "OpenCV threads (1: one core, as the budget says)")
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_option("--json", o.json_path, "also write the results as JSON");
   app.add_flag("--jppc-only", o.jppc_only, "time JPP-C alone (for profiling)");
   ivoa::add_query_grid_options(app, o.grid);
