@@ -1,5 +1,5 @@
-// `ivoa-dataset info` as a user runs it: sessions, splits and class counts;
-// a folder that is not a dataset is bad input.
+// `ivoa-dataset` as a user runs it. info: sessions, splits and class counts;
+// a folder that is not a dataset is bad input. build: flags checked up front.
 #include <fstream>
 #include <string>
 
@@ -41,6 +41,16 @@ TEST(DatasetInfo, FolderWithoutADatasetIsBadInput) {
   const auto r = dataset_info(dir.path().string());
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
   EXPECT_TRUE(contains(r.output, "not a dataset")) << r.output;
+}
+
+// A detector flag that cannot work is refused before any log is read, by name.
+TEST(DatasetBuild, DetectorFlagOutOfRangeIsAUsageError) {
+  test::TempDir dir;
+  std::ofstream(dir.file("a.lcmlog")) << "never read";
+  const auto r = test::run_command("timeout 60 " IVOA_DATASET_EXE " build --out " + dir.file("data") +
+                                   " --labels jppc --rect_scale -1 " + dir.file("a.lcmlog"));
+  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+  EXPECT_TRUE(contains(r.output, "rect_scale must be in (0, 1]")) << r.output;
 }
 
 }  // namespace

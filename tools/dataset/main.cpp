@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "ivoa/dataset/builder.hpp"
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/logio/session_name.hpp"
+#include "ivoa/stereo/config.hpp"
 #include "ivoa/stereo/options.hpp"
 
 namespace fs = std::filesystem;
@@ -182,7 +184,8 @@ void add_build_command(CLI::App& app, BuildCommand& b) {
                   "do not store the detector's per-sample evidence (JPP-C's window costs, re-run on each frame; "
                   "ivoa-train learns them as a side task)");
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   build->add_option("logs", b.logs, "LCM log files, in order")->required()->check(CLI::ExistingFile);
   const size_t before_relabel_flags = build->get_options().size();
   add_query_grid_options(*build, options.grid);
@@ -191,10 +194,23 @@ void add_build_command(CLI::App& app, BuildCommand& b) {
   b.relabel_flags.erase(b.relabel_flags.begin(), b.relabel_flags.begin() + static_cast<long>(before_relabel_flags));
 }
 
+// Checked before the first log is read: a bad value found at the first frame
+// would not name its flag.
+bool detector_flags_valid(const stereo::DetectorConfig& detector) {
+  try {
+    stereo::validate(detector.jpp);
+    stereo::validate(detector.dense);
+  } catch (const std::invalid_argument& e) {
+    spdlog::error("{}", e.what());
+    return false;
+  }
+  return true;
+}
+
 // After parsing. Returns an exit code, or -1 to go on.
 int finish_build_options(BuildCommand& b) {
   b.options.evidence = !b.no_evidence;
-  if (b.options.labels != dataset::kRecordedLabels) return -1;
+  if (b.options.labels != dataset::kRecordedLabels) return detector_flags_valid(b.options.detector) ? -1 : kExitUsage;
   const CLI::Option& patch_size = *b.command->get_option("--patch-size");
   if (const CLI::Option* flag = ignored_with_recorded_labels(b.relabel_flags, patch_size, b.options)) {
     spdlog::error(
