@@ -10,6 +10,7 @@
 #include <spdlog/spdlog.h>
 #include <torch/torch.h>
 
+#include "ivoa/core/json_text.hpp"
 #include "ivoa/core/label_confusion.hpp"
 #include "ivoa/core/time.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
@@ -104,7 +105,7 @@ int label_of(const SplitData& d, const SampleRef& r) { return sample_of(d, r).la
 
 std::string json_list(const std::vector<std::string>& v) {
   std::string s = "[";
-  for (size_t k = 0; k < v.size(); ++k) s += (k ? ", \"" : "\"") + v[k] + "\"";
+  for (size_t k = 0; k < v.size(); ++k) s += (k ? ", " : "") + json_quote(v[k]);
   return s + "]";
 }
 
