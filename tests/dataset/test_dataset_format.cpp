@@ -169,6 +169,39 @@ TEST(DatasetFormat, TruncatedPatchStoreIsReported) {
   }
 }
 
+// A row cut from samples.csv together with its patch leaves the store
+// consistent, but session.json would still claim the old counts.
+TEST(DatasetFormat, IndexThatDisagreesWithSessionJsonIsReported) {
+  test::TempDir dir;
+  {
+    SessionWriter w(dir.path().string(), info("cut"));
+    w.add_frame(1, 1, 2);
+    SampleRecord fp;
+    fp.label = 2;  // FP, in kLabelNames order
+    w.add_sample(SampleRecord{}, numbered_patch(0));
+    w.add_sample(fp, numbered_patch(1));
+  }
+  const auto session = dir.path() / "cut";
+  std::ifstream in(session / "samples.csv");
+  const std::string header_and_first = [&] {
+    std::string header, first;
+    std::getline(in, header);
+    std::getline(in, first);
+    return header + "\n" + first + "\n";
+  }();
+  in.close();
+  std::ofstream(session / "samples.csv") << header_and_first;
+  std::filesystem::resize_file(session / "patches.bin", 100 * 100 * 3);
+  try {
+    SessionReader r(session.string());
+    FAIL() << "read a session whose index disagrees with session.json";
+  } catch (const DatasetError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("session.json says 2 samples (TP 1, TN 0, FP 1, FN 0)"), std::string::npos) << what;
+    EXPECT_NE(what.find("samples.csv lists 1 samples (TP 1, TN 0, FP 0, FN 0)"), std::string::npos) << what;
+  }
+}
+
 TEST(DatasetFormat, EvidenceRoundTripsPerSampleAndOldSessionsHaveNone) {
   test::TempDir dir;
   SessionInfo with = info("ev");

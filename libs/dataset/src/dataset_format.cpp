@@ -231,6 +231,7 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
     if (!has_side) s.patch_side = info_.patch_size;
     samples_.push_back(s);
   }
+  check_index_matches_metadata();
   const size_t patch_bytes = this->patch_bytes();
   const std::string patches = dir_ + "/patches.bin";
   const int fd = ::open(patches.c_str(), O_RDONLY);
@@ -253,6 +254,23 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
   }
   ::close(fd);
   read_evidence();
+}
+
+// session.json's counts are what `ivoa-dataset info` and the reports show:
+// a session whose index was edited or cut short must not claim other numbers.
+void SessionReader::check_index_matches_metadata() const {
+  std::array<int64_t, kNumClasses> counts{};
+  for (const SampleRecord& s : samples_) ++counts[static_cast<size_t>(s.label)];
+  if (static_cast<int64_t>(samples_.size()) == info_.samples && counts == info_.class_counts) return;
+  const auto listed = [](int64_t total, const std::array<int64_t, kNumClasses>& c) {
+    std::string text = std::to_string(total) + " samples (";
+    for (int k = 0; k < kNumClasses; ++k)
+      text += fmt::format("{}{} {}", k ? ", " : "", kLabelNames[k], c[static_cast<size_t>(k)]);
+    return text + ")";
+  };
+  throw DatasetError(dir_ + ": session.json says " + listed(info_.samples, info_.class_counts) +
+                     ", samples.csv lists " + listed(static_cast<int64_t>(samples_.size()), counts) +
+                     " (edited or truncated session?)");
 }
 
 void SessionReader::read_evidence() {

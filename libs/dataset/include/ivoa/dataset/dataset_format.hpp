@@ -135,6 +135,7 @@ class SessionReader {
   const float* evidence(size_t i) const;
 
  private:
+  void check_index_matches_metadata() const;
   void read_evidence();
   std::string dir_;
   SessionInfo info_;
