@@ -82,6 +82,24 @@ TEST(Bus, LogWrittenAndReplayedThroughTheSameInterface) {
   EXPECT_EQ(utimes, (std::vector<int64_t>{0, 1, 2, 3, 4}));
 }
 
+// lcm::LCM::subscribe hands back a subscription even for a regex GLib
+// cannot compile, which crashed `ivoa-lcm-stats --channels '['`.
+TEST(Bus, ChannelRegexThatDoesNotCompileThrowsWithTheRegex) {
+  Bus bus("memq://");
+  try {
+    bus.subscribe_raw("CAMERA[", [](const void*, size_t, const ReceiveInfo&) {});
+    FAIL() << "subscribed with a regex that does not compile";
+  } catch (const BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("'CAMERA['"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not a valid channel regex"), std::string::npos) << e.what();
+  }
+  int received = 0;
+  bus.subscribe_raw("BUS_TEST_RE.*", [&](const void*, size_t, const ReceiveInfo&) { ++received; });
+  const char byte = 1;
+  ASSERT_TRUE(bus.publish_raw("BUS_TEST_REGEX", &byte, 1));
+  EXPECT_TRUE(handle_until(bus, [&] { return received == 1; })) << "the bus still works after the refusal";
+}
+
 TEST(Bus, BadUrlThrowsWithTheUrl) {
   try {
     Bus bus("nonsense://x");

@@ -41,9 +41,14 @@ struct Watch {
 int watch(const std::string& lcm_url, const Watch& w) {
   ivoa::Bus bus(lcm_url);
   ivoa::tools::TrafficStats stats;
-  bus.subscribe_raw(w.channels, [&](const void* data, size_t size, const ivoa::ReceiveInfo& info) {
-    stats.add(info.channel, data, size, info.recv_utime);
-  });
+  try {
+    bus.subscribe_raw(w.channels, [&](const void* data, size_t size, const ivoa::ReceiveInfo& info) {
+      stats.add(info.channel, data, size, info.recv_utime);
+    });
+  } catch (const ivoa::BusError& e) {
+    spdlog::error("--channels: {}", e.what());
+    return ivoa::kExitUsage;
+  }
   ivoa::install_stop_handlers();
   bus.handle(0);  // udpm joins the group lazily, on the first handle
   if (!ivoa::write_ready_file(w.ready_file)) return ivoa::kExitIoError;
@@ -82,7 +87,8 @@ int main(int argc, char** argv) {
   Watch w;
   std::vector<std::string> expect_args;
   bool list_types = false;
-  app.add_option("--channels", w.channels, "channel regex")->capture_default_str();
+  app.add_option("--channels", w.channels, "channel regex (GLib syntax, matched against the whole name)")
+      ->capture_default_str();
   app.add_option("--duration", w.duration_s, "stop after this many seconds (0 = until Ctrl-C)")
       ->check(ivoa::non_negative_number());
   app.add_option("--print-every", w.print_every_s, "print the table every N seconds (0 = only at the end)")

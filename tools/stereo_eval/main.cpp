@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -66,10 +67,12 @@ void add_options(CLI::App& app, CommandLine& cl) {
       ->check(ivoa::positive_number());
   app.add_option("--wrong-offsets", cl.scoring.wrong_offsets, "wrong hypotheses at truth +- these offsets, pixels")
       ->delimiter(',')
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   app.add_option("--texture-threshold", cl.scoring.texture_threshold,
                  "textured: RMS x-gradient over the 11x11 window >= this, gray levels/px")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_option("--models", cl.models, "jppc, sgbm")->delimiter(',')->check(CLI::IsMember({"jppc", "sgbm"}));
   app.add_option("--sgbm-tolerance", cl.sgbm_tolerance, "SGBM confirms a hypothesis within this many pixels")
       ->capture_default_str()
@@ -109,7 +112,9 @@ void fit_sgbm_range(const CLI::App& app, const Pair& p, CommandLine& cl) {
 
 std::vector<ivoa::stereo_eval::ModelScore> score_models(const CommandLine& cl, const Pair& p, cv::Mat& overlay) {
   std::vector<ivoa::stereo_eval::ModelScore> scores;
+  std::set<std::string> scored;
   for (const std::string& name : cl.models) {
+    if (!scored.insert(name).second) continue;  // named twice: one row is enough
     std::unique_ptr<ivoa::stereo_eval::PointCheckModel> model;
     if (name == "jppc") model = std::make_unique<ivoa::stereo_eval::JppPointModel>(cl.jpp);
     else model = std::make_unique<ivoa::stereo_eval::SgbmPointModel>(cl.sgbm, cl.sgbm_tolerance);

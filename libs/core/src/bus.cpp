@@ -17,11 +17,12 @@ std::string default_lcm_url() {
   return with_receive_buffer(env && *env ? env : kProjectDefaultUrl);
 }
 
-// Owns the std::function for LCM 1.3.1, which has no lambda subscribe.
+// Owns the std::function; LCM's C API calls it through `user`.
 struct Bus::Subscription {
   RawHandler handler;
-  void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    handler(rbuf->data, rbuf->data_size, ReceiveInfo{channel, rbuf->recv_utime, rbuf->data_size});
+  static void on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {
+    static_cast<Subscription*>(user)->handler(rbuf->data, rbuf->data_size,
+                                              ReceiveInfo{channel, rbuf->recv_utime, rbuf->data_size});
   }
 };
 
@@ -39,14 +40,20 @@ bool Bus::publish_raw(std::string_view channel, const void* data, size_t size) {
   return lcm_->publish(std::string(channel), data, static_cast<unsigned int>(size)) == 0;
 }
 
+// Through the C API: lcm::LCM::subscribe returns a subscription even when
+// the regex does not compile, and using it then crashes.
 void Bus::subscribe_raw(std::string_view channel_regex, RawHandler handler) {
   auto sub = std::make_unique<Subscription>();
   sub->handler = std::move(handler);
-  lcm::Subscription* s = lcm_->subscribe(std::string(channel_regex), &Subscription::on_message, sub.get());
-  if (s == nullptr) throw BusError("cannot subscribe to '" + std::string(channel_regex) + "'");
+  const std::string regex(channel_regex);
+  lcm_subscription_t* s = lcm_subscribe(lcm_->getUnderlyingLCM(), regex.c_str(), &Subscription::on_message, sub.get());
+  if (s == nullptr)
+    throw BusError("cannot subscribe to '" + regex +
+                   "': not a valid channel regex (GLib syntax, matched against the "
+                   "whole channel name)");
   // Images arrive in bursts; keep more than LCM's default 30 queued per
   // subscription so short stalls do not drop messages.
-  s->setQueueCapacity(120);
+  lcm_subscription_set_queue_capacity(s, 120);
   subscriptions_.push_back(std::move(sub));
 }
 
