@@ -24,9 +24,11 @@ void add_monitor_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
       ->group(g);
   app.add_option("--obstacle-min-height", m.obstacle_min_height, "points higher are obstacles, m")
       ->capture_default_str()
+      ->check(ivoa::positive_number())
       ->group(g);
   app.add_option("--obstacle-max-height", m.obstacle_max_height, "points higher are ignored (overhangs), m")
       ->capture_default_str()
+      ->check(ivoa::positive_number())
       ->group(g);
   app.add_option("--hole-min-depth", m.hole_min_depth, "points lower than the ground by this are holes, m")
       ->capture_default_str()
@@ -73,6 +75,15 @@ void add_channel_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
       ->group(g);
 }
 
+// The heights are compared once both are parsed (the grid options hold the
+// app's parse-complete callback).
+bool heights_in_order(const ivoa::monitor::DepthMonitorConfig& m) {
+  if (m.obstacle_min_height < m.obstacle_max_height) return true;
+  spdlog::error("--obstacle-min-height ({} m) must be below --obstacle-max-height ({} m)", m.obstacle_min_height,
+                m.obstacle_max_height);
+  return false;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -85,6 +96,7 @@ int main(int argc, char** argv) {
   add_channel_options(app, options);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("depth_monitor", common.log_level);
+  if (!heights_in_order(options.monitor)) return ivoa::kExitUsage;
   ivoa::install_stop_handlers();
   try {
     ivoa::Bus bus(common.lcm_url);
