@@ -52,7 +52,9 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--threads", config.threads, "LibTorch threads")
       ->capture_default_str()
       ->check(ivoa::positive_number());
-  app.add_option("--device", config.device, "cpu or cuda")->capture_default_str();
+  app.add_option("--device", config.device, "cpu or cuda")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"cpu", "cuda"}));
   app.add_option("--seed", config.seed, "dropout masks (0 = from the clock)")->capture_default_str();
 }
 

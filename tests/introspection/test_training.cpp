@@ -4,6 +4,8 @@
 // tested end to end elsewhere.)
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
 
 #include <opencv2/core.hpp>
 
@@ -344,6 +346,25 @@ TEST(Training, MakesTheModelsFolderOrSaysItCannot) {
     FAIL();
   } catch (const TrainOutputError& e) {
     EXPECT_NE(std::string(e.what()).find("split.yaml/m.pt: cannot create its folder"), std::string::npos) << e.what();
+  }
+}
+
+// A device this LibTorch cannot use is refused before any step, and
+// without writing anything (cuda used to end in LibTorch's backtrace; any
+// other name trained on the CPU). Debian's LibTorch has no CUDA.
+TEST(Training, DeviceItCannotUseIsRefusedByName) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 2, 2);
+  for (const auto& [device, why] :
+       {std::pair<std::string, std::string>{"cuda", "no usable CUDA"}, {"gpu", "unknown device 'gpu' (cpu, cuda)"}}) {
+    c.device = device;
+    try {
+      train_model(c);
+      FAIL() << "trained on device '" << device << "'";
+    } catch (const ModelError& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(c.output)) << device;
   }
 }
 

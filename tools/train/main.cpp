@@ -97,7 +97,7 @@ void add_model_options(CLI::App& app, TrainCommandLine& cl) {
   app.add_flag("--no-augment", cl.no_augment, "no photometric augmentation");
   app.add_option("--seed", c.seed, "initial weights, batch draws, augmentation and dropout")->capture_default_str();
   app.add_option("--threads", c.threads, "LibTorch threads")->capture_default_str()->check(ivoa::positive_number());
-  app.add_option("--device", c.device, "cpu or cuda")->capture_default_str();
+  app.add_option("--device", c.device, "cpu or cuda")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
 }
 
 void add_validation_options(CLI::App& app, TrainCommandLine& cl) {

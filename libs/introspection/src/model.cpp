@@ -25,15 +25,6 @@ torch::Generator make_generator(uint64_t seed) {
   return at::detail::createCPUGenerator(seed ? seed : static_cast<uint64_t>(now_utime()));
 }
 
-torch::Device device_of(const std::string& name) {
-  if (name == "cpu") return torch::kCPU;
-  if (name == "cuda") {
-    if (!torch::cuda::is_available()) throw ModelError("device 'cuda' requested but this LibTorch has no usable CUDA");
-    return torch::kCUDA;
-  }
-  throw ModelError("unknown device '" + name + "' (cpu, cuda)");
-}
-
 cv::Mat filtered(const cv::Mat& m, int window) {
   if (window <= 1) return m;
   cv::Mat out;
@@ -135,7 +126,7 @@ class NativeIntrospectionModel : public IntrospectionModel {
   NativeIntrospectionModel(NativeModel model, const InferenceConfig& config)
       : IntrospectionModel(config),
         model_(std::move(model)),
-        device_(device_of(config.device)),
+        device_(device_named(config.device)),
         generator_(make_generator(config.seed)) {
     model_.net->to(device_);
     model_.net->eval();

@@ -67,6 +67,15 @@ void fill_patch(const cv::Mat& patch, int views, const float* table, float* out)
 
 }  // namespace
 
+torch::Device device_named(const std::string& name) {
+  if (name == "cpu") return torch::kCPU;
+  if (name == "cuda") {
+    if (!torch::cuda::is_available()) throw ModelError("device 'cuda' requested but this LibTorch has no usable CUDA");
+    return torch::kCUDA;
+  }
+  throw ModelError("unknown device '" + name + "' (cpu, cuda)");
+}
+
 torch::Tensor normalize_patches(const torch::Tensor& bgr_uint8, const ModelInfo& info) {
   return resized_to_input(standardize(to_unit_rgb(bgr_uint8), info), info);
 }

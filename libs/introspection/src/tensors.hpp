@@ -1,5 +1,7 @@
 #pragma once
-// cv::Mat <-> tensor conversions with the model's normalisation.
+// cv::Mat <-> tensor conversions with the model's normalisation, and the
+// device a model runs on.
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -11,6 +13,10 @@ namespace ivoa::introspection {
 
 // Views (ModelInfo::views) travel stacked along the rows, as the dataset
 // stores them, and become channel groups: view k is channels 3k..3k+2.
+
+// "cpu" or "cuda"; throws ModelError for another name, or for cuda where
+// this LibTorch cannot use it (Debian's is CPU-only).
+torch::Device device_named(const std::string& name);
 
 // 8-bit BGR image (views x H rows) -> [1, 3 x views, H, W] float, RGB, (x/255 - mean) / std.
 torch::Tensor image_to_tensor(const cv::Mat& bgr, const ModelInfo& info);

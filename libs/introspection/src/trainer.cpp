@@ -19,6 +19,7 @@
 #include "evidence_task.hpp"
 #include "mc_dropout.hpp"
 #include "model_file.hpp"
+#include "tensors.hpp"
 
 namespace ivoa::introspection {
 namespace {
@@ -522,7 +523,7 @@ TrainReport calibrate_model(const TrainConfig& c) {
   torch::set_num_threads(std::max(c.threads, 1));
   if (c.init.empty() || c.output.empty()) throw std::runtime_error("calibration needs a model (--init) and --out");
   make_output_folder(c.output);
-  const torch::Device device = c.device == "cuda" ? torch::kCUDA : torch::kCPU;
+  const torch::Device device = device_named(c.device);
   const SplitData val = load_split_data(c, c.val_split);
   NativeModel model = load_native_model(c.init);
   if (model.info.views != val.views || model.info.patch_scale != val.patch_scale ||
@@ -546,7 +547,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   const double start = monotonic_ms();
   torch::set_num_threads(std::max(c.threads, 1));
   torch::manual_seed(c.seed);
-  const torch::Device device = c.device == "cuda" ? torch::kCUDA : torch::kCPU;
+  const torch::Device device = device_named(c.device);
   if (c.output.empty()) throw std::runtime_error("no output model file given");
   make_output_folder(c.output);
   const SplitData train = load_split_data(c, c.train_split);
