@@ -5,6 +5,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -208,10 +209,14 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
 
 using SessionList = std::vector<std::pair<std::string, std::string>>;  // (split, session)
 
+// A split named twice is evaluated once (its samples would count twice);
+// load_split already refuses a session in two splits.
 SessionList list_sessions(const Options& o) {
   SessionList sessions;
+  std::set<std::string> listed;
   for (const auto& split : o.splits)
-    for (const auto& s : dataset::split_sessions(o.split_file, split, o.dataset)) sessions.push_back({split, s});
+    if (listed.insert(split).second)
+      for (const auto& s : dataset::split_sessions(o.split_file, split, o.dataset)) sessions.push_back({split, s});
   return sessions;
 }
 
