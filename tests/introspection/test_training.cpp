@@ -4,6 +4,7 @@
 // tested end to end elsewhere.)
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -347,6 +348,22 @@ TEST(Training, MakesTheModelsFolderOrSaysItCannot) {
   } catch (const TrainOutputError& e) {
     EXPECT_NE(std::string(e.what()).find("split.yaml/m.pt: cannot create its folder"), std::string::npos) << e.what();
   }
+}
+
+// Validating on the training split would keep the model that fits it best
+// and calibrate the gate on seen samples: refused before anything is written.
+TEST(Training, ValidationOnTheTrainingSplitIsRefused) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 2, 2);
+  c.val_split = c.train_split;
+  try {
+    train_model(c);
+    FAIL() << "validated on the training split";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("the validation split 'train' is the one trained on"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(c.output));
 }
 
 // A device this LibTorch cannot use is refused before any step, and

@@ -2,6 +2,7 @@
 //
 //   ivoa-train --dataset data/ --split split.yaml --out model.pt
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -202,6 +203,9 @@ int main(int argc, char** argv) {
   } catch (const introspection::TrainOutputError& e) {
     spdlog::error("{}", e.what());
     return kExitIoError;
+  } catch (const std::invalid_argument& e) {  // settings that cannot train, e.g. validating on the training split
+    spdlog::error("{}", e.what());
+    return kExitUsage;
   } catch (const std::exception& e) {  // ModelError and the rest: the message names the file and what is wrong
     spdlog::error("{}", e.what());
     return kExitBadInput;

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 
 #include <ATen/CPUGeneratorImpl.h>
 #include <spdlog/spdlog.h>
@@ -549,6 +550,10 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   torch::manual_seed(c.seed);
   const torch::Device device = device_named(c.device);
   if (c.output.empty()) throw std::runtime_error("no output model file given");
+  if (c.val_split == c.train_split)
+    throw std::invalid_argument("the validation split '" + c.val_split +
+                                "' is the one trained on: the kept model and the uncertainty gate need held-out "
+                                "sessions");
   make_output_folder(c.output);
   const SplitData train = load_split_data(c, c.train_split);
   const SplitData val = load_split_data(c, c.val_split);

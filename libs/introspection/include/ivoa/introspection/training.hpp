@@ -110,8 +110,10 @@ class TrainOutputError : public std::runtime_error {
 };
 
 // Trains and writes config.output, creating its folder. Throws
-// TrainOutputError for a file it cannot write, std::runtime_error naming any
-// other problem (missing split, empty class, unreadable dataset).
+// TrainOutputError for a file it cannot write, std::invalid_argument for
+// settings that cannot train (validation on the training split),
+// std::runtime_error naming any other problem (missing split, empty class,
+// unreadable dataset, a device LibTorch cannot use).
 TrainReport train_model(const TrainConfig& config, const std::function<void(const TrainStatus&)>& progress = {});
 
 // Re-calibrates the uncertainty gates of an existing model (config.init) on
