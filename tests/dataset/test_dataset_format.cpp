@@ -243,6 +243,23 @@ TEST(DatasetFormat, EvidenceRoundTripsPerSampleAndOldSessionsHaveNone) {
   }
 }
 
+// "--session .." wrote the session's files into the dataset's parent folder.
+TEST(DatasetFormat, SessionNameThatIsNotAFolderOfItsOwnIsRefused) {
+  test::TempDir dir;
+  const std::string root = (dir.path() / "data").string();
+  for (const std::string name : {"", ".", "..", "a/b"}) {
+    try {
+      SessionWriter w(root, info(name));
+      FAIL() << "accepted session name '" << name << "'";
+    } catch (const DatasetError& e) {
+      EXPECT_NE(std::string(e.what()).find("session name '" + name + "' must be a folder name"), std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "patches.bin"));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "data" / "patches.bin"));
+}
+
 TEST(DatasetFormat, RejectsWrongPatchesAndLabels) {
   test::TempDir dir;
   SessionWriter w(dir.path().string(), info("s3"));

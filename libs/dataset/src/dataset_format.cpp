@@ -134,8 +134,9 @@ SessionWriter::SessionWriter(const std::string& dataset_root, SessionInfo info)
     : dir_((fs::path(dataset_root) / info.session).string()),
       info_(std::move(info)),
       files_(std::make_unique<Files>()) {
-  if (info_.session.empty() || info_.session.find('/') != std::string::npos)
-    throw DatasetError("session name '" + info_.session + "' must be a non-empty folder name");
+  const std::string& name = info_.session;  // "..": the session's files would land beside the dataset
+  if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos)
+    throw DatasetError("session name '" + name + "' must be a folder name (not empty, '.' or '..', no '/')");
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec) throw DatasetError(dir_ + ": cannot create session folder: " + ec.message());
