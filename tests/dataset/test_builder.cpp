@@ -258,11 +258,15 @@ TEST(DatasetBuilder, RecordedLabelsCanBeCutWithAnotherPatchSize) {
   });
   BuildOptions options;  // labels: recorded
   options.recorded_patch_size = 360;
-  const SessionReader session = build_session(dir.file("data"), "rec", log_path, options);
+  SessionBuilder builder(dir.file("data"), "rec", options);
+  builder.add_log(log_path);
+  const BuildReport report = builder.finish();
+  const SessionReader session(dir.file("data") + "/rec");
   EXPECT_EQ(session.info().patch_size, 360);
   EXPECT_EQ(session.info().grid.patch_size, 100);  // the grid that labelled the cells
   ASSERT_GT(session.size(), 0u);
   EXPECT_LT(session.size(), recorded);  // some 360 px squares leave the 960x600 image
+  EXPECT_EQ(report.patches_outside, static_cast<int64_t>(recorded - session.size())) << "each skipped cell counted";
   for (size_t i = 0; i < session.size(); ++i) {
     const auto& s = session.samples()[i];
     const cv::Mat want = left.at(s.utime)(patch_rect(s.u, s.v, 360));

@@ -68,6 +68,11 @@ int build_session(const std::string& out, const std::string& session, const std:
   if (r.tn_dropped > 0)
     std::printf("%-28s %lld TN cells left out (--keep-tn %g)\n", "", static_cast<long long>(r.tn_dropped),
                 options.keep_tn);
+  if (r.patches_outside > 0)
+    std::printf("%-28s %lld labelled cells skipped: their patch leaves the image\n", "",
+                static_cast<long long>(r.patches_outside));
+  if (r.samples == 0 && r.patches_outside > 0)
+    spdlog::warn("{}: no samples: every labelled cell's patch leaves the image (a smaller --patch-size?)", session);
   if (r.evidence_mismatches > 0)
     std::printf("%-28s %lld samples' evidence left NaN: the re-run detector's verdict differs from the label's\n", "",
                 static_cast<long long>(r.evidence_mismatches));
@@ -160,8 +165,10 @@ void add_build_command(CLI::App& app, BuildCommand& b) {
                    "'recorded' (the log's INTROSPECTION_LABELS) or a detector to re-run offline: jppc, dense")
       ->capture_default_str();
   build->add_option("--session", b.session, "session name for all logs (default: per log, from the file name)");
-  build->add_option("--environment", options.environment,
-                    "indoor or outdoor (default: what the simulator logged, else the scene name)");
+  build
+      ->add_option("--environment", options.environment,
+                   "indoor or outdoor (default: what the simulator logged, else the scene name)")
+      ->check(CLI::IsMember({"indoor", "outdoor"}));
   build
       ->add_option("--views", options.views,
                    "1: left patches (the paper); 2: each with the right image warped onto the ground plane below it")

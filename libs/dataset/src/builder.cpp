@@ -269,7 +269,10 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
   int64_t samples = 0;
   const std::vector<int> sides = patch_sides(labels, image->second);
   for (const auto& [i, patch] : labelled_patches(labels, image->second, sides)) {
-    if (patch.empty()) continue;  // the patch would leave the image
+    if (patch.empty()) {  // the patch would leave the image
+      ++report.patches_outside;
+      continue;
+    }
     if (labels.label[i] == introspection_labels_t::LABEL_TN && !keeps_tn(labels.utime, i, options.keep_tn)) {
       writer->count_dropped_tn();  // only cells that would have been stored count as left out
       ++report.tn_dropped;
