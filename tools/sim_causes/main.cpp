@@ -435,13 +435,16 @@ int explain(const CommandLine& cl) {
   tally.unexplained_fixed.resize(opt.variants.size());
   tally.variants.resize(opt.variants.size());
   int worst = kExitOk;
-  for (const SessionResult& r : explain_sessions(cl.logs, opt, cl.jobs)) {
+  size_t failed = 0;
+  const std::vector<SessionResult> results = explain_sessions(cl.logs, opt, cl.jobs);
+  for (const SessionResult& r : results) {
     csv << r.rows.str();
     variants_csv << r.variant_rows.str();
     tally.add(r.tally);
     if (!r.error.empty()) {  // a bad session is reported and skipped; the others are still written
       spdlog::error("{}", r.error);
       worst = kExitBadInput;
+      ++failed;
     }
   }
   csv.flush();
@@ -450,6 +453,7 @@ int explain(const CommandLine& cl) {
     spdlog::error("writing {} failed", !csv ? opt.out : opt.variants_out);
     return kExitIoError;
   }
+  if (failed == results.size()) return worst;  // no session explained: no tables of zeros
   print_summary(tally);
   print_variants(tally, opt.variants);
   return worst;
