@@ -97,6 +97,21 @@ TEST(LogWriter, RefusesAnExistingFileUnlessAskedToOverwrite) {
   EXPECT_EQ(std::filesystem::file_size(path), 0u);
 }
 
+// A folder given as the log: "use --force" would not help, so it is not offered.
+TEST(LogWriter, FolderIsRefusedAsSuchWithOrWithoutOverwrite) {
+  test::TempDir dir;
+  LogWriterOptions overwrite;
+  overwrite.overwrite = true;
+  for (const LogWriterOptions& options : {LogWriterOptions{}, overwrite}) {
+    try {
+      LogWriter writer(dir.path().string(), options);
+      FAIL() << "opened a folder as a log";
+    } catch (const LogWriteError& e) {
+      EXPECT_NE(std::string(e.what()).find("it is a folder (name a file in it)"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(LogReader, TruncatedEventIsReportedAtItsOffsetAfterTheGoodOnes) {
   test::TempDir dir;
   const std::string path = dir.file("cut.lcmlog");

@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 
 #include "ivoa/logio/log_format.hpp"
 
@@ -16,6 +17,9 @@ LogWriter::LogWriter(std::string path, LogWriterOptions options) : path_(std::mo
   fd_ = ::open(path_.c_str(), flags, 0644);
   if (fd_ < 0) {
     const int error = errno;
+    std::error_code ignored;
+    if (std::filesystem::is_directory(path_, ignored))  // EEXIST or EISDIR: --force would not help
+      throw LogWriteError("cannot create log " + path_ + ": it is a folder (name a file in it)");
     throw LogWriteError("cannot create log " + path_ + ": " + std::strerror(error) +
                         (error == EEXIST ? " (use --force to overwrite)" : ""));
   }
