@@ -595,6 +595,16 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
                                "--dataset", self.f.data, "--out", os.path.join(self.root, "x")])
         self.assertEqual(code, 2)
 
+    def test_numeric_flags_out_of_range_are_usage_errors(self):
+        # --perplexity -3 used to end in scikit-learn's traceback after the metrics.
+        for flag, value, why in (("--perplexity", "-3", "--perplexity must be > 0, not -3"),
+                                 ("--threads", "0", "--threads must be at least 1, not 0"),
+                                 ("--max-overlays", "-1", "--max-overlays must be >= 0")):
+            code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--out",
+                                        os.path.join(self.root, "x"), flag, value])
+            self.assertEqual(code, 2, stderr)
+            self.assertIn(why, stderr)
+
 
 def write_causes(path, sessions, detector="jppc", cause_of=None, not_reproduced=0, relabel=None, fixed_by=None):
     """An ivoa-sim-causes CSV for the true FP/FN rows of `sessions`: causes

@@ -118,6 +118,12 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
         p.error("--tsne-max must be at least 5")
     if a.tsne_iterations < 250:
         p.error("--tsne-iterations must be at least 250 (scikit-learn's minimum)")
+    if not a.perplexity > 0:
+        p.error(f"--perplexity must be > 0, not {a.perplexity:g}")
+    if a.threads < 1:
+        p.error(f"--threads must be at least 1, not {a.threads}")
+    if a.max_overlays < 0:
+        p.error(f"--max-overlays must be >= 0 (0 = all), not {a.max_overlays}")
     return a
 
 
