@@ -28,9 +28,12 @@ TP, TN, FP, FN = 0, 1, 2, 3
 GROUPS = [(50, (TN, TN, TN)), (20, (TP, TP, TP)), (10, (FP, FP, TN)), (20, (FN, TP, FN))]
 
 
-def write_dataset(root, labels, extra_cells=0):
+def write_dataset(root, labels, extra_cells=0, detector=None):
     d = os.path.join(root, "office_s31")
     os.makedirs(d)
+    if detector:
+        with open(os.path.join(d, "session.json"), "w") as f:
+            json.dump({"session": "office_s31", "detector": detector}, f)
     with open(os.path.join(d, "samples.csv"), "w") as f:
         f.write("sample,frame,utime,depth_utime,cell,label\n")
         for i, label in enumerate(labels):
@@ -104,6 +107,19 @@ class LabelRepeatabilityTest(unittest.TestCase):
         proc = subprocess.run([sys.executable, TOOL, self.data[0], bad], capture_output=True, text=True, timeout=60)
         self.assertEqual(proc.returncode, 3)
         self.assertIn("samples.csv: line 2", proc.stderr)
+
+    def test_realisations_must_be_distinct_and_of_one_detector(self):
+        proc = subprocess.run([sys.executable, TOOL, self.data[0], self.data[0] + "/"], capture_output=True,
+                              text=True, timeout=60)
+        self.assertEqual(proc.returncode, 2)
+        self.assertIn("is given twice", proc.stderr)
+        labels = [g[1][0] for g in GROUPS for _ in range(g[0])]
+        jppc, dense = os.path.join(self.tmp.name, "jppc"), os.path.join(self.tmp.name, "dense")
+        write_dataset(jppc, labels, detector="jppc")
+        write_dataset(dense, labels, detector="dense")
+        proc = subprocess.run([sys.executable, TOOL, jppc, dense], capture_output=True, text=True, timeout=60)
+        self.assertEqual(proc.returncode, 3)
+        self.assertIn("session office_s31 is labelled from different detectors ('jppc' in", proc.stderr)
 
 
 if __name__ == "__main__":

@@ -64,6 +64,29 @@ def read_labels(dataset: str) -> Dict[str, Dict[Tuple[int, int], int]]:
     return sessions
 
 
+def session_detector(dataset: str, session: str) -> str:
+    """The detector a session's labels are about (session.json), or "" if it does not say."""
+    path = os.path.join(dataset, session, "session.json")
+    try:
+        with open(path) as f:
+            return str(json.load(f).get("detector", ""))
+    except FileNotFoundError:
+        return ""
+    except (OSError, ValueError, AttributeError) as e:
+        raise InputError(f"{path}: cannot read session metadata: {e}") from None
+
+
+def check_one_detector(datasets: List[str], sessions) -> None:
+    """Realisations labelled from different detectors differ by more than the noise."""
+    for name in sorted(sessions):
+        detectors = {d: session_detector(d, name) for d in datasets}
+        named = {d: det for d, det in detectors.items() if det}
+        if len(set(named.values())) > 1:
+            listed = ", ".join(f"'{det}' in {d}" for d, det in named.items())
+            raise InputError(f"session {name} is labelled from different detectors ({listed}): the realisations "
+                             "must differ only in their noise seed")
+
+
 def common_cells(realisations: List[Dict[str, Dict[Tuple[int, int], int]]]) -> Tuple[np.ndarray, int, int]:
     """(cells x K) label matrix over the sessions and cells all realisations
     labelled, plus how many cells some but not all of them labelled, and
@@ -113,7 +136,9 @@ def leave_one_out_majority(labels: np.ndarray) -> List[float]:
 
 
 def analyse(datasets: List[str]) -> dict:
-    labels, partial, n_sessions = common_cells([read_labels(d) for d in datasets])
+    realisations = [read_labels(d) for d in datasets]
+    check_one_detector(datasets, set.intersection(*(set(r) for r in realisations)))
+    labels, partial, n_sessions = common_cells(realisations)
     agreement = pairwise_agreement(labels)
     diag = [float(agreement[c, c]) for c in range(4)]
     majority = leave_one_out_majority(labels)
@@ -150,6 +175,11 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if len(args.datasets) < 2:
         ap.error("give at least two datasets (noise realisations) of the same sessions")
+    seen = {}
+    for d in args.datasets:  # one folder twice would agree with itself
+        if os.path.realpath(d) in seen:
+            ap.error(f"{d} is given twice (as {seen[os.path.realpath(d)]} too): give each realisation once")
+        seen[os.path.realpath(d)] = d
     try:
         result = analyse(args.datasets)
     except InputError as e:
