@@ -47,10 +47,10 @@ void Bus::subscribe_raw(std::string_view channel_regex, RawHandler handler) {
   sub->handler = std::move(handler);
   const std::string regex(channel_regex);
   lcm_subscription_t* s = lcm_subscribe(lcm_->getUnderlyingLCM(), regex.c_str(), &Subscription::on_message, sub.get());
-  if (s == nullptr)
-    throw BusError("cannot subscribe to '" + regex +
-                   "': not a valid channel regex (GLib syntax, matched against the "
-                   "whole channel name)");
+  if (s == nullptr) {
+    const char* why = "not a valid channel regex (GLib syntax, matched against the whole channel name)";
+    throw BusError("cannot subscribe to '" + regex + "': " + why);
+  }
   // Images arrive in bursts; keep more than LCM's default 30 queued per
   // subscription so short stalls do not drop messages.
   lcm_subscription_set_queue_capacity(s, 120);
