@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
+#include <thread>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
@@ -81,18 +82,23 @@ void add_bench_options(CLI::App& app, BenchOptions& o) {
       ->capture_default_str()
       ->check(ivoa::positive_number());
   app.add_option("--seed", o.seed, "scene and trajectory seed")->capture_default_str();
-  app.add_option("--cpu", o.cpu, "core to pin to (-1: do not pin)")->capture_default_str();
+  app.add_option("--cpu", o.cpu, "core to pin to (-1: do not pin)")
+      ->capture_default_str()
+      ->check(CLI::Range(-1, CPU_SETSIZE - 1));
   app.add_option("--budget-ms", o.budget_ms, "per-frame budget the worst scene's median is compared with, ms")
       ->capture_default_str()
       ->check(ivoa::positive_number());
 }
 
-void pin_to_cpu(int cpu) {
-  if (cpu < 0) return;
+// Returns the CPU pinned to, or -1 (not asked, or the core is not there).
+int pin_to_cpu(int cpu) {
+  if (cpu < 0) return -1;
   cpu_set_t set;
   CPU_ZERO(&set);
   CPU_SET(cpu, &set);
-  if (sched_setaffinity(0, sizeof set, &set) != 0) spdlog::warn("cannot pin to CPU {}", cpu);
+  if (sched_setaffinity(0, sizeof set, &set) == 0) return cpu;
+  spdlog::warn("cannot pin to CPU {} (this machine has {}): timing unpinned", cpu, std::thread::hardware_concurrency());
+  return -1;
 }
 
 void print_header(const BenchOptions& o) {
@@ -101,7 +107,7 @@ void print_header(const BenchOptions& o) {
   std::printf(
       "single thread%s, OpenCV threads off; times: this thread's CPU ms (wall ms), best and median of %d x %d "
       "frames\n\n",
-      o.cpu >= 0 ? (", pinned to CPU " + std::to_string(o.cpu)).c_str() : "", o.frames, o.repeats);
+      o.cpu >= 0 ? (", pinned to CPU " + std::to_string(o.cpu)).c_str() : ", not pinned", o.frames, o.repeats);
   std::printf("%-16s %6s | %17s %8s | %9s %9s %9s %9s | %14s %8s | %9s\n", "scene", "solids", "accelerated best",
               "median", "left", "right", "sensors", "depth", "brute force", "speed-up", "vs budget");
 }
@@ -160,8 +166,8 @@ int main(int argc, char** argv) {
   add_bench_options(app, o);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("bench-simulator", common.log_level);
-  cv::setNumThreads(0);  // OpenCV runs everything on this thread
-  pin_to_cpu(o.cpu);
+  cv::setNumThreads(0);       // OpenCV runs everything on this thread
+  o.cpu = pin_to_cpu(o.cpu);  // the header says what the times were taken on
   print_header(o);
   double worst_best = 0, worst_median = 0;
   for (const auto& name : o.scenes) {
