@@ -69,7 +69,8 @@ void add_session_options(CLI::App& app, CommandLine& cl) {
       ->check(ivoa::non_negative_number());
   app.add_option("--start-utime", config.start_utime,
                  "utime of frame 0, us since epoch (default: now); frame k is "
-                 "at start + k / rate, so sessions are reproducible");
+                 "at start + k / rate, so sessions are reproducible")
+      ->check(ivoa::non_negative_number());  // negative is the struct's "now"
   app.add_option("--rig", cl.rig_file, "render with this rig calibration file instead of the built-in rig");
   app.add_option("--save-rig", cl.save_rig, "write the rig calibration (OpenCV YAML) to this file and go on");
 }

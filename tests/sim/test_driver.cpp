@@ -126,6 +126,8 @@ TEST(SimDriver, ExecutableRunsAndFailsCleanly) {
       std::system((driver + " --lcm-url memq:// --log-level off --scene " + dir.file("bad.yaml")).c_str());
   EXPECT_EQ(WEXITSTATUS(status), 3);
   EXPECT_EQ(WEXITSTATUS(std::system((driver + " --rate -1 --log-level off 2>/dev/null").c_str())), 2);
+  // A negative start time used to mean "now" without a word.
+  EXPECT_EQ(WEXITSTATUS(std::system((driver + " --start-utime -5 --log-level off 2>/dev/null").c_str())), 2);
 }
 
 }  // namespace

@@ -369,7 +369,8 @@ void add_options(CLI::App& app, CommandLine& cl) {
       ->capture_default_str();
   app.add_option("--noise-seed", opt.timing.noise_seed, "the simulator driver's --noise-seed")->capture_default_str();
   app.add_option("--start-utime", opt.start_utime,
-                 "utime of the session's frame 0 (default: the logged frame with seq 0)");
+                 "utime of the session's frame 0 (default: the logged frame with seq 0)")
+      ->check(ivoa::non_negative_number());  // negative is the struct's "not given"
   app.add_option("--dataset", opt.dataset,
                  "take the failure cells from this dataset's sessions (named like the logs) instead of the logs' "
                  "labels: e.g. the dense detector's, labelled offline by ivoa-dataset")
