@@ -315,7 +315,10 @@ def plot_group_bars(groups: List[dict], title: str, xlabel: str, path: str) -> s
     mp = [g["mean_per_class_accuracy"] if g["mean_per_class_accuracy"] is not None else np.nan for g in groups]
     oa = [g["overall_accuracy"] if g["overall_accuracy"] is not None else np.nan for g in groups]
     x = np.arange(len(names))
-    fig, ax = plt.subplots(figsize=(max(5.0, 1.3 * len(names) + 2), 4.2))
+    # Each group gets room for its label at fontsize 8 (about 0.08 in a
+    # character), so long session names do not run into each other.
+    per_group = max(1.3, 0.08 * max((len(n) for n in names), default=0))
+    fig, ax = plt.subplots(figsize=(max(5.0, per_group * len(names) + 2), 4.2))
     ax.bar(x - 0.2, mp, 0.4, color="#444466", label="mean per-class accuracy")
     ax.bar(x + 0.2, oa, 0.4, color="#aaaacc", label="overall accuracy")
     ax.set_xticks(x, [f"{n}\n({g['split'] + ', ' if g.get('split') else ''}n = {g['n']})"
