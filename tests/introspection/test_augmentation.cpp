@@ -148,6 +148,17 @@ TEST(BatchAugmenter, DrawsStayInTheirRangesAndFollowTheSeed) {
     EXPECT_LT(p.noise_index, BatchAugmenter::kNoiseBankSize);
   }
   EXPECT_TRUE(differs);
+  // Ranges of its own: no noise (ivoa-train --augment-noise 0), the gains still drawn.
+  PhotometricRanges quiet;
+  quiet.noise_sigma = {0.0, 0.0};
+  BatchAugmenter without_noise(info, true, 5, quiet);
+  bool gains_vary = false;
+  for (int k = 0; k < 50; ++k) {
+    const PhotometricParams p = without_noise.draw();
+    EXPECT_EQ(p.noise_sigma, 0);
+    gains_vary = gains_vary || p.exposure != 1;
+  }
+  EXPECT_TRUE(gains_vary);
   // Without augmentation the draw is the identity.
   BatchAugmenter plain(info, false, 5);
   const PhotometricParams id = plain.draw();

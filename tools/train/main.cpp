@@ -96,6 +96,10 @@ void add_model_options(CLI::App& app, TrainCommandLine& cl) {
       ->check(ivoa::non_negative_number())
       ->capture_default_str();
   app.add_flag("--no-augment", cl.no_augment, "no photometric augmentation");
+  app.add_option("--augment-noise", c.augment_noise_max,
+                 "largest per-pixel Gaussian noise sigma the augmentation adds (on [0, 1]; 0: none)")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_option("--seed", c.seed, "initial weights, batch draws, augmentation and dropout")->capture_default_str();
   app.add_option("--threads", c.threads, "LibTorch threads")->capture_default_str()->check(ivoa::positive_number());
   app.add_option("--device", c.device, "cpu or cuda")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));

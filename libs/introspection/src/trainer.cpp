@@ -189,7 +189,8 @@ std::string training_summary(const TrainConfig& c, const SplitData& train, const
     << ", \"batch_size\": " << c.batch_size << ", \"optimizer\": \"" << optimizer_name(c.optimizer)
     << "\", \"learning_rate\": " << c.learning_rate << ", \"momentum\": " << c.momentum
     << ", \"weight_decay\": " << c.weight_decay << ", \"seed\": " << c.seed
-    << ", \"augment\": " << (c.augment ? "true" : "false") << ", \"fn_weight\": " << c.fn_weight
+    << ", \"augment\": " << (c.augment ? "true" : "false") << ", \"augment_noise_max\": " << c.augment_noise_max
+    << ", \"fn_weight\": " << c.fn_weight
     << ", \"evidence_weight\": " << (train.evidence_size > 0 ? c.evidence_weight : 0.0)
     << ", \"best_step\": " << r.best_step << ", \"val_mean_class_accuracy\": " << r.best_val_mean_class_accuracy
     << ", \"val_accuracy\": " << r.best_val_accuracy << ", \"val_accuracy_retained\": " << r.val_accuracy_retained
@@ -566,7 +567,9 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   // Every random stream continues from the step (a resumed run does not replay the first batches).
   BalancedSampler sampler(train, classes, c.fn_weight, c.seed * 7919 + static_cast<uint64_t>(first_step));
   auto generator = at::detail::createCPUGenerator(c.seed + static_cast<uint64_t>(first_step));
-  BatchAugmenter make_batch(info, c.augment, c.seed * 104729 + static_cast<uint64_t>(first_step));
+  PhotometricRanges ranges;
+  ranges.noise_sigma = {0.0, c.augment_noise_max};
+  BatchAugmenter make_batch(info, c.augment, c.seed * 104729 + static_cast<uint64_t>(first_step), ranges);
   const std::vector<SampleRef> val_refs = validation_subset(val, c.max_val_samples);
   report.val_samples = static_cast<int64_t>(val_refs.size());
 

@@ -47,6 +47,10 @@ struct TrainConfig {
   // class's share is multiplied by this (the reference uses 0.1 outdoors).
   double fn_weight = 1.0;
   bool augment = true;  // photometric: brightness, contrast, gamma, channel gains, noise
+  // Upper end of the augmentation's per-pixel Gaussian noise (sigma on [0, 1],
+  // drawn uniformly from 0 to it). Unlike the gains, added noise changes what
+  // the stereo matcher would see, while the label stays the recorded one.
+  double augment_noise_max = 0.03;
   // Weight of the side task (evidence_task.hpp) in the loss: regress the
   // detector's evidence stored with each sample; 0 turns it off, and
   // datasets without evidence train without it.
