@@ -44,6 +44,11 @@ void add_detector_flags(CLI::App& app, DetectorFlags& f) {
   app.add_option("--max-frames", o.max_frames, "exit after publishing this many grids (0: run until stopped)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
+  app.add_option("--queue-frames", o.queue_frames,
+                 "frames held while the detector is busy: 1 keeps only the newest (live); more keeps that many, "
+                 "oldest first (recording a simulator that renders ahead)")
+      ->capture_default_str()
+      ->check(ivoa::positive_number());
   ivoa::add_query_grid_options(app, o.grid);
   ivoa::stereo::add_detector_options(app, o.detector);
 }

@@ -1,5 +1,6 @@
 #include "stereo_detector_node.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 #include <spdlog/spdlog.h>
@@ -21,7 +22,10 @@ std::string frame_name(const std::string& channel, const stereo_image_t& msg) {
 }  // namespace
 
 StereoDetectorNode::StereoDetectorNode(Bus& bus, Heartbeat& heartbeat, StereoDetectorOptions options)
-    : bus_(bus), heartbeat_(heartbeat), options_(std::move(options)) {
+    : bus_(bus),
+      heartbeat_(heartbeat),
+      options_(std::move(options)),
+      mailbox_(static_cast<size_t>(std::max(options_.queue_frames, 1))) {
   heartbeat_.set_counter(kFramesWithoutCalibration, 0);
   heartbeat_.set_counter(kCalibrationsApplied, 0);
 }

@@ -4,7 +4,8 @@
 // obstacle_grid_t per processed frame out on OBSTACLES_STEREO.
 //
 // The LCM thread only queues: the newest stereo frame goes into a latest-value
-// mailbox (a frame replaced before the worker took it counts as dropped) and
+// mailbox (a frame pushed out before the worker took it counts as dropped;
+// StereoDetectorOptions::queue_frames says how many it holds) and
 // calibrations are kept under a lock. A worker thread decodes the newest
 // frame, (re)builds the detector and query grid when the calibration changed,
 // evaluates the grid and publishes it. Bad input (undecodable or wrongly sized
@@ -38,6 +39,10 @@ struct StereoDetectorOptions {
   std::string calibration_channel{channels::kRigCalibration};
   std::string output_channel{channels::kObstaclesStereo};
   int64_t max_frames = 0;  // finish after publishing this many grids; 0 = never
+  // Frames held while the worker is busy. 1 (live): only the newest, older
+  // ones count as dropped. More: that many, oldest first, so a recording of
+  // a simulator that renders ahead loses no frame to a stall at start-up.
+  int queue_frames = 1;
 };
 
 class StereoDetectorNode {

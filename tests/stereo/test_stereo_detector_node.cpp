@@ -97,6 +97,19 @@ TEST_F(StereoDetectorNodeTest, PublishesAGridPerFrameOnceCalibrated) {
   EXPECT_EQ(counter(status, node.kCalibrationsApplied), 1);
 }
 
+// Frames that arrive faster than the detector works through them (a
+// simulator rendering ahead) are all held, and processed in order.
+TEST_F(StereoDetectorNodeTest, WithAQueueEveryFrameOfABurstGetsItsGrid) {
+  options_.queue_frames = 6;
+  StereoDetectorNode node(bus_, heartbeat_, options_);
+  node.start();
+  publish_calibration(rig_);
+  for (int64_t utime = 1; utime <= 6; ++utime) publish_frame(utime);
+  ASSERT_TRUE(handle_until([&] { return grids_.size() == 6; }));
+  for (size_t i = 0; i < grids_.size(); ++i) EXPECT_EQ(grids_[i].utime, static_cast<int64_t>(i) + 1);
+  EXPECT_EQ(heartbeat_.snapshot().dropped, 0);
+}
+
 TEST_F(StereoDetectorNodeTest, BadInputIsCountedAndSkipped) {
   bus_.on_decode_error([&](const std::string& what) { heartbeat_.bad_input(what); });
   StereoDetectorNode node(bus_, heartbeat_, options_);

@@ -107,6 +107,9 @@ in_lcm_net() {
 }
 
 # record_session WORKER NAME SCENE SEED FRAMES: one session through sim.pmd.
+# The simulator renders ahead as fast as it can, so the stereo detector holds
+# up to 8 frames instead of only the newest: a stall while the processes
+# start on a busy machine then costs no frame its labels (live, one frame).
 record_session() {
   local worker=$1 name=$2 scene=$3 seed=$4 frames=$5
   local log=$out/logs/$name.lcmlog
@@ -116,7 +119,7 @@ record_session() {
   local utime=$((1700000000000000 + seed * 10000000000))
   in_lcm_net "$worker" "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
     --set SCENE="$SCENES/$scene.yaml" --set SEED="$seed" --set FRAMES="$frames" --set RATE=$RATE \
-    --set SIM_ARGS="--as-fast-as-possible --start-utime $utime" \
+    --set SIM_ARGS="--as-fast-as-possible --start-utime $utime" --set DETECTOR_ARGS="--queue-frames 8" \
     --set LOG_FILE="$log" --set VIEWER_DIR="$out/viewer/$name" --set VIEWER_ARGS="--every $(( frames >= 8 ? frames / 4 : 1 )) --max-images 4" \
     --skip introspection --until sim_driver --grace 2 --plain --status-every 0 \
     --output-dir "$out/process_logs/$name" --status-file "$out/process_logs/$name/status.txt" \
