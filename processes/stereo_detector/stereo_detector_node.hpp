@@ -6,9 +6,10 @@
 // The LCM thread only queues: the newest stereo frame goes into a latest-value
 // mailbox (a frame pushed out before the worker took it counts as dropped;
 // StereoDetectorOptions::queue_frames says how many it holds) and
-// calibrations are kept under a lock. A worker thread decodes the newest
-// frame, (re)builds the detector and query grid when the calibration changed,
-// evaluates the grid and publishes it. Bad input (undecodable or wrongly sized
+// calibrations are kept under a lock. A worker thread decodes the frame it
+// takes (the newest, or with a queue the oldest held), (re)builds the
+// detector and query grid when the calibration changed, evaluates the grid
+// and publishes it. Bad input (undecodable or wrongly sized
 // images, invalid calibrations) is reported to the heartbeat, counted and
 // skipped; frames before any calibration are counted and skipped.
 #include <atomic>
