@@ -93,6 +93,23 @@ def write_dataset(root, sessions, detector="jppc"):
             f.write("frame,utime,depth_utime,cells_labelled,samples\n")
 
 
+def write_evidence(root, sessions, margins, threshold=0.75):
+    """evidence.f32 for each session of a dataset (3 values a sample: the worst
+    at threshold + margin, one lower, one not observed; a NaN margin: none
+    observed) and evidence_size in its session.json."""
+    k = 0
+    for name, _, rows in sessions:
+        d = os.path.join(root, name)
+        m = np.asarray(margins[k:k + len(rows)], np.float64)
+        k += len(rows)
+        ev = np.stack([threshold + m, threshold + m - 0.1, np.full(len(m), np.nan)], axis=1)
+        ev.astype("<f4").tofile(os.path.join(d, "evidence.f32"))
+        info = json.loads(read_text(os.path.join(d, "session.json")))
+        info["evidence_size"] = 3
+        with open(os.path.join(d, "session.json"), "w") as f:
+            json.dump(info, f)
+
+
 def write_eval(out, sessions, predicted, probs, var, embeddings, detector="jppc", threshold=0.03,
                overlay=False, verdict=None, overlay_dots=None):
     """An ivoa-eval output folder (tools/eval/README.md) for the given rows;
@@ -213,6 +230,13 @@ def fabricate(root):
     write_eval(known, sessions, predicted, one_hot_probs(predicted), var, np.abs(rng.normal(0, 1, (n, DIM))),
                detector="dense", verdict=verdict)
 
+    # JPP-C's evidence: the known model's wrong rows (all of which flip the
+    # verdict) lie 0.02 from the threshold, the others 0.5; row 0 unobserved.
+    obstacle = np.isin(label, (TP, FP))
+    margin = np.where(obstacle, 1.0, -1.0) * np.where(wrong, 0.02, 0.5)
+    margin[0] = np.nan
+    write_evidence(data, sessions, margin)
+
     # degenerate: a dataset without FN, one predicted failure.
     d_sessions = [("lab_s3", "indoor", session_rows((10, 15, 5, 0), phen, surf))]
     data2 = os.path.join(root, "data_nofn")
@@ -224,7 +248,7 @@ def fabricate(root):
     write_eval(degenerate, d_sessions, d_pred, one_hot_probs(d_pred), rng.uniform(0.001, 0.05, len(d_label)),
                np.abs(rng.normal(0, 1, (len(d_label), DIM))))
     return types.SimpleNamespace(data=data, data2=data2, perfect=perfect, known=known, degenerate=degenerate,
-                                 label=label, predicted=predicted, wrong=wrong, sessions=sessions,
+                                 label=label, predicted=predicted, wrong=wrong, margin=margin, sessions=sessions,
                                  perfect_confidence=p_top)
 
 
@@ -311,7 +335,7 @@ class ReportTest(unittest.TestCase):
         for must in ("confusion.png", "failure_roc.png", "accuracy_vs_threshold.png", "retained_vs_threshold.png",
                      "accuracy_vs_retained.png", "accuracy_by_distance.png", "clusters_tsne.png", "cluster_0_mosaic.png",
                      "cluster_1_mosaic.png", "phenomena_fn_fp.png", "office_s1_1000000.png",
-                     "verdict_accuracy_vs_retained.png"):
+                     "verdict_accuracy_vs_retained.png", "accuracy_by_margin.png"):
             self.assertTrue(any(l.endswith(must) for l in links), must)
         # eval.json says which predictions the overlay dots show
         self.assertIn("inner dot = prediction given the detector's recorded verdict", report)
@@ -421,6 +445,37 @@ class ReportTest(unittest.TestCase):
         self.assertIsNone(self.model("jppc")["given_verdict"])
         self.assertIn("Not in this eval folder", read_text(os.path.join(self.out, "report.md")))
 
+    def test_accuracy_by_the_detectors_margin(self):
+        """The known model's verdict errors all lie near JPP-C's threshold."""
+        g = self.model("dense")["by_margin"]
+        self.assertTrue(g["ok"], g["message"])
+        self.assertEqual(g["n_with_evidence"], 199)  # row 0 has no observed value
+        self.assertAlmostEqual(g["agreement"], 1.0)
+        near = self.f.wrong[1:]
+        self.assertAlmostEqual(g["near_share"], near.mean())
+        self.assertAlmostEqual(g["near_verdict_error_share"], 1.0)
+        self.assertAlmostEqual(g["near_error_share"], 1.0)
+        self.assertAlmostEqual(g["verdict_accuracy_far"], 1.0)
+        bands = {(b["low"], b["high"]): b for b in g["bands"]}
+        self.assertEqual(list(bands), [(None, -0.3), (-0.04, 0.0), (0.0, 0.04), (0.3, None)])
+        label = self.f.label[1:]
+        for key, verdict_acc, obstacle in (((None, -0.3), 1.0, 0.0), ((-0.04, 0.0), 0.0, 0.0),
+                                           ((0.0, 0.04), 0.0, 1.0), ((0.3, None), 1.0, 1.0)):
+            self.assertAlmostEqual(bands[key]["verdict_accuracy"], verdict_acc, msg=str(key))
+            self.assertAlmostEqual(bands[key]["obstacle_share"], obstacle, msg=str(key))
+        want_near_free = int(np.sum(near & np.isin(label, (TN, FN))))
+        self.assertEqual(bands[(-0.04, 0.0)]["n"], want_near_free)
+        self.assertAlmostEqual(sum(b["share"] for b in g["bands"]), 1.0)
+        self.assertIsNotNone(bands[(0.3, None)]["given_verdict_accuracy"])
+        # a perfect model reads every verdict; it has no verdict errors to place
+        p = self.model("jppc")["by_margin"]
+        self.assertTrue(all(b["verdict_accuracy"] == 1.0 for b in p["bands"]))
+        self.assertIsNone(p["near_verdict_error_share"])
+        self.assertIsNone(p["bands"][0]["given_verdict_accuracy"])  # no verdict columns in that eval
+        report = read_text(os.path.join(self.out, "report.md"))
+        self.assertIn("By how close the detector came to its threshold", report)
+        self.assertIn("| -0.04 … 0 |", report)
+
     def test_comparison_per_phenomenon(self):
         perfect = {e["phenomenon"]: e for e in self.model("jppc")["per_phenomenon"]}
         known = {e["phenomenon"]: e for e in self.model("dense")["per_phenomenon"]}
@@ -488,6 +543,34 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         report = read_text(os.path.join(out, "report.md"))
         self.assertIn("Clustering not possible", report)
         self.assertIn("absent from the truth: FN", report)
+
+    def test_evidence_is_optional_and_checked_against_the_labels(self):
+        """No evidence: the report says so. Evidence that does not give the
+        labels' verdicts at the threshold (here: a wrong --evidence-threshold)
+        is not used, and the report says why."""
+        out = os.path.join(self.root, "report_no_evidence")
+        code, _, stderr = run_main(["--eval", self.f.degenerate, "--dataset", self.f.data2, "--out", out])
+        self.assertEqual(code, 0, stderr)
+        m = next(iter(json.loads(read_text(os.path.join(out, "metrics.json")))["models"].values()))
+        self.assertIsNone(m["by_margin"])
+        self.assertIn("Not available: the dataset keeps no evidence", read_text(os.path.join(out, "report.md")))
+        out = os.path.join(self.root, "report_other_threshold")
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--out", out,
+                                    "--evidence-threshold", "1.2"])
+        self.assertEqual(code, 0, stderr)
+        m = next(iter(json.loads(read_text(os.path.join(out, "metrics.json")))["models"].values()))
+        self.assertFalse(m["by_margin"]["ok"])
+        self.assertLess(m["by_margin"]["agreement"], 0.99)
+        self.assertIn("Not shown: the evidence gives the labels' verdict for only",
+                      read_text(os.path.join(out, "report.md")))
+
+    def test_truncated_evidence(self):
+        d = os.path.join(self.root, "data_short_evidence")
+        shutil.copytree(self.f.data, d)
+        path = os.path.join(d, "campus_s2", "evidence.f32")
+        with open(path, "r+b") as fh:
+            fh.truncate(os.path.getsize(path) - 4)
+        self.assert_bad_input(["--eval", self.f.perfect, "--dataset", d], "evidence.f32", "bytes")
 
     def test_footprint_scaled_dataset_reports_the_cut_sides(self):
         """A dataset that records patch_side per sample (ivoa-dataset --patch-scale):
@@ -866,6 +949,21 @@ class MetricUnitTest(unittest.TestCase):
         self.assertNotIn("wider than the patch", text)
         self.assertIn("1 m the safety disc is wider than the patch",
                       distance_table({"distances": rows, "patch_size": 100, "patch_scale": 0}))
+
+    def test_by_margin_puts_the_threshold_itself_on_the_obstacle_side(self):
+        """JPP-C calls a cell an obstacle when its worst cost reaches the
+        threshold: a margin of exactly 0 is an obstacle's, in band [0, 0.04)."""
+        load_tool()
+        from report_metrics import by_margin
+        label = np.array([TP, TN, FN, FP])
+        run = types.SimpleNamespace(label=label, predicted=np.array([TP, TN, TP, TN]), verdict=None)
+        g = by_margin(run, np.array([0.0, -0.5, -0.001, 0.5]), 0.75)
+        self.assertTrue(g["ok"], g["message"])
+        bands = {(b["low"], b["high"]): b["n"] for b in g["bands"]}
+        self.assertEqual(bands, {(0.0, 0.04): 1, (None, -0.3): 1, (-0.04, 0.0): 1, (0.3, None): 1})
+        self.assertAlmostEqual(g["near_share"], 0.5)
+        self.assertAlmostEqual(g["near_verdict_error_share"], 0.5)  # the FN read as obstacle; the far FP too
+        self.assertIsNone(by_margin(run, None, 0.75))
 
     def test_auroc_undefined_without_failures(self):
         load_tool()

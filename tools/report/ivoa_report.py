@@ -72,8 +72,9 @@ import report_figures as figures  # noqa: E402
 import report_markdown as md  # noqa: E402
 import report_metrics as metrics  # noqa: E402
 from report_clustering import ClusterOptions, cluster_failures  # noqa: E402
-from report_inputs import (Dataset, EvalRun, InputError, attach_causes, attach_dataset, load_causes,  # noqa: E402
-                           load_eval, load_variants, make_names, patch_scale, patch_sides, patch_size, query_grid)
+from report_inputs import (Dataset, EvalRun, InputError, attach_causes, attach_dataset, evidence_margin,  # noqa: E402
+                           load_causes, load_eval, load_variants, make_names, patch_scale, patch_sides, patch_size,
+                           query_grid)
 
 
 def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
@@ -107,6 +108,9 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     p.add_argument("--variants", action="append", metavar="VARIANTS_CSV",
                    help="ivoa-sim-causes --variants-out output: what other detector settings fix and break on the "
                         "same frames (with --causes from the same run, also among the failures with no cause found)")
+    p.add_argument("--evidence-threshold", type=float, default=0.75, metavar="COST",
+                   help="the labels' detector's threshold on its evidence (JPP-C's conf_pos_thresh: a cell is an "
+                        "obstacle iff its worst window cost reaches it), for accuracy by the detector's margin")
     p.add_argument("--max-overlays", type=int, default=0,
                    help="copy at most this many overlay figures per model into the report (0 = all)")
     a = p.parse_args(argv)
@@ -172,6 +176,7 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "sweep": metrics.uncertainty_sweep(run),
         "per_phenomenon": metrics.per_phenomenon(run),
         "given_verdict": metrics.given_verdict(run),
+        "by_margin": metrics.by_margin(run, evidence_margin(run, args.evidence_threshold), args.evidence_threshold),
         "causes_of_failures": metrics.causes_of_failures(run),
     }
     figs = {
@@ -192,6 +197,9 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         figs["verdict_accuracy_vs_retained"] = figures.plot_accuracy_vs_retained(
             [("image alone", rm["sweep"]), ("given the detector's verdict", rm["given_verdict"]["sweep"])],
             run.name, os.path.join(d, "verdict_accuracy_vs_retained.png"))
+    if rm["by_margin"] and rm["by_margin"]["ok"]:
+        figs["margin_bands"] = figures.plot_margin_bands(rm["by_margin"], run.name,
+                                                         os.path.join(d, "accuracy_by_margin.png"))
     if rm["failure"]["roc"]:
         figs["roc"] = figures.plot_roc([(run.name, rm["failure"])], run.name, os.path.join(d, "failure_roc.png"))
 

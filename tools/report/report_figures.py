@@ -19,6 +19,7 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from report_inputs import FN, FP, LABEL_NAMES, NO_CAUSE, EvalRun, cause_name, phenomenon_name  # noqa: E402
+from report_metrics import band_name  # noqa: E402
 
 CLASS_COLOURS = ("#2ca02c", "#1f77b4", "#ff7f0e", "#d62728")   # TP, TN, FP, FN
 # One colour per phenomenon code, the same in every figure and model.
@@ -329,4 +330,32 @@ def plot_group_bars(groups: List[dict], title: str, xlabel: str, path: str) -> s
     ax.grid(axis="y", alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title(title)
+    return _save(fig, path)
+
+
+def plot_margin_bands(margin: dict, title: str, path: str) -> str:
+    """Per band of the detector's evidence margin: how often the model reads the
+    verdict from the image, its four-class accuracy, and the share of the cells."""
+    bands = margin["bands"]
+    x = np.arange(len(bands))
+    fig, ax = plt.subplots(figsize=(max(6.0, 1.2 * len(bands) + 2), 4.4))
+    ax.bar(x - 0.2, [b["verdict_accuracy"] for b in bands], 0.4, color="#444466",
+           label="detector's verdict read from the image (obstacle or free)")
+    ax.bar(x + 0.2, [b["overall_accuracy"] for b in bands], 0.4, color="#aaaacc", label="four classes")
+    near = [i for i, b in enumerate(bands) if b["low"] is not None and b["high"] is not None
+            and b["low"] >= -margin["near"] and b["high"] <= margin["near"]]
+    if near:
+        ax.axvspan(min(near) - 0.5, max(near) + 0.5, color="#ffdd99", alpha=0.35, zorder=0,
+                   label=f"within {margin['near']:g} of the threshold")
+    first_obstacle = next((i for i, b in enumerate(bands) if b["low"] is not None and b["low"] >= 0), len(bands))
+    ax.axvline(first_obstacle - 0.5, color="k", lw=1)
+    ax.set_xticks(x, [f"{band_name(b)}\n{100 * b['share']:.0f} % of cells\nn = {b['n']}" for b in bands], fontsize=8)
+    ax.set_xlabel(f"detector's worst evidence value minus its threshold {margin['threshold']:g} "
+                  "(left of the line: free; right: obstacle)")
+    ax.set_ylim(0, 1.05)
+    ax.set_ylabel("accuracy")
+    ax.grid(axis="y", alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    ax.set_title(f"{title}: accuracy by how close the detector came to its threshold")
+    fig.tight_layout()
     return _save(fig, path)

@@ -130,6 +130,7 @@ class DatasetSession:
     label: np.ndarray
     patch_side: Optional[np.ndarray] = None  # square cut around each cell, px (datasets that record it)
     _patches: Optional[np.memmap] = None
+    _evidence: Optional[np.ndarray] = None
 
     @property
     def size(self) -> int:
@@ -157,6 +158,24 @@ class DatasetSession:
                                     shape=(self.size, views * self.patch_size, self.patch_size, 3))
                 self._patches = stacked[:, :self.patch_size]
         return self._patches
+
+    def evidence(self) -> Optional[np.ndarray]:
+        """(N, evidence_size) float32 from evidence.f32: the labels' detector's
+        evidence per sample (JPP-C: the window cost of each ground sample, NaN
+        where not observed), size-checked; None where the session has none."""
+        size = int(self.info.get("evidence_size", 0) or 0)
+        if size <= 0:
+            return None
+        if self._evidence is not None:
+            return self._evidence
+        p = os.path.join(self.path, "evidence.f32")
+        if not os.path.isfile(p):
+            raise InputError(f"{p}: missing (session.json of {self.name} says evidence_size {size})")
+        got, want = os.path.getsize(p), self.size * size * 4
+        if got != want:
+            raise InputError(f"{p}: {got} bytes, expected {self.size} samples x {size} float32 = {want}")
+        self._evidence = np.fromfile(p, dtype="<f4").reshape(self.size, size)
+        return self._evidence
 
 
 class Dataset:
@@ -492,7 +511,8 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
                 f"{pred_path}: row {r + 1} (session {name}, sample {run.sample[r]}) does not match "
                 f"{os.path.join(s.path, 'samples.csv')} (utime/cell/label differ in {len(mismatch)} of "
                 f"{len(rows)} rows): is --dataset the dataset this eval ran on?")
-        s.patches()  # size check now, not in the middle of the figures
+        s.patches()  # size checks now, not in the middle of the figures
+        s.evidence()
         det = s.info.get("detector")
         label_detectors.add(det or "unknown")
         if det and run.detector != "unknown" and det != run.detector:
@@ -504,6 +524,26 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
     run.dataset = dataset
     run.label_detector = label_detectors.pop() if len(label_detectors) == 1 else run.detector
     return warnings
+
+
+def evidence_margin(run: EvalRun, threshold: float) -> Optional[np.ndarray]:
+    """Per prediction row, how far the labels' detector was from its verdict:
+    the largest of the cell's evidence values (for JPP-C, the worst window cost
+    of its ground samples; the cell is an obstacle iff it is >= threshold)
+    minus the threshold. NaN where no value was observed. None when the run
+    has no dataset or a session of it has no evidence."""
+    if run.dataset is None:
+        return None
+    margin = np.full(run.size, np.nan)
+    for name in sorted(set(run.session.tolist())):
+        ev = run.dataset.session(name).evidence()
+        if ev is None:
+            return None
+        rows = np.flatnonzero(run.session == name)
+        values = ev[run.sample[rows]]
+        seen = ~np.all(np.isnan(values), axis=1)
+        margin[rows[seen]] = np.nanmax(values[seen], axis=1) - threshold
+    return margin
 
 
 NO_CAUSE = -1

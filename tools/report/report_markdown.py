@@ -8,7 +8,7 @@ from typing import Dict, List, Optional, Sequence
 
 from report_clustering import REFERENCE_VAR_CUT, ClusterOptions
 from report_inputs import LABEL_NAMES, EvalRun, cause_name, phenomenon_name, surface_name
-from report_metrics import PAPER_MPCA_AT_70, RETAIN_TARGET
+from report_metrics import PAPER_MPCA_AT_70, RETAIN_TARGET, band_name
 
 PURITY_TARGET = 0.80
 
@@ -184,6 +184,7 @@ def verdict_section(rm: dict, figs: Dict[str, str]) -> str:
     if v is None:
         out.append("Not in this eval folder (written by an ivoa-eval older than the `stereo_state`, "
                    "`verdict_predicted`, `p_wrong` and `var_wrong` columns).\n")
+        out.append(margin_text(rm, figs))
         return "\n".join(out)
     m, f, s = v["overall"], v["failure"], v["sweep"]
     out.append(
@@ -218,7 +219,38 @@ def verdict_section(rm: dict, figs: Dict[str, str]) -> str:
                      [[g["group"], g["n"]] + _class_cells(g) + [fmt(g["mean_per_class_accuracy"]),
                                                                fmt(g["overall_accuracy"])] for g in v["sessions"]]))
     out.append("\n" + image(figs["verdict_accuracy_vs_retained"], "accuracy vs retained, image alone and given the verdict"))
+    out.append(margin_text(rm, figs))
     return "\n".join(out)
+
+
+def margin_text(rm: dict, figs: Dict[str, str]) -> str:
+    """§4's last part: accuracy by how close the detector came to its threshold."""
+    g = rm.get("by_margin")
+    out = ["\n**By how close the detector came to its threshold**\n"]
+    if g is None:
+        out.append("Not available: the dataset keeps no evidence of the labels' detector (the dense detector keeps "
+                   "none; `ivoa-dataset build --no-evidence` skips it).\n")
+        return "\n".join(out)
+    if not g["ok"]:
+        out.append(f"Not shown: {g['message']}.\n")
+        return "\n".join(out)
+    out.append(
+        f"The dataset records the detector's evidence for each cell (JPP-C: the window cost of each of its ground "
+        f"samples; the cell is an obstacle iff the worst reaches {g['threshold']:g}), so each cell's margin is its "
+        f"worst value minus the threshold. Near zero a little image noise decides the verdict (in the simulator, "
+        f"another draw of the sensor noise on the same frame moves a cell's worst cost by 0.04 at the median). "
+        f"{pct(g['near_share'])} of the {g['n_with_evidence']} cells lie within ±{g['near']:g} of the threshold; "
+        f"they hold **{pct(g['near_verdict_error_share'])}** of the model's errors in reading the verdict from the "
+        f"image (verdict read right in {pct(g['verdict_accuracy'])} of all cells, "
+        f"{pct(g['verdict_accuracy_far'])} of those farther out) and {pct(g['near_error_share'])} of its "
+        f"four-class errors.\n")
+    rows = [[band_name(b), b["n"], pct(b["share"]), pct(b["obstacle_share"], 0), fmt(b["verdict_accuracy"]),
+             fmt(b["overall_accuracy"]), fmt(b["given_verdict_accuracy"])] for b in g["bands"]]
+    out.append(table(["margin", "cells", "share", "detector said obstacle", "verdict read from the image",
+                      "four classes", "given the verdict"], rows))
+    out.append("\n" + image(figs["margin_bands"], "accuracy by the detector's margin"))
+    return "\n".join(out)
+
 
 
 def _counts_text(d: Dict[int, int], namer, total: int, top: int = 4) -> str:

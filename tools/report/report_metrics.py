@@ -23,7 +23,7 @@ from typing import Dict, List, Optional
 import numpy as np
 from sklearn.metrics import roc_auc_score, roc_curve
 
-from report_inputs import FN, FP, LABEL_NAMES, NO_CAUSE, ONLY_TOGETHER, STATE_OBSTACLE, EvalRun
+from report_inputs import FN, FP, LABEL_NAMES, NO_CAUSE, ONLY_TOGETHER, STATE_OBSTACLE, TP, EvalRun
 
 N_CLASSES = 4
 # The reference code's threshold sweep (analyze_results.py).
@@ -293,6 +293,84 @@ def given_verdict(run: EvalRun) -> Optional[dict]:
         "failure": failure,
         "sweep": gate_sweep(run.label, v.predicted, v.var_wrong, run.verdict_threshold),
     }
+
+
+# Bands of the evidence margin (worst window cost minus the threshold, in the
+# cost's own units: JPP-C's per-pixel L1 DAISY distance, threshold 0.75) and
+# the half-width counted as "near the threshold". The sensor noise of one
+# simulated frame moves a cell's worst cost by about 0.04 (median) to 0.13
+# (90th percentile), so within +-0.08 the verdict is often the noise's.
+MARGIN_EDGES = (-0.3, -0.15, -0.08, -0.04, 0.0, 0.04, 0.08, 0.15, 0.3)
+NEAR_MARGIN = 0.08
+# Share of rows whose margin must agree with the label's verdict for the
+# evidence to be taken as that verdict's (a wrong --evidence-threshold or
+# evidence recorded with other detector settings fails it).
+MARGIN_AGREEMENT_MIN = 0.99
+
+
+def band_name(band: dict) -> str:
+    """'< -0.3', '-0.08 … -0.04', '≥ 0.3' for a band of by_margin (open ends: None)."""
+    if band["low"] is None:
+        return f"< {band['high']:g}"
+    if band["high"] is None:
+        return f"≥ {band['low']:g}"
+    return f"{band['low']:g} … {band['high']:g}"
+
+
+def _accuracy(hit: np.ndarray) -> Optional[float]:
+    return float(np.mean(hit)) if len(hit) else None
+
+
+def _margin_bands(m: np.ndarray, said_obstacle: np.ndarray, hits: Dict[str, Optional[np.ndarray]]) -> List[dict]:
+    """Per non-empty band of MARGIN_EDGES (band i: edges[i] <= m < edges[i + 1],
+    so a cost exactly at the threshold is an obstacle's, as for JPP-C): its
+    size, how often the detector said obstacle, and the accuracy of each hit
+    array (None arrays give None)."""
+    edges = (None,) + MARGIN_EDGES + (None,)
+    band = np.digitize(m, MARGIN_EDGES)
+    out = []
+    for i in range(len(edges) - 1):
+        b = band == i
+        if b.any():
+            out.append(dict({"low": edges[i], "high": edges[i + 1], "n": int(b.sum()), "share": float(b.mean()),
+                             "obstacle_share": float(np.mean(said_obstacle[b]))},
+                            **{k: _accuracy(h[b]) if h is not None else None for k, h in hits.items()}))
+    return out
+
+
+def by_margin(run: EvalRun, margin: Optional[np.ndarray], threshold: float) -> Optional[dict]:
+    """How the model does by how close the labels' detector came to its
+    threshold: per band of the evidence margin, the share of cells, how often
+    the detector said obstacle, how often the model reads that verdict from the
+    image alone (its predicted class TP/FP vs TN/FN), its four-class overall
+    accuracy, and given the verdict; then which share of its verdict errors
+    lies near the threshold. None without evidence; ok False (with a message)
+    where the evidence does not reproduce the labels' verdicts."""
+    if margin is None:
+        return None
+    seen = ~np.isnan(margin)
+    said_obstacle = np.isin(run.label, (TP, FP))[seen]
+    m = margin[seen]
+    agreement = _accuracy((m >= 0) == said_obstacle)
+    out = {"ok": False, "message": "", "threshold": threshold, "n_with_evidence": int(seen.sum()),
+           "agreement": agreement, "near": NEAR_MARGIN, "bands": []}
+    if agreement is None:
+        out["message"] = "no sample has an observed evidence value"
+        return out
+    if agreement < MARGIN_AGREEMENT_MIN:
+        out["message"] = (f"the evidence gives the labels' verdict for only {100 * agreement:.1f} % of the samples at "
+                          f"threshold {threshold:g} (is --evidence-threshold the detector's?)")
+        return out
+    verdict_hit = np.isin(run.predicted, (TP, FP))[seen] == said_obstacle
+    correct = (run.predicted == run.label)[seen]
+    given = (run.verdict.predicted == run.label)[seen] if run.verdict is not None else None
+    out["bands"] = _margin_bands(m, said_obstacle, {"verdict_accuracy": verdict_hit, "overall_accuracy": correct,
+                                                    "given_verdict_accuracy": given})
+    near = np.abs(m) < NEAR_MARGIN
+    out.update(ok=True, near_share=float(near.mean()),
+               near_verdict_error_share=_accuracy(near[~verdict_hit]), near_error_share=_accuracy(near[~correct]),
+               verdict_accuracy=_accuracy(verdict_hit), verdict_accuracy_far=_accuracy(verdict_hit[~near]))
+    return out
 
 
 def per_phenomenon(run: EvalRun) -> List[dict]:
