@@ -252,7 +252,6 @@ def margin_text(rm: dict, figs: Dict[str, str]) -> str:
     return "\n".join(out)
 
 
-
 def _counts_text(d: Dict[int, int], namer, total: int, top: int = 4) -> str:
     """'reflection 120 (80 %), none 30 (20 %)' for a composition dict."""
     items = list(d.items())
