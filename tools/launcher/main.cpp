@@ -64,6 +64,11 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_flag("--plain", o.plain, "on a terminal too: prefixed lines and a periodic table instead of a live table");
   app.add_option("--output-dir", l.output_dir, "also append each command's output to DIR/NAME.log");
   app.add_option("--status-channel", l.status_channel, "heartbeat channel")->capture_default_str();
+  app.add_option("--ready-timeout", l.ready_timeout_s,
+                 "a script's wait \"running\" on an ivoa program waits for its first heartbeat at most this long, "
+                 "s (0: not at all)")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_flag("--list", o.list, "print the commands that would run, expanded, and exit");
   const char* g = "Respawn";
   auto& s = l.supervisor;

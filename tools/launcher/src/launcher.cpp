@@ -16,6 +16,7 @@
 #include <spdlog/spdlog.h>
 
 #include "heartbeat_monitor.hpp"
+#include "readiness_gate.hpp"
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/launcher/script_runner.hpp"
@@ -100,15 +101,14 @@ class Run {
         host_(host),
         options_(options),
         printer_(options, names_of(commands)),
+        readiness_(commands, options.ready_timeout_s, event_printer()),
         supervisor_(
             std::move(commands), options.supervisor,
-            [this](const std::string& n, const std::string& l) { printer_.line(n, l); },
-            [this](const std::string& n, const std::string& e) { printer_.event(n, e); }) {
+            [this](const std::string& n, const std::string& l) { printer_.line(n, l); }, event_printer()) {
     connect_lcm();
     if (!options_.script.empty())
-      script_ =
-          std::make_unique<ScriptRunner>(flatten_script(config_, options_.script), supervisor_,
-                                         [this](const std::string& n, const std::string& e) { printer_.event(n, e); });
+      script_ = std::make_unique<ScriptRunner>(flatten_script(config_, options_.script), supervisor_, event_printer(),
+                                               [this](const std::string& name) { return announced(name); });
   }
 
   int run() {
@@ -148,6 +148,15 @@ class Run {
     std::vector<std::string> out;
     for (const auto& c : commands) out.push_back(c.spec.name);
     return out;
+  }
+
+  EventHandler event_printer() {
+    return [this](const std::string& n, const std::string& e) { printer_.event(n, e); };
+  }
+
+  // Without LCM there are no heartbeats to wait for.
+  bool announced(const std::string& name) {
+    return !monitor_ || readiness_.ready(supervisor_.status(name), monitor_->latest(name));
   }
 
   void connect_lcm() {
@@ -265,6 +274,7 @@ class Run {
   std::string host_;
   LauncherOptions options_;
   OutputPrinter printer_;
+  ReadinessGate readiness_;
   Supervisor supervisor_;
   std::unique_ptr<Bus> bus_;
   std::unique_ptr<HeartbeatMonitor> monitor_;

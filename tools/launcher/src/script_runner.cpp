@@ -2,8 +2,9 @@
 
 namespace ivoa::launcher {
 
-ScriptRunner::ScriptRunner(std::vector<ScriptStep> steps, Supervisor& supervisor, EventHandler on_event)
-    : steps_(std::move(steps)), supervisor_(supervisor), on_event_(std::move(on_event)) {}
+ScriptRunner::ScriptRunner(std::vector<ScriptStep> steps, Supervisor& supervisor, EventHandler on_event,
+                           ReadyCheck ready)
+    : steps_(std::move(steps)), supervisor_(supervisor), on_event_(std::move(on_event)), ready_(std::move(ready)) {}
 
 std::vector<std::string> ScriptRunner::targets(const ScriptStep& step) const {
   std::vector<std::string> out;
@@ -20,7 +21,7 @@ std::vector<std::string> ScriptRunner::targets(const ScriptStep& step) const {
 bool ScriptRunner::satisfied(const std::vector<std::string>& names, const std::string& status) const {
   for (const auto& name : names) {
     const RunState s = supervisor_.status(name).state;
-    if (status == "running" && s == RunState::kIdle) return false;
+    if (status == "running" && (s == RunState::kIdle || (ready_ && !ready_(name)))) return false;
     if (status == "stopped" && s != RunState::kStopped && s != RunState::kIdle) return false;
   }
   return true;

@@ -23,6 +23,9 @@ struct LauncherOptions {
   std::string output_dir;          // also append each command's output to DIR/NAME.log
   std::string lcm_url;             // heartbeats; "none" to run without LCM
   std::string status_channel = "PROCESS_STATUS";
+  // A script's wait "running" on a command that runs an ivoa program also
+  // waits for its first heartbeat, at most this long (0: never waits for one).
+  double ready_timeout_s = 10.0;
   SupervisorOptions supervisor;
 };
 

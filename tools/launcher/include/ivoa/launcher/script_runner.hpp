@@ -2,9 +2,11 @@
 // Runs a procman script (flattened by flatten_script) against a Supervisor,
 // one step at a time, without blocking: advance() does what it can and
 // returns at the first wait that is not yet satisfied.
-// "running" means every target has been started; "stopped" means none of
-// them runs, stops or waits to respawn.
+// "running" means every target has been started (and passes the ready
+// check, if one is given); "stopped" means none of them runs, stops or
+// waits to respawn.
 #include <chrono>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -15,7 +17,12 @@ namespace ivoa::launcher {
 
 class ScriptRunner {
  public:
-  ScriptRunner(std::vector<ScriptStep> steps, Supervisor& supervisor, EventHandler on_event);
+  // Whether a started command counts as running yet (ivoa-launch: it has
+  // announced itself; see readiness_gate.hpp).
+  using ReadyCheck = std::function<bool(const std::string& command)>;
+
+  ScriptRunner(std::vector<ScriptStep> steps, Supervisor& supervisor, EventHandler on_event,
+               ReadyCheck ready = nullptr);
 
   void advance();
   bool done() const { return next_ >= steps_.size(); }
@@ -30,6 +37,7 @@ class ScriptRunner {
   std::vector<ScriptStep> steps_;
   Supervisor& supervisor_;
   EventHandler on_event_;
+  ReadyCheck ready_;
   size_t next_ = 0;
   bool waiting_ = false;
   Clock::time_point wait_until_;
