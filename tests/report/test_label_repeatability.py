@@ -20,6 +20,8 @@ import sys
 import tempfile
 import unittest
 
+import numpy as np
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 TOOL = os.path.normpath(os.path.join(HERE, "..", "..", "tools", "report", "ivoa_label_repeatability.py"))
 TP, TN, FP, FN = 0, 1, 2, 3
@@ -120,6 +122,90 @@ class LabelRepeatabilityTest(unittest.TestCase):
         proc = subprocess.run([sys.executable, TOOL, jppc, dense], capture_output=True, text=True, timeout=60)
         self.assertEqual(proc.returncode, 3)
         self.assertIn("session office_s31 is labelled from different detectors ('jppc' in", proc.stderr)
+
+
+def write_evidence_dataset(root, cells, realisation, detector="jppc"):
+    """One session whose samples carry JPP-C-like evidence: cells are
+    (label per realisation, worst cost per realisation); each sample stores
+    [worst, worst - 0.1, NaN] (NaN worst: nothing observed)."""
+    d = os.path.join(root, "office_s31")
+    os.makedirs(d)
+    with open(os.path.join(d, "session.json"), "w") as f:
+        json.dump({"session": "office_s31", "detector": detector, "evidence_size": 3}, f)
+    with open(os.path.join(d, "samples.csv"), "w") as f:
+        f.write("sample,frame,utime,depth_utime,cell,label\n")
+        for i, (labels, _) in enumerate(cells):
+            f.write(f"{i},0,1000,1004,{i},{labels[realisation]}\n")
+    worst = np.array([costs[realisation] for _, costs in cells], np.float64)
+    np.stack([worst, worst - 0.1, np.full(len(worst), np.nan)], axis=1).astype("<f4").tofile(
+        os.path.join(d, "evidence.f32"))
+
+
+# (labels in realisations 0, 1 and 2, worst window cost in each); threshold 0.75.
+EVIDENCE_CELLS = [
+    ((TN, TN, TN), (0.20, 0.22, 0.25)),         # all far below: < -0.3, one verdict
+    ((TN, FP, TN), (0.70, 0.78, 0.72)),         # -0.08 … -0.04, 0 … 0.04, -0.04 … 0
+    ((TP, TP, TP), (1.20, 1.10, 1.15)),         # all >= 0.3, one verdict
+    ((FN, TP, TP), (0.74, 0.76, 0.77)),         # -0.04 … 0, then twice 0 … 0.04
+    ((TN, TN, TN), (0.10, float("nan"), 0.12)),  # realisation 1 observed nothing: left out
+]
+
+
+class EvidenceRepeatabilityTest(unittest.TestCase):
+    """How far the noise moves the worst cost, and per margin band how often
+    another realisation keeps the verdict, worked out by hand."""
+
+    def run_tool(self, write, *extra):
+        """Three realisations written by write(root, realisation); the tool's
+        process and its JSON (None when it failed)."""
+        tmp = tempfile.TemporaryDirectory()
+        self.addCleanup(tmp.cleanup)
+        roots = [os.path.join(tmp.name, f"noise{r}") for r in range(3)]
+        for r, root in enumerate(roots):
+            write(root, r)
+        out = os.path.join(tmp.name, "out.json")
+        proc = subprocess.run([sys.executable, TOOL, *roots, "--json", out, *extra], capture_output=True, text=True,
+                              timeout=60)
+        if proc.returncode != 0:
+            return proc, None
+        with open(out) as f:
+            return proc, json.load(f)
+
+    def run_on_cells(self, *extra):
+        return self.run_tool(lambda root, r: write_evidence_dataset(root, EVIDENCE_CELLS, r), *extra)
+
+    def test_shifts_and_bands(self):
+        proc, r = self.run_on_cells()
+        self.assertEqual(proc.returncode, 0, proc.stderr)
+        e = r["evidence"]
+        self.assertEqual(r["detector"], "jppc")
+        self.assertEqual(r["session_names"], ["office_s31"])
+        self.assertEqual((e["cells"], e["cells_without_evidence"]), (4, 1))
+        # |shifts| of the three pairs per cell: 0.02 0.05 0.03, 0.08 0.02 0.06, 0.10 0.05 0.05, 0.02 0.03 0.01;
+        # sorted, the 6th and 7th of 12 are 0.03 and 0.05; the 90th percentile 0.06 + 0.9 x 0.02
+        self.assertAlmostEqual(e["worst_shift_median"], 0.04, places=5)
+        self.assertAlmostEqual(e["worst_shift_p90"], 0.078, places=5)
+        # each cell of each realisation in its band once, agreeing with 0-2 of the two others
+        bands = {(b["low"], b["high"]): (b["n"], b["verdict_agreement"]) for b in e["bands"]}
+        self.assertEqual(set(bands), {(None, -0.3), (-0.08, -0.04), (-0.04, 0.0), (0.0, 0.04), (0.3, None)})
+        for key, (n, agreement) in {(None, -0.3): (3, 1.0), (-0.08, -0.04): (1, 0.5), (-0.04, 0.0): (2, 0.25),
+                                    (0.0, 0.04): (3, 1 / 3), (0.3, None): (3, 1.0)}.items():
+            self.assertEqual(bands[key][0], n, key)
+            self.assertAlmostEqual(bands[key][1], agreement, msg=str(key))
+        self.assertAlmostEqual(e["verdict_agreement"], 2 / 3)
+        self.assertIn("moves by 0.040 (median) and 0.078 (90th percentile)", proc.stdout)
+
+    def test_evidence_must_give_the_labels_verdicts(self):
+        proc, _ = self.run_on_cells("--evidence-threshold", "0.5")
+        self.assertEqual(proc.returncode, 3)
+        self.assertIn("the evidence gives the labels' verdict for only 75.0 % of the cells at threshold 0.5",
+                      proc.stderr)
+
+    def test_without_evidence_the_labels_are_still_compared(self):
+        proc, r = self.run_tool(lambda root, _: write_dataset(root, [TN] * 10, detector="dense"))
+        self.assertEqual(proc.returncode, 0, proc.stderr)
+        self.assertIsNone(r["evidence"])
+        self.assertIn("no evidence in these datasets", proc.stdout)
 
 
 if __name__ == "__main__":

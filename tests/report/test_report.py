@@ -471,6 +471,10 @@ class ReportTest(unittest.TestCase):
         report = read_text(os.path.join(self.out, "report.md"))
         self.assertIn("By how close the detector came to its threshold", report)
         self.assertIn("| -0.04 … 0 |", report)
+        # without --repeatability no noise figure is quoted, only how to measure one
+        self.assertIn("`tools/main_job/ivoa-label-repeatability.sh` measures how far", report)
+        self.assertNotIn("at the median", report)
+        self.assertNotIn("another noise draw keeps the verdict", report)
 
     def test_comparison_per_phenomenon(self):
         perfect = {e["phenomenon"]: e for e in self.model("jppc")["per_phenomenon"]}
@@ -567,6 +571,68 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         with open(path, "r+b") as fh:
             fh.truncate(os.path.getsize(path) - 4)
         self.assert_bad_input(["--eval", self.f.perfect, "--dataset", d], "evidence.f32", "bytes")
+
+    def write_repeatability(self, name, detector="jppc", threshold=0.75, bands=None):
+        """An ivoa_label_repeatability.py --json file: the free side's two bands
+        nearest the threshold keep the verdict 0.7 and 0.5 of the time, the
+        far free side always; no figure for the far obstacle side."""
+        if bands is None:
+            bands = [{"low": None, "high": -0.3, "n": 40, "verdict_agreement": 1.0},
+                     {"low": -0.04, "high": 0.0, "n": 10, "verdict_agreement": 0.7},
+                     {"low": 0.0, "high": 0.04, "n": 10, "verdict_agreement": 0.5}]
+        path = os.path.join(self.root, name)
+        with open(path, "w") as fh:
+            json.dump({"datasets": ["a", "b", "c"], "detector": detector, "session_names": ["campus_s2", "other_s9"],
+                       "evidence": {"threshold": threshold, "cells": 60, "worst_shift_median": 0.044,
+                                    "worst_shift_p90": 0.133, "bands": bands}}, fh)
+        return path
+
+    def test_noise_repeatability_beside_the_margin_bands(self):
+        """--repeatability: each band gets how often another noise draw keeps
+        the verdict, and the model's verdict errors are set against those of a
+        predictor blind to the noise, over the bands both have."""
+        out = os.path.join(self.root, "report_noise")
+        code, _, stderr = run_main(["--eval", self.f.known, "--dataset", self.f.data, "--out", out,
+                                    "--repeatability", self.write_repeatability("noise.json"),
+                                    "--tsne-iterations", "250"])
+        self.assertEqual(code, 0, stderr)
+        g = next(iter(json.loads(read_text(os.path.join(out, "metrics.json")))["models"].values()))["by_margin"]
+        bands = {(b["low"], b["high"]): b for b in g["bands"]}
+        self.assertEqual([bands[k]["noise_agreement"] for k in bands], [1.0, 0.7, 0.5, None])
+        n_far, n_free, n_obst = (bands[k]["n"] for k in ((None, -0.3), (-0.04, 0.0), (0.0, 0.04)))
+        c = g["noise_comparison"]
+        self.assertTrue(c["used"])
+        self.assertEqual(c["cells_compared"], n_far + n_free + n_obst)
+        self.assertEqual(c["model_verdict_errors"], n_free + n_obst)  # the known model misses every near verdict
+        self.assertAlmostEqual(c["noise_verdict_errors"], 0.3 * n_free + 0.5 * n_obst)
+        self.assertEqual((c["sessions_in_common"], c["run_sessions"]), (1, len(self.f.sessions)))
+        report = read_text(os.path.join(out, "report.md"))
+        self.assertIn("another noise draw keeps the verdict", report)
+        self.assertIn("moves a cell's worst value by 0.044 at the median and 0.133", report)
+        self.assertIn(f"would misread about **{0.3 * n_free + 0.5 * n_obst:.0f}**", report)
+
+    def test_noise_repeatability_of_another_detector_is_not_used(self):
+        out = os.path.join(self.root, "report_noise_dense")
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--out", out,
+                                    "--repeatability", self.write_repeatability("noise_dense.json", "dense")])
+        self.assertEqual(code, 0, stderr)
+        g = next(iter(json.loads(read_text(os.path.join(out, "metrics.json")))["models"].values()))["by_margin"]
+        self.assertFalse(g["noise_comparison"]["used"])
+        self.assertTrue(all("noise_agreement" not in b for b in g["bands"]))
+        self.assertIn("were not used: measured for detector 'dense'", read_text(os.path.join(out, "report.md")))
+
+    def test_bad_noise_repeatability_is_named(self):
+        self.assert_bad_input(["--eval", self.f.perfect, "--dataset", self.f.data, "--repeatability",
+                               self.write_repeatability("noise_thr.json", threshold=0.5)],
+                              "noise_thr.json: measured at evidence threshold 0.5, the report uses 0.75")
+        self.assert_bad_input(["--eval", self.f.perfect, "--dataset", self.f.data, "--repeatability",
+                               self.write_repeatability("noise_bad.json", bands=[{"low": None}])],
+                              "noise_bad.json: malformed repeatability figures (KeyError")
+        path = os.path.join(self.root, "noise_none.json")
+        with open(path, "w") as fh:
+            json.dump({"datasets": ["a", "b"], "evidence": None}, fh)
+        self.assert_bad_input(["--eval", self.f.perfect, "--dataset", self.f.data, "--repeatability", path],
+                              "noise_none.json: its datasets keep no detector evidence")
 
     def test_footprint_scaled_dataset_reports_the_cut_sides(self):
         """A dataset that records patch_side per sample (ivoa-dataset --patch-scale):

@@ -6,9 +6,9 @@
 # labels cell by cell (tools/report/ivoa_label_repeatability.py).
 #
 # Usage: ivoa-label-repeatability.sh [--realisations K] [--seed S] [--frames N]
-#                                    [--detector jppc|dense] [--out DIR]
+#                                    [--scenes A,B,...] [--detector jppc|dense] [--out DIR]
 #   defaults: K = 4 noise seeds (0 = the main job's recordings), seed 31,
-#   60 frames per session (the full-scale test sessions), jppc
+#   60 frames per session (the full-scale test sessions), the nine scenes, jppc
 # Needs the build (./tools/run-main-job.sh or ./tools/run-tests.sh); about
 # 20 s per session and realisation on 2 cores; logs are deleted once labelled.
 set -euo pipefail
@@ -27,11 +27,15 @@ while [ $# -gt 0 ]; do
     --realisations) realisations=$2; shift 2 ;;
     --seed) seed=$2; shift 2 ;;
     --frames) frames=$2; shift 2 ;;
+    --scenes) IFS=, read -r -a SCENE_NAMES <<< "$2"; shift 2 ;;
     --detector) detector=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
-    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d'; exit 0 ;;
     *) echo "ivoa-label-repeatability: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
+done
+for scene in "${SCENE_NAMES[@]}"; do
+  [ -f "$ROOT/libs/sim/scenes/$scene.yaml" ] || { echo "ivoa-label-repeatability: no scene '$scene' in libs/sim/scenes" >&2; exit 2; }
 done
 [ "$realisations" -ge 2 ] 2>/dev/null || { echo "ivoa-label-repeatability: --realisations must be 2 or more" >&2; exit 2; }
 [ -x "$BIN/ivoa-sim-driver" ] || { echo "ivoa-label-repeatability: no build at $BIN (run ./tools/run-main-job.sh once)" >&2; exit 3; }

@@ -17,13 +17,19 @@
 #   6. write the report (metrics, uncertainty, failure clusters and their
 #      purity by phenomenon and by cause, figures).
 #
-# Usage: ivoa-main-job.sh [--scale default|smoke|full] [--views 1|2] [--patch-scale K] [--out DIR] [--live]
+# Usage: ivoa-main-job.sh [--scale default|smoke|full] [--views 1|2] [--patch-scale K] [--out DIR]
+#                         [--noise-draws K] [--live]
 #   --scale full   more sessions and training: the recipe of the shipped model
 #   --scale smoke  a few frames per session: checks the whole chain (a test)
 #   --views 1      the paper's input, the left image only (default 2: the
 #                  left image and the right one warped onto the ground)
 #   --patch-scale K  footprint-scaled patches, K disc widths per square
 #                  (default 1.6); 0: the paper's fixed 100 px squares
+#   --noise-draws K  also record the test sessions with K sensor-noise draws
+#                  (ivoa-label-repeatability.sh) and set, band by band of
+#                  JPP-C's margin, how often another draw keeps its verdict
+#                  beside the models in the report (default 0: off; about a
+#                  minute per draw at the default scale, 3 at full)
 #   --live         the short variant: run the shipped model live on the
 #                  simulator (sim.pmd with introspection and the viewer)
 set -euo pipefail
@@ -40,18 +46,22 @@ views=2
 patch_scale=1.6
 out=""
 live=0
+noise_draws=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --scale) scale=$2; shift 2 ;;
     --views) views=$2; shift 2 ;;
     --patch-scale) patch_scale=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
+    --noise-draws) noise_draws=$2; shift 2 ;;
     --live) live=1; shift ;;
-    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d'; exit 0 ;;
     *) echo "ivoa-main-job: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
 case "$views" in 1|2) ;; *) echo "ivoa-main-job: --views must be 1 or 2, not '$views'" >&2; exit 2 ;; esac
+case "$noise_draws" in 0|[2-9]|[1-9][0-9]) ;;
+  *) echo "ivoa-main-job: --noise-draws must be 0 (off) or 2 or more, not '$noise_draws'" >&2; exit 2 ;; esac
 out=${out:-$ROOT/out/main-job-$scale}
 
 # Scene files, and the sessions of each split per scale.
@@ -249,8 +259,19 @@ echo "  dense (the labels made offline, from its dataset):"
   --out "$out/causes_dense.csv" --variants-out "$out/variants_dense.csv" "${test_logs[@]}" |
   tee "$out/causes_dense.txt"
 
+repeatability=()
+if [ "$noise_draws" -gt 0 ]; then
+  step "Recording the test sessions with $noise_draws sensor-noise draws"
+  echo "  same scenes, poses and exposures, other camera and depth noise; JPP-C and the monitor re-run offline"
+  "$ROOT/tools/main_job/ivoa-label-repeatability.sh" --realisations "$noise_draws" --seed "${TEST_SEEDS[0]}" \
+    --frames "$TEST_FRAMES" --scenes "$(IFS=,; echo "${SCENE_NAMES[*]}")" --out "$out/label-repeatability" |
+    tee "$out/label_repeatability.txt"
+  repeatability=(--repeatability "$out/label-repeatability/label_repeatability.json")
+fi
+
 step "Writing the report"
-"$PY" "$ROOT/tools/report/ivoa_report.py" "${evals[@]}" "${datasets[@]}" --causes "$out/causes_jppc.csv" \
+"$PY" "$ROOT/tools/report/ivoa_report.py" "${evals[@]}" "${datasets[@]}" "${repeatability[@]}" \
+  --causes "$out/causes_jppc.csv" \
   --causes "$out/causes_dense.csv" --variants "$out/variants_jppc.csv" --variants "$out/variants_dense.csv" \
   --out "$out/report" --title "IVOA on the simulated robot ($scale scale)" |
   tee "$out/report_summary.txt"

@@ -13,9 +13,15 @@ cells labelled in every realisation it prints
   the most common label of the other K - 1. This predictor knows the scene
   exactly but not the noise; as K grows it approaches the best any such
   predictor can do, so its mean per-class accuracy estimates the ceiling
-  for a model that cannot see which way the noise will tip a verdict.
+  for a model that cannot see which way the noise will tip a verdict;
+* where the datasets keep the detector's evidence (JPP-C's window costs),
+  how far the noise moves a cell's worst value, and per band of its margin
+  to the threshold how often another realisation gives the same verdict.
+  ``ivoa_report.py --repeatability`` sets the model's verdict accuracy
+  beside these, band by band.
 
 Usage: ivoa_label_repeatability.py DATASET DATASET [DATASET ...] [--json FILE]
+                                   [--evidence-threshold COST]
 (tools/main_job/ivoa-label-repeatability.sh records and labels them).
 """
 
@@ -26,9 +32,11 @@ import csv
 import json
 import os
 import sys
-from typing import Dict, List, Tuple
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
+
+from margin_bands import MARGIN_AGREEMENT_MIN, band_name, margin_bands
 
 LABEL_NAMES = ("TP", "TN", "FP", "FN")
 EXIT_BAD_INPUT = 3
@@ -76,6 +84,38 @@ def session_detector(dataset: str, session: str) -> str:
         raise InputError(f"{path}: cannot read session metadata: {e}") from None
 
 
+def read_worst_costs(dataset: str, session: str) -> Optional[Dict[Tuple[int, int], float]]:
+    """{(utime, cell): the detector's worst evidence value} of one session
+    (JPP-C: its worst ground sample's window cost; NaN where it observed
+    none), or None when the session keeps no evidence (session.json's
+    evidence_size 0: the dense detector, or --no-evidence)."""
+    folder = os.path.join(dataset, session)
+    try:
+        with open(os.path.join(folder, "session.json")) as f:
+            size = int(json.load(f).get("evidence_size", 0) or 0)
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError, TypeError, AttributeError) as e:
+        raise InputError(f"{folder}/session.json: cannot read evidence_size: {e}") from None
+    if size <= 0:
+        return None
+    path = os.path.join(folder, "evidence.f32")
+    if not os.path.isfile(path):
+        raise InputError(f"{path}: missing (session.json says evidence_size {size})")
+    values = np.fromfile(path, dtype="<f4")
+    with open(os.path.join(folder, "samples.csv"), newline="") as f:
+        rows = [(int(r["sample"]), int(r["utime"]), int(r["cell"])) for r in csv.DictReader(f)]
+    if values.size != len(rows) * size:
+        raise InputError(f"{path}: {values.size} values, expected {len(rows)} samples x {size}")
+    if any(not 0 <= sample < len(rows) for sample, _, _ in rows):
+        raise InputError(f"{folder}/samples.csv: sample numbers must index the {len(rows)} rows of evidence.f32")
+    values = values.reshape(len(rows), size)
+    observed = ~np.all(np.isnan(values), axis=1)
+    worst = np.full(len(rows), np.nan)
+    worst[observed] = np.nanmax(values[observed], axis=1)
+    return {(utime, cell): float(worst[sample]) for sample, utime, cell in rows}
+
+
 def check_one_detector(datasets: List[str], sessions) -> None:
     """Realisations labelled from different detectors differ by more than the noise."""
     for name in sorted(sessions):
@@ -87,20 +127,29 @@ def check_one_detector(datasets: List[str], sessions) -> None:
                              "must differ only in their noise seed")
 
 
-def common_cells(realisations: List[Dict[str, Dict[Tuple[int, int], int]]]) -> Tuple[np.ndarray, int, int]:
-    """(cells x K) label matrix over the sessions and cells all realisations
-    labelled, plus how many cells some but not all of them labelled, and
-    the number of sessions used."""
-    names = set.intersection(*(set(r) for r in realisations))
+Key = Tuple[str, Tuple[int, int]]  # (session, (utime, cell))
+
+
+def common_cells(realisations: List[Dict[str, Dict[Tuple[int, int], int]]]) -> Tuple[List[Key], int, List[str]]:
+    """The (session, (utime, cell)) keys every realisation labelled, in a fixed
+    order, plus how many cells some but not all of them labelled, and the
+    sessions they have in common."""
+    names = sorted(set.intersection(*(set(r) for r in realisations)))
     if not names:
         raise InputError("the datasets have no session in common")
-    rows, partial = [], 0
-    for name in sorted(names):
-        keys = [set(r[name]) for r in realisations]
-        shared = set.intersection(*keys)
-        partial += len(set.union(*keys)) - len(shared)
-        rows += [[r[name][k] for r in realisations] for k in sorted(shared)]
-    return np.array(rows, dtype=np.int64).reshape(-1, len(realisations)), partial, len(names)
+    keys, partial = [], 0
+    for name in names:
+        cells = [set(r[name]) for r in realisations]
+        shared = set.intersection(*cells)
+        partial += len(set.union(*cells)) - len(shared)
+        keys += [(name, k) for k in sorted(shared)]
+    return keys, partial, names
+
+
+def label_matrix(realisations, keys: List[Key]) -> np.ndarray:
+    """(cells x K) labels of the keys in each realisation."""
+    rows = [[r[name][k] for r in realisations] for name, k in keys]
+    return np.array(rows, dtype=np.int64).reshape(-1, len(realisations))
 
 
 def per_class(truth: np.ndarray, predicted: np.ndarray) -> List[float]:
@@ -135,21 +184,70 @@ def leave_one_out_majority(labels: np.ndarray) -> List[float]:
     return per_class(np.concatenate(truth), np.concatenate(predicted))
 
 
-def analyse(datasets: List[str]) -> dict:
+def worst_cost_matrix(datasets: List[str], keys: List[Key]) -> Optional[np.ndarray]:
+    """(cells x K) worst evidence value of each key in each realisation, or
+    None when a session of a realisation keeps no evidence."""
+    columns = []
+    for d in datasets:
+        per_session = {}
+        for name in sorted({name for name, _ in keys}):
+            worst = read_worst_costs(d, name)
+            if worst is None:
+                return None
+            per_session[name] = worst
+        columns.append([per_session[name][k] for name, k in keys])
+    return np.array(columns, dtype=np.float64).T.reshape(len(keys), len(datasets))
+
+
+def evidence_repeatability(worst: np.ndarray, labels: np.ndarray, threshold: float) -> dict:
+    """How far another noise draw moves a cell's worst evidence value, and,
+    per band of one draw's margin (margin_bands.MARGIN_EDGES), how often
+    another draw gives the same verdict (obstacle iff worst >= threshold):
+    the verdict accuracy a predictor that knew the scene but not the noise
+    would have, band by band. Cells some draw observed no evidence for are
+    left out. Raises InputError when the evidence does not give the labels'
+    verdicts at this threshold."""
+    observed = ~np.isnan(worst).any(axis=1)
+    w, said_obstacle = worst[observed], np.isin(labels[observed], (0, 2))  # TP, FP
+    k = w.shape[1]
+    if not len(w):
+        raise InputError("no cell has an observed evidence value in every realisation")
+    agreement = float(np.mean((w >= threshold) == said_obstacle))
+    if agreement < MARGIN_AGREEMENT_MIN:
+        raise InputError(f"the evidence gives the labels' verdict for only {100 * agreement:.1f} % of the cells at "
+                         f"threshold {threshold:g} (is --evidence-threshold the detector's?)")
+    shifts = np.concatenate([np.abs(w[:, i] - w[:, j]) for i in range(k) for j in range(i + 1, k)])
+    pairs = [(i, j) for i in range(k) for j in range(k) if i != j]
+    margin = np.concatenate([w[:, i] - threshold for i, _ in pairs])
+    same = np.concatenate([(w[:, i] >= threshold) == (w[:, j] >= threshold) for i, j in pairs])
+    bands = margin_bands(margin, margin >= 0, {"verdict_agreement": same})
+    for b in bands:  # every cell of a realisation counted once per other realisation
+        b["n"] //= k - 1
+    return {"threshold": threshold, "cells": int(len(w)), "cells_without_evidence": int((~observed).sum()),
+            "evidence_agreement": agreement,
+            "worst_shift_median": float(np.median(shifts)), "worst_shift_p90": float(np.percentile(shifts, 90)),
+            "verdict_agreement": float(np.mean(same)), "bands": bands}
+
+
+def analyse(datasets: List[str], threshold: float) -> dict:
     realisations = [read_labels(d) for d in datasets]
     check_one_detector(datasets, set.intersection(*(set(r) for r in realisations)))
-    labels, partial, n_sessions = common_cells(realisations)
+    keys, partial, names = common_cells(realisations)
+    labels = label_matrix(realisations, keys)
     agreement = pairwise_agreement(labels)
     diag = [float(agreement[c, c]) for c in range(4)]
     majority = leave_one_out_majority(labels)
     support = [int(np.sum(labels[:, 0] == c)) for c in range(4)]
+    worst = worst_cost_matrix(datasets, keys)
     return {
-        "datasets": datasets, "sessions": n_sessions, "cells": int(len(labels)),
+        "datasets": datasets, "detector": session_detector(datasets[0], names[0]), "sessions": len(names),
+        "session_names": names, "cells": int(len(labels)),
         "cells_labelled_in_some_realisations_only": partial, "support_first": support,
         "agreement": agreement.tolist(), "agreement_per_class": diag,
         "agreement_mean_per_class": float(np.nanmean(diag)),
         "majority_per_class": majority, "majority_mean_per_class": float(np.nanmean(majority)),
         "cells_with_one_label_in_all": float(np.mean((labels == labels[:, :1]).all(axis=1))),
+        "evidence": evidence_repeatability(worst, labels, threshold) if worst is not None else None,
     }
 
 
@@ -166,12 +264,24 @@ def print_summary(r: dict) -> None:
     print("majority of the other realisations, per class: "
           + ", ".join(f"{n} {v:.3f}" for n, v in zip(LABEL_NAMES, r["majority_per_class"]))
           + f"; mean per-class {r['majority_mean_per_class']:.3f}")
+    e = r["evidence"]
+    if e is None:
+        print("no evidence in these datasets (the dense detector keeps none): no cost shifts")
+        return
+    print(f"the detector's worst evidence value moves by {e['worst_shift_median']:.3f} (median) and "
+          f"{e['worst_shift_p90']:.3f} (90th percentile) between realisations ({e['cells']} cells)")
+    print(f"another realisation gives the same verdict, by band of this one's margin (worst - {e['threshold']:g}; "
+          "n: cells x realisations):")
+    for b in e["bands"]:
+        print(f"  {band_name(b):>14}  n={b['n']:<6} {b['verdict_agreement']:.3f}")
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("datasets", nargs="+", help="datasets of the same sessions with different noise seeds")
-    ap.add_argument("--json", help="also write the numbers here")
+    ap.add_argument("--json", help="also write the numbers here (ivoa_report.py --repeatability reads them)")
+    ap.add_argument("--evidence-threshold", type=float, default=0.75, metavar="COST",
+                    help="the detector's threshold on its evidence (JPP-C's conf_pos_thresh 0.75)")
     args = ap.parse_args(argv)
     if len(args.datasets) < 2:
         ap.error("give at least two datasets (noise realisations) of the same sessions")
@@ -181,7 +291,7 @@ def main(argv=None) -> int:
             ap.error(f"{d} is given twice (as {seen[os.path.realpath(d)]} too): give each realisation once")
         seen[os.path.realpath(d)] = d
     try:
-        result = analyse(args.datasets)
+        result = analyse(args.datasets, args.evidence_threshold)
     except InputError as e:
         print(f"ivoa_label_repeatability: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT

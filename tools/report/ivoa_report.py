@@ -73,8 +73,8 @@ import report_markdown as md  # noqa: E402
 import report_metrics as metrics  # noqa: E402
 from report_clustering import ClusterOptions, cluster_failures  # noqa: E402
 from report_inputs import (Dataset, EvalRun, InputError, attach_causes, attach_dataset, evidence_margin,  # noqa: E402
-                           load_causes, load_eval, load_variants, make_names, patch_scale, patch_sides, patch_size,
-                           query_grid)
+                           load_causes, load_eval, load_repeatability, load_variants, make_names, patch_scale,
+                           patch_sides, patch_size, query_grid)
 
 
 def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
@@ -111,6 +111,10 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     p.add_argument("--evidence-threshold", type=float, default=0.75, metavar="COST",
                    help="the labels' detector's threshold on its evidence (JPP-C's conf_pos_thresh: a cell is an "
                         "obstacle iff its worst window cost reaches it), for accuracy by the detector's margin")
+    p.add_argument("--repeatability", metavar="JSON",
+                   help="ivoa_label_repeatability.py --json output for the test sessions (simulator only): sets "
+                        "how often another sensor-noise draw keeps the detector's verdict beside the model, band "
+                        "by band of the margin")
     p.add_argument("--max-overlays", type=int, default=0,
                    help="copy at most this many overlay figures per model into the report (0 = all)")
     a = p.parse_args(argv)
@@ -133,8 +137,9 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
 
 def load_inputs(args: argparse.Namespace):
     """Reads every eval folder and its dataset, checking they agree, and the
-    causes and variants CSVs. Raises InputError on bad input; returns the
-    runs, the detector settings' figures and warnings for the report."""
+    causes and variants CSVs and the noise repeatability figures. Raises
+    InputError on bad input; returns the runs, the detector settings'
+    figures, the repeatability figures (or None) and warnings for the report."""
     runs = [load_eval(p) for p in args.eval]
     make_names(runs)
     datasets: Dict[str, Dataset] = {}
@@ -150,10 +155,12 @@ def load_inputs(args: argparse.Namespace):
         for run in runs:
             warnings += attach_causes(run, causes)
     settings = metrics.detector_settings([load_variants(path) for path in args.variants or []], causes)
-    return runs, settings, warnings
+    noise = load_repeatability(args.repeatability, args.evidence_threshold) if args.repeatability else None
+    return runs, settings, noise, warnings
 
 
-def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out_dir: str):
+def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out_dir: str,
+                noise: Optional[dict] = None):
     """All numbers and figures for one model. Returns (numbers for metrics.json,
     figure paths relative to the report, clustering result, overlay paths)."""
     d = os.path.join(out_dir, run.slug)
@@ -176,7 +183,8 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "sweep": metrics.uncertainty_sweep(run),
         "per_phenomenon": metrics.per_phenomenon(run),
         "given_verdict": metrics.given_verdict(run),
-        "by_margin": metrics.by_margin(run, evidence_margin(run, args.evidence_threshold), args.evidence_threshold),
+        "by_margin": metrics.by_margin(run, evidence_margin(run, args.evidence_threshold), args.evidence_threshold,
+                                       noise),
         "causes_of_failures": metrics.causes_of_failures(run),
     }
     figs = {
@@ -300,7 +308,7 @@ def _json_default(o):
 
 def run_report(args: argparse.Namespace, argv: List[str]) -> int:
     """Loads, analyses, writes report.md + metrics.json, prints the summary."""
-    runs, settings, warnings = load_inputs(args)
+    runs, settings, noise, warnings = load_inputs(args)
     out_dir = args.out
     try:
         os.makedirs(out_dir, exist_ok=True)
@@ -312,7 +320,7 @@ def run_report(args: argparse.Namespace, argv: List[str]) -> int:
     numbers: Dict[str, dict] = {}
     sections = []
     for run in runs:
-        rm, figs, res, overlays = analyse_run(run, args, opt, out_dir)
+        rm, figs, res, overlays = analyse_run(run, args, opt, out_dir, noise)
         numbers[run.slug] = rm
         sections.append("\n".join([
             f"## Model: {run.name}\n",

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 from collections import Counter
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import List, Sequence, Tuple
 
 import matplotlib
 
@@ -18,8 +18,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
-from report_inputs import FN, FP, LABEL_NAMES, NO_CAUSE, EvalRun, cause_name, phenomenon_name  # noqa: E402
-from report_metrics import band_name  # noqa: E402
+from margin_bands import band_name  # noqa: E402
+from report_inputs import LABEL_NAMES, NO_CAUSE, EvalRun, cause_name, phenomenon_name  # noqa: E402
 
 CLASS_COLOURS = ("#2ca02c", "#1f77b4", "#ff7f0e", "#d62728")   # TP, TN, FP, FN
 # One colour per phenomenon code, the same in every figure and model.
@@ -335,12 +335,17 @@ def plot_group_bars(groups: List[dict], title: str, xlabel: str, path: str) -> s
 
 def plot_margin_bands(margin: dict, title: str, path: str) -> str:
     """Per band of the detector's evidence margin: how often the model reads the
-    verdict from the image, its four-class accuracy, and the share of the cells."""
+    verdict from the image, its four-class accuracy, and the share of the cells;
+    with repeatability figures, how often another noise draw keeps the verdict."""
     bands = margin["bands"]
     x = np.arange(len(bands))
     fig, ax = plt.subplots(figsize=(max(6.0, 1.2 * len(bands) + 2), 4.4))
     ax.bar(x - 0.2, [b["verdict_accuracy"] for b in bands], 0.4, color="#444466",
            label="detector's verdict read from the image (obstacle or free)")
+    noisy = [(i, b["noise_agreement"]) for i, b in enumerate(bands) if b.get("noise_agreement") is not None]
+    if noisy:
+        ax.scatter([i - 0.2 for i, _ in noisy], [a for _, a in noisy], marker="_", s=500, linewidths=2.5,
+                   color="#dd5500", zorder=3, label="another sensor-noise draw keeps the verdict")
     ax.bar(x + 0.2, [b["overall_accuracy"] for b in bands], 0.4, color="#aaaacc", label="four classes")
     near = [i for i, b in enumerate(bands) if b["low"] is not None and b["high"] is not None
             and b["low"] >= -margin["near"] and b["high"] <= margin["near"]]

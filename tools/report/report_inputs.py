@@ -616,6 +616,32 @@ def load_variants(path: str) -> Dict[tuple, Dict[str, int]]:
     return out
 
 
+def load_repeatability(path: str, threshold: float) -> dict:
+    """The evidence part of an ivoa_label_repeatability.py --json file: how far
+    another sensor-noise draw moves the detector's worst evidence value and,
+    per margin band, how often it keeps the verdict. Adds the file's path,
+    detector and sessions. InputError when it has none, or was measured at
+    another threshold than the report's."""
+    data = _read_json(path)
+    if "evidence" not in data:
+        raise InputError(f"{path}: no 'evidence' entry (written by an older ivoa_label_repeatability.py? run it again)")
+    e = data["evidence"]
+    if e is None:
+        raise InputError(f"{path}: its datasets keep no detector evidence (the dense detector keeps none)")
+    try:
+        if abs(float(e["threshold"]) - threshold) > 1e-9:
+            raise InputError(f"{path}: measured at evidence threshold {float(e['threshold']):g}, the report uses "
+                             f"{threshold:g} (--evidence-threshold)")
+        bands = [{"low": b["low"], "high": b["high"], "n": int(b["n"]),
+                  "verdict_agreement": float(b["verdict_agreement"])} for b in e["bands"]]
+        return {"path": path, "detector": str(data.get("detector", "")), "realisations": len(data["datasets"]),
+                "sessions": [str(s) for s in data["session_names"]], "cells": int(e["cells"]),
+                "worst_shift_median": float(e["worst_shift_median"]), "worst_shift_p90": float(e["worst_shift_p90"]),
+                "bands": bands}
+    except (KeyError, TypeError, ValueError) as err:
+        raise InputError(f"{path}: malformed repeatability figures ({type(err).__name__}: {err})") from None
+
+
 def attach_causes(run: EvalRun, all_causes: List[Causes]) -> List[str]:
     """Sets run.cause for the true FP/FN rows that the causes CSV about the
     detector of the run's labels covers (same session, utime and cell). A

@@ -6,9 +6,10 @@ from __future__ import annotations
 import os
 from typing import Dict, List, Optional, Sequence
 
+from margin_bands import band_name
 from report_clustering import REFERENCE_VAR_CUT, ClusterOptions
 from report_inputs import LABEL_NAMES, EvalRun, cause_name, phenomenon_name, surface_name
-from report_metrics import PAPER_MPCA_AT_70, RETAIN_TARGET, band_name
+from report_metrics import PAPER_MPCA_AT_70, RETAIN_TARGET
 
 PURITY_TARGET = 0.80
 
@@ -234,22 +235,46 @@ def margin_text(rm: dict, figs: Dict[str, str]) -> str:
     if not g["ok"]:
         out.append(f"Not shown: {g['message']}.\n")
         return "\n".join(out)
+    noise = g["noise_comparison"]
+    with_noise = noise is not None and noise["used"]
     out.append(
         f"The dataset records the detector's evidence for each cell (JPP-C: the window cost of each of its ground "
         f"samples; the cell is an obstacle iff the worst reaches {g['threshold']:g}), so each cell's margin is its "
-        f"worst value minus the threshold. Near zero a little image noise decides the verdict (in the simulator, "
-        f"another draw of the sensor noise on the same frame moves a cell's worst cost by 0.04 at the median). "
+        f"worst value minus the threshold. Near zero a little image noise decides the verdict "
+        f"({noise_context(noise)}). "
         f"{pct(g['near_share'])} of the {g['n_with_evidence']} cells lie within ±{g['near']:g} of the threshold; "
         f"they hold **{pct(g['near_verdict_error_share'])}** of the model's errors in reading the verdict from the "
         f"image (verdict read right in {pct(g['verdict_accuracy'])} of all cells, "
         f"{pct(g['verdict_accuracy_far'])} of those farther out) and {pct(g['near_error_share'])} of its "
         f"four-class errors.\n")
-    rows = [[band_name(b), b["n"], pct(b["share"]), pct(b["obstacle_share"], 0), fmt(b["verdict_accuracy"]),
-             fmt(b["overall_accuracy"]), fmt(b["given_verdict_accuracy"])] for b in g["bands"]]
-    out.append(table(["margin", "cells", "share", "detector said obstacle", "verdict read from the image",
-                      "four classes", "given the verdict"], rows))
+    rows = [[band_name(b), b["n"], pct(b["share"]), pct(b["obstacle_share"], 0), fmt(b["verdict_accuracy"])]
+            + ([fmt(b.get("noise_agreement"))] if with_noise else [])
+            + [fmt(b["overall_accuracy"]), fmt(b["given_verdict_accuracy"])] for b in g["bands"]]
+    out.append(table(["margin", "cells", "share", "detector said obstacle", "verdict read from the image"]
+                     + (["another noise draw keeps the verdict"] if with_noise else [])
+                     + ["four classes", "given the verdict"], rows))
+    if with_noise:
+        out.append(f"\nOver these {noise['cells_compared']} cells the model misreads {noise['model_verdict_errors']} "
+                   f"verdicts; a predictor that knew each scene exactly but not the noise would misread about "
+                   f"**{noise['noise_verdict_errors']:.0f}**: where the model falls below the noise column, a better "
+                   f"model could still gain.\n")
     out.append("\n" + image(figs["margin_bands"], "accuracy by the detector's margin"))
     return "\n".join(out)
+
+
+def noise_context(noise: Optional[dict]) -> str:
+    """The parenthesis on how far the sensor noise moves the evidence: measured
+    (ivoa_report.py --repeatability), not applicable, or how to measure it."""
+    if noise is None:
+        return ("on simulated sessions, `tools/main_job/ivoa-label-repeatability.sh` measures how far another draw "
+                "of the sensor noise moves it; `--repeatability` sets its figures beside the model's")
+    if not noise["used"]:
+        return f"the repeatability figures in `{noise['path']}` were not used: {noise['message']}"
+    where = (f"{noise['sessions_in_common']} of these {noise['run_sessions']} sessions" if noise["sessions_in_common"]
+             else "other sessions than these")
+    return (f"another draw of the sensor noise on the same frames moves a cell's worst value by "
+            f"{noise['worst_shift_median']:.3f} at the median and {noise['worst_shift_p90']:.3f} at the 90th "
+            f"percentile: `{noise['path']}`, {noise['realisations']} draws of {noise['cells']} cells, {where}")
 
 
 def _counts_text(d: Dict[int, int], namer, total: int, top: int = 4) -> str:

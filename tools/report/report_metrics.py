@@ -23,6 +23,7 @@ from typing import Dict, List, Optional
 import numpy as np
 from sklearn.metrics import roc_auc_score, roc_curve
 
+from margin_bands import MARGIN_AGREEMENT_MIN, NEAR_MARGIN, margin_bands, share
 from report_inputs import FN, FP, LABEL_NAMES, NO_CAUSE, ONLY_TOGETHER, STATE_OBSTACLE, TP, EvalRun
 
 N_CLASSES = 4
@@ -295,65 +296,27 @@ def given_verdict(run: EvalRun) -> Optional[dict]:
     }
 
 
-# Bands of the evidence margin (worst window cost minus the threshold, in the
-# cost's own units: JPP-C's per-pixel L1 DAISY distance, threshold 0.75) and
-# the half-width counted as "near the threshold". The sensor noise of one
-# simulated frame moves a cell's worst cost by about 0.04 (median) to 0.13
-# (90th percentile), so within +-0.08 the verdict is often the noise's.
-MARGIN_EDGES = (-0.3, -0.15, -0.08, -0.04, 0.0, 0.04, 0.08, 0.15, 0.3)
-NEAR_MARGIN = 0.08
-# Share of rows whose margin must agree with the label's verdict for the
-# evidence to be taken as that verdict's (a wrong --evidence-threshold or
-# evidence recorded with other detector settings fails it).
-MARGIN_AGREEMENT_MIN = 0.99
-
-
-def band_name(band: dict) -> str:
-    """'< -0.3', '-0.08 … -0.04', '≥ 0.3' for a band of by_margin (open ends: None)."""
-    if band["low"] is None:
-        return f"< {band['high']:g}"
-    if band["high"] is None:
-        return f"≥ {band['low']:g}"
-    return f"{band['low']:g} … {band['high']:g}"
-
-
-def _accuracy(hit: np.ndarray) -> Optional[float]:
-    return float(np.mean(hit)) if len(hit) else None
-
-
-def _margin_bands(m: np.ndarray, said_obstacle: np.ndarray, hits: Dict[str, Optional[np.ndarray]]) -> List[dict]:
-    """Per non-empty band of MARGIN_EDGES (band i: edges[i] <= m < edges[i + 1],
-    so a cost exactly at the threshold is an obstacle's, as for JPP-C): its
-    size, how often the detector said obstacle, and the accuracy of each hit
-    array (None arrays give None)."""
-    edges = (None,) + MARGIN_EDGES + (None,)
-    band = np.digitize(m, MARGIN_EDGES)
-    out = []
-    for i in range(len(edges) - 1):
-        b = band == i
-        if b.any():
-            out.append(dict({"low": edges[i], "high": edges[i + 1], "n": int(b.sum()), "share": float(b.mean()),
-                             "obstacle_share": float(np.mean(said_obstacle[b]))},
-                            **{k: _accuracy(h[b]) if h is not None else None for k, h in hits.items()}))
-    return out
-
-
-def by_margin(run: EvalRun, margin: Optional[np.ndarray], threshold: float) -> Optional[dict]:
+def by_margin(run: EvalRun, margin: Optional[np.ndarray], threshold: float,
+              noise: Optional[dict] = None) -> Optional[dict]:
     """How the model does by how close the labels' detector came to its
     threshold: per band of the evidence margin, the share of cells, how often
     the detector said obstacle, how often the model reads that verdict from the
     image alone (its predicted class TP/FP vs TN/FN), its four-class overall
     accuracy, and given the verdict; then which share of its verdict errors
-    lies near the threshold. None without evidence; ok False (with a message)
-    where the evidence does not reproduce the labels' verdicts."""
+    lies near the threshold. With noise (report_inputs.load_repeatability),
+    each band also gets how often another sensor-noise draw keeps the verdict
+    (noise_agreement), and the whole how many verdict errors a predictor that
+    knew the scene but not the noise would make (noise_comparison). None
+    without evidence; ok False (with a message) where the evidence does not
+    reproduce the labels' verdicts."""
     if margin is None:
         return None
     seen = ~np.isnan(margin)
     said_obstacle = np.isin(run.label, (TP, FP))[seen]
     m = margin[seen]
-    agreement = _accuracy((m >= 0) == said_obstacle)
+    agreement = share((m >= 0) == said_obstacle)
     out = {"ok": False, "message": "", "threshold": threshold, "n_with_evidence": int(seen.sum()),
-           "agreement": agreement, "near": NEAR_MARGIN, "bands": []}
+           "agreement": agreement, "near": NEAR_MARGIN, "bands": [], "noise_comparison": None}
     if agreement is None:
         out["message"] = "no sample has an observed evidence value"
         return out
@@ -364,12 +327,40 @@ def by_margin(run: EvalRun, margin: Optional[np.ndarray], threshold: float) -> O
     verdict_hit = np.isin(run.predicted, (TP, FP))[seen] == said_obstacle
     correct = (run.predicted == run.label)[seen]
     given = (run.verdict.predicted == run.label)[seen] if run.verdict is not None else None
-    out["bands"] = _margin_bands(m, said_obstacle, {"verdict_accuracy": verdict_hit, "overall_accuracy": correct,
+    out["bands"] = margin_bands(m, said_obstacle, {"verdict_accuracy": verdict_hit, "overall_accuracy": correct,
                                                     "given_verdict_accuracy": given})
     near = np.abs(m) < NEAR_MARGIN
     out.update(ok=True, near_share=float(near.mean()),
-               near_verdict_error_share=_accuracy(near[~verdict_hit]), near_error_share=_accuracy(near[~correct]),
-               verdict_accuracy=_accuracy(verdict_hit), verdict_accuracy_far=_accuracy(verdict_hit[~near]))
+               near_verdict_error_share=share(near[~verdict_hit]), near_error_share=share(near[~correct]),
+               verdict_accuracy=share(verdict_hit), verdict_accuracy_far=share(verdict_hit[~near]))
+    if noise is not None:
+        out["noise_comparison"] = compare_with_noise(run, out["bands"], noise)
+    return out
+
+
+def compare_with_noise(run: EvalRun, bands: List[dict], noise: dict) -> dict:
+    """Sets each band's noise_agreement from the repeatability figures (None
+    where they have no cell in that band) and counts, over the bands both
+    have, the model's verdict errors against those of a predictor that knew
+    the scene but not the noise (sum of n x (1 - agreement)). Figures about
+    another detector are not used (used False, with the reason)."""
+    out = {k: noise[k] for k in ("path", "detector", "realisations", "cells", "worst_shift_median",
+                                 "worst_shift_p90")}
+    run_sessions = set(run.session.tolist())
+    out.update(run_sessions=len(run_sessions), sessions_in_common=len(run_sessions & set(noise["sessions"])),
+               used=not noise["detector"] or noise["detector"] == run.label_detector, cells_compared=0,
+               model_verdict_errors=0, noise_verdict_errors=0.0)
+    if not out["used"]:
+        out["message"] = (f"measured for detector '{noise['detector']}'; the labels here are about "
+                          f"'{run.label_detector}'")
+        return out
+    by_edges = {(b["low"], b["high"]): b["verdict_agreement"] for b in noise["bands"]}
+    for b in bands:
+        b["noise_agreement"] = by_edges.get((b["low"], b["high"]))
+        if b["noise_agreement"] is not None and b["verdict_accuracy"] is not None:
+            out["cells_compared"] += b["n"]
+            out["model_verdict_errors"] += int(round(b["n"] * (1 - b["verdict_accuracy"])))
+            out["noise_verdict_errors"] += b["n"] * (1 - b["noise_agreement"])
     return out
 
 
