@@ -205,7 +205,18 @@ class EvidenceRepeatabilityTest(unittest.TestCase):
         proc, r = self.run_tool(lambda root, _: write_dataset(root, [TN] * 10, detector="dense"))
         self.assertEqual(proc.returncode, 0, proc.stderr)
         self.assertIsNone(r["evidence"])
-        self.assertIn("no evidence in these datasets", proc.stdout)
+        self.assertIn("not every dataset keeps the detector's evidence", proc.stdout)
+
+    def test_bad_evidence_is_named(self):
+        def truncated(root, r):
+            write_evidence_dataset(root, EVIDENCE_CELLS, r)
+            path = os.path.join(root, "office_s31", "evidence.f32")
+            if r == 2:
+                with open(path, "r+b") as f:
+                    f.truncate(os.path.getsize(path) - 4)
+        proc, _ = self.run_tool(truncated)
+        self.assertEqual(proc.returncode, 3)
+        self.assertIn("noise2/office_s31/evidence.f32: 14 values, expected 5 samples x 3", proc.stderr)
 
 
 if __name__ == "__main__":

@@ -39,6 +39,7 @@ import numpy as np
 from margin_bands import MARGIN_AGREEMENT_MIN, band_name, margin_bands
 
 LABEL_NAMES = ("TP", "TN", "FP", "FN")
+TP, FP = 0, 2  # the labels whose detector verdict is "obstacle"
 EXIT_BAD_INPUT = 3
 
 
@@ -104,7 +105,11 @@ def read_worst_costs(dataset: str, session: str) -> Optional[Dict[Tuple[int, int
         raise InputError(f"{path}: missing (session.json says evidence_size {size})")
     values = np.fromfile(path, dtype="<f4")
     with open(os.path.join(folder, "samples.csv"), newline="") as f:
-        rows = [(int(r["sample"]), int(r["utime"]), int(r["cell"])) for r in csv.DictReader(f)]
+        try:
+            rows = [(int(r["sample"]), int(r["utime"]), int(r["cell"])) for r in csv.DictReader(f)]
+        except (KeyError, ValueError) as e:
+            raise InputError(f"{folder}/samples.csv: evidence needs integer sample, utime and cell columns "
+                             f"({type(e).__name__}: {e})") from None
     if values.size != len(rows) * size:
         raise InputError(f"{path}: {values.size} values, expected {len(rows)} samples x {size}")
     if any(not 0 <= sample < len(rows) for sample, _, _ in rows):
@@ -208,7 +213,7 @@ def evidence_repeatability(worst: np.ndarray, labels: np.ndarray, threshold: flo
     left out. Raises InputError when the evidence does not give the labels'
     verdicts at this threshold."""
     observed = ~np.isnan(worst).any(axis=1)
-    w, said_obstacle = worst[observed], np.isin(labels[observed], (0, 2))  # TP, FP
+    w, said_obstacle = worst[observed], np.isin(labels[observed], (TP, FP))
     k = w.shape[1]
     if not len(w):
         raise InputError("no cell has an observed evidence value in every realisation")
@@ -266,7 +271,7 @@ def print_summary(r: dict) -> None:
           + f"; mean per-class {r['majority_mean_per_class']:.3f}")
     e = r["evidence"]
     if e is None:
-        print("no evidence in these datasets (the dense detector keeps none): no cost shifts")
+        print("not every dataset keeps the detector's evidence (the dense detector keeps none): no cost shifts")
         return
     print(f"the detector's worst evidence value moves by {e['worst_shift_median']:.3f} (median) and "
           f"{e['worst_shift_p90']:.3f} (90th percentile) between realisations ({e['cells']} cells)")
