@@ -54,6 +54,13 @@ void add_monitor_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
       ->capture_default_str()
       ->check(ivoa::non_negative_number())
       ->group(g);
+  // A log recorded as fast as possible replays its depth frames in bursts,
+  // seconds of stream time ahead of a detector that works through its queue.
+  app.add_option("--depth-history-us", o.pairing.depth_history_us,
+                 "keep depth frames this long (stream time, behind the newest) for late stereo grids, us")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number())
+      ->group(g);
 }
 
 void add_channel_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {

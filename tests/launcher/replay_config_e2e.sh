@@ -4,8 +4,9 @@
 # monitor -> logger, viewer) over real UDP multicast LCM, as the README
 # shows. Every frame must be replayed, detected, labelled and logged again:
 # the launcher starts the player only once the consumers have announced
-# themselves, and the detector queues the frames, which this log (recorded
-# as fast as possible) replays in bursts tens of milliseconds apart.
+# themselves, the detector queues the frames, which this log (recorded as
+# fast as possible) replays in bursts tens of milliseconds apart, and the
+# monitor keeps the depth frames until the detector's late grids arrive.
 set -euo pipefail
 B=${IVOA_BUILD_DIR:?}; S=${IVOA_SOURCE_DIR:?}
 out=$(mktemp -d)
@@ -17,7 +18,8 @@ frames=8
 
 timeout 80 "$B/bin/ivoa-launch" "$S/procman_configs/replay.pmd" --script start --plain --status-every 0 \
   --skip introspection --set LOG="$out/raw.lcmlog" --set LOG_DIR="$out" --set LOG_FILE="$out/replay.lcmlog" \
-  --set VIEWER_ARGS="--every 1" --set DETECTOR_ARGS="--queue-frames $frames" --until logplayer --grace 3 --duration 60 \
+  --set VIEWER_ARGS="--every 1" --set DETECTOR_ARGS="--queue-frames $frames" \
+  --set MONITOR_ARGS="--depth-history-us 10000000" --until logplayer --grace 3 --duration 60 \
   --status-file "$out/status.json" > "$out/launch.txt" 2>&1 \
   || { cat "$out/launch.txt"; echo "ivoa-launch failed"; exit 1; }
 

@@ -119,7 +119,8 @@ in_lcm_net() {
 # record_session WORKER NAME SCENE SEED FRAMES: one session through sim.pmd.
 # The simulator renders ahead as fast as it can, so the stereo detector holds
 # up to 8 frames instead of only the newest: a stall while the processes
-# start on a busy machine then costs no frame its labels (live, one frame).
+# start on a busy machine then costs no frame its labels (live, one frame);
+# the depth monitor keeps 10 s of depth frames (default 2) for its late grids.
 record_session() {
   local worker=$1 name=$2 scene=$3 seed=$4 frames=$5
   local log=$out/logs/$name.lcmlog
@@ -130,6 +131,7 @@ record_session() {
   in_lcm_net "$worker" "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
     --set SCENE="$SCENES/$scene.yaml" --set SEED="$seed" --set FRAMES="$frames" --set RATE=$RATE \
     --set SIM_ARGS="--as-fast-as-possible --start-utime $utime" --set DETECTOR_ARGS="--queue-frames 8" \
+    --set MONITOR_ARGS="--depth-history-us 10000000" \
     --set LOG_FILE="$log" --set VIEWER_DIR="$out/viewer/$name" --set VIEWER_ARGS="--every $(( frames >= 8 ? frames / 4 : 1 )) --max-images 4" \
     --skip introspection --until sim_driver --grace 2 --plain --status-every 0 \
     --output-dir "$out/process_logs/$name" --status-file "$out/process_logs/$name/status.txt" \
