@@ -25,8 +25,12 @@ fi
 
 "$B/bin/ivoa-logger" "$out/live.lcmlog" -x 'LCM_SELF_TEST|PROCESS_STATUS' --ready-file "$out/logger.ready" \
   --log-level warn & pids+=($!)
-"$B/bin/ivoa-stereo-detector" --model jppc --log-level warn & pids+=($!)
-"$B/bin/ivoa-depth-monitor" --log-level warn & pids+=($!)
+# Every frame must be labelled: the detector queues the frames it cannot
+# take at once (a log recorded as fast as possible replays in bursts, and a
+# busy machine can stall it live), and the monitor keeps the depth frames
+# until the late grids arrive (16 frames at 4 Hz: 3.75 s of stream time).
+"$B/bin/ivoa-stereo-detector" --model jppc --queue-frames $frames --log-level warn & pids+=($!)
+"$B/bin/ivoa-depth-monitor" --depth-history-us 10000000 --log-level warn & pids+=($!)
 wait_for_file "$out/logger.ready" 20
 # Both processes are up once each has sent two heartbeats.
 "$B/bin/ivoa-lcm-stats" --channels PROCESS_STATUS --expect PROCESS_STATUS=4 --duration 20 --print-every 0 > /dev/null
