@@ -609,6 +609,7 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         report = read_text(os.path.join(out, "report.md"))
         self.assertIn("another noise draw keeps the verdict", report)
         self.assertIn("moves a cell's worst value by 0.044 at the median and 0.133", report)
+        self.assertIn(f"3 draws of 60 cells, which re-recorded 1 of these {len(self.f.sessions)} sessions", report)
         self.assertIn(f"would misread about **{0.3 * n_free + 0.5 * n_obst:.0f}**", report)
 
     def test_noise_repeatability_of_another_detector_is_not_used(self):

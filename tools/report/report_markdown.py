@@ -270,11 +270,11 @@ def noise_context(noise: Optional[dict]) -> str:
                 "of the sensor noise moves it; `--repeatability` sets its figures beside the model's")
     if not noise["used"]:
         return f"the repeatability figures in `{noise['path']}` were not used: {noise['message']}"
-    where = (f"{noise['sessions_in_common']} of these {noise['run_sessions']} sessions" if noise["sessions_in_common"]
-             else "other sessions than these")
-    return (f"another draw of the sensor noise on the same frames moves a cell's worst value by "
-            f"{noise['worst_shift_median']:.3f} at the median and {noise['worst_shift_p90']:.3f} at the 90th "
-            f"percentile: `{noise['path']}`, {noise['realisations']} draws of {noise['cells']} cells, {where}")
+    where = (f"re-recorded {noise['sessions_in_common']} of these {noise['run_sessions']} sessions"
+             if noise["sessions_in_common"] else "recorded other sessions than these")
+    return (f"another draw of the sensor noise moves a cell's worst value by {noise['worst_shift_median']:.3f} at "
+            f"the median and {noise['worst_shift_p90']:.3f} at the 90th percentile; `{noise['path']}`: "
+            f"{noise['realisations']} draws of {noise['cells']} cells, which {where}")
 
 
 def _counts_text(d: Dict[int, int], namer, total: int, top: int = 4) -> str:
