@@ -73,16 +73,24 @@ def read_labels(dataset: str) -> Dict[str, Dict[Tuple[int, int], int]]:
     return sessions
 
 
-def session_detector(dataset: str, session: str) -> str:
-    """The detector a session's labels are about (session.json), or "" if it does not say."""
+def session_info(dataset: str, session: str) -> dict:
+    """A session's session.json, or {} where it has none."""
     path = os.path.join(dataset, session, "session.json")
     try:
         with open(path) as f:
-            return str(json.load(f).get("detector", ""))
+            info = json.load(f)
     except FileNotFoundError:
-        return ""
-    except (OSError, ValueError, AttributeError) as e:
+        return {}
+    except (OSError, ValueError) as e:
         raise InputError(f"{path}: cannot read session metadata: {e}") from None
+    if not isinstance(info, dict):
+        raise InputError(f"{path}: cannot read session metadata: not a JSON object")
+    return info
+
+
+def session_detector(dataset: str, session: str) -> str:
+    """The detector a session's labels are about (session.json), or "" if it does not say."""
+    return str(session_info(dataset, session).get("detector", ""))
 
 
 def read_worst_costs(dataset: str, session: str) -> Optional[Dict[Tuple[int, int], float]]:
@@ -92,11 +100,8 @@ def read_worst_costs(dataset: str, session: str) -> Optional[Dict[Tuple[int, int
     evidence_size 0: the dense detector, or --no-evidence)."""
     folder = os.path.join(dataset, session)
     try:
-        with open(os.path.join(folder, "session.json")) as f:
-            size = int(json.load(f).get("evidence_size", 0) or 0)
-    except FileNotFoundError:
-        return None
-    except (OSError, ValueError, TypeError, AttributeError) as e:
+        size = int(session_info(dataset, session).get("evidence_size", 0) or 0)
+    except (TypeError, ValueError) as e:
         raise InputError(f"{folder}/session.json: cannot read evidence_size: {e}") from None
     if size <= 0:
         return None
