@@ -86,7 +86,7 @@ void log_model(const ivoa::introspection::IntrospectionModel& model, int mc_pass
 }  // namespace
 
 int main(int argc, char** argv) {
-  ivoa::introspection::prefer_passive_openmp_wait(argv);
+  ivoa::introspection::tune_libtorch_runtime(argv);
   CLI::App app{"Introspection: heatmaps of predicted stereo failures (TP/TN/FP/FN) with MC-dropout uncertainty"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);

@@ -313,7 +313,7 @@ int evaluate(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  introspection::prefer_passive_openmp_wait(argv);
+  introspection::tune_libtorch_runtime(argv);
   CLI::App app{"Run a model on dataset sessions: predictions, uncertainties, embeddings, overlay figures"};
   CommonOptions common;
   add_offline_options(app, common);

@@ -190,7 +190,7 @@ int train(const introspection::TrainConfig& c) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ivoa::introspection::prefer_passive_openmp_wait(argv);
+  ivoa::introspection::tune_libtorch_runtime(argv);
   CLI::App app{"Train an introspection model on a dataset, validating on held-out sessions"};
   CommonOptions common;
   add_offline_options(app, common);

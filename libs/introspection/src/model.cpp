@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <utility>
 
 #include <ATen/CPUGeneratorImpl.h>
 #include <opencv2/imgproc.hpp>
@@ -267,10 +268,16 @@ std::unique_ptr<IntrospectionModel> load_scripted(const std::string& path, const
 
 }  // namespace
 
-void prefer_passive_openmp_wait(char** argv) {
-  if (std::getenv("OMP_WAIT_POLICY") != nullptr) return;
-  setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
-  execv("/proc/self/exe", argv);  // only returns on failure: then run with the default policy
+void tune_libtorch_runtime(char** argv) {
+  // Thresholds above any tensor: nothing is mapped per allocation, nothing
+  // handed back to the kernel between steps.
+  constexpr const char* kMallocTunables =
+      "glibc.malloc.mmap_threshold=2147483647:glibc.malloc.trim_threshold=4294967295";
+  bool changed = false;
+  for (const auto& [name, value] :
+       {std::pair{"OMP_WAIT_POLICY", "PASSIVE"}, std::pair{"GLIBC_TUNABLES", kMallocTunables}})
+    if (std::getenv(name) == nullptr && setenv(name, value, 1) == 0) changed = true;
+  if (changed) execv("/proc/self/exe", argv);  // only returns on failure: then run with the defaults
 }
 
 std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& path, const InferenceConfig& config) {

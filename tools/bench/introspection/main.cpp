@@ -299,7 +299,7 @@ void time_reference(const cv::Mat& frame, const BenchOptions& o, const Inference
 }  // namespace
 
 int main(int argc, char** argv) {
-  ivoa::introspection::prefer_passive_openmp_wait(argv);
+  ivoa::introspection::tune_libtorch_runtime(argv);
   CLI::App app{"Introspection benchmark: our full-frame MC-dropout inference vs the reference approach"};
   BenchOptions o;
   add_bench_options(app, o);

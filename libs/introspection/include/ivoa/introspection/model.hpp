@@ -120,13 +120,17 @@ struct PatchOutputs {
   std::vector<std::vector<float>> embeddings;  // FC2 (256-d, post-ReLU, no dropout), if asked
 };
 
-// LibTorch's OpenMP threads spin while they wait for work. On a robot
-// computer shared with other processes that is ruinous (measured 5x slower
-// under load); a passive wait costs next to nothing when the CPU is free.
-// libgomp reads OMP_WAIT_POLICY when it is loaded, so this re-executes the
-// program once with OMP_WAIT_POLICY=PASSIVE unless the user set a policy.
-// Call it first thing in main().
-void prefer_passive_openmp_wait(char** argv);
+// Two settings LibTorch's CPU path needs, read only when the program is
+// loaded, so this re-executes the program once with them (each unless the
+// user set it). Call it first thing in main().
+// - OMP_WAIT_POLICY=PASSIVE: LibTorch's OpenMP threads otherwise spin while
+//   they wait for work, which on a robot computer shared with other
+//   processes is ruinous (measured 5x slower under load).
+// - GLIBC_TUNABLES keeping freed memory for reuse: by default glibc maps
+//   every large tensor afresh and unmaps it when freed, and the kernel's
+//   page faults then took three quarters of a training step (ivoa-train
+//   3.5x faster without them; results identical byte for byte).
+void tune_libtorch_runtime(char** argv);
 
 class IntrospectionModel {
  public:
