@@ -60,12 +60,17 @@ SlideNetImpl::SlideNetImpl(double dropout, int64_t in_channels) : IntrospectionN
   trunk = register_module("trunk", t);
 }
 
+torch::Tensor SlideNetImpl::trunk_input(const torch::Tensor& x) const {
+  return channels_last ? x.contiguous(at::MemoryFormat::ChannelsLast) : x;
+}
+
 torch::Tensor SlideNetImpl::features(const torch::Tensor& patches) {
-  return trunk->forward(patches).flatten(1);  // [B, 64, 2, 2] -> [B, 256]
+  // flatten() reads in logical (channel-major) order whatever the layout.
+  return trunk->forward(trunk_input(patches)).flatten(1);  // [B, 64, 2, 2] -> [B, 256]
 }
 
 torch::Tensor SlideNetImpl::cell_features(const torch::Tensor& image, int64_t& rows, int64_t& cols) {
-  const auto map = trunk->forward(image);  // [1, 64, h, w]
+  const auto map = trunk->forward(trunk_input(image));  // [1, 64, h, w]
   // unfold flattens each 2x2 block channel-major, like flatten() of a
   // patch's [64, 2, 2] output, so FC1 sees the same feature order.
   const auto blocks = nn::functional::unfold(

@@ -68,6 +68,14 @@ class SlideNetImpl : public IntrospectionNetImpl {
   // row-major; rows/cols are set to the heatmap size.
   torch::Tensor cell_features(const torch::Tensor& image, int64_t& rows, int64_t& cols);
   torch::nn::Sequential trunk{nullptr};
+  // Run the trunk channels-last (NHWC): oneDNN's convolutions and batch
+  // norm take about half the time on a CPU in that layout, and the values
+  // differ from NCHW's only in float rounding. false: PyTorch's default
+  // layout (the benchmark's baseline).
+  bool channels_last = true;
+
+ private:
+  torch::Tensor trunk_input(const torch::Tensor& x) const;
 };
 TORCH_MODULE(SlideNet);
 

@@ -77,9 +77,11 @@ std::string write_model(const std::string& architecture, const std::string& dir,
   return path;
 }
 
-// ms per training step (forward, backward, SGD) of a batch of patches.
-double train_step_ms(const std::string& architecture, int batch, int runs, int views = 1) {
+// ms per training step (forward, backward, SGD) of a batch of patches;
+// channels_last=false runs SlideNet's trunk in PyTorch's default layout.
+double train_step_ms(const std::string& architecture, int batch, int runs, int views = 1, bool channels_last = true) {
   auto net = make_network(architecture, 0.5, views);
+  if (auto slide = std::dynamic_pointer_cast<SlideNetImpl>(net)) slide->channels_last = channels_last;
   net->train();
   torch::optim::SGD sgd(net->parameters(), torch::optim::SGDOptions(0.005).momentum(0.9));
   const int s = input_size_of(architecture);
@@ -203,11 +205,15 @@ void print_inference(const InferenceTimes& t, int passes, int threads, int refer
 void print_training(int batch, int runs) {
   const double slide_step = train_step_ms("slidenet", batch, std::max(1, runs / 2));
   const double two_view_step = train_step_ms("slidenet", batch, std::max(1, runs / 2), 2);
+  const double nchw_step = train_step_ms("slidenet", batch, std::max(1, runs / 2), 2, false);
   const int alex_batch = std::min(batch, 32);
   const double alex_step = train_step_ms("alexnet", alex_batch, 2);
   std::printf("Training throughput (forward + backward + SGD step):\n");
   std::printf("  %-58s %10.0f patches/s (batch %d)\n", "slidenet, 100x100 patches", 1000.0 * batch / slide_step, batch);
   std::printf("  %-58s %10.0f patches/s (batch %d)\n", "slidenet, two views", 1000.0 * batch / two_view_step, batch);
+  std::printf("  %-58s %10.0f patches/s (channels-last: %.2fx faster)\n",
+              "baseline: slidenet, two views, NCHW (PyTorch's default)", 1000.0 * batch / nchw_step,
+              nchw_step / two_view_step);
   std::printf("  %-58s %10.0f patches/s (batch %d)\n", "alexnet-224, whole network", 1000.0 * alex_batch / alex_step,
               alex_batch);
   const auto [tensor_ms, fused_ms] = batch_preparation_ms(batch, runs);
