@@ -47,6 +47,40 @@ TEST(SlideNet, WholeImagePassEqualsEveryPatchAlone) {
   EXPECT_LT((p_cells - p_alone).abs().max().item<double>(), 1e-5);
 }
 
+// The channels-last trunk (the default, for speed) computes what NCHW does,
+// forward on patches and whole images and backward, up to float rounding.
+TEST(SlideNet, ChannelsLastComputesWhatNchwComputes) {
+  torch::manual_seed(4);
+  SlideNet net(0.5, 6);
+  randomize_batchnorm(*net);
+  const auto patches = torch::randn({8, 6, 100, 100}), image = torch::randn({1, 6, 180, 220});
+  // Inference first for both layouts: a training-mode forward moves the
+  // batch norms' running statistics.
+  const auto infer = [&](bool channels_last) {
+    net->channels_last = channels_last;
+    net->eval();
+    torch::NoGradGuard no_grad;
+    int64_t rows = 0, cols = 0;
+    return std::vector<torch::Tensor>{net->features(patches), net->cell_features(image, rows, cols)};
+  };
+  const auto conv1_gradient = [&](bool channels_last) {
+    net->channels_last = channels_last;
+    net->train();
+    net->zero_grad();
+    net->features(patches).square().sum().backward();
+    return net->trunk[0]->as<torch::nn::Conv2d>()->weight.grad().clone();
+  };
+  auto nchw = infer(false), nhwc = infer(true);
+  nchw.push_back(conv1_gradient(false));
+  nhwc.push_back(conv1_gradient(true));
+  for (size_t k = 0; k < nchw.size(); ++k) {
+    ASSERT_EQ(nchw[k].sizes(), nhwc[k].sizes()) << k;
+    const double scale = nchw[k].abs().max().item<double>();
+    EXPECT_GT(scale, 0.01) << k;
+    EXPECT_LT((nchw[k] - nhwc[k]).abs().max().item<double>(), 1e-4 * scale) << k;
+  }
+}
+
 TEST(InferenceMaxPool, EqualsMaxPool2dExactly) {
   torch::manual_seed(7);
   const auto x = torch::randn({2, 5, 37, 52});
