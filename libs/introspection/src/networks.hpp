@@ -69,9 +69,9 @@ class SlideNetImpl : public IntrospectionNetImpl {
   torch::Tensor cell_features(const torch::Tensor& image, int64_t& rows, int64_t& cols);
   torch::nn::Sequential trunk{nullptr};
   // Run the trunk channels-last (NHWC): oneDNN's convolutions and batch
-  // norm take about half the time on a CPU in that layout, and the values
-  // differ from NCHW's only in float rounding. false: PyTorch's default
-  // layout (the benchmark's baseline).
+  // norm are faster in that layout (a training step 1.33x on two cores,
+  // docs/benchmarks.md), and the values differ from NCHW's only in float
+  // rounding. false: PyTorch's default layout (the benchmark's baseline).
   bool channels_last = true;
 
  private:
