@@ -10,14 +10,6 @@
 
 namespace ivoa::test {
 
-Eigen::Matrix3d optical_to_robot(double pitch_rad) {
-  Eigen::Matrix3d axes;
-  axes << 0, 0, 1,  //
-      -1, 0, 0,     //
-      0, -1, 0;
-  return Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()).toRotationMatrix() * axes;
-}
-
 RigCalibration make_test_rig(double pitch_deg, bool with_distortion) {
   RigCalibration rig;
   rig.rig_name = "test_rig";

@@ -10,10 +10,6 @@ namespace ivoa::test {
 // `pitch_deg` down; a 640x480 depth sensor 5 cm above the left camera.
 RigCalibration make_test_rig(double pitch_deg = 15.0, bool with_distortion = false);
 
-// Camera optical frame -> robot frame for a camera looking forward and
-// pitched down by `pitch_rad`.
-Eigen::Matrix3d optical_to_robot(double pitch_rad);
-
 // The whole file, byte for byte ("" if it cannot be read).
 std::string read_file(const std::string& path);
 

@@ -1,3 +1,4 @@
+#include <cmath>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -84,6 +85,18 @@ TEST(Calibration, InvalidValuesAreRejected) {
   rig_calibration_t msg = to_message(test::make_test_rig(), 0);
   msg.left.width = 0;
   EXPECT_THROW(from_message(msg), CalibrationError);
+}
+
+TEST(Calibration, OpticalAxesMapToTheRobotFrame) {
+  const Eigen::Matrix3d level = optical_to_robot(0.0);
+  EXPECT_TRUE((level * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitX()));   // forward
+  EXPECT_TRUE((level * Eigen::Vector3d::UnitX()).isApprox(-Eigen::Vector3d::UnitY()));  // right
+  EXPECT_TRUE((level * Eigen::Vector3d::UnitY()).isApprox(-Eigen::Vector3d::UnitZ()));  // down
+  // Pitched 30 degrees down, the optical axis points at the ground ahead.
+  const Eigen::Vector3d axis = optical_to_robot(M_PI / 6) * Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR(axis.x(), std::cos(M_PI / 6), 1e-12);
+  EXPECT_NEAR(axis.y(), 0.0, 1e-12);
+  EXPECT_NEAR(axis.z(), -0.5, 1e-12);
 }
 
 }  // namespace

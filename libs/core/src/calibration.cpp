@@ -133,6 +133,14 @@ CameraIntrinsics camera_from_message(const camera_intrinsics_t& msg) {
 
 }  // namespace
 
+Eigen::Matrix3d optical_to_robot(double pitch_down_rad) {
+  Eigen::Matrix3d axes;  // optical x right, y down, z forward -> robot x forward, y left, z up
+  axes << 0, 0, 1,  //
+      -1, 0, 0,     //
+      0, -1, 0;
+  return Eigen::AngleAxisd(pitch_down_rad, Eigen::Vector3d::UnitY()).toRotationMatrix() * axes;
+}
+
 void validate(const RigCalibration& rig, const std::string& where) {
   validate_camera(rig.left, where, "left camera");
   validate_camera(rig.right, where, "right camera");

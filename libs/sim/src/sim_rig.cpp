@@ -5,15 +5,6 @@
 namespace ivoa::sim {
 namespace {
 
-// Optical frame (x right, y down, z forward) -> robot frame, pitched down.
-Eigen::Matrix3d optical_to_robot(double pitch_rad) {
-  Eigen::Matrix3d axes;
-  axes << 0, 0, 1,  //
-      -1, 0, 0,     //
-      0, -1, 0;
-  return Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()).toRotationMatrix() * axes;
-}
-
 CameraIntrinsics camera(const std::string& name, int w, int h, double f, double dcx, double dcy) {
   CameraIntrinsics c;
   c.name = name;

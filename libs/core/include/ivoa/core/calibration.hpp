@@ -46,6 +46,10 @@ class CalibrationError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Rotation of an optical frame into the robot frame for a camera looking
+// forward along robot x, pitched down by `pitch_down_rad` about robot y.
+Eigen::Matrix3d optical_to_robot(double pitch_down_rad);
+
 // Checks sizes, focal lengths, rotations and ranges; throws CalibrationError
 // naming `where` and the first problem found.
 void validate(const RigCalibration& rig, const std::string& where);
