@@ -461,8 +461,8 @@ void Tracer::finish_floor(const FloorSample& f, Shaded& out, float& fresnel, flo
 Rgbf Tracer::floor_reflection(int pixel, float roughness) const {
   const PixelRay& pr = rays_.ray(pixel);
   const Ray ray = make_ray(pr);
-  const float x = px_ + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
-  const float y = py_ + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+  float x, y;
+  floor_point(pr, x, y);
   Rgbf r = reflection(ray, pr.s_floor, roughness);
   if (!glare_lights_.empty()) r += light_lobes(ray, x, y, roughness);
   return r;
@@ -475,19 +475,19 @@ inline void Tracer::add_reflection(Shaded& out, float fresnel, const Rgbf& refle
   if (out.specular > 0.35f * out.radiance.luminance()) out.phenomena |= GT::PHENOMENON_REFLECTION;
 }
 
-// How far a primary ray can reach a solid: to the floor when it falls, to
-// the ceiling (if any) when it rises.
-float Tracer::primary_range(const PixelRay& pr, const Ray& ray) const {
-  return pr.slope > 0 && scene_.has_ceiling ? s_ceiling_up_ * ray.inv_slope : pr.s_floor;
+inline Tracer::Hit Tracer::first_solid(const PixelRay& pr, const Ray& ray, float& s_reach) const {
+  s_reach = pr.slope > 0 && scene_.has_ceiling ? s_ceiling_up_ * ray.inv_slope : pr.s_floor;
+  Hit hit;
+  if (bin_may_hit(ray, s_reach)) nearest(ray, 0.0f, s_reach, false, hit);
+  return hit;
 }
 
 bool Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, FloorSample* floor) const {
   const PixelRay& pr = rays_.ray(pixel);
   const Ray ray = make_ray(pr);
   const bool up = pr.slope > 0;
-  const float s_hi = primary_range(pr, ray);
-  Hit hit;
-  if (bin_may_hit(ray, s_hi)) nearest(ray, 0.0f, s_hi, false, hit);
+  float s_hi;
+  const Hit hit = first_solid(pr, ray, s_hi);
   fresnel = 0;
   if (hit.candidate >= 0) {
     shade_solid(ray, hit, false, 0.0f, out);
@@ -495,8 +495,7 @@ bool Tracer::shade_primary(int pixel, Shaded& out, float& fresnel, FloorSample* 
   } else if (!up) {
     FloorSample f;
     f.pixel = pixel;
-    f.x = px_ + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
-    f.y = py_ + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+    floor_point(pr, f.x, f.y);
     if (const FloorFeature* pit = floor_feature(f.x, f.y, f.material)) {
       shade_pit(ray, *pit, pr.s_floor, out);
     } else {
@@ -639,9 +638,8 @@ Ranged Tracer::range(int pixel) const {
   const PixelRay& pr = rays_.ray(pixel);
   const Ray ray = make_ray(pr);
   const bool up = pr.slope > 0;
-  const float s_hi = primary_range(pr, ray);
-  Hit hit;
-  if (bin_may_hit(ray, s_hi)) nearest(ray, 0.0f, s_hi, false, hit);
+  float s_hi;
+  const Hit hit = first_solid(pr, ray, s_hi);
   const SkyData& sky = scene_.sky;
   const float sun_strength = sky.has_sun ? sky.sun_irradiance.luminance() / 300.0f : 0.0f;
   Ranged out;
@@ -661,8 +659,8 @@ Ranged Tracer::range(int pixel) const {
     return out;
   }
   if (!up) {
-    const float x = px_ + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
-    const float y = py_ + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+    float x, y;
+    floor_point(pr, x, y);
     uint16_t mid;
     if (const FloorFeature* pit = floor_feature(x, y, mid)) {
       Shaded sh;

@@ -80,7 +80,14 @@ class Tracer {
   void fill_bins(const std::vector<Candidate>& all, const std::vector<std::pair<int, int>>& spans,
                  const std::vector<size_t>& span_owner);
   inline Ray make_ray(const PixelRay& r) const;
-  float primary_range(const PixelRay& pr, const Ray& ray) const;
+  // The nearest solid a primary ray meets before it reaches the floor
+  // (falling) or the ceiling (rising); `s_reach` is set to that limit.
+  Hit first_solid(const PixelRay& pr, const Ray& ray, float& s_reach) const;
+  // Where a falling primary ray meets the floor, world frame.
+  void floor_point(const PixelRay& pr, float& x, float& y) const {
+    x = px_ + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
+    y = py_ + sin_yaw_ * pr.floor_x + cos_yaw_ * pr.floor_y;
+  }
   // False when no solid of the ray's azimuth bin starts before s_hi (nearest() would find none).
   bool bin_may_hit(const Ray& ray, float s_hi) const;
   // Nearest solid along the ray with s in [s_lo, s_hi); mirrored: below the floor.
