@@ -134,7 +134,8 @@ CameraIntrinsics camera_from_message(const camera_intrinsics_t& msg) {
 }  // namespace
 
 Eigen::Matrix3d optical_to_robot(double pitch_down_rad) {
-  Eigen::Matrix3d axes;  // optical x right, y down, z forward -> robot x forward, y left, z up
+  // Optical x right, y down, z forward -> robot x forward, y left, z up.
+  Eigen::Matrix3d axes;
   axes << 0, 0, 1,  //
       -1, 0, 0,     //
       0, -1, 0;

@@ -18,11 +18,11 @@
 namespace ivoa::monitor {
 
 struct PairingConfig {
-  int64_t tolerance_us = 16'667;         // max |stereo - depth| utime (1/60 s)
+  int64_t tolerance_us = 16'667;  // max |stereo - depth| utime (1/60 s)
   // Keep depth frames this long (stream time). Bounds memory on the robot:
   // 640x480 16-bit depth at 30 Hz is 37 MB for 2 s, 184 MB for 10 s.
   int64_t depth_history_us = 2'000'000;
-  int64_t max_wait_us = 500'000;         // decide a pending stereo frame once stereo time moves this far past it
+  int64_t max_wait_us = 500'000;  // decide a pending stereo frame once stereo time moves this far past it
 };
 
 struct PairingCounters {
