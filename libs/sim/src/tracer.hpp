@@ -82,7 +82,7 @@ class Tracer {
   inline Ray make_ray(const PixelRay& r) const;
   // The nearest solid a primary ray meets before it reaches the floor
   // (falling) or the ceiling (rising); `s_reach` is set to that limit.
-  Hit first_solid(const PixelRay& pr, const Ray& ray, float& s_reach) const;
+  inline Hit first_solid(const PixelRay& pr, const Ray& ray, float& s_reach) const;
   // Where a falling primary ray meets the floor, world frame.
   void floor_point(const PixelRay& pr, float& x, float& y) const {
     x = px_ + cos_yaw_ * pr.floor_x - sin_yaw_ * pr.floor_y;
