@@ -136,7 +136,6 @@ class Publisher {
 };
 
 int stream(OpenNiCamera& camera, Publisher& publisher, ivoa::Heartbeat& heartbeat, const Flags& f) {
-  ivoa::install_stop_handlers();
   heartbeat.set_state("running");
   double last_depth_ms = ivoa::monotonic_ms();
   while (!ivoa::stop_requested()) {
@@ -172,6 +171,7 @@ int main(int argc, char** argv) {
   add_options(app, f);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("openni2_kinect", f.common.log_level);
+  ivoa::install_stop_handlers();  // before OpenNI2 starts: a signal while it opens the device still exits cleanly
   f.camera.lossy_color = !f.lossless_color;
 
   try {
