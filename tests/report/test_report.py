@@ -505,6 +505,19 @@ class ReportTest(unittest.TestCase):
             np.testing.assert_array_equal(tile, bgr[run.sample[r]][:, :, ::-1])
             self.assertEqual(tile[0, 0, 0], 200)  # R came from the file's third (R) byte
 
+    def test_mosaic_is_as_tall_as_the_rows_it_fills(self):
+        """A cluster with few samples gets a short mosaic, not rows of white."""
+        load_tool()
+        from report_figures import make_mosaic
+        from report_inputs import Dataset, attach_dataset, load_eval, make_names
+        run = load_eval(self.f.perfect)
+        make_names([run])
+        attach_dataset(run, Dataset(self.f.data))
+        tile = PATCH + 2 * 3
+        self.assertEqual(make_mosaic(run, np.arange(12), rows_n=5, cols_n=10).shape[:2], (2 * tile, 10 * tile))
+        self.assertEqual(make_mosaic(run, np.arange(80), rows_n=5, cols_n=10).shape[:2], (5 * tile, 10 * tile))
+        self.assertEqual(make_mosaic(run, np.arange(0), rows_n=5, cols_n=10).shape[:2], (tile, 10 * tile))
+
 
 class FabricatedInputsCase(unittest.TestCase):
     """Fresh fabricated inputs in a temporary folder for each test class."""

@@ -237,12 +237,15 @@ def plot_cluster_scatter(run: EvalRun, res, title: str, path: str) -> str:
 def make_mosaic(run: EvalRun, rows: np.ndarray, rows_n: int = 5, cols_n: int = 10, border: int = 3) -> np.ndarray:
     """RGB mosaic of the given samples' patches (read from the dataset's
     patches.bin through its memmap; BGR -> RGB), each framed in its true-label
-    colour. Missing tiles stay white."""
+    colour. At most rows_n rows, no more than the samples fill; missing
+    tiles stay white."""
     ds = run.dataset
     p = ds.session(run.session[rows[0]]).patch_size if len(rows) else ds.patch_size
     tile = p + 2 * border
-    out = np.full((rows_n * tile, cols_n * tile, 3), 255, np.uint8)
-    for i, r in enumerate(rows[: rows_n * cols_n]):
+    shown = rows[: rows_n * cols_n]
+    filled_rows = max(1, -(-len(shown) // cols_n))  # ceiling division
+    out = np.full((filled_rows * tile, cols_n * tile, 3), 255, np.uint8)
+    for i, r in enumerate(shown):
         s = ds.session(str(run.session[r]))
         patch = np.asarray(s.patches()[run.sample[r]])[:, :, ::-1]  # BGR -> RGB
         if patch.shape[0] != p:
