@@ -136,7 +136,9 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
   bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
   bus_.subscribe<stereo_image_t>(options_.stereo_channel, [this](const stereo_image_t& m, const ReceiveInfo&) {
     heartbeat_.count_in();
+    const uint64_t dropped_before = frames_.dropped();
     frames_.put({m, monotonic_ms()});
+    if (frames_.dropped() != dropped_before) heartbeat_.count_dropped();  // the status table's DROP column
   });
   if (model_->info().views == 2)
     bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
@@ -158,7 +160,6 @@ void IntrospectionNode::work() {
     auto frame = frames_.take(std::chrono::milliseconds(100));
     if (!frame) continue;
     process(*frame);
-    heartbeat_.set_counter("frames_skipped", static_cast<int64_t>(frames_.dropped()));
     heartbeat_.set_counter("frames_done", frames_done_.load());
   }
 }

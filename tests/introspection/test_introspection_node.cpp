@@ -109,6 +109,41 @@ TEST(IntrospectionNode, TwoViewModelWaitsForTheCalibrationThenRuns) {
   EXPECT_EQ(heartbeat.bad_input_count(), 1);
 }
 
+// A burst of frames while the network is busy: the mailbox keeps only the
+// newest, and each frame it replaces is counted as dropped in the heartbeat
+// (the launcher's DROP column), so every frame received is accounted for.
+TEST(IntrospectionNode, FramesSkippedWhileBusyAreCountedAsDropped) {
+  test::TempDir dir;
+  Bus bus("memq://");
+  Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
+  introspection::InferenceConfig config;
+  config.mc_passes = 2;
+  config.seed = 1;
+  IntrospectionNodeOptions options;
+  options.grid_channel = "";
+  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 1), config), options,
+                         2);
+  int published = 0;
+  bus.subscribe<introspection_t>(channels::kIntrospection,
+                                 [&](const introspection_t&, const ReceiveInfo&) { ++published; });
+  const RigCalibration rig = test::make_test_rig();
+  constexpr int kBurst = 6;
+  for (int i = 0; i < kBurst; ++i) {
+    stereo_image_t frame = stereo_frame(rig, 1000 * (i + 1));
+    bus.publish(channels::kStereoImages, frame);
+  }
+  for (int i = 0; i < kBurst; ++i) bus.handle(5);  // the whole burst, far faster than one inference
+  const auto accounted = [&] {
+    const process_status_t s = heartbeat.snapshot();
+    return s.messages_out + s.dropped == kBurst && published == s.messages_out;  // and each output delivered
+  };
+  ASSERT_TRUE(deliver_until(bus, accounted)) << "out " << heartbeat.snapshot().messages_out << ", dropped "
+                                             << heartbeat.snapshot().dropped << " of " << kBurst;
+  const process_status_t s = heartbeat.snapshot();
+  EXPECT_EQ(s.messages_in, kBurst);
+  EXPECT_GE(s.dropped, 1) << "the burst arrived while the first frame was still being processed";
+}
+
 TEST(IntrospectionNode, ScaledModelPredictsQueryCellsFromTheirOwnPatches) {
   test::TempDir dir;
   introspection::InferenceConfig config;
