@@ -1,6 +1,12 @@
 // The launcher's view of heartbeats: matched to commands, and the latency
 // column keeps the last measured value through idle heartbeats.
+#include <signal.h>
+#include <sys/prctl.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
+
+#include <string>
 
 #include "heartbeat_monitor.hpp"
 #include "ivoa/core/bus.hpp"
@@ -51,6 +57,56 @@ TEST(LauncherHeartbeats, IdleHeartbeatKeepsTheLastMeasuredLatency) {
   bus.publish("TEST_HB_LATENCY", stranger);
   monitor.drain();
   EXPECT_FALSE(monitor.latest("stranger").has_value());
+}
+
+process_status_t local_status(int pid, const std::string& state) {
+  char host[256] = {0};
+  gethostname(host, sizeof(host) - 1);
+  process_status_t s;
+  s.name = "whatever-it-calls-itself";  // matched by process group, not by name
+  s.host = host;
+  s.pid = pid;
+  s.state = state;
+  return s;
+}
+
+// A process's last heartbeat, sent as it stops, is often read only after the
+// launcher has reaped it: it still belongs to its command, so the final
+// status table shows "stopped", not the state before.
+TEST(LauncherHeartbeats, HeartbeatsReadAfterTheProcessEndedStillCount) {
+  ASSERT_EQ(prctl(PR_SET_CHILD_SUBREAPER, 1), 0);  // as ivoa-launch: reap the group's orphans
+  SupervisorOptions options;
+  options.reap_orphans = true;
+  LaunchCommand c;
+  c.spec.name = "family";
+  c.spec.exec = c.shell_command = "sleep 30 & echo $!; wait";  // the shell leads the group, sleep is in it
+  c.spec.stop_signal = SIGTERM;                                // a shell's background job ignores SIGINT
+  int child = 0;
+  Supervisor supervisor(
+      {c}, options, [&](const std::string&, const std::string& line) { child = std::stoi(line); },
+      [](const std::string&, const std::string&) {});
+  Bus bus("memq://");
+  HeartbeatMonitor monitor(bus, "TEST_HB_ENDED", supervisor);
+  const auto heard = [&](const process_status_t& s) {
+    process_status_t copy = s;
+    bus.publish("TEST_HB_ENDED", copy);
+    monitor.drain();
+    const auto latest = monitor.latest("family");
+    return latest ? latest->status.state : std::string("(none)");
+  };
+  supervisor.start_all();
+  for (int i = 0; i < 100 && child == 0; ++i) supervisor.step(50);
+  ASSERT_GT(child, 0);
+  const int leader = supervisor.status("family").pid;
+  EXPECT_EQ(heard(local_status(child, "running")), "running");
+
+  supervisor.stop_all();
+  for (int i = 0; i < 100 && supervisor.busy(); ++i) supervisor.step(50);
+  ASSERT_FALSE(supervisor.busy());
+  EXPECT_EQ(heard(local_status(child, "stopped")), "stopped") << "a pid heard from while it ran";
+  EXPECT_EQ(heard(local_status(leader, "stopped by leader")), "stopped by leader") << "the group's leader";
+  EXPECT_EQ(heard(local_status(leader + 100000, "stranger")), "stopped by leader") << "a pid never in the group";
+  prctl(PR_SET_CHILD_SUBREAPER, 0);
 }
 
 }  // namespace

@@ -17,14 +17,25 @@ void HeartbeatMonitor::drain() {
   }
 }
 
+std::optional<std::string> HeartbeatMonitor::local_command(pid_t pid) {
+  const pid_t group = getpgid(pid);
+  if (group > 0) {
+    auto command = supervisor_.command_with_group(group);
+    if (command) commands_by_pid_[pid] = *command;
+    return command;
+  }
+  // The process has ended and been reaped: its last heartbeat (sent as it
+  // stopped) is often read only now. Its pid is free, so no live process
+  // can be mistaken for it.
+  const auto known = commands_by_pid_.find(pid);
+  if (known != commands_by_pid_.end()) return known->second;
+  return supervisor_.command_with_group(pid);  // a group leader never heard while alive
+}
+
 void HeartbeatMonitor::on_status(const process_status_t& status) {
   std::optional<std::string> command;
-  if (status.host == hostname_) {
-    const pid_t group = getpgid(status.pid);
-    if (group > 0) command = supervisor_.command_with_group(group);
-  } else if (supervisor_.has(status.name)) {
-    command = status.name;
-  }
+  if (status.host == hostname_) command = local_command(status.pid);
+  else if (supervisor_.has(status.name)) command = status.name;
   if (!command) return;
   Latest next{status, std::chrono::steady_clock::now()};
   // A heartbeat's latency covers its own period; one with no work in it

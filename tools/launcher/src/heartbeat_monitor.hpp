@@ -3,6 +3,8 @@
 // heartbeat from this machine belongs to the command whose process group
 // holds its pid (so it works whatever the process calls itself and through
 // "sh -c"); one from another machine to the command of the same name.
+#include <sys/types.h>
+
 #include <chrono>
 #include <map>
 #include <optional>
@@ -30,11 +32,13 @@ class HeartbeatMonitor {
 
  private:
   void on_status(const process_status_t& status);
+  std::optional<std::string> local_command(pid_t pid);
 
   Bus& bus_;
   const Supervisor& supervisor_;
   std::string hostname_;
   std::map<std::string, Latest> latest_;
+  std::map<pid_t, std::string> commands_by_pid_;  // every local pid heard from, for heartbeats read after it ended
 };
 
 }  // namespace ivoa::launcher

@@ -137,6 +137,7 @@ class Run {
         killed = true;
       }
     }
+    if (monitor_) monitor_->drain();  // the heartbeats the commands sent as they stopped
     const int code = exit_code();
     printer_.show(header(false), format_status_table(rows()));
     write_status_file(reason, code);
