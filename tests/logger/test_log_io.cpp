@@ -14,6 +14,7 @@
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/logio/log_summary.hpp"
 #include "ivoa/logio/log_writer.hpp"
+#include "ivoa/process_status_t.hpp"
 #include "logger_test_util.hpp"
 #include "test_rig.hpp"
 
@@ -264,6 +265,26 @@ TEST(LogSummary, CountsSequenceGapsRepeatsAndUtimeRegressions) {
   EXPECT_EQ(s.gaps[0].next, 5);
   EXPECT_EQ(s.seq_regressions, 1);
   EXPECT_EQ(s.utime_regressions, 1);
+}
+
+TEST(LogSummary, HeartbeatsOfManySendersAreNotCountedAsUtimeRegressions) {
+  LogSummary summary;
+  for (const int64_t utime : {200, 100, 300, 250}) {  // two processes' heartbeats, interleaved
+    process_status_t status{};                        // value-initialised: the array counts are 0
+    status.utime = utime;
+    std::vector<uint8_t> bytes(static_cast<size_t>(status.getEncodedSize()));
+    status.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    summary.add("PROCESS_STATUS", utime, bytes.data(), bytes.size());
+  }
+  const ChannelSummary& s = summary.channels().at("PROCESS_STATUS");
+  EXPECT_EQ(s.type, "ivoa.process_status_t");
+  EXPECT_FALSE(s.utime_ordered);
+  EXPECT_EQ(s.utime_regressions, 0);
+  EXPECT_EQ(channel_json(s).find("utime_regressions"), std::string::npos);
+  const std::string table = summary.table();
+  const size_t start = table.find("PROCESS_STATUS");
+  const std::string row = table.substr(start, table.find('\n', start) - start);
+  EXPECT_EQ(row.back(), '-') << "the utime< column: " << row;
 }
 
 TEST(LogSummary, UnknownPayloadsAreCountedButNotDecoded) {

@@ -43,6 +43,8 @@ bool type_has_seq(std::string_view type_name) {
   return type_name == "ivoa.stereo_image_t" || type_name == "ivoa.depth_image_t";
 }
 
+bool type_has_many_senders(std::string_view type_name) { return type_name == "ivoa.process_status_t"; }
+
 std::optional<int64_t> payload_seq(std::string_view type_name, const void* data, size_t size) {
   if (!type_has_seq(type_name) || size < 24) return std::nullopt;
   return read_be64(static_cast<const uint8_t*>(data) + 16);

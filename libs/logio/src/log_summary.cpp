@@ -36,6 +36,7 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
     s.fingerprint = fingerprint;
     s.type = std::string(payload_type_name(data, size).value_or("unknown"));
     s.has_seq = type_has_seq(s.type);
+    s.utime_ordered = !type_has_many_senders(s.type);
     s.first_timestamp = timestamp;
   }
   ++s.count;
@@ -48,7 +49,7 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
   const auto utime = payload_utime(data, size);
   if (s.type == "unknown" || !utime) return;
   if (s.count == 1) s.first_utime = *utime;
-  else if (*utime < s.last_utime) ++s.utime_regressions;
+  else if (*utime < s.last_utime && s.utime_ordered) ++s.utime_regressions;
   s.last_utime = *utime;
   if (const auto seq = payload_seq(s.type, data, size)) add_seq(s, *seq);
 }
@@ -61,9 +62,10 @@ std::string LogSummary::table() const {
   out += line;
   for (const auto& [name, s] : channels_) {
     const auto seq = [&s](int64_t v) { return s.has_seq ? std::to_string(v) : std::string("-"); };
-    std::snprintf(line, sizeof(line), "%-24s %-28s %8lld %10.1f %9s %9s %8s %8lld\n", name.c_str(), s.type.c_str(),
+    const std::string regressions = s.utime_ordered ? std::to_string(s.utime_regressions) : "-";
+    std::snprintf(line, sizeof(line), "%-24s %-28s %8lld %10.1f %9s %9s %8s %8s\n", name.c_str(), s.type.c_str(),
                   static_cast<long long>(s.count), static_cast<double>(s.bytes) / 1e6, seq(s.first_seq).c_str(),
-                  seq(s.last_seq).c_str(), seq(s.missing_seq).c_str(), static_cast<long long>(s.utime_regressions));
+                  seq(s.last_seq).c_str(), seq(s.missing_seq).c_str(), regressions.c_str());
     out += line;
   }
   return out;
@@ -81,8 +83,8 @@ std::string channel_json(const ChannelSummary& s) {
                     ", \"first_timestamp\": " + std::to_string(s.first_timestamp) +
                     ", \"last_timestamp\": " + std::to_string(s.last_timestamp);
   if (s.type != "unknown")
-    out += ", \"first_utime\": " + std::to_string(s.first_utime) + ", \"last_utime\": " + std::to_string(s.last_utime) +
-           ", \"utime_regressions\": " + std::to_string(s.utime_regressions);
+    out += ", \"first_utime\": " + std::to_string(s.first_utime) + ", \"last_utime\": " + std::to_string(s.last_utime);
+  if (s.type != "unknown" && s.utime_ordered) out += ", \"utime_regressions\": " + std::to_string(s.utime_regressions);
   if (s.has_seq) {
     out += ", \"first_seq\": " + std::to_string(s.first_seq) + ", \"last_seq\": " + std::to_string(s.last_seq) +
            ", \"missing_seq\": " + std::to_string(s.missing_seq) +

@@ -25,6 +25,10 @@ std::optional<std::string_view> payload_type_name(const void* data, size_t size)
 // seq. Read straight from the payload of an ivoa message (no decoding);
 // empty if the payload is too short or the type has no such field.
 bool type_has_seq(std::string_view type_name);
+// Types every process publishes on one channel (the PROCESS_STATUS
+// heartbeats): their utimes interleave by sender, so a channel's utime
+// order says nothing about them.
+bool type_has_many_senders(std::string_view type_name);
 std::optional<int64_t> payload_utime(const void* data, size_t size);
 std::optional<int64_t> payload_seq(std::string_view type_name, const void* data, size_t size);
 

@@ -25,6 +25,7 @@ struct ChannelSummary {
   int64_t first_timestamp = 0, last_timestamp = 0;  // log (receive) time
   int64_t first_utime = 0, last_utime = 0;          // message utime, ivoa types only
   int64_t utime_regressions = 0;                    // message utime went backwards
+  bool utime_ordered = true;                        // false for heartbeats, whose senders interleave: not counted
   bool has_seq = false;
   int64_t first_seq = -1, last_seq = -1;
   int64_t missing_seq = 0;      // messages missing according to seq
