@@ -3,6 +3,7 @@
 // heatmap and the uncertainty heatmap; shows them in a window where there
 // is a display (--window), and writes PNGs (--out-dir) and/or a video (--video).
 #include <optional>
+#include <set>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -11,6 +12,7 @@
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
+#include "ivoa/logio/log_reader.hpp"
 #include "ivoa/viewer/figure_window.hpp"
 #include "ivoa/viewer/viewer_node.hpp"
 
@@ -94,6 +96,28 @@ std::optional<bool> choose_window(const ivoa::viewer::ViewerOptions& options) {
   return window;
 }
 
+// The parts a log holds (read from its event headers): each of its frames
+// waits for them, also before the first has come (the introspection
+// process, warming up, answers the first frames late).
+std::array<bool, ivoa::viewer::kNumParts> parts_in_log(const std::string& url, const ivoa::viewer::ViewerOptions& o) {
+  using namespace ivoa::viewer;
+  std::array<bool, kNumParts> parts{};
+  const std::string path = url.substr(7, url.find('?') - 7);  // file://PATH?options
+  std::set<std::string> channels;
+  try {
+    ivoa::logio::LogReader reader(path, {/*resync=*/true, /*headers_only=*/true});
+    ivoa::logio::LogEvent event;
+    while (reader.next(event)) channels.insert(event.channel);
+  } catch (const ivoa::logio::LogReadError& e) {
+    spdlog::warn("{}; frames wait only for the channels seen so far", e.what());
+  }
+  parts[kStereoGrid] = channels.count(o.stereo_grid_channel) > 0;
+  parts[kDepthGrid] = channels.count(o.depth_grid_channel) > 0;
+  parts[kLabels] = channels.count(o.labels_channel) > 0;
+  parts[kIntrospection] = channels.count(o.introspection_channel) > 0;
+  return parts;
+}
+
 // Draws until stopped (or, offline, until the log ends); the exit code.
 int run_viewer(const std::string& lcm_url, const ivoa::viewer::ViewerOptions& options, bool window, bool offline) {
   ivoa::Bus bus(lcm_url);
@@ -131,6 +155,7 @@ int main(int argc, char** argv) {
   ivoa::init_logging("viewer", common.log_level);
   const bool offline = common.lcm_url.rfind("file://", 0) == 0;
   if (offline && app.get_option("--every-frame")->count() == 0) options.every_frame = true;
+  if (offline) options.matcher.expected = parts_in_log(common.lcm_url, options);
   ivoa::install_stop_handlers();
 
   const std::optional<bool> window = choose_window(options);

@@ -84,6 +84,17 @@ TEST(LogReader, ReadsWhatLcmLogFileWrote) {
   EXPECT_EQ(r.events[2].timestamp, 52);
   EXPECT_EQ(r.events[2].event_number, 2);
   EXPECT_EQ(r.events[2].data, numbered_bytes(102, 2));
+
+  LogReader headers(path, {/*resync=*/false, /*headers_only=*/true});
+  LogEvent event;
+  std::vector<std::string> channels;
+  while (headers.next(event)) {
+    channels.push_back(event.channel);
+    EXPECT_TRUE(event.data.empty()) << "headers only";
+  }
+  EXPECT_TRUE(headers.clean());
+  EXPECT_EQ(channels, (std::vector<std::string>{"LCM_0", "LCM_1", "LCM_2"}));
+  EXPECT_EQ(event.timestamp, 52);
 }
 
 TEST(LogWriter, RefusesAnExistingFileUnlessAskedToOverwrite) {

@@ -3,6 +3,8 @@
 // is waited for at most settle_ms; late parts and old frames are counted.
 #include <gtest/gtest.h>
 
+#include <vector>
+
 #include "ivoa/viewer/frame_matcher.hpp"
 #include "viewer_messages.hpp"
 
@@ -131,6 +133,46 @@ TEST(ViewerFrameMatcher, EveryFrameModeHandsOutFramesInOrder) {
   EXPECT_EQ(m.take(4)->utime, 200);
   EXPECT_FALSE(m.take(4)) << "frame 300 may still get its parts";
   EXPECT_EQ(m.take(5, true)->utime, 300);
+  EXPECT_EQ(m.skipped(), 0u);
+}
+
+TEST(ViewerFrameMatcher, ALogsFirstFramesWaitForAPartNotSeenYet) {
+  MatcherOptions o = options();
+  o.every_frame = true;
+  o.expected[kIntrospection] = true;  // the log holds introspection, but its first answer comes late
+  FrameMatcher m(o);
+  m.add_image(100, gray_image(100), 0);
+  m.add_stereo_grid(grid(100, {0}), 0);
+  m.add_image(200, gray_image(200), 1);
+  m.add_stereo_grid(grid(200, {0}), 1);
+  EXPECT_FALSE(m.take(2)) << "no introspection has come yet, but the log has some";
+  m.add_introspection(introspection(100), 3);
+  auto f = m.take(4);
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->utime, 100);
+  EXPECT_TRUE(f->introspection) << "drawn with its introspection, not before it";
+  EXPECT_FALSE(m.take(5)) << "frame 200 waits for its own";
+
+  FrameMatcher unexpected(options());  // live: a part never seen is not waited for
+  unexpected.add_image(100, gray_image(100), 0);
+  unexpected.add_stereo_grid(grid(100, {0}), 0);
+  EXPECT_EQ(unexpected.take(1)->utime, 100);
+}
+
+TEST(ViewerFrameMatcher, EveryFrameModeDrawsTheOldestIncompleteFrameRatherThanDropIt) {
+  MatcherOptions o = options();
+  o.every_frame = true;
+  o.expected[kIntrospection] = true;
+  FrameMatcher m(o);
+  std::vector<int64_t> drawn;
+  for (int64_t t = 1; t <= 20; ++t) {  // introspection never comes; frames arrive faster than settle_ms
+    m.add_image(t, gray_image(t), 0);
+    while (auto f = m.take(1)) drawn.push_back(f->utime);
+  }
+  EXPECT_EQ(drawn.size(), 12u) << "the oldest, once more than max_frames (8) wait";
+  while (auto f = m.take(2, true)) drawn.push_back(f->utime);
+  ASSERT_EQ(drawn.size(), 20u);
+  for (size_t i = 0; i < drawn.size(); ++i) EXPECT_EQ(drawn[i], static_cast<int64_t>(i + 1));
   EXPECT_EQ(m.skipped(), 0u);
 }
 

@@ -100,8 +100,9 @@ bool LogReader::next(LogEvent& event) {
     event.offset = offset;
     event.event_number = h.event_number;
     event.timestamp = h.timestamp;
-    event.data.resize(h.data_bytes);
-    read_exactly(event.data.data(), h.data_bytes, offset + kEventHeaderBytes + h.channel_bytes);
+    event.data.resize(options_.headers_only ? 0 : h.data_bytes);
+    if (!options_.headers_only)
+      read_exactly(event.data.data(), h.data_bytes, offset + kEventHeaderBytes + h.channel_bytes);
     position_ = offset + h.event_bytes();
     return true;
   }

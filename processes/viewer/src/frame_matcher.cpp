@@ -1,5 +1,6 @@
 #include "ivoa/viewer/frame_matcher.hpp"
 
+#include <algorithm>
 #include <limits>
 
 namespace ivoa::viewer {
@@ -45,8 +46,13 @@ FrameSet* FrameMatcher::slot(int64_t utime, Part part, double now_ms) {
   FrameSet& frame = frames_[utime];
   frame.utime = utime;
   while (frames_.size() > options_.max_frames) {
-    skipped_ += frames_.begin()->second.left.has_value();
-    frames_.erase(frames_.begin());
+    auto victim = frames_.begin();
+    if (options_.every_frame)  // frames with an image are handed out by take_oldest, never dropped
+      victim = std::find_if(frames_.begin(), frames_.end(),
+                            [utime](const auto& f) { return !f.second.left && f.first != utime; });
+    if (victim == frames_.end()) break;
+    skipped_ += victim->second.left.has_value();
+    frames_.erase(victim);
   }
   const auto it = frames_.find(utime);
   return it == frames_.end() ? nullptr : &it->second;  // an old utime may be evicted at once
@@ -74,7 +80,7 @@ void FrameMatcher::add_introspection(const introspection_t& introspection, doubl
 bool FrameMatcher::complete(const FrameSet& frame, double now_ms) const {
   for (int p = 0; p < kNumParts; ++p) {
     const bool active = now_ms - last_seen_ms_[p] <= options_.active_ms;
-    if ((active || p == kImage) && !frame.has(static_cast<Part>(p))) return false;
+    if ((active || p == kImage || options_.expected[p]) && !frame.has(static_cast<Part>(p))) return false;
   }
   return true;
 }
@@ -94,8 +100,8 @@ std::optional<FrameSet> FrameMatcher::take_oldest(double now_ms, bool flush) {
   if (oldest == frames_.end()) return std::nullopt;
   // Messages come in time order: once a newer frame is complete, this one's
   // parts have all come that ever will.
-  bool ready =
-      flush || complete(oldest->second, now_ms) || now_ms - oldest->second.image_received_ms >= options_.settle_ms;
+  bool ready = flush || frames_.size() > options_.max_frames || complete(oldest->second, now_ms) ||
+               now_ms - oldest->second.image_received_ms >= options_.settle_ms;
   for (auto it = std::next(oldest); !ready && it != frames_.end(); ++it)
     ready = it->second.left && complete(it->second, now_ms);
   if (!ready) return std::nullopt;

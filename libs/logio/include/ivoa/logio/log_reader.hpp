@@ -45,6 +45,9 @@ struct LogReaderOptions {
   // After a bad event, look for the next plausible event and go on
   // (reporting the skipped bytes) instead of stopping there.
   bool resync = false;
+  // Leave each event's data unread (LogEvent::data empty): channels and
+  // times only, without reading the images.
+  bool headers_only = false;
 };
 
 class LogReader {

@@ -6,7 +6,8 @@
 // published ("active": seen in the last few seconds); when none has for a
 // while, the best there is (most parts, then newest), so a missing process
 // never stops the drawing. Older frames are dropped and counted, except
-// with every_frame (logs), where frames are handed out oldest first.
+// with every_frame (logs), where frames are handed out oldest first, and
+// the oldest also once more than max_frames are waiting.
 #include <array>
 #include <cstdint>
 #include <map>
@@ -39,6 +40,9 @@ struct MatcherOptions {
   double active_ms = 3000;   // a part seen this recently is expected in every frame
   double settle_ms = 1000;   // nothing complete for this long: draw the best frame there is
   bool every_frame = false;  // hand out every frame with an image, in order, once it or a newer one is complete
+  // Parts expected in every frame even before any has been seen: a log's
+  // channels, so its first frames wait for a process that was slow to start.
+  std::array<bool, kNumParts> expected{};
 };
 
 class FrameMatcher {
