@@ -2,6 +2,7 @@
 // ground grid (label or verdict rings, prediction dots), the P(FP)+P(FN)
 // heatmap and the uncertainty heatmap; shows them in a window where there
 // is a display (--window), and writes PNGs (--out-dir) and/or a video (--video).
+#include <array>
 #include <optional>
 #include <set>
 #include <string>
