@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -64,6 +65,17 @@ int64_t counter(Heartbeat& heartbeat, const std::string& name) {
              : status.counter_values[static_cast<size_t>(it - status.counter_names.begin())];
 }
 
+// A node with T = 2 passes that publishes heatmaps only (no obstacle grids).
+std::unique_ptr<IntrospectionNode> image_only_node(Bus& bus, Heartbeat& heartbeat, const std::string& model_path) {
+  introspection::InferenceConfig config;
+  config.mc_passes = 2;
+  config.seed = 1;
+  IntrospectionNodeOptions options;
+  options.grid_channel = "";
+  return std::make_unique<IntrospectionNode>(bus, heartbeat,
+                                             introspection::IntrospectionModel::load(model_path, config), options, 2);
+}
+
 stereo_image_t stereo_frame(const RigCalibration& rig, int64_t utime) {
   cv::Mat left(rig.left.height, rig.left.width, CV_8UC3), right(rig.right.height, rig.right.width, CV_8UC3);
   cv::randu(left, 0, 255);
@@ -79,13 +91,7 @@ TEST(IntrospectionNode, TwoViewModelWaitsForTheCalibrationThenRuns) {
   test::TempDir dir;
   Bus bus("memq://");
   Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
-  introspection::InferenceConfig config;
-  config.mc_passes = 2;
-  config.seed = 1;
-  IntrospectionNodeOptions options;
-  options.grid_channel = "";
-  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 2), config), options,
-                         2);
+  const auto node = image_only_node(bus, heartbeat, write_model(dir, 2));
   std::vector<introspection_t> out;
   bus.subscribe<introspection_t>(channels::kIntrospection,
                                  [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
@@ -116,13 +122,7 @@ TEST(IntrospectionNode, FramesSkippedWhileBusyAreCountedAsDropped) {
   test::TempDir dir;
   Bus bus("memq://");
   Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
-  introspection::InferenceConfig config;
-  config.mc_passes = 2;
-  config.seed = 1;
-  IntrospectionNodeOptions options;
-  options.grid_channel = "";
-  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 1), config), options,
-                         2);
+  const auto node = image_only_node(bus, heartbeat, write_model(dir, 1));
   int published = 0;
   bus.subscribe<introspection_t>(channels::kIntrospection,
                                  [&](const introspection_t&, const ReceiveInfo&) { ++published; });
