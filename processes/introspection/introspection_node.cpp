@@ -1,6 +1,7 @@
 #include "introspection_node.hpp"
 
 #include <algorithm>
+#include <future>
 #include <limits>
 #include <utility>
 
@@ -129,6 +130,19 @@ introspection_t make_introspection_message(const introspection::IntrospectionMod
   return msg;
 }
 
+double warm_up(introspection::IntrospectionModel& model, cv::Size image_size, int near_cells) {
+  const double start = monotonic_ms();
+  const cv::Mat blank(image_size.height * model.info().views, image_size.width, CV_8UC3, cv::Scalar::all(128));
+  model.run(blank);
+  const int side = std::min({2 * model.info().patch_size, image_size.width, image_size.height});
+  if (model.info().patch_scale > 0 && side > model.info().patch_size) {
+    const std::vector<introspection::IntrospectionModel::CellPatch> cells(
+        static_cast<size_t>(near_cells), {image_size.width / 2.0, image_size.height - side / 2.0, side});
+    model.predict_cells(blank, cells);
+  }
+  return monotonic_ms() - start;
+}
+
 IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
                                      std::unique_ptr<introspection::IntrospectionModel> model,
                                      IntrospectionNodeOptions options, int mc_passes)
@@ -146,8 +160,15 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
   if (!options_.grid_channel.empty())
     bus_.subscribe<obstacle_grid_t>(options_.grid_channel,
                                     [this](const obstacle_grid_t& m, const ReceiveInfo&) { on_grid(m); });
+  std::promise<void> warm;
+  std::future<void> warmed = warm.get_future();
+  worker_ = std::thread([this, &warm] {
+    warm_up_worker();
+    warm.set_value();
+    work();
+  });
+  warmed.wait();
   heartbeat_.set_state("running");
-  worker_ = std::thread([this] { work(); });
 }
 
 IntrospectionNode::~IntrospectionNode() {
@@ -155,8 +176,21 @@ IntrospectionNode::~IntrospectionNode() {
   worker_.join();
 }
 
+void IntrospectionNode::warm_up_worker() {
+  if (!options_.warm_up) return;
+  try {
+    const double ms = warm_up(*model_, *options_.warm_up);
+    spdlog::info("warmed up on a blank {}x{} frame in {:.0f} ms", options_.warm_up->width, options_.warm_up->height,
+                 ms);
+  } catch (const std::exception& e) {  // the first real frame pays for the set-up instead
+    spdlog::warn("warm-up on a blank {}x{} frame failed: {}", options_.warm_up->width, options_.warm_up->height,
+                 e.what());
+  }
+}
+
 void IntrospectionNode::work() {
   while (!frames_.closed()) {
+    update_warp();  // as soon as a calibration is in, so the first frame does not wait for it
     auto frame = frames_.take(std::chrono::milliseconds(100));
     if (!frame) continue;
     process(*frame);
@@ -191,6 +225,15 @@ void IntrospectionNode::on_grid(obstacle_grid_t grid) {
   grids_.put(grid);
 }
 
+void IntrospectionNode::update_warp() {
+  std::optional<RigCalibration> rig;
+  {
+    std::lock_guard<std::mutex> lock(calibration_mutex_);
+    rig = std::exchange(new_rig_, std::nullopt);
+  }
+  if (rig) warp_ = std::make_unique<GroundWarp>(*rig);  // outside the lock: 0.4 s for 960x600 on a slow core
+}
+
 cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& where, cv::Mat& left) {
   try {
     left = decode_image(frame.msg.left);
@@ -199,12 +242,7 @@ cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& wh
     return {};
   }
   if (model_->info().views == 1) return left;
-  std::optional<RigCalibration> rig;
-  {
-    std::lock_guard<std::mutex> lock(calibration_mutex_);
-    rig = std::exchange(new_rig_, std::nullopt);
-  }
-  if (rig) warp_ = std::make_unique<GroundWarp>(*rig);  // outside the lock: it takes a while
+  update_warp();
   if (!warp_) {
     heartbeat_.bad_input(where + ": no " + options_.calibration_channel + " yet (a two-view model needs it)");
     return {};

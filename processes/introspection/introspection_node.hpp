@@ -43,6 +43,9 @@ struct IntrospectionNodeOptions {
   // After the CNN, how long to wait for the detector's grid of the frame
   // (its verdicts); the query cells' geometry comes from any recent grid.
   std::chrono::milliseconds grid_wait{200};
+  // Before the first frame, run the model once on a blank frame of this
+  // size (the camera's) on the worker thread; the constructor returns after.
+  std::optional<cv::Size> warm_up;
 };
 
 // The detector's most recent obstacle grids, by utime (thread-safe).
@@ -78,6 +81,13 @@ introspection_t make_introspection_message(const introspection::IntrospectionMod
                                            const std::vector<introspection::Prediction>& predictions, int mc_passes,
                                            bool grid_is_this_frames);
 
+// Runs the model once on a blank frame of `image_size` (views stacked as
+// for a real one), with `near_cells` squares of their own for a
+// footprint-scaled model, so LibTorch's one-time set-up is paid before the
+// first real frame instead of delaying it. Call it on the thread that will
+// run the model: the set-up is partly per thread. Returns how long it took, ms.
+double warm_up(introspection::IntrospectionModel& model, cv::Size image_size, int near_cells = 40);
+
 class IntrospectionNode {
  public:
   IntrospectionNode(Bus& bus, Heartbeat& heartbeat, std::unique_ptr<introspection::IntrospectionModel> model,
@@ -91,6 +101,7 @@ class IntrospectionNode {
     stereo_image_t msg;
     double received_ms;
   };
+  void warm_up_worker();
   void work();
   void process(const Frame& frame);
   void on_calibration(const rig_calibration_t& msg);
@@ -98,6 +109,8 @@ class IntrospectionNode {
   // The image the model runs on (left, or left over the ground-warped
   // right); empty after reporting bad input.
   cv::Mat model_input(const Frame& frame, const std::string& where, cv::Mat& left);
+  // Builds the ground warp of a calibration received since (worker thread only).
+  void update_warp();
 
   Bus& bus_;
   Heartbeat& heartbeat_;

@@ -1,7 +1,9 @@
 // ivoa-introspection: the CNN that predicts where and how stereo fails, live.
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -25,7 +27,17 @@ struct CommandLine {
   ivoa::IntrospectionNodeOptions options;
   std::string lookup = "nearest";
   int grid_wait_ms = static_cast<int>(options.grid_wait.count());
+  std::string warm_up = "960x600";
 };
+
+// "960x600" -> 960 x 600; empty for anything else ("none").
+std::optional<cv::Size> frame_size(const std::string& text) {
+  int width = 0, height = 0;
+  char x = 0, rest = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &width, &x, &height, &rest) != 3 || x != 'x' || width <= 0 || height <= 0)
+    return std::nullopt;
+  return cv::Size(width, height);
+}
 
 void add_model_options(CLI::App& app, CommandLine& cl) {
   auto& config = cl.config;
@@ -56,6 +68,13 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
       ->capture_default_str()
       ->check(CLI::IsMember({"cpu", "cuda"}));
   app.add_option("--seed", config.seed, "dropout masks (0 = from the clock)")->capture_default_str();
+  app.add_option("--warm-up", cl.warm_up,
+                 "before listening, run the model once on a blank frame of this size (WxH, the camera's), so the "
+                 "first real frame is not delayed by LibTorch's set-up; none: skip")
+      ->capture_default_str()
+      ->check([](const std::string& s) {
+        return s == "none" || frame_size(s) ? std::string() : "expected WxH (e.g. 960x600) or none";
+      });
 }
 
 void add_channel_options(CLI::App& app, ivoa::IntrospectionNodeOptions& options) {
@@ -108,6 +127,7 @@ int main(int argc, char** argv) {
     return ivoa::kExitBadInput;
   }
   log_model(*model, cl.config.mc_passes);
+  cl.options.warm_up = frame_size(cl.warm_up);
   try {
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "introspection");

@@ -144,6 +144,35 @@ TEST(IntrospectionNode, FramesSkippedWhileBusyAreCountedAsDropped) {
   EXPECT_GE(s.dropped, 1) << "the burst arrived while the first frame was still being processed";
 }
 
+// The warm-up runs every path a frame takes (heatmaps over both views,
+// the near cells' own squares) on a blank frame, then the node works as
+// without it.
+TEST(IntrospectionNode, WarmsUpOnABlankFrameThenRunsAsUsual) {
+  test::TempDir dir;
+  introspection::InferenceConfig config;
+  config.mc_passes = 2;
+  const auto scaled_two_views = introspection::IntrospectionModel::load(write_model(dir, 2, 1.6), config);
+  EXPECT_GT(warm_up(*scaled_two_views, cv::Size(320, 240)), 0.0);
+
+  Bus bus("memq://");
+  Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
+  IntrospectionNodeOptions options;
+  options.grid_channel = "";
+  const RigCalibration rig = test::make_test_rig();
+  options.warm_up = cv::Size(rig.left.width, rig.left.height);
+  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 1), config), options,
+                         2);
+  EXPECT_EQ(heartbeat.snapshot().state, "running") << "the constructor returns once warmed up";
+  std::vector<introspection_t> out;
+  bus.subscribe<introspection_t>(channels::kIntrospection,
+                                 [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
+  stereo_image_t frame = stereo_frame(rig, 5000);
+  bus.publish(channels::kStereoImages, frame);
+  ASSERT_TRUE(deliver_until(bus, [&] { return !out.empty(); }));
+  EXPECT_EQ(out[0].utime, 5000);
+  EXPECT_EQ(heartbeat.bad_input_count(), 0);
+}
+
 TEST(IntrospectionNode, ScaledModelPredictsQueryCellsFromTheirOwnPatches) {
   test::TempDir dir;
   introspection::InferenceConfig config;
