@@ -1,6 +1,7 @@
 #include "monitor_node.hpp"
 
 #include <cmath>
+#include <utility>
 
 #include <spdlog/spdlog.h>
 
@@ -19,7 +20,17 @@ MonitorNode::MonitorNode(Bus& bus, Heartbeat& heartbeat, MonitorNodeOptions opti
                                 [this](const depth_image_t& m, const ReceiveInfo&) { on_depth(m); });
   bus_.subscribe<obstacle_grid_t>(options_.stereo_channel,
                                   [this](const obstacle_grid_t& m, const ReceiveInfo&) { on_stereo(m); });
+  heartbeat_.set_counter(kFramesWithoutCalibration, 0);
   heartbeat_.set_state("waiting for calibration");
+}
+
+bool MonitorNode::has_calibration(const std::string& where) {
+  if (pipeline_) return true;
+  heartbeat_.add_to_counter(kFramesWithoutCalibration, 1);
+  if (!std::exchange(warned_no_calibration_, true))
+    spdlog::warn("skipping {}: no {} received yet (such inputs are counted as {})", where, options_.calibration_channel,
+                 kFramesWithoutCalibration);
+  return false;
 }
 
 void MonitorNode::on_calibration(const rig_calibration_t& msg) {
@@ -44,10 +55,7 @@ void MonitorNode::on_calibration(const rig_calibration_t& msg) {
 void MonitorNode::on_depth(const depth_image_t& msg) {
   heartbeat_.count_in();
   const std::string where = options_.depth_channel + " utime " + std::to_string(msg.utime);
-  if (!pipeline_) {
-    heartbeat_.bad_input(where + ": no " + options_.calibration_channel + " received yet; skipped");
-    return;
-  }
+  if (!has_calibration(where)) return;
   if (!(std::isfinite(msg.fx) && std::isfinite(msg.fy) && std::isfinite(msg.cx) && std::isfinite(msg.cy) &&
         msg.fx > 0 && msg.fy > 0)) {
     heartbeat_.bad_input(where + ": intrinsics are not finite and positive");
@@ -68,10 +76,7 @@ void MonitorNode::on_depth(const depth_image_t& msg) {
 void MonitorNode::on_stereo(const obstacle_grid_t& msg) {
   heartbeat_.count_in();
   const std::string where = options_.stereo_channel + " utime " + std::to_string(msg.utime);
-  if (!pipeline_) {
-    heartbeat_.bad_input(where + ": no " + options_.calibration_channel + " received yet; skipped");
-    return;
-  }
+  if (!has_calibration(where)) return;
   try {
     publish(pipeline_->add_stereo(msg));
   } catch (const monitor::LabelError& e) {

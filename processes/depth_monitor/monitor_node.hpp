@@ -34,6 +34,8 @@ class MonitorNode {
   void on_calibration(const rig_calibration_t& msg);
   void on_depth(const depth_image_t& msg);
   void on_stereo(const obstacle_grid_t& msg);
+  // False (counted, warned about once) while no calibration has arrived.
+  bool has_calibration(const std::string& where);
   void publish(std::vector<monitor::PipelineOutcome> outcomes);
   void update_counters();
 
@@ -43,6 +45,7 @@ class MonitorNode {
   std::vector<uint8_t> calibration_bytes_;  // the calibration the pipeline was built for
   std::unique_ptr<monitor::LabelingPipeline> pipeline_;
   int64_t unmatched_ = 0, labelled_cells_ = 0;
+  bool warned_no_calibration_ = false;
 };
 
 }  // namespace ivoa

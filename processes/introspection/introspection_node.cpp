@@ -154,9 +154,11 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
     frames_.put({m, monotonic_ms()});
     if (frames_.dropped() != dropped_before) heartbeat_.count_dropped();  // the status table's DROP column
   });
-  if (model_->info().views == 2)
+  if (model_->info().views == 2) {
+    heartbeat_.set_counter(kFramesWithoutCalibration, 0);
     bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
                                       [this](const rig_calibration_t& m, const ReceiveInfo&) { on_calibration(m); });
+  }
   if (!options_.grid_channel.empty())
     bus_.subscribe<obstacle_grid_t>(options_.grid_channel,
                                     [this](const obstacle_grid_t& m, const ReceiveInfo&) { on_grid(m); });
@@ -244,7 +246,10 @@ cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& wh
   if (model_->info().views == 1) return left;
   update_warp();
   if (!warp_) {
-    heartbeat_.bad_input(where + ": no " + options_.calibration_channel + " yet (a two-view model needs it)");
+    heartbeat_.add_to_counter(kFramesWithoutCalibration, 1);
+    if (!std::exchange(warned_no_calibration_, true))
+      spdlog::warn("skipping {}: no {} yet, which a two-view model needs (such frames are counted as {})", where,
+                   options_.calibration_channel, kFramesWithoutCalibration);
     return {};
   }
   try {

@@ -120,6 +120,7 @@ class IntrospectionNode {
   LatestMailbox<Frame> frames_;
   RecentGrids grids_;
   bool warned_other_detector_ = false;  // LCM thread only
+  bool warned_no_calibration_ = false;  // worker thread only
   std::mutex calibration_mutex_;
   std::vector<uint8_t> calibration_bytes_;  // the newest calibration's content (utime zeroed)
   std::optional<RigCalibration> new_rig_;   // handed to the worker, which builds the warp

@@ -49,7 +49,7 @@ struct StereoDetectorOptions {
 class StereoDetectorNode {
  public:
   // Heartbeat counters it keeps besides in/out/dropped/bad input.
-  static constexpr const char* kFramesWithoutCalibration = "frames_without_calibration";
+  static constexpr const char* kFramesWithoutCalibration = ivoa::kFramesWithoutCalibration;
   static constexpr const char* kCalibrationsApplied = "calibrations_applied";
 
   StereoDetectorNode(Bus& bus, Heartbeat& heartbeat, StereoDetectorOptions options);

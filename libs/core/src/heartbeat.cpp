@@ -115,6 +115,13 @@ int64_t Heartbeat::bad_input_count() const {
   return bad_;
 }
 
+std::optional<int64_t> Heartbeat::counter(const std::string& name) const {
+  std::lock_guard<std::mutex> l(mutex_);
+  const auto it = counters_.find(name);
+  if (it == counters_.end()) return std::nullopt;
+  return it->second;
+}
+
 void Heartbeat::tick() {
   {
     std::lock_guard<std::mutex> l(mutex_);

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "ivoa/core/channels.hpp"
@@ -14,6 +15,11 @@
 namespace ivoa {
 class Bus;
 class process_status_t;
+
+// Counter of inputs skipped because no RIG_CALIBRATION has arrived yet. Not
+// bad input: a consumer started a moment before the driver sees a frame or
+// two first, and the state says "waiting for calibration" meanwhile.
+inline constexpr const char* kFramesWithoutCalibration = "frames_without_calibration";
 
 class Heartbeat {
  public:
@@ -36,6 +42,8 @@ class Heartbeat {
 
   process_status_t snapshot() const;
   int64_t bad_input_count() const;
+  // A process-specific counter's value; nullopt if it was never set.
+  std::optional<int64_t> counter(const std::string& name) const;
 
  private:
   process_status_t make_status_locked() const;
