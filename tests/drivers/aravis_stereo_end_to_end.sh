@@ -23,7 +23,7 @@ assert_json "$OUT/summary.json" \
   's["pixelformat"] == "BGR"' 's["width"] == 640 and s["height"] == 480' \
   's["max_skew_ms"] <= 25' 's["utime_regressions"] == 0' 's["seq_gaps"] <= max(4, s["checked"] // 10)' \
   '2 <= s["rate_hz"] <= 24' \
-  's["rig_messages"] >= 1' 's["rig_name"] == "ivoa-test-640x480"' 'abs(s["rig_baseline"] - 0.12) < 1e-9' \
+  's["rig_messages"] >= 1' 's["pairs_before_rig"] == 0' 's["rig_name"] == "ivoa-test-640x480"' 'abs(s["rig_baseline"] - 0.12) < 1e-9' \
   's["status"]["state"] == "running"' 's["status"]["counters"]["pairs"] >= 20' \
   's["status"]["counters"]["missed_left"] <= 4' 's["status"]["counters"]["missed_right"] <= 4' \
   's["status"]["counters"]["reconnects"] == 0' \

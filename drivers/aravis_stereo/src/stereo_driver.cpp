@@ -170,12 +170,15 @@ int StereoDriver::run() {
   State& s = *state_;
   install_stop_handlers();
   s.update_state();
+  // The calibration goes out before the cameras open, so the consumers (and
+  // the depth sensor's monitor) have it before the first frame.
+  s.publish_rig();
+  const double start_ms = monotonic_ms();
   s.left.start();
   s.right.start();
-  const double start_ms = monotonic_ms();
   const double rig_period_ms = 1000.0 / std::max(s.options.rig_rate_hz, 0.1);
   const double trigger_period_ms = 1000.0 / std::max(s.options.frame_rate_hz, 0.1);
-  double next_rig_ms = start_ms;
+  double next_rig_ms = start_ms + rig_period_ms;
   double next_trigger_ms = start_ms;
   int exit_code = kExitOk;
   spdlog::info("pairing left/right frames within {:.1f} ms; publishing {} on {} and the rig on {} at {:.1f} Hz",

@@ -71,6 +71,7 @@ class StereoChecker {
 
   void on_pair(const ivoa::stereo_image_t& msg, const ivoa::ReceiveInfo& info) {
     ++received_;
+    if (rig_messages_ == 0) ++pairs_before_rig_;
     if (last_seq_ >= 0 && msg.seq != last_seq_ + 1) seq_gaps_ += std::max<int64_t>(0, msg.seq - last_seq_ - 1);
     if (last_utime_ > 0 && msg.utime <= last_utime_) ++utime_regressions_;
     last_seq_ = msg.seq;
@@ -121,6 +122,7 @@ class StereoChecker {
     o.set("width", width_);
     o.set("height", height_);
     o.set("rig_messages", rig_messages_);
+    o.set("pairs_before_rig", pairs_before_rig_);
     o.set("rig_name", rig_name_);
     o.set("rig_baseline", rig_baseline_);
     o.set("first_error", first_error_);
@@ -234,7 +236,7 @@ class StereoChecker {
   int width_ = 0, height_ = 0;
   double max_colour_error_ = 0;
   std::set<uint32_t> ticks_;
-  int64_t rig_messages_ = 0;
+  int64_t rig_messages_ = 0, pairs_before_rig_ = 0;  // the calibration should come first
   std::string rig_name_;
   double rig_baseline_ = 0;
   std::string first_error_;
