@@ -114,6 +114,7 @@ int main(int argc, char** argv) {
     const bool offline = bus.url().rfind("file://", 0) == 0;
     const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, offline);
     node.flush();
+    heartbeat.publish_now();  // with the labels flush() published
     return code;
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());

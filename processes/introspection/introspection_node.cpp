@@ -173,9 +173,11 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
   heartbeat_.set_state("running");
 }
 
-IntrospectionNode::~IntrospectionNode() {
+IntrospectionNode::~IntrospectionNode() { stop(); }
+
+void IntrospectionNode::stop() {
   frames_.close();
-  worker_.join();
+  if (worker_.joinable()) worker_.join();
 }
 
 void IntrospectionNode::warm_up_worker() {

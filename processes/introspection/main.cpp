@@ -132,7 +132,10 @@ int main(int argc, char** argv) {
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "introspection");
     ivoa::IntrospectionNode node(bus, heartbeat, std::move(model), cl.options, cl.config.mc_passes);
-    return ivoa::run_until_stopped(bus, &heartbeat, {}, 50, bus.url().rfind("file://", 0) == 0);
+    const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, bus.url().rfind("file://", 0) == 0);
+    node.stop();
+    heartbeat.publish_now();  // with the frame that was in hand at the stop
+    return code;
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitFailure;

@@ -135,6 +135,7 @@ int run_viewer(const std::string& lcm_url, const ivoa::viewer::ViewerOptions& op
       },
       50, offline);
   node.finish();
+  heartbeat.publish_now();  // with the figures finish() drew
   spdlog::info("{} figures drawn", node.figures());
   return node.output_failed() ? ivoa::kExitIoError : code;
 }

@@ -2,6 +2,7 @@
 
 #include <signal.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <sstream>
@@ -21,6 +22,15 @@ std::string state_text(const CommandStatus& c) {
   std::string s = to_string(c.state);
   if (c.state == RunState::kRespawning) s += " " + fixed(c.respawn_in_s, 1) + "s";
   return s;
+}
+
+// The process-specific counters, {"name": value, ...}.
+std::string counters_json(const process_status_t& h) {
+  std::string out = "{";
+  const size_t n = std::min(h.counter_names.size(), h.counter_values.size());
+  for (size_t i = 0; i < n; ++i)
+    out += (i ? ", " : "") + json_quote(h.counter_names[i]) + ": " + std::to_string(h.counter_values[i]);
+  return out + "}";
 }
 
 std::string clip(const std::string& s, size_t width) { return s.size() <= width ? s : s.substr(0, width - 1) + "~"; }
@@ -85,7 +95,7 @@ std::string format_status_json(const std::vector<StatusRow>& rows, const RunSumm
         << ", \"bad_input\": " << h.bad_input << ", \"latency_ms_mean\": " << fixed(h.latency_ms_mean, 3)
         << ", \"latency_ms_max\": " << fixed(h.latency_ms_max, 3) << ", \"state\": " << json_quote(h.state)
         << ", \"last_error\": " << json_quote(h.last_error) << ", \"age_s\": " << fixed(rows[i].heartbeat_age_s, 3)
-        << "}}";
+        << ", \"counters\": " << counters_json(h) << "}}";
   }
   out << "\n]}\n";
   return out.str();
