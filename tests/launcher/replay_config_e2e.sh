@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# End to end: a recorded raw session replayed by ivoa-launch with
-# procman_configs/replay.pmd (lcm-logplayer -> stereo detector, depth
+# End to end: a recorded raw session, cut into two split files as
+# ivoa-logger --split-mb leaves it, replayed by ivoa-launch with
+# procman_configs/replay.pmd (ivoa-log-play -> stereo detector, depth
 # monitor -> logger, viewer) over real UDP multicast LCM, as the README
-# shows. Every frame must be replayed, detected, labelled and logged again:
+# shows. Every frame of both files must be replayed, detected, labelled and
+# logged again:
 # the launcher starts the player only once the consumers have announced
 # themselves, the detector queues the frames, which this log (recorded as
 # fast as possible) replays in bursts tens of milliseconds apart, and the
@@ -15,9 +17,23 @@ frames=8
 
 "$B/bin/ivoa-sim-driver" --frames $frames --rate 2 --seed 11 --as-fast-as-possible \
   --lcm-url "file://$out/raw.lcmlog?mode=w" --log-level warn
+# Cut it in two at an event boundary (LCM log events: sync word, event
+# number, time, channel and data lengths, channel, data).
+python3 - "$out/raw.lcmlog" <<'PY'
+import struct, sys
+path = sys.argv[1]
+raw, events, pos = open(path, "rb").read(), [], 0
+while pos < len(raw):
+    _, _, _, channel_len, data_len = struct.unpack(">IqqII", raw[pos:pos + 28])
+    events.append(raw[pos:pos + 28 + channel_len + data_len])
+    pos += 28 + channel_len + data_len
+half = len(events) // 2
+open(path + ".00", "wb").write(b"".join(events[:half]))
+open(path + ".01", "wb").write(b"".join(events[half:]))
+PY
 
 timeout 80 "$B/bin/ivoa-launch" "$S/procman_configs/replay.pmd" --script start --plain --status-every 0 \
-  --skip introspection --set LOG="$out/raw.lcmlog" --set LOG_DIR="$out" --set LOG_FILE="$out/replay.lcmlog" \
+  --skip introspection --set LOG="$out/raw.lcmlog.00 $out/raw.lcmlog.01" --set LOG_DIR="$out" --set LOG_FILE="$out/replay.lcmlog" \
   --set VIEWER_ARGS="--every 1" --set DETECTOR_ARGS="--queue-frames $frames" \
   --set MONITOR_ARGS="--depth-history-us 10000000" --until logplayer --grace 3 --duration 60 \
   --status-file "$out/status.json" > "$out/launch.txt" 2>&1 \
@@ -39,6 +55,8 @@ for c in ("OBSTACLES_STEREO", "OBSTACLES_DEPTH", "INTROSPECTION_LABELS"):
     assert n == frames, f"{c}: {n} messages for {frames} replayed frames"
 pngs = [f for f in os.listdir(f"{out}/viewer") if f.endswith(".png")]
 assert pngs, "the viewer drew nothing"
-print(f"OK: {frames} frames replayed; grids and labels recomputed "
+player = next(c for c in status["commands"] if c["name"] == "logplayer")["heartbeat"]
+assert player["counters"]["files_done"] == 2 and player["bad_input"] == 0, player
+print(f"OK: {frames} frames replayed from two split files; grids and labels recomputed "
       f"({channels['INTROSPECTION_LABELS']['count']} labelled frames), {len(pngs)} viewer figures")
 PY

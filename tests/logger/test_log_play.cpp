@@ -1,0 +1,137 @@
+// ivoa-log-play's player: split files as one stream, in order, channels by
+// regex, damaged stretches skipped and reported, the pace. Played as fast as
+// possible into memq://, so nothing here depends on timing.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "ivoa/core/bus.hpp"
+#include "ivoa/core/heartbeat.hpp"
+#include "ivoa/log_play/log_player.hpp"
+#include "ivoa/logio/log_reader.hpp"
+#include "ivoa/logio/log_writer.hpp"
+#include "logger_test_util.hpp"
+#include "test_rig.hpp"
+
+namespace ivoa::log_play {
+namespace {
+
+struct Played {
+  std::string channel;
+  std::vector<uint8_t> data;
+};
+
+// Writes events {channel, timestamp}; each payload is numbered by its timestamp.
+std::vector<uint64_t> write_log(const std::string& path, const std::vector<std::pair<std::string, int64_t>>& events) {
+  logio::LogWriter writer(path);
+  std::vector<uint64_t> offsets;
+  for (const auto& [channel, t] : events) {
+    offsets.push_back(writer.bytes());
+    const auto data = test::numbered_bytes(64, static_cast<uint8_t>(t));
+    writer.write(channel, t, data.data(), data.size());
+  }
+  writer.close();
+  return offsets;
+}
+
+struct PlayFixture {
+  Bus bus{"memq://"};
+  Heartbeat heartbeat{bus, "log_play", "TEST_LOG_PLAY_STATUS", 3600.0};
+  std::vector<Played> played;
+
+  PlayFixture() {
+    bus.subscribe_raw("CAM|DEPTH|RIG", [this](const void* data, size_t size, const ReceiveInfo& info) {
+      const auto* bytes = static_cast<const uint8_t*>(data);
+      played.push_back({info.channel, {bytes, bytes + size}});
+    });
+  }
+  PlayCounts play(const std::vector<std::string>& files, LogPlayerOptions options = {}) {
+    options.speed = 0;
+    LogPlayer player(bus, heartbeat, files, options);
+    EXPECT_TRUE(player.play());
+    while (bus.handle(0) > 0) {
+    }
+    return player.counts();
+  }
+};
+
+TEST(LogPlay, SplitFilesPlayAsOneStreamInTheGivenOrder) {
+  test::TempDir dir;
+  const std::string a = dir.file("s.lcmlog.00"), b = dir.file("s.lcmlog.01");
+  write_log(a, {{"RIG", 1}, {"CAM", 10}, {"DEPTH", 11}});
+  write_log(b, {{"RIG", 1}, {"CAM", 20}, {"DEPTH", 21}});  // a split file starts with the older calibration
+  PlayFixture f;
+  const PlayCounts counts = f.play({a, b});
+  EXPECT_EQ(counts.files_done, 2);
+  EXPECT_EQ(counts.published, 6);
+  ASSERT_EQ(f.played.size(), 6u);
+  const std::vector<std::string> order{"RIG", "CAM", "DEPTH", "RIG", "CAM", "DEPTH"};
+  for (size_t i = 0; i < order.size(); ++i) EXPECT_EQ(f.played[i].channel, order[i]) << i;
+  EXPECT_EQ(f.played[4].data, test::numbered_bytes(64, 20)) << "payloads pass unchanged";
+  EXPECT_EQ(f.heartbeat.snapshot().messages_out, 6);
+  EXPECT_EQ(f.heartbeat.counter("files_done"), 2);
+  EXPECT_EQ(f.heartbeat.snapshot().state, "finished");
+}
+
+TEST(LogPlay, ChannelsAreChosenByWholeNameRegex) {
+  test::TempDir dir;
+  const std::string log = dir.file("s.lcmlog");
+  write_log(log, {{"RIG", 1}, {"CAM", 2}, {"CAM_OUT", 3}, {"DEPTH", 4}});
+  PlayFixture f;
+  LogPlayerOptions options;
+  options.channels = "CAM.*|RIG";
+  options.exclude = "CAM_OUT";
+  const PlayCounts counts = f.play({log}, options);
+  EXPECT_EQ(counts.published, 2);
+  EXPECT_EQ(counts.filtered_out, 2);
+  ASSERT_EQ(f.played.size(), 2u);
+  EXPECT_EQ(f.played[0].channel, "RIG");
+  EXPECT_EQ(f.played[1].channel, "CAM");
+}
+
+TEST(LogPlay, ADamagedStretchIsSkippedReportedAndPlayGoesOn) {
+  test::TempDir dir;
+  const std::string a = dir.file("s.lcmlog.00"), b = dir.file("s.lcmlog.01");
+  const auto offsets = write_log(a, {{"CAM", 1}, {"DEPTH", 2}, {"CAM", 3}});
+  write_log(b, {{"CAM", 4}});
+  {
+    std::fstream file(a, std::ios::in | std::ios::out | std::ios::binary);
+    file.seekp(static_cast<std::streamoff>(offsets[1]));
+    file.put(0);  // the second event's sync word
+  }
+  PlayFixture f;
+  const PlayCounts counts = f.play({a, b});
+  EXPECT_EQ(counts.damaged, 1);
+  EXPECT_EQ(counts.published, 3);
+  EXPECT_EQ(counts.files_done, 2);
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 1);
+  EXPECT_NE(f.heartbeat.snapshot().last_error.find(a + ": byte " + std::to_string(offsets[1])), std::string::npos)
+      << f.heartbeat.snapshot().last_error;
+}
+
+TEST(LogPlay, AnUnreadableFileStopsEverythingBeforePlay) {
+  test::TempDir dir;
+  const std::string good = dir.file("s.lcmlog.00"), missing = dir.file("s.lcmlog.01");
+  write_log(good, {{"CAM", 1}});
+  PlayFixture f;
+  try {
+    LogPlayer player(f.bus, f.heartbeat, {good, missing}, {});
+    FAIL() << "a missing file was accepted";
+  } catch (const logio::LogReadError& e) {
+    EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(LogPlayer(f.bus, f.heartbeat, {good}, LogPlayerOptions{1.0, "CAM(", ""}), std::invalid_argument);
+  EXPECT_TRUE(f.played.empty());
+}
+
+TEST(LogPlay, EventsAreDueAtTheirLogTimeOverTheSpeed) {
+  EXPECT_DOUBLE_EQ(due_ms(1'500'000, 1'000'000, 1.0), 500.0);
+  EXPECT_DOUBLE_EQ(due_ms(1'500'000, 1'000'000, 2.0), 250.0);
+  EXPECT_DOUBLE_EQ(due_ms(1'500'000, 1'000'000, 0.0), 0.0) << "as fast as possible";
+  EXPECT_DOUBLE_EQ(due_ms(900'000, 1'000'000, 1.0), 0.0) << "earlier than the first event: at once";
+}
+
+}  // namespace
+}  // namespace ivoa::log_play

@@ -1,0 +1,57 @@
+// ivoa-log-play: plays recorded LCM logs into LCM as they were recorded;
+// the split files of one session (run.lcmlog.00 .01 ...) as one stream.
+//   ivoa-log-play logs/record-20261202-212245.lcmlog.[0-9][0-9]
+//   ivoa-log-play --speed 0.5 -c '^(STEREO_IMAGES|DEPTH_IMAGE|RIG_CALIBRATION)$' session.lcmlog
+#include <stdexcept>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/bus.hpp"
+#include "ivoa/core/heartbeat.hpp"
+#include "ivoa/core/process.hpp"
+#include "ivoa/core/stop_signal.hpp"
+#include "ivoa/log_play/log_player.hpp"
+#include "ivoa/logio/log_reader.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "Play LCM logs into LCM at the recorded pace; several files (the split files of one session, in order) "
+      "play as one stream. Damaged stretches are skipped and reported. Exit codes: 0 played (or stopped), "
+      "1 LCM failure, 2 bad flags, 3 a log cannot be read."};
+  ivoa::CommonOptions common;
+  ivoa::add_common_options(app, common);
+  std::vector<std::string> logs;
+  ivoa::log_play::LogPlayerOptions options;
+  app.add_option("logs", logs, "LCM log files, played in the order given")->required();
+  app.add_option("-s,--speed", options.speed, "multiple of the recorded pace (0: as fast as possible)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("-c,--channels", options.channels, "play the channels matching this regex (whole name)")
+      ->capture_default_str();
+  app.add_option("-x,--exclude", options.exclude, "leave out the channels matching this regex");
+  if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
+  ivoa::init_logging("log_play", common.log_level);
+  ivoa::install_stop_handlers();
+  try {
+    ivoa::Bus bus(common.lcm_url);
+    ivoa::Heartbeat heartbeat(bus, "log_play");
+    ivoa::log_play::LogPlayer player(bus, heartbeat, logs, options);
+    const bool whole = player.play();
+    const auto& c = player.counts();
+    heartbeat.set_state(whole ? "finished" : "stopped");
+    heartbeat.publish_now();
+    spdlog::info("{}: {} of {} files, {} events published, {} of other channels, {} damaged stretches skipped",
+                 whole ? "finished" : "stopped", c.files_done, logs.size(), c.published, c.filtered_out, c.damaged);
+    return c.publish_failures > 0 ? ivoa::kExitFailure : ivoa::kExitOk;
+  } catch (const ivoa::logio::LogReadError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitBadInput;
+  } catch (const std::invalid_argument& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitUsage;
+  } catch (const ivoa::BusError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitFailure;
+  }
+}
