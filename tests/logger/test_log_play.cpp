@@ -126,6 +126,18 @@ TEST(LogPlay, AnUnreadableFileStopsEverythingBeforePlay) {
   EXPECT_TRUE(f.played.empty());
 }
 
+TEST(LogPlay, AFileThatIsNoLogIsReportedAndTheOthersPlay) {
+  test::TempDir dir;
+  const std::string text = dir.file("notes.txt"), log = dir.file("s.lcmlog");
+  std::ofstream(text) << "not a log\n";
+  write_log(log, {{"CAM", 1}});
+  PlayFixture f;
+  const PlayCounts counts = f.play({text, log});
+  EXPECT_EQ(counts.not_logs, 1);
+  EXPECT_EQ(counts.published, 1);
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 1);
+}
+
 TEST(LogPlay, EventsAreDueAtTheirLogTimeOverTheSpeed) {
   EXPECT_DOUBLE_EQ(due_ms(1'500'000, 1'000'000, 1.0), 500.0);
   EXPECT_DOUBLE_EQ(due_ms(1'500'000, 1'000'000, 2.0), 250.0);

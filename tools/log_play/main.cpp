@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Play LCM logs into LCM at the recorded pace; several files (the split files of one session, in order) "
       "play as one stream. Damaged stretches are skipped and reported. Exit codes: 0 played (or stopped), "
-      "1 LCM failure, 2 bad flags, 3 a log cannot be read."};
+      "1 LCM failure, 2 bad flags, 3 a log cannot be opened (nothing played) or holds no event (the others played)."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
   std::vector<std::string> logs;
@@ -43,7 +43,8 @@ int main(int argc, char** argv) {
     heartbeat.publish_now();
     spdlog::info("{}: {} of {} files, {} events published, {} of other channels, {} damaged stretches skipped",
                  whole ? "finished" : "stopped", c.files_done, logs.size(), c.published, c.filtered_out, c.damaged);
-    return c.publish_failures > 0 ? ivoa::kExitFailure : ivoa::kExitOk;
+    if (c.publish_failures > 0) return ivoa::kExitFailure;
+    return c.not_logs > 0 ? ivoa::kExitBadInput : ivoa::kExitOk;
   } catch (const ivoa::logio::LogReadError& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitBadInput;

@@ -99,8 +99,10 @@ void LogPlayer::report_problems(const logio::LogReader& reader) {
     ++counts_.damaged;
     heartbeat_.bad_input(reader.path() + ": " + problem.describe());
   }
-  if (const std::string not_a_log = reader.not_a_log(); !not_a_log.empty())
+  if (const std::string not_a_log = reader.not_a_log(); !not_a_log.empty()) {
+    ++counts_.not_logs;
     spdlog::error("{}: {}", reader.path(), not_a_log);
+  }
 }
 
 }  // namespace ivoa::log_play

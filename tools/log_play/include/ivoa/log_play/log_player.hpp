@@ -32,6 +32,7 @@ struct PlayCounts {
   int64_t damaged = 0;       // damaged stretches skipped (each reported)
   int64_t publish_failures = 0;
   int files_done = 0;
+  int not_logs = 0;  // files no event could be read from (played past, reported)
 };
 
 // When an event is due, in ms after play began: its log time since the
