@@ -24,15 +24,16 @@ double due_ms(int64_t timestamp_us, int64_t first_timestamp_us, double speed) {
 // The stream's clock across files: the first event's log time and the wall
 // time play began, and the latest log time played (log time never runs back).
 struct LogPlayer::Pacing {
-  logger::ChannelFilter filter;
   bool started = false;
   int64_t first_us = 0, latest_us = 0;
   double start_ms = 0;
 };
 
 LogPlayer::LogPlayer(Bus& bus, Heartbeat& heartbeat, std::vector<std::string> paths, LogPlayerOptions options)
-    : bus_(bus), heartbeat_(heartbeat), options_(std::move(options)) {
-  logger::ChannelFilter check(options_.channels, options_.exclude);  // a bad regex fails here, not mid-play
+    : bus_(bus),
+      heartbeat_(heartbeat),
+      options_(std::move(options)),
+      filter_(std::make_unique<logger::ChannelFilter>(options_.channels, options_.exclude)) {
   for (auto& path : paths) readers_.push_back(std::make_unique<logio::LogReader>(path, logio::LogReaderOptions{true}));
   heartbeat_.set_counter("files_done", 0);
   heartbeat_.set_counter("filtered_out", 0);
@@ -42,7 +43,7 @@ LogPlayer::LogPlayer(Bus& bus, Heartbeat& heartbeat, std::vector<std::string> pa
 LogPlayer::~LogPlayer() = default;
 
 bool LogPlayer::play() {
-  Pacing pacing{logger::ChannelFilter(options_.channels, options_.exclude)};
+  Pacing pacing;
   for (size_t i = 0; i < readers_.size(); ++i) {
     heartbeat_.set_state(fmt::format("playing {} ({} of {})", readers_[i]->path(), i + 1, readers_.size()));
     heartbeat_.publish_now();
@@ -58,7 +59,7 @@ bool LogPlayer::play() {
 bool LogPlayer::play_file(logio::LogReader& reader, Pacing& pacing) {
   logio::LogEvent event;
   while (reader.next(event)) {
-    if (!pacing.filter.accepts(event.channel)) {
+    if (!filter_->accepts(event.channel)) {
       heartbeat_.set_counter("filtered_out", ++counts_.filtered_out);
       continue;
     }

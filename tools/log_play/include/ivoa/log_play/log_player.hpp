@@ -17,6 +17,9 @@ class Heartbeat;
 namespace ivoa::logio {
 class LogReader;
 }
+namespace ivoa::logger {
+class ChannelFilter;
+}
 
 namespace ivoa::log_play {
 
@@ -65,6 +68,7 @@ class LogPlayer {
   Bus& bus_;
   Heartbeat& heartbeat_;
   LogPlayerOptions options_;
+  std::unique_ptr<logger::ChannelFilter> filter_;
   std::vector<std::unique_ptr<logio::LogReader>> readers_;
   PlayCounts counts_;
 };
