@@ -2,9 +2,9 @@
 // always-recorded calibration channel.
 #include <gtest/gtest.h>
 
-#include "ivoa/logger/channel_filter.hpp"
+#include "ivoa/logio/channel_filter.hpp"
 
-namespace ivoa::logger {
+namespace ivoa::logio {
 namespace {
 
 TEST(ChannelFilter, IncludeRegexMustMatchTheWholeName) {
@@ -41,4 +41,4 @@ TEST(ChannelFilter, ABadRegexIsAnInvalidArgumentNamingIt) {
 }
 
 }  // namespace
-}  // namespace ivoa::logger
+}  // namespace ivoa::logio

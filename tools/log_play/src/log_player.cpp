@@ -11,7 +11,7 @@
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/core/time.hpp"
-#include "ivoa/logger/channel_filter.hpp"
+#include "ivoa/logio/channel_filter.hpp"
 #include "ivoa/logio/log_reader.hpp"
 
 namespace ivoa::log_play {
@@ -33,7 +33,7 @@ LogPlayer::LogPlayer(Bus& bus, Heartbeat& heartbeat, std::vector<std::string> pa
     : bus_(bus),
       heartbeat_(heartbeat),
       options_(std::move(options)),
-      filter_(std::make_unique<logger::ChannelFilter>(options_.channels, options_.exclude)) {
+      filter_(std::make_unique<logio::ChannelFilter>(options_.channels, options_.exclude)) {
   for (auto& path : paths) readers_.push_back(std::make_unique<logio::LogReader>(path, logio::LogReaderOptions{true}));
   heartbeat_.set_counter("files_done", 0);
   heartbeat_.set_counter("filtered_out", 0);

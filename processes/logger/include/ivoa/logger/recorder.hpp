@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include "ivoa/logger/channel_filter.hpp"
+#include "ivoa/logio/channel_filter.hpp"
 #include "ivoa/logger/event_queue.hpp"
 #include "ivoa/logger/session_counters.hpp"
 #include "ivoa/logger/split_log.hpp"
@@ -70,7 +70,7 @@ class Recorder {
   void throttle(double start_ms);
 
   RecorderOptions options_;
-  ChannelFilter filter_;
+  logio::ChannelFilter filter_;
   SessionCounters counters_;
   SplitLog log_;
   EventQueue queue_;

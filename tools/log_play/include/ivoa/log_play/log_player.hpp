@@ -15,11 +15,9 @@ class Heartbeat;
 }  // namespace ivoa
 
 namespace ivoa::logio {
-class LogReader;
-}
-namespace ivoa::logger {
 class ChannelFilter;
-}
+class LogReader;
+}  // namespace ivoa::logio
 
 namespace ivoa::log_play {
 
@@ -68,7 +66,7 @@ class LogPlayer {
   Bus& bus_;
   Heartbeat& heartbeat_;
   LogPlayerOptions options_;
-  std::unique_ptr<logger::ChannelFilter> filter_;
+  std::unique_ptr<logio::ChannelFilter> filter_;
   std::vector<std::unique_ptr<logio::LogReader>> readers_;
   PlayCounts counts_;
 };

@@ -1,9 +1,9 @@
-#include "ivoa/logger/channel_filter.hpp"
+#include "ivoa/logio/channel_filter.hpp"
 
 #include <algorithm>
 #include <stdexcept>
 
-namespace ivoa::logger {
+namespace ivoa::logio {
 namespace {
 
 std::regex compile(const std::string& pattern, const char* what) {
@@ -36,4 +36,4 @@ bool ChannelFilter::decide(const std::string& channel) const {
   return !(has_exclude_ && std::regex_match(channel, exclude_));
 }
 
-}  // namespace ivoa::logger
+}  // namespace ivoa::logio

@@ -1,5 +1,5 @@
 #pragma once
-// Which channels the logger records: those matching an include regex and
+// Which channels a log tool takes (the logger records, the player plays): those matching an include regex and
 // not an exclude regex (ECMAScript syntax, matched against the whole name,
 // as LCM anchors its own channel regexes), plus channels that are always
 // recorded whatever the regexes say (the rig calibration, so that every
@@ -10,7 +10,7 @@
 #include <unordered_map>
 #include <vector>
 
-namespace ivoa::logger {
+namespace ivoa::logio {
 
 class ChannelFilter {
  public:
@@ -30,4 +30,4 @@ class ChannelFilter {
   std::unordered_map<std::string, bool> decisions_;
 };
 
-}  // namespace ivoa::logger
+}  // namespace ivoa::logio
