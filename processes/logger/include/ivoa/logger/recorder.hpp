@@ -12,10 +12,10 @@
 #include <thread>
 #include <vector>
 
-#include "ivoa/logio/channel_filter.hpp"
 #include "ivoa/logger/event_queue.hpp"
 #include "ivoa/logger/session_counters.hpp"
 #include "ivoa/logger/split_log.hpp"
+#include "ivoa/logio/channel_filter.hpp"
 
 namespace ivoa::logger {
 
