@@ -7,7 +7,6 @@
 
 #include <chrono>
 #include <csignal>
-#include <ctime>
 #include <filesystem>
 #include <thread>
 
@@ -35,15 +34,6 @@ constexpr int kFinalHandleLimit = 2000;
 constexpr double kFinalHandleMs = 500;
 constexpr double kStatusPeriodMs = 100;  // recorder totals -> heartbeat counters
 constexpr double kDrainReportMs = 2000;
-
-std::string expand_time_pattern(const std::string& pattern) {
-  const std::time_t now = std::time(nullptr);
-  std::tm local{};
-  localtime_r(&now, &local);
-  std::string out(4096, '\0');
-  out.resize(std::strftime(out.data(), out.size(), pattern.c_str(), &local));
-  return out;
-}
 
 std::string hostname() {
   char buf[256] = {0};
@@ -250,7 +240,7 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
 // expands to nothing.
 bool fill_recorder_options(LoggerFlags& f) {
   RecorderOptions& o = f.options;
-  o.log.path = expand_time_pattern(f.file);
+  o.log.path = ivoa::expand_time_pattern(f.file);
   if (o.log.path.empty()) {
     spdlog::error("the file name pattern '{}' expands to nothing", f.file);
     return false;

@@ -11,7 +11,10 @@
 #  3. depth-to-colour registration: shifted depth, colour-camera intrinsics;
 #     a clean exit on SIGTERM;
 #  4. no device: a clear error naming the Kinect v1 driver caveat, exit 1;
-#     a missing recording, exit 3.
+#     a missing recording, exit 3;
+#  5. a recording is never overwritten (a respawned driver given the same
+#     name exits 4 and leaves the first one whole); time patterns in the
+#     name are expanded.
 . "$(dirname "$0")/driver_test_lib.sh"
 DRIVER="$B/bin/ivoa-openni2-kinect"
 CHECK="$B/tests/ivoa-test-check-depth"
@@ -81,5 +84,19 @@ if [ "$code" != 3 ] || ! grep -q "missing.oni: recording not found" "$OUT/missin
   cat "$OUT/missing.log" >&2
   exit 1
 fi
+# 5. The file of step 1 exists: refused, left as it was.
+before=$(sha256sum <"$OUT/clip.oni")
+code=0
+"$DRIVER" --record "$OUT/clip.oni" --max-frames 5 >"$OUT/again.log" 2>&1 || code=$?
+if [ "$code" != 4 ] || ! grep -q "clip.oni: exists; a recording is never overwritten" "$OUT/again.log" ||
+  [ "$(sha256sum <"$OUT/clip.oni")" != "$before" ]; then
+  echo "FAILED: recording over an existing file: exit $code (want 4), file unchanged?" >&2
+  cat "$OUT/again.log" >&2
+  exit 1
+fi
+year_before=$(date +%Y)
+"$DRIVER" --record "$OUT/timed-%Y.oni" --max-frames 5 >"$OUT/timed.log" 2>&1 || { show timed; exit 1; }
+[ -s "$OUT/timed-$year_before.oni" ] || [ -s "$OUT/timed-$(date +%Y).oni" ] ||
+  { echo "FAILED: --record timed-%Y.oni wrote no timed-YYYY.oni" >&2; ls "$OUT" >&2; cat "$OUT/timed.log" >&2; exit 1; }
 echo "OK: live $(cat "$OUT/live.json")"
 echo "OK: replay $(cat "$OUT/replay.json")"

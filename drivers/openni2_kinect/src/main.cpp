@@ -47,7 +47,9 @@ void add_options(CLI::App& app, Flags& f) {
   app.add_flag("--register", f.camera.register_depth,
                "depth-to-colour registration: depth in the colour camera's frame (its intrinsics are published)");
   app.add_option("--rig", f.rig_path, "rig calibration file: use its K_depth instead of the field-of-view intrinsics");
-  app.add_option("--record", f.camera.record_path, "also record the streams to this .oni file");
+  app.add_option("--record", f.camera.record_path,
+                 "also record the streams to this .oni file (strftime patterns such as %Y%m%d-%H%M%S are expanded "
+                 "at start; an existing file is never overwritten)");
   app.add_flag("--record-lossless-color", f.lossless_color, "record colour losslessly (about 30x larger)");
   app.add_option("--max-frames", f.max_frames, "stop after this many depth frames (0 = no limit)")
       ->capture_default_str()
@@ -173,6 +175,14 @@ int main(int argc, char** argv) {
   ivoa::init_logging("openni2_kinect", f.common.log_level);
   ivoa::install_stop_handlers();  // before OpenNI2 starts: a signal while it opens the device still exits cleanly
   f.camera.lossy_color = !f.lossless_color;
+  if (!f.camera.record_path.empty()) {
+    const std::string pattern = f.camera.record_path;
+    f.camera.record_path = ivoa::expand_time_pattern(pattern);
+    if (f.camera.record_path.empty()) {
+      spdlog::error("--record: the file name pattern '{}' expands to nothing", pattern);
+      return ivoa::kExitUsage;
+    }
+  }
 
   try {
     ivoa::Bus bus(f.common.lcm_url);

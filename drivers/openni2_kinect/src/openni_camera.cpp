@@ -1,6 +1,11 @@
 #include "ivoa/openni2_kinect/openni_camera.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <atomic>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 
 #include <OpenNI.h>
@@ -49,6 +54,23 @@ bool pick_mode(const openni::SensorInfo* info, openni::PixelFormat format, openn
     found = true;
   }
   return found;
+}
+
+// Creates the recording's file, failing if it exists: OpenNI2's recorder
+// would truncate it, and a respawned driver given the same name would
+// erase the session it recorded before.
+void claim_record_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd >= 0) {
+    ::close(fd);
+    return;
+  }
+  if (errno == EEXIST)
+    throw DeviceError(path +
+                          ": exists; a recording is never overwritten (remove it, or name recordings with a time "
+                          "pattern such as kinect-%Y%m%d-%H%M%S.oni)",
+                      kExitIoError);
+  throw DeviceError(path + ": cannot record: " + std::strerror(errno), kExitIoError);
 }
 
 // Set on the OniFile player's thread when a recording that does not loop
@@ -148,11 +170,17 @@ struct OpenNiCamera::Impl {
 
   void start_recording() {
     if (options.record_path.empty()) return;
+    claim_record_file(options.record_path);
     if (recorder.create(options.record_path.c_str()) != openni::STATUS_OK ||
         recorder.attach(depth, false) != openni::STATUS_OK ||
         (color.isValid() && recorder.attach(color, options.lossy_color) != openni::STATUS_OK) ||
-        recorder.start() != openni::STATUS_OK)
-      throw DeviceError(options.record_path + ": cannot record: " + extended_error(), kExitIoError);
+        recorder.start() != openni::STATUS_OK) {
+      const std::string why = extended_error();
+      if (recorder.isValid()) recorder.destroy();
+      std::error_code ignored;
+      std::filesystem::remove(options.record_path, ignored);  // our empty claim, nothing recorded
+      throw DeviceError(options.record_path + ": cannot record: " + why, kExitIoError);
+    }
     spdlog::info("recording to {}", options.record_path);
   }
 

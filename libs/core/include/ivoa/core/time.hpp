@@ -1,6 +1,7 @@
 #pragma once
 #include <chrono>
 #include <cstdint>
+#include <string>
 
 namespace ivoa {
 
@@ -15,5 +16,10 @@ inline double monotonic_ms() {
   using namespace std::chrono;
   return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
 }
+
+// A file name pattern with strftime's fields (%Y, %m, %d, %H, %M, %S...)
+// filled in with the local time now; "" if it expands to nothing (or past
+// 4 KiB). Gives each run of a respawned recorder its own file.
+std::string expand_time_pattern(const std::string& pattern);
 
 }  // namespace ivoa
