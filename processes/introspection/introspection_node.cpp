@@ -192,11 +192,16 @@ void IntrospectionNode::warm_up_worker() {
   }
 }
 
+// Once closed, the mailbox's last frame is still run (take() returns at
+// once): a frame received is published or counted as dropped, never lost.
 void IntrospectionNode::work() {
-  while (!frames_.closed()) {
+  while (true) {
     update_warp();  // as soon as a calibration is in, so the first frame does not wait for it
     auto frame = frames_.take(std::chrono::milliseconds(100));
-    if (!frame) continue;
+    if (!frame) {
+      if (frames_.closed()) return;
+      continue;
+    }
     process(*frame);
     heartbeat_.set_counter("frames_done", frames_done_.load());
   }

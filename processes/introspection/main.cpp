@@ -134,7 +134,7 @@ int main(int argc, char** argv) {
     ivoa::IntrospectionNode node(bus, heartbeat, std::move(model), cl.options, cl.config.mc_passes);
     const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, bus.url().rfind("file://", 0) == 0);
     node.stop();
-    heartbeat.publish_now();  // with the frame that was in hand at the stop
+    heartbeat.publish_now();  // with the frames that were in hand and waiting at the stop
     return code;
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());

@@ -49,7 +49,6 @@ void StereoDetectorNode::start() {
 }
 
 void StereoDetectorNode::stop() {
-  stopping_ = true;
   mailbox_.close();
   if (worker_.joinable()) worker_.join();
 }
@@ -99,10 +98,19 @@ bool StereoDetectorNode::update_detector() {
   return true;
 }
 
+// After stop() the frames still queued are processed (take() no longer
+// waits), so a stop at the end of a recording labels its last frames; past
+// --max-frames they are counted as dropped. None is left unaccounted for.
 void StereoDetectorNode::run_worker() {
-  while (!stopping_) {
+  while (true) {
     const std::optional<Frame> frame = mailbox_.take(std::chrono::milliseconds(100));
-    if (frame) process(*frame);
+    if (!frame) {
+      if (mailbox_.closed()) return;
+    } else if (finished_) {
+      heartbeat_.count_dropped();
+    } else {
+      process(*frame);
+    }
   }
 }
 

@@ -61,7 +61,8 @@ class StereoDetectorNode {
   // messages still replace it.
   void set_calibration(const RigCalibration& rig);
 
-  // Subscribes and starts the worker. stop() joins it (also at destruction).
+  // Subscribes and starts the worker. stop() lets it finish the frames
+  // queued, then joins it (also at destruction).
   void start();
   void stop();
 
@@ -95,7 +96,7 @@ class StereoDetectorNode {
   std::unique_ptr<QueryGrid> grid_;
   bool warned_no_calibration_ = false;
 
-  std::atomic<bool> stopping_{false}, finished_{false};
+  std::atomic<bool> finished_{false};
   std::atomic<int64_t> published_{0};
   std::thread worker_;
 };

@@ -110,6 +110,40 @@ TEST_F(StereoDetectorNodeTest, WithAQueueEveryFrameOfABurstGetsItsGrid) {
   EXPECT_EQ(heartbeat_.snapshot().dropped, 0);
 }
 
+// Stopped with a queue still full (the end of a recording played fast),
+// the node labels the frames it holds before it exits; past --max-frames
+// they are counted as dropped. Every frame in is out or dropped.
+TEST_F(StereoDetectorNodeTest, StopFinishesTheQueuedFramesFirst) {
+  options_.queue_frames = 6;
+  StereoDetectorNode node(bus_, heartbeat_, options_);
+  node.set_calibration(rig_);
+  node.start();
+  for (int64_t utime = 1; utime <= 6; ++utime) publish_frame(utime);
+  for (int i = 0; i < 6; ++i) bus_.handle(5);
+  node.stop();
+  const process_status_t s = heartbeat_.snapshot();
+  EXPECT_EQ(s.messages_in, 6);
+  EXPECT_EQ(s.messages_out, 6);
+  EXPECT_EQ(s.dropped, 0);
+  ASSERT_TRUE(handle_until([&] { return grids_.size() == 6; }));
+  EXPECT_EQ(grids_.back().utime, 6);
+}
+
+TEST_F(StereoDetectorNodeTest, FramesQueuedPastMaxFramesAreCountedAsDropped) {
+  options_.queue_frames = 6;
+  options_.max_frames = 2;
+  StereoDetectorNode node(bus_, heartbeat_, options_);
+  node.set_calibration(rig_);
+  node.start();
+  for (int64_t utime = 1; utime <= 5; ++utime) publish_frame(utime);
+  for (int i = 0; i < 5; ++i) bus_.handle(5);
+  node.stop();
+  const process_status_t s = heartbeat_.snapshot();
+  EXPECT_TRUE(node.finished());
+  EXPECT_EQ(s.messages_out, 2);
+  EXPECT_EQ(s.dropped, 3);
+}
+
 TEST_F(StereoDetectorNodeTest, BadInputIsCountedAndSkipped) {
   bus_.on_decode_error([&](const std::string& what) { heartbeat_.bad_input(what); });
   StereoDetectorNode node(bus_, heartbeat_, options_);
