@@ -1,8 +1,9 @@
 // ivoa-log-check: what an LCM log holds and whether it is intact. Per
 // channel: type, count, size, sequence-number gaps, utime regressions.
 // For a damaged or truncated log: the byte offset of the first bad event
-// and how many good events come before it. Several files (a split
-// session, in order) are checked as one recording.
+// and how many good events come before it. Per process: its last
+// heartbeat (final state and counts). Several files (a split session, in
+// order) are checked as one recording.
 #include <map>
 #include <stdexcept>
 
@@ -14,9 +15,11 @@
 #include "ivoa/core/process.hpp"
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/logio/log_summary.hpp"
+#include "last_heartbeats.hpp"
 
 namespace {
 
+using ivoa::log_check::LastHeartbeats;
 using ivoa::logio::LogSummary;
 
 struct FileResult {
@@ -29,7 +32,7 @@ struct FileResult {
   std::string error;                           // could not be read at all
 };
 
-FileResult check_file(const std::string& path, bool resync, LogSummary& summary) {
+FileResult check_file(const std::string& path, bool resync, LogSummary& summary, LastHeartbeats& heartbeats) {
   FileResult r;
   r.path = path;
   try {
@@ -43,6 +46,7 @@ FileResult check_file(const std::string& path, bool resync, LogSummary& summary)
       if (!got) break;
       if (r.events++ == 0) r.first_channel = event.channel;
       summary.add(event);
+      heartbeats.add(event);
     }
     r.problems = reader.problems();
   } catch (const ivoa::logio::LogReadError& e) {
@@ -64,7 +68,8 @@ void print_file(const FileResult& r) {
                 static_cast<long long>(r.events_before_problem[i]));
 }
 
-std::string results_json(const std::vector<FileResult>& files, const LogSummary& summary) {
+std::string results_json(const std::vector<FileResult>& files, const LogSummary& summary,
+                         const LastHeartbeats& heartbeats) {
   using ivoa::json_quote;
   std::string out = "{\"files\": [";
   for (size_t i = 0; i < files.size(); ++i) {
@@ -86,7 +91,7 @@ std::string results_json(const std::vector<FileResult>& files, const LogSummary&
     out += sep + json_quote(name) + ": " + ivoa::logio::channel_json(channel);
     sep = ",\n  ";
   }
-  return out + "}}\n";
+  return out + "},\n\"processes\": " + heartbeats.json() + "}\n";
 }
 
 // False (with a message) if a channel's count is not the one expected.
@@ -141,15 +146,17 @@ void add_check_options(CLI::App& app, CheckCommandLine& cl) {
 // (the exit code).
 int check_logs(const CheckCommandLine& cl) {
   LogSummary summary;
+  LastHeartbeats heartbeats;
   std::vector<FileResult> results;
   bool damaged = false;
   for (const auto& path : cl.files) {
-    results.push_back(check_file(path, cl.resync, summary));
+    results.push_back(check_file(path, cl.resync, summary, heartbeats));
     print_file(results.back());
     damaged = damaged || !results.back().error.empty() || !results.back().problems.empty();
   }
   std::printf("\n%s", summary.table().c_str());
-  if (!ivoa::write_text_file(cl.json_path, results_json(results, summary))) return ivoa::kExitIoError;
+  if (const std::string table = heartbeats.table(); !table.empty()) std::printf("\n%s", table.c_str());
+  if (!ivoa::write_text_file(cl.json_path, results_json(results, summary, heartbeats))) return ivoa::kExitIoError;
   const bool expected = expectations_hold(ivoa::parse_channel_counts(cl.expect, "--expect"), summary);
   const bool complete = !cl.no_gaps || sequences_complete(summary);
   if (damaged) return ivoa::kExitBadInput;
@@ -160,7 +167,8 @@ int check_logs(const CheckCommandLine& cl) {
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage.\n"
+      "Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage; each "
+      "process's last heartbeat.\n"
       "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 3 a log is damaged or "
       "unreadable, 4 the --json file cannot be written."};
   ivoa::CommonOptions common;
