@@ -92,6 +92,14 @@ if mode == "record":
         assert channels.get("RIG_CALIBRATION", {}).get("count", 0) >= 1, f"{f} does not start self-contained"
         for c, v in channels.items():
             totals[c] = totals.get(c, 0) + v["count"]
+    # record.pmd's stop script stops the cameras, the detector, the monitor,
+    # each waited for, then the logger: their final heartbeats are recorded.
+    logged = check["processes"]  # the last file's, by the name each process gives itself
+    for n, process in (("stereo_camera", "aravis_stereo"), ("kinect", "openni2_kinect"),
+                       ("stereo_detector", "stereo_detector"), ("depth_monitor", "depth_monitor")):
+        final = logged.get(process, {})
+        assert final.get("state") == "stopped", f"{process}: last heartbeat in the log {final}, not its final one"
+        assert final["messages_out"] == hb[n]["messages_out"], (n, final, hb[n])
     pairs, grids, labels = totals["STEREO_IMAGES"], totals["OBSTACLES_STEREO"], totals["INTROSPECTION_LABELS"]
     assert pairs >= 4 * 12 and totals["DEPTH_IMAGE"] >= 3 * pairs // 2, totals
     assert grids >= pairs - 2, f"{grids} grids for {pairs} pairs"

@@ -106,6 +106,15 @@ with open(f"{out}/viewer/{pngs[-1]}", "rb") as f:
 assert head[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
 width, height = struct.unpack(">II", head[16:24])
 assert (width, height) == (3 * 480, 300), f"figure is {width}x{height}, expected three 480x300 panels"
+# The stop script stops the simulator, then the detector, the other
+# consumers and the viewer, each waited for, and the logger last: every
+# process's final heartbeat ("stopped", its final counts) is in the log.
+logged = check["processes"]
+for name in processes - {"logger"}:
+    final = logged.get(name, {})
+    assert final.get("state") == "stopped", f"{name}: last heartbeat in the log {final}, not its final one"
+    table = cmds[name]["heartbeat"]
+    assert (final["messages_in"], final["messages_out"]) == (table["messages_in"], table["messages_out"]), (name, final, table)
 counts = {c: channels[c]["count"] for c in expected}
 print(f"OK: detector killed and respawned (restarts 1), log channels {counts}, {len(pngs)} viewer figures")
 PY

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 
 #include <chrono>
+#include <cstdio>
 #include <fstream>
 #include <thread>
 
@@ -124,6 +125,36 @@ script "go" {
                        "\"pid\": 0, \"state\": \"idle\""))
       << json;
   EXPECT_TRUE(contains(json, "\"end_reason\": \"every command has ended\"")) << json;
+}
+
+// A producer that takes half a second to stop and a logger: the file's
+// "stop" script stops the producer first and waits for it, so the logger
+// outlives it; with --stop-script "" both get the signal at once and the
+// logger is gone first.
+TEST(LaunchCli, TheStopScriptStopsTheProducerBeforeTheLogger) {
+  ivoa::test::TempDir dir;
+  const auto order = dir.file("order.txt");
+  const auto config = write_file(dir, "stop.pmd", R"(
+cmd "logger" { exec = "trap 'echo logger >> ${ORDER}; exit 0' INT; while true; do sleep 0.05; done"; }
+cmd "producer" { exec = "trap 'sleep 0.5; echo producer >> ${ORDER}; exit 0' INT; while true; do sleep 0.05; done"; }
+script "stop" {
+  stop cmd "producer" wait "stopped";
+  stop cmd "logger" wait "stopped";
+}
+)");
+  Result r = launch(config + " --set ORDER=" + order + " --duration 1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_file(order), "producer\nlogger\n") << r.output;
+  EXPECT_TRUE(contains(r.output, "running script \"stop\"")) << r.output;
+
+  std::remove(order.c_str());
+  r = launch(config + " --set ORDER=" + order + " --duration 1 --stop-script ''");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_file(order), "logger\nproducer\n") << r.output;
+
+  r = launch(config + " --set ORDER=" + order + " --duration 1 --stop-script shutdown");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(contains(r.output, "--stop-script shutdown: no such script")) << r.output;
 }
 
 TEST(LaunchCli, ConfigurationErrorsNameFileAndLineAndExitTwo) {

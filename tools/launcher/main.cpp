@@ -48,6 +48,10 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--skip", o.selection.skip, "leave out these commands or groups");
   app.add_option("--set", o.sets, "NAME=VALUE for ${NAME} (before the environment and the file's defaults)");
   app.add_option("--script", l.script, "run this script of the file instead of starting every command");
+  app.add_option("--stop-script", l.stop_script,
+                 "at the stop, run this script of the file first if it has one (the producers before the logger), "
+                 "then stop what still runs; \"\" = stop everything at once")
+      ->capture_default_str();
   app.add_option("--duration", l.duration_s, "stop everything after this many seconds (0: no limit)")
       ->check(ivoa::non_negative_number());
   app.add_flag("--once", l.once, "stop everything once every command without auto_respawn has ended");
@@ -116,6 +120,9 @@ SelectedCommands prepare(CliOptions& o, Config& config) {
   SelectedCommands selected = select_commands(config, o.selection, variables);
   o.launcher.supervisor.environment = variables.exported();
   if (!o.launcher.script.empty()) flatten_script(config, o.launcher.script);
+  if (o.launcher.stop_script != LauncherOptions().stop_script && !o.launcher.stop_script.empty() &&
+      !config.find_script(o.launcher.stop_script))
+    throw ConfigError(config.path + ": --stop-script " + o.launcher.stop_script + ": no such script");
   for (const auto& name : o.launcher.until) {
     const bool selected_here = std::any_of(selected.commands.begin(), selected.commands.end(),
                                            [&](const LaunchCommand& c) { return c.spec.name == name; });

@@ -126,9 +126,9 @@ class Run {
     // The screen is left as it is; the stop's events print below it.
     printer_.end_redraw();
     printer_.event("all", "stopping (" + reason + ")");
-    supervisor_.stop_all();
     const int signals_before = g_stop_signals.load();
-    bool killed = false;
+    bool killed = run_stop_script(signals_before);
+    supervisor_.stop_all();
     while (supervisor_.busy()) {
       if (supervisor_.step(100, monitor_ ? monitor_->fd() : -1)) monitor_->drain();
       if (!killed && g_stop_signals.load() > signals_before) {
@@ -153,6 +153,25 @@ class Run {
 
   EventHandler event_printer() {
     return [this](const std::string& n, const std::string& e) { printer_.event(n, e); };
+  }
+
+  // The file's stop script, stepped like the start script; each of its
+  // stops is bounded by the command's stop_time_allowed. A second stop
+  // signal cuts it short and kills every command (returns true then).
+  bool run_stop_script(int signals_before) {
+    if (options_.stop_script.empty() || !config_.find_script(options_.stop_script)) return false;
+    printer_.event("all", "running script \"" + options_.stop_script + "\"");
+    ScriptRunner stop(flatten_script(config_, options_.stop_script), supervisor_, event_printer(),
+                      [this](const std::string& name) { return announced(name); });
+    for (stop.advance(); !stop.done(); stop.advance()) {
+      if (supervisor_.step(100, monitor_ ? monitor_->fd() : -1)) monitor_->drain();
+      if (g_stop_signals.load() > signals_before) {
+        printer_.event("all", "second stop signal: SIGKILL to every command");
+        supervisor_.kill_all();
+        return true;
+      }
+    }
+    return false;
   }
 
   // Without LCM there are no heartbeats to wait for.

@@ -1,7 +1,8 @@
 #pragma once
 // ivoa-launch's run loop: supervises the selected commands (or runs a
 // script), follows their heartbeats, shows the status table, and decides
-// when to end (signal, --duration, --once/--until, or nothing left to run).
+// when to end (signal, --duration, --once/--until, or nothing left to run);
+// then runs the stop script, if any, and stops what is left.
 #include <string>
 #include <vector>
 
@@ -26,6 +27,10 @@ struct LauncherOptions {
   // A script's wait "running" on a command that runs an ivoa program also
   // waits for its first heartbeat, at most this long (0: never waits for one).
   double ready_timeout_s = 10.0;
+  // At the stop, run this script of the file first if it has one (e.g.
+  // producers, then consumers, the logger last, each waited for), then
+  // stop whatever still runs; "" = stop everything at once.
+  std::string stop_script = "stop";
   SupervisorOptions supervisor;
 };
 
