@@ -15,7 +15,7 @@
 #include "ivoa/core/process.hpp"
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/logio/log_summary.hpp"
-#include "last_heartbeats.hpp"
+#include "ivoa/log_check/last_heartbeats.hpp"
 
 namespace {
 

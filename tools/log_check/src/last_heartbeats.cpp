@@ -1,4 +1,4 @@
-#include "last_heartbeats.hpp"
+#include "ivoa/log_check/last_heartbeats.hpp"
 
 #include <fmt/format.h>
 
