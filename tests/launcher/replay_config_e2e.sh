@@ -53,6 +53,12 @@ channels = json.load(open(f"{out}/check.json"))["channels"]
 for c in ("OBSTACLES_STEREO", "OBSTACLES_DEPTH", "INTROSPECTION_LABELS"):
     n = channels.get(c, {}).get("count", 0)
     assert n == frames, f"{c}: {n} messages for {frames} replayed frames"
+# replay.pmd's stop script: the player, the detector, the monitor, the
+# viewer, each waited for, then the logger: their final heartbeats are logged.
+logged = json.load(open(f"{out}/check.json"))["processes"]
+assert logged.get("log_play", {}).get("state") == "finished", logged.get("log_play")
+for name in ("stereo_detector", "depth_monitor", "viewer"):
+    assert logged.get(name, {}).get("state") == "stopped", f"{name}: last heartbeat in the log {logged.get(name)}"
 pngs = [f for f in os.listdir(f"{out}/viewer") if f.endswith(".png")]
 assert pngs, "the viewer drew nothing"
 player = next(c for c in status["commands"] if c["name"] == "logplayer")["heartbeat"]
