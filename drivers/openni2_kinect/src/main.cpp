@@ -49,7 +49,7 @@ void add_options(CLI::App& app, Flags& f) {
   app.add_option("--rig", f.rig_path, "rig calibration file: use its K_depth instead of the field-of-view intrinsics");
   app.add_option("--record", f.camera.record_path,
                  "also record the streams to this .oni file (strftime patterns such as %Y%m%d-%H%M%S are expanded "
-                 "at start; an existing file is never overwritten)");
+                 "at start; if it exists, to the first free FILE-1.oni, FILE-2.oni, ...: never overwritten)");
   app.add_flag("--record-lossless-color", f.lossless_color, "record colour losslessly (about 30x larger)");
   app.add_option("--max-frames", f.max_frames, "stop after this many depth frames (0 = no limit)")
       ->capture_default_str()

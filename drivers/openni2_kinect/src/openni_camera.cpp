@@ -20,6 +20,7 @@ constexpr int kWidth = 640;
 constexpr int kHeight = 480;
 constexpr int kFps = 30;
 constexpr int kEndOfFileSilenceMs = 1000;  // a playing recording that delivers nothing for this long has ended
+constexpr int kMaxRecordingSuffix = 999;   // kinect-1.oni ... kinect-999.oni
 
 const char* const kNoDeviceHelp =
     "Is the sensor plugged in and powered (a Kinect v1 needs its mains adapter)? Debian's OpenNI2 drives only "
@@ -56,21 +57,29 @@ bool pick_mode(const openni::SensorInfo* info, openni::PixelFormat format, openn
   return found;
 }
 
-// Creates the recording's file, failing if it exists: OpenNI2's recorder
-// would truncate it, and a respawned driver given the same name would
-// erase the session it recorded before.
-void claim_record_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd >= 0) {
-    ::close(fd);
-    return;
+// Creates the recording's file and returns its name: `path`, or if that
+// exists `stem-1.ext`, `stem-2.ext`, ... OpenNI2's recorder would truncate
+// an existing file, and a driver respawned with the same name would erase
+// the session it recorded before; refusing instead would stop the depth
+// stream the rest of the system needs.
+std::string claim_record_file(const std::string& path) {
+  const std::filesystem::path p(path);
+  for (int n = 0; n <= kMaxRecordingSuffix; ++n) {
+    const std::string name =
+        n == 0 ? path
+               : (p.parent_path() / (p.stem().string() + "-" + std::to_string(n) + p.extension().string())).string();
+    const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd >= 0) {
+      ::close(fd);
+      if (n > 0) spdlog::warn("{} exists (a recording is never overwritten): recording to {}", path, name);
+      return name;
+    }
+    if (errno != EEXIST) throw DeviceError(name + ": cannot record: " + std::strerror(errno), kExitIoError);
   }
-  if (errno == EEXIST)
-    throw DeviceError(path +
-                          ": exists; a recording is never overwritten (remove it, or name recordings with a time "
-                          "pattern such as kinect-%Y%m%d-%H%M%S.oni)",
-                      kExitIoError);
-  throw DeviceError(path + ": cannot record: " + std::strerror(errno), kExitIoError);
+  throw DeviceError(path + ": cannot record: it and " + std::to_string(kMaxRecordingSuffix) +
+                        " numbered variants exist (name recordings with a time pattern such as "
+                        "kinect-%Y%m%d-%H%M%S.oni)",
+                    kExitIoError);
 }
 
 // Set on the OniFile player's thread when a recording that does not loop
@@ -170,7 +179,7 @@ struct OpenNiCamera::Impl {
 
   void start_recording() {
     if (options.record_path.empty()) return;
-    claim_record_file(options.record_path);
+    options.record_path = claim_record_file(options.record_path);
     if (recorder.create(options.record_path.c_str()) != openni::STATUS_OK ||
         recorder.attach(depth, false) != openni::STATUS_OK ||
         (color.isValid() && recorder.attach(color, options.lossy_color) != openni::STATUS_OK) ||

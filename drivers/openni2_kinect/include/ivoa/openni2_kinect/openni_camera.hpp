@@ -31,7 +31,7 @@ struct OpenNiOptions {
   bool register_depth = false;        // depth-to-colour registration (depth in the colour camera's frame)
   double playback_speed = 1.0;        // .oni only: 1 = real time, <= 0 = as fast as possible
   bool loop = false;                  // .oni only: start again at the end instead of stopping
-  std::string record_path;            // record the streams to this new .oni file ("" = no recording)
+  std::string record_path;            // record the streams to this .oni file, never overwritten ("" = none)
   bool lossy_color = true;            // record colour as JPEG (about 30x smaller than lossless)
 };
 
@@ -52,7 +52,8 @@ class OpenNiCamera {
   // Initialises OpenNI2, opens the device, starts the streams (and the
   // recorder). Throws DeviceError: no device or driver (exit 1), an .oni
   // file that is missing or unreadable (exit 3), a recording that cannot
-  // be written or whose file exists (exit 4).
+  // be written (exit 4). A recording whose file exists goes to the first
+  // free "stem-N.oni" next to it instead.
   explicit OpenNiCamera(const OpenNiOptions& options);
   ~OpenNiCamera();
   OpenNiCamera(const OpenNiCamera&) = delete;
