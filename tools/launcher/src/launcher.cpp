@@ -131,11 +131,7 @@ class Run {
     supervisor_.stop_all();
     while (supervisor_.busy()) {
       if (supervisor_.step(100, monitor_ ? monitor_->fd() : -1)) monitor_->drain();
-      if (!killed && g_stop_signals.load() > signals_before) {
-        printer_.event("all", "second stop signal: SIGKILL to every command");
-        supervisor_.kill_all();
-        killed = true;
-      }
+      if (!killed) killed = kill_on_second_signal(signals_before);
     }
     if (monitor_) monitor_->drain();  // the heartbeats the commands sent as they stopped
     const int code = exit_code();
@@ -165,13 +161,18 @@ class Run {
                       [this](const std::string& name) { return announced(name); });
     for (stop.advance(); !stop.done(); stop.advance()) {
       if (supervisor_.step(100, monitor_ ? monitor_->fd() : -1)) monitor_->drain();
-      if (g_stop_signals.load() > signals_before) {
-        printer_.event("all", "second stop signal: SIGKILL to every command");
-        supervisor_.kill_all();
-        return true;
-      }
+      if (kill_on_second_signal(signals_before)) return true;
     }
     return false;
+  }
+
+  // Once another stop signal has come since the stop began, kills every
+  // command at once; true then.
+  bool kill_on_second_signal(int signals_before) {
+    if (g_stop_signals.load() <= signals_before) return false;
+    printer_.event("all", "second stop signal: SIGKILL to every command");
+    supervisor_.kill_all();
+    return true;
   }
 
   // Without LCM there are no heartbeats to wait for.
