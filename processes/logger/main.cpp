@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/core/file_names.hpp"
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/process.hpp"
@@ -21,12 +22,15 @@
 #include "ivoa/core/time.hpp"
 #include "ivoa/logger/receive_buffer.hpp"
 #include "ivoa/logger/recorder.hpp"
+#include "ivoa/logger/split_log.hpp"
 
 namespace {
 
 using ivoa::logger::Recorder;
 using ivoa::logger::RecorderOptions;
 using ivoa::logger::RecorderStatus;
+using ivoa::logger::SplitLog;
+using ivoa::logger::SplitLogOptions;
 
 // Messages LCM had already taken in when the stop came are still handled,
 // within this bound (traffic may go on arriving).
@@ -34,6 +38,7 @@ constexpr int kFinalHandleLimit = 2000;
 constexpr double kFinalHandleMs = 500;
 constexpr double kStatusPeriodMs = 100;  // recorder totals -> heartbeat counters
 constexpr double kDrainReportMs = 2000;
+constexpr int kMaxLogSuffix = 999;  // --increment: FILE-1 ... FILE-999
 
 std::string hostname() {
   char buf[256] = {0};
@@ -200,7 +205,7 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
 struct LoggerFlags {
   std::string file = "ivoa-%Y%m%d-%H%M%S.lcmlog", ready_file;
   double split_mb = 0, max_queue_mb = 1024, max_write_mb_s = 0, socket_buffer_mb = 64;
-  bool force = false, no_sidecar = false;
+  bool force = false, increment = false, no_sidecar = false;
   RecorderOptions options;
 };
 
@@ -231,13 +236,40 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
                  "(CAP_NET_ADMIN); 0 = as LCM sets it")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1000.0));  // the kernel takes an int of bytes, and books twice that
-  app.add_flag("-f,--force", f.force, "overwrite existing files");
+  auto* force = app.add_flag("-f,--force", f.force, "overwrite existing files");
+  app.add_flag("-i,--increment", f.increment,
+               "if FILE exists, record to FILE-1, FILE-2, ... (before the extension) instead of refusing; lets a "
+               "respawned logger with a fixed name go on recording")
+      ->excludes(force);
   app.add_flag("--no-sidecar", f.no_sidecar, "do not write FILE.json next to each log");
   app.add_option("--ready-file", f.ready_file, "create this file once subscribed (lets scripts start publishers)");
 }
 
+// --increment: the first of PATH, PATH-1, ... whose log (or first split
+// part) does not exist yet; false if none of the first 999 is free.
+bool pick_unused_name(SplitLogOptions& log) {
+  const std::string wanted = log.path;
+  const auto name = ivoa::first_free_numbered_name(wanted, kMaxLogSuffix, [&log](const std::string& candidate) {
+    log.path = candidate;
+    return !std::filesystem::exists(SplitLog::part_path(log, 0));
+  });
+  if (!name) {
+    spdlog::error(
+        "{} and {} numbered variants exist; name the log with a time pattern such as "
+        "ivoa-%Y%m%d-%H%M%S.lcmlog",
+        wanted, kMaxLogSuffix);
+    return false;
+  }
+  if (*name != wanted) {
+    SplitLogOptions first = log;
+    first.path = wanted;
+    spdlog::warn("{} exists (a log is never overwritten): logging to {}", SplitLog::part_path(first, 0), *name);
+  }
+  return true;
+}
+
 // The recorder's options from the flags; false if the file name pattern
-// expands to nothing.
+// expands to nothing or --increment finds no unused name.
 bool fill_recorder_options(LoggerFlags& f) {
   RecorderOptions& o = f.options;
   o.log.path = ivoa::expand_time_pattern(f.file);
@@ -246,6 +278,7 @@ bool fill_recorder_options(LoggerFlags& f) {
     return false;
   }
   o.log.split_bytes = static_cast<uint64_t>(f.split_mb * 1e6);
+  if (f.increment && !pick_unused_name(o.log)) return false;
   o.log.overwrite = f.force;
   o.log.sidecars = !f.no_sidecar;
   o.log.identity = {"ivoa-logger", IVOA_VERSION, IVOA_GIT_DESCRIBE, hostname(), "", o.channels, o.exclude};

@@ -67,6 +67,32 @@ set -e
 [ $code = 4 ] && grep -q "use --force" "$out/exists.err" || { echo "FAIL: existing file: exit $code"; exit 1; }
 echo "OK: an existing log is refused with exit 4"
 
+# With --increment (what record.pmd passes, for a respawned logger given a
+# fixed name) the existing log is kept byte for byte and the next free
+# numbered name records the whole session, split or not.
+kept=$(sha256sum <"$out/limit/out.lcmlog")
+for n in 1 2; do
+  "$B/bin/ivoa-logger" --lcm-url "file://$input?speed=0" --increment "$out/limit/out.lcmlog" 2>>"$out/increment.err"
+done
+"$B/bin/ivoa-logger" --lcm-url "file://$input?speed=0" -i --split-mb 1 "$out/limit/out.lcmlog" 2>>"$out/increment.err"
+"$B/bin/ivoa-logger" --lcm-url "file://$input?speed=0" -i --split-mb 1 "$out/limit/out.lcmlog" 2>>"$out/increment.err"
+[ "$(sha256sum <"$out/limit/out.lcmlog")" = "$kept" ] || { echo "FAIL: --increment changed the existing log"; exit 1; }
+grep -q "out.lcmlog exists (a log is never overwritten): logging to .*out-1.lcmlog" "$out/increment.err" ||
+  { echo "FAIL: no warning naming the new file"; cat "$out/increment.err"; exit 1; }
+grep -q "out.lcmlog.00 exists (a log is never overwritten): logging to .*out-1.lcmlog" "$out/increment.err" ||
+  { echo "FAIL: no warning naming the split log's first part"; cat "$out/increment.err"; exit 1; }
+for f in out-1.lcmlog out-2.lcmlog; do
+  "$B/bin/ivoa-log-check" --json "$out/$f.json" "$out/limit/$f" >/dev/null
+  grep -q '"events": 40' "$out/$f.json" || { echo "FAIL: $f does not hold the 40 events"; exit 1; }
+done
+[ -f "$out/limit/out.lcmlog.00" ] && [ -f "$out/limit/out-1.lcmlog.00" ] || { echo "FAIL: split parts"; ls "$out/limit"; exit 1; }
+set +e
+"$B/bin/ivoa-logger" --lcm-url "file://$input?speed=0" -i -f "$out/limit/x.lcmlog" 2>/dev/null
+code=$?
+set -e
+[ $code = 2 ] || { echo "FAIL: --increment with --force: exit $code, expected 2"; exit 1; }
+echo "OK: --increment keeps the existing logs and records to out-1, out-2 (and out-1.lcmlog.00 when split)"
+
 mkdir "$out/tmpfs" "$out/work"
 if unshare -m true 2>/dev/null; then
   unshare -m "$0" --on-full-tmpfs "$input" "$out/tmpfs" "$out/work"

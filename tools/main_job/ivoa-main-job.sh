@@ -148,6 +148,7 @@ record_session() {
 if [ $live = 1 ]; then
   [ -f "$SHIPPED" ] || { echo "ivoa-main-job: no shipped model at $SHIPPED" >&2; exit 3; }
   mkdir -p "$out/live"
+  rm -f "$out/live/live.lcmlog" "$out/live/live.lcmlog.json"  # a rerun scores this run, not the last
   step "Running the shipped model live on the simulator (sim.pmd: simulator, detector, monitor, introspection, logger, viewer)"
   in_lcm_net 0 "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
     --set SEED=41 --set FRAMES=60 --set RATE=$RATE --set MODEL="$SHIPPED" \

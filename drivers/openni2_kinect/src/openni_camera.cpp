@@ -11,6 +11,7 @@
 #include <OpenNI.h>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/file_names.hpp"
 #include "ivoa/core/process.hpp"
 
 namespace ivoa::openni2_kinect {
@@ -63,23 +64,22 @@ bool pick_mode(const openni::SensorInfo* info, openni::PixelFormat format, openn
 // the session it recorded before; refusing instead would stop the depth
 // stream the rest of the system needs.
 std::string claim_record_file(const std::string& path) {
-  const std::filesystem::path p(path);
-  for (int n = 0; n <= kMaxRecordingSuffix; ++n) {
-    const std::string name =
-        n == 0 ? path
-               : (p.parent_path() / (p.stem().string() + "-" + std::to_string(n) + p.extension().string())).string();
-    const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  const auto name = first_free_numbered_name(path, kMaxRecordingSuffix, [](const std::string& candidate) {
+    const int fd = ::open(candidate.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd >= 0) {
       ::close(fd);
-      if (n > 0) spdlog::warn("{} exists (a recording is never overwritten): recording to {}", path, name);
-      return name;
+      return true;
     }
-    if (errno != EEXIST) throw DeviceError(name + ": cannot record: " + std::strerror(errno), kExitIoError);
-  }
-  throw DeviceError(path + ": cannot record: it and " + std::to_string(kMaxRecordingSuffix) +
-                        " numbered variants exist (name recordings with a time pattern such as "
-                        "kinect-%Y%m%d-%H%M%S.oni)",
-                    kExitIoError);
+    if (errno == EEXIST) return false;
+    throw DeviceError(candidate + ": cannot record: " + std::strerror(errno), kExitIoError);
+  });
+  if (!name)
+    throw DeviceError(path + ": cannot record: it and " + std::to_string(kMaxRecordingSuffix) +
+                          " numbered variants exist (name recordings with a time pattern such as "
+                          "kinect-%Y%m%d-%H%M%S.oni)",
+                      kExitIoError);
+  if (*name != path) spdlog::warn("{} exists (a recording is never overwritten): recording to {}", path, *name);
+  return *name;
 }
 
 // Set on the OniFile player's thread when a recording that does not loop

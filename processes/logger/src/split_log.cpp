@@ -15,17 +15,17 @@ SplitLog::SplitLog(SplitLogOptions options, SessionCounters& counters)
 
 SplitLog::~SplitLog() = default;
 
-std::string SplitLog::part_path(int part) const {
-  if (options_.split_bytes == 0) return options_.path;
+std::string SplitLog::part_path(const SplitLogOptions& options, int part) {
+  if (options.split_bytes == 0) return options.path;
   char suffix[16];
   std::snprintf(suffix, sizeof(suffix), ".%02d", part);
-  return options_.path + suffix;
+  return options.path + suffix;
 }
 
 void SplitLog::open_part(int part, int64_t timestamp) {
   logio::LogWriterOptions writer_options;
   writer_options.overwrite = options_.overwrite;
-  writer_ = std::make_unique<logio::LogWriter>(part_path(part), writer_options);
+  writer_ = std::make_unique<logio::LogWriter>(part_path(options_, part), writer_options);
   files_.push_back(writer_->path());
   counters_.files.fetch_add(1);
   summary_ = logio::LogSummary();

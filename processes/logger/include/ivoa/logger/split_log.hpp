@@ -43,8 +43,10 @@ class SplitLog {
 
   const std::vector<std::string>& files() const { return files_; }
 
+  // The name of file `part` (0, 1, ...) of a log with these options.
+  static std::string part_path(const SplitLogOptions& options, int part);
+
  private:
-  std::string part_path(int part) const;
   void open_part(int part, int64_t timestamp);
   void write_to_current(const std::string& channel, int64_t timestamp, const std::vector<uint8_t>& data);
   void update_sidecar(bool complete, const std::string& error);
