@@ -12,7 +12,10 @@
 namespace ivoa {
 
 MonitorNode::MonitorNode(Bus& bus, Heartbeat& heartbeat, MonitorNodeOptions options)
-    : bus_(bus), heartbeat_(heartbeat), options_(std::move(options)) {
+    : bus_(bus),
+      heartbeat_(heartbeat),
+      options_(std::move(options)),
+      calibration_wait_(heartbeat_, options_.calibration_channel) {
   bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
   bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
                                     [this](const rig_calibration_t& m, const ReceiveInfo&) { on_calibration(m); });
@@ -20,16 +23,12 @@ MonitorNode::MonitorNode(Bus& bus, Heartbeat& heartbeat, MonitorNodeOptions opti
                                 [this](const depth_image_t& m, const ReceiveInfo&) { on_depth(m); });
   bus_.subscribe<obstacle_grid_t>(options_.stereo_channel,
                                   [this](const obstacle_grid_t& m, const ReceiveInfo&) { on_stereo(m); });
-  heartbeat_.set_counter(kFramesWithoutCalibration, 0);
   heartbeat_.set_state("waiting for calibration");
 }
 
 bool MonitorNode::has_calibration(const std::string& where) {
   if (pipeline_) return true;
-  heartbeat_.add_to_counter(kFramesWithoutCalibration, 1);
-  if (!std::exchange(warned_no_calibration_, true))
-    spdlog::warn("skipping {}: no {} received yet (such inputs are counted as {})", where, options_.calibration_channel,
-                 kFramesWithoutCalibration);
+  calibration_wait_.skip(where);
   return false;
 }
 
@@ -44,6 +43,7 @@ void MonitorNode::on_calibration(const rig_calibration_t& msg) {
     }
     pipeline_ = std::make_unique<monitor::LabelingPipeline>(rig, options_.grid, options_.monitor, options_.pairing);
     calibration_bytes_ = std::move(bytes);
+    calibration_wait_.end();
     spdlog::info("calibration '{}': depth {}x{}, {} query cells ({} with a full patch in the left image)", rig.rig_name,
                  rig.depth.width, rig.depth.height, pipeline_->grid().size(), pipeline_->grid().count_in_image());
     heartbeat_.set_state("running");

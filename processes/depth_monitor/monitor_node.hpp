@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/core/calibration_wait.hpp"
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/monitor/labeling_pipeline.hpp"
@@ -42,10 +43,10 @@ class MonitorNode {
   Bus& bus_;
   Heartbeat& heartbeat_;
   MonitorNodeOptions options_;
+  CalibrationWait calibration_wait_;
   std::vector<uint8_t> calibration_bytes_;  // the calibration the pipeline was built for
   std::unique_ptr<monitor::LabelingPipeline> pipeline_;
   int64_t unmatched_ = 0, labelled_cells_ = 0;
-  bool warned_no_calibration_ = false;
 };
 
 }  // namespace ivoa

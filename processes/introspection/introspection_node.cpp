@@ -155,7 +155,7 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
     if (frames_.dropped() != dropped_before) heartbeat_.count_dropped();  // the status table's DROP column
   });
   if (model_->info().views == 2) {
-    heartbeat_.set_counter(kFramesWithoutCalibration, 0);
+    calibration_wait_.emplace(heartbeat_, options_.calibration_channel);
     bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
                                       [this](const rig_calibration_t& m, const ReceiveInfo&) { on_calibration(m); });
   }
@@ -253,12 +253,10 @@ cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& wh
   if (model_->info().views == 1) return left;
   update_warp();
   if (!warp_) {
-    heartbeat_.add_to_counter(kFramesWithoutCalibration, 1);
-    if (!std::exchange(warned_no_calibration_, true))
-      spdlog::warn("skipping {}: no {} yet, which a two-view model needs (such frames are counted as {})", where,
-                   options_.calibration_channel, kFramesWithoutCalibration);
+    calibration_wait_->skip(where, ", which a two-view model needs");
     return {};
   }
+  calibration_wait_->end();
   try {
     return warp_->stack(left, decode_image(frame.msg.right));
   } catch (const std::exception& e) {

@@ -26,6 +26,7 @@
 
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/calibration.hpp"
+#include "ivoa/core/calibration_wait.hpp"
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/ground_warp.hpp"
 #include "ivoa/core/heartbeat.hpp"
@@ -122,8 +123,8 @@ class IntrospectionNode {
   int mc_passes_;
   LatestMailbox<Frame> frames_;
   RecentGrids grids_;
-  bool warned_other_detector_ = false;  // LCM thread only
-  bool warned_no_calibration_ = false;  // worker thread only
+  bool warned_other_detector_ = false;               // LCM thread only
+  std::optional<CalibrationWait> calibration_wait_;  // two-view models; worker thread only
   std::mutex calibration_mutex_;
   std::vector<uint8_t> calibration_bytes_;  // the newest calibration's content (utime zeroed)
   std::optional<RigCalibration> new_rig_;   // handed to the worker, which builds the warp

@@ -25,8 +25,8 @@ StereoDetectorNode::StereoDetectorNode(Bus& bus, Heartbeat& heartbeat, StereoDet
     : bus_(bus),
       heartbeat_(heartbeat),
       options_(std::move(options)),
-      mailbox_(static_cast<size_t>(std::max(options_.queue_frames, 1))) {
-  heartbeat_.set_counter(kFramesWithoutCalibration, 0);
+      mailbox_(static_cast<size_t>(std::max(options_.queue_frames, 1))),
+      calibration_wait_(heartbeat_, options_.calibration_channel) {
   heartbeat_.set_counter(kCalibrationsApplied, 0);
 }
 
@@ -117,14 +117,10 @@ void StereoDetectorNode::run_worker() {
 void StereoDetectorNode::process(const Frame& frame) {
   const std::string name = frame_name(options_.stereo_channel, frame.msg);
   if (!update_detector()) {
-    heartbeat_.add_to_counter(kFramesWithoutCalibration, 1);
-    if (!warned_no_calibration_)
-      spdlog::warn("skipping {}: no calibration yet on {} (frames are counted as {})", name,
-                   options_.calibration_channel, kFramesWithoutCalibration);
-    warned_no_calibration_ = true;
+    calibration_wait_.skip(name);
     return;
   }
-  warned_no_calibration_ = false;
+  calibration_wait_.end();
   const double start_ms = monotonic_ms();
   obstacle_grid_t out = make_obstacle_grid(*grid_, detector_->name(), frame.msg.utime);
   try {

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/core/calibration_wait.hpp"
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/mailbox.hpp"
@@ -94,7 +95,7 @@ class StereoDetectorNode {
   uint64_t detector_version_ = 0;
   std::unique_ptr<stereo::ObstacleDetector> detector_;
   std::unique_ptr<QueryGrid> grid_;
-  bool warned_no_calibration_ = false;
+  CalibrationWait calibration_wait_;
 
   std::atomic<bool> finished_{false};
   std::atomic<int64_t> published_{0};
