@@ -376,5 +376,36 @@ TEST(DatasetBuilder, FileThatIsNotALogIsNamedAsSuch) {
   }
 }
 
+// A raw log (no depth monitor ran) built with --labels recorded has nothing
+// to label from: refused, naming the way out, and the session built before
+// under that name is kept, not replaced by an empty one.
+TEST(DatasetBuilder, LogWithoutRecordedLabelsIsRefusedAndKeepsTheExistingSession) {
+  test::TempDir dir;
+  const std::string labelled = dir.file("labelled.lcmlog"), raw = dir.file("raw.lcmlog");
+  const auto recorded = write_patterned_labels_log(labelled);
+  test::write_sim_log(raw, kScene, 4, 3);
+  build_session(dir.file("data"), "s", labelled, BuildOptions{});
+
+  SessionBuilder builder(dir.file("data"), "s", BuildOptions{});
+  builder.add_log(raw);
+  try {
+    builder.finish();
+    FAIL() << "a session without labels was written";
+  } catch (const DatasetError& e) {
+    const std::string why = e.what();
+    EXPECT_NE(why.find("raw.lcmlog: no INTROSPECTION_LABELS message"), std::string::npos) << why;
+    EXPECT_NE(why.find("--labels jppc"), std::string::npos) << why;
+  }
+  EXPECT_EQ(SessionReader(dir.file("data") + "/s").size(), recorded.size());
+
+  BuildOptions rerun;  // and re-labelling needs depth frames
+  rerun.labels = "jppc";
+  rerun.depth_channel = "NO_SUCH_DEPTH";
+  SessionBuilder relabel(dir.file("data"), "s", rerun);
+  relabel.add_log(raw);
+  EXPECT_THROW(relabel.finish(), DatasetError);
+  EXPECT_EQ(SessionReader(dir.file("data") + "/s").size(), recorded.size());
+}
+
 }  // namespace
 }  // namespace ivoa::dataset

@@ -76,6 +76,7 @@ struct SessionBuilder::Impl {
   bool evidence_warned = false;
   std::map<int64_t, Truth> truths;           // utime -> simulator truth
   std::deque<introspection_labels_t> ready;  // labels waiting for their frame's truth
+  int64_t label_sources = 0;  // messages the labels come from: recorded labels, or depth to re-label with
 
   bool rerun() const { return options.labels != kRecordedLabels; }
   void bad(const std::string& what);
@@ -92,12 +93,26 @@ struct SessionBuilder::Impl {
   std::vector<std::pair<size_t, cv::Mat>> labelled_patches(const introspection_labels_t& labels, const cv::Mat& views,
                                                            const std::vector<int>& sides) const;
   void open_writer();
+  std::string no_label_source() const;
 };
 
 void SessionBuilder::Impl::bad(const std::string& what) {
   ++report.bad_messages;
   if (report.problems.size() < 100) report.problems.push_back(what);
   spdlog::warn("skipped: {}", what);
+}
+
+// Why a session whose logs hold nothing to label from is refused, before an
+// existing session of that name is replaced by an empty one.
+std::string SessionBuilder::Impl::no_label_source() const {
+  std::string logs;
+  for (const auto& log : info.logs) logs += (logs.empty() ? "" : ", ") + log;
+  const std::string kept = "; session '" + session + "' not written (an existing one is kept)";
+  if (rerun())
+    return logs + ": no " + options.depth_channel + " message after the calibration, so the depth monitor has " +
+           "nothing to label from" + kept;
+  return logs + ": no " + options.labels_channel + " message after the calibration: recorded without the depth " +
+         "monitor? Label it offline from its depth frames with --labels jppc (or dense)" + kept;
 }
 
 void SessionBuilder::Impl::open_writer() {
@@ -164,6 +179,7 @@ void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
 
 void SessionBuilder::Impl::on_depth(const logio::LogEvent& e) {
   if (!rerun()) return;
+  ++label_sources;
   depth_image_t msg;
   if (!logio::decode(e, msg))
     return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.depth_image_t");
@@ -179,6 +195,7 @@ void SessionBuilder::Impl::on_depth(const logio::LogEvent& e) {
 
 void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
   if (rerun()) return;
+  ++label_sources;
   introspection_labels_t msg;
   if (!logio::decode(e, msg))
     return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.introspection_labels_t");
@@ -411,6 +428,7 @@ void SessionBuilder::add_log(const std::string& path, const ProgressCallback& pr
 
 BuildReport SessionBuilder::finish() {
   Impl& m = *impl_;
+  if (m.label_sources == 0) throw DatasetError(m.no_label_source());
   if (m.pipeline) m.take(m.pipeline->flush());
   m.emit_ready(true);
   m.open_writer();  // an empty session is still written, so it can be listed

@@ -83,6 +83,8 @@ class SessionBuilder {
   // (byte offset) goes to the report. Throws DatasetError for a log that
   // cannot be opened or holds no RIG_CALIBRATION.
   void add_log(const std::string& path, const ProgressCallback& progress = {});
+  // Writes the session. Throws DatasetError, writing nothing, if its logs
+  // hold nothing to label from (no labels recorded, or no depth to re-label).
   BuildReport finish();
 
  private:
