@@ -171,6 +171,6 @@ int main(int argc, char** argv) {
     return drive(cl.driver, sim_config, common.lcm_url, cl.status_channel);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
-    return ivoa::kExitFailure;
+    return e.exit_code();
   }
 }

@@ -138,6 +138,6 @@ int main(int argc, char** argv) {
     return code;
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
-    return ivoa::kExitFailure;
+    return e.exit_code();
   }
 }

@@ -172,7 +172,7 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
     bus = std::make_unique<ivoa::Bus>(common.lcm_url);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
-    return ivoa::kExitFailure;
+    return e.exit_code();
   }
   options.log.identity.lcm_url = bus->url();
   int code = ivoa::kExitOk;

@@ -93,7 +93,7 @@ int run_detector(const std::string& lcm_url, const DetectorFlags& f,
     return code;
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
-    return ivoa::kExitFailure;
+    return e.exit_code();
   }
 }
 

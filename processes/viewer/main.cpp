@@ -3,6 +3,7 @@
 // heatmap and the uncertainty heatmap; shows them in a window where there
 // is a display (--window), and writes PNGs (--out-dir) and/or a video (--video).
 #include <array>
+#include <filesystem>
 #include <optional>
 #include <set>
 #include <string>
@@ -105,6 +106,7 @@ std::array<bool, ivoa::viewer::kNumParts> parts_in_log(const std::string& url, c
   std::array<bool, kNumParts> parts{};
   const std::string path = url.substr(7, url.find('?') - 7);  // file://PATH?options
   std::set<std::string> channels;
+  if (!std::filesystem::exists(path)) return parts;  // LCM refuses the URL next, saying so
   try {
     ivoa::logio::LogReader reader(path, {/*resync=*/true, /*headers_only=*/true});
     ivoa::logio::LogEvent event;
@@ -146,7 +148,8 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Viewer: left image with the ground grid (label or stereo verdict rings, introspection prediction dots; "
       "TP green, TN blue, FP orange, FN red), P(FP)+P(FN) and uncertainty heatmaps, in a window and/or as "
-      "PNG files and video. Exit codes: 0 ok, 1 LCM failure, 2 bad flags, 4 cannot write the output."};
+      "PNG files and video. Exit codes: 0 ok, 1 LCM failure, 2 bad flags, 3 no such log to replay, 4 cannot write "
+      "the output."};
   ivoa::CommonOptions common;
   ivoa::viewer::ViewerOptions options;
   ivoa::add_common_options(app, common);
@@ -166,7 +169,7 @@ int main(int argc, char** argv) {
     return run_viewer(common.lcm_url, options, *window, offline);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
-    return ivoa::kExitFailure;
+    return e.exit_code();
   } catch (const ivoa::viewer::OutputError& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitIoError;

@@ -106,6 +106,30 @@ TEST(Bus, BadUrlThrowsWithTheUrl) {
     FAIL();
   } catch (const BusError& e) {
     EXPECT_NE(std::string(e.what()).find("nonsense://x"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("LCM URLs: udpm://"), std::string::npos) << e.what();
+    EXPECT_EQ(e.exit_code(), kExitUsage);
+  }
+}
+
+// A log to replay that is not there is an unusable input file (exit 3),
+// said as such: not a hint about multicast routes.
+TEST(Bus, MissingLogToReplayIsBadInputNamingTheFile) {
+  try {
+    Bus bus("file:///nonexistent/bus_test/session.lcmlog?speed=0");
+    FAIL();
+  } catch (const BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("the log '/nonexistent/bus_test/session.lcmlog' does not exist"),
+              std::string::npos)
+        << e.what();
+    EXPECT_EQ(std::string(e.what()).find("multicast"), std::string::npos) << e.what();
+    EXPECT_EQ(e.exit_code(), kExitBadInput);
+  }
+  try {
+    Bus bus("file:///nonexistent/bus_test/out.lcmlog?mode=w");
+    FAIL();
+  } catch (const BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot write the log"), std::string::npos) << e.what();
+    EXPECT_EQ(e.exit_code(), kExitIoError);
   }
 }
 

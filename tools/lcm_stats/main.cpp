@@ -116,6 +116,6 @@ int main(int argc, char** argv) {
     return watch(common.lcm_url, w);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
-    return ivoa::kExitFailure;
+    return e.exit_code();
   }
 }

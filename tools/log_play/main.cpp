@@ -53,6 +53,6 @@ int main(int argc, char** argv) {
     return ivoa::kExitUsage;
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
-    return ivoa::kExitFailure;
+    return e.exit_code();
   }
 }

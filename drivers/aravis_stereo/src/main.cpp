@@ -195,7 +195,7 @@ int main(int argc, char** argv) {
     exit_code = driver.run();
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
-    exit_code = ivoa::kExitFailure;
+    exit_code = e.exit_code();
   }
   arv_shutdown();
   return exit_code;

@@ -209,6 +209,6 @@ int main(int argc, char** argv) {
     return exit_code;
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
-    return ivoa::kExitFailure;
+    return e.exit_code();
   }
 }

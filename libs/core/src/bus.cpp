@@ -1,6 +1,7 @@
 #include "ivoa/core/bus.hpp"
 
 #include <cstdlib>
+#include <filesystem>
 
 #include <spdlog/spdlog.h>
 
@@ -17,6 +18,29 @@ std::string default_lcm_url() {
   return with_receive_buffer(env && *env ? env : kProjectDefaultUrl);
 }
 
+namespace {
+
+// Why LCM would not start on `url`, as far as can be told from outside it.
+BusError cannot_start(const std::string& url) {
+  const std::string what = "cannot start LCM on '" + url + "'";
+  if (url.rfind("file://", 0) == 0) {
+    const std::string rest = url.substr(7);
+    const std::string path = rest.substr(0, rest.find('?'));
+    const bool reading = rest.find("mode=w") == std::string::npos && rest.find("mode=a") == std::string::npos;
+    if (reading && !std::filesystem::exists(path))
+      return BusError(what + ": the log '" + path + "' does not exist", kExitBadInput);
+    if (reading) return BusError(what + ": cannot read the log '" + path + "'", kExitBadInput);
+    return BusError(what + ": cannot write the log '" + path + "' (does its folder exist?)", kExitIoError);
+  }
+  if (url.rfind("udpm://", 0) == 0)
+    return BusError(what + ": is there a multicast route? e.g. ip route add 224.0.0.0/4 dev lo");
+  return BusError(
+      what + " (LCM URLs: udpm://GROUP:PORT?ttl=0, file://LOG?speed=1 to replay, file://LOG?mode=w, memq://)",
+      kExitUsage);
+}
+
+}  // namespace
+
 // Owns the std::function; LCM's C API calls it through `user`.
 struct Bus::Subscription {
   RawHandler handler;
@@ -28,9 +52,7 @@ struct Bus::Subscription {
 
 Bus::Bus(const std::string& url) : url_(url.empty() ? default_lcm_url() : url) {
   lcm_ = std::make_unique<lcm::LCM>(url_);
-  if (!lcm_->good())
-    throw BusError("cannot start LCM on '" + url_ +
-                   "' (for udpm: is there a multicast route? e.g. ip route add 224.0.0.0/4 dev lo)");
+  if (!lcm_->good()) throw cannot_start(url_);
 }
 
 Bus::~Bus() = default;

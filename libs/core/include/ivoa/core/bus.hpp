@@ -14,6 +14,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "ivoa/core/message_counts.hpp"
+#include "ivoa/core/process.hpp"
 
 namespace ivoa {
 
@@ -29,7 +30,14 @@ std::string with_receive_buffer(const std::string& url);
 
 class BusError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit BusError(const std::string& what, int exit_code = kExitFailure)
+      : std::runtime_error(what), exit_code_(exit_code) {}
+  // What a process exits with: kExitBadInput for a log that cannot be read
+  // (file://), kExitIoError for one that cannot be written, else kExitFailure.
+  int exit_code() const { return exit_code_; }
+
+ private:
+  int exit_code_;
 };
 
 struct ReceiveInfo {
@@ -43,8 +51,8 @@ class Bus {
   using RawHandler = std::function<void(const void* data, size_t size, const ReceiveInfo&)>;
   using ErrorHandler = std::function<void(const std::string& what)>;
 
-  // Empty url = default_lcm_url(). Throws BusError if LCM cannot start
-  // (for udpm this usually means no multicast route).
+  // Empty url = default_lcm_url(). Throws BusError if LCM cannot start, with
+  // the likely reason: for udpm no multicast route, for file:// no such log.
   explicit Bus(const std::string& url = "");
   ~Bus();
   Bus(const Bus&) = delete;
