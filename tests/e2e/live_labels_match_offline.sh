@@ -82,3 +82,13 @@ for k in common: counts[live[k]["label"]] = counts.get(live[k]["label"], 0) + 1
 print(f"OK: {len(live_frames)}/{frames} frames, {len(common)} samples: live labels == offline labels, patches equal; "
       f"labels (0 TP, 1 TN, 2 FP, 3 FN): {dict(sorted(counts.items()))}")
 PY
+
+# The failure causes of the same log: without --rate the frames' times give
+# the driver's 4 Hz, and every frame is re-rendered with the verdict the live
+# detector gave (at the tool's default 2 Hz, half would be skipped).
+"$B/bin/ivoa-sim-causes" --out "$out/causes.csv" "$out/live.lcmlog" > "$out/causes.txt" 2>&1 ||
+  { cat "$out/causes.txt"; exit 1; }
+grep -q "live: recorded at 4 Hz" "$out/causes.txt" &&
+  grep -qE "failure cells in $frames frames \(0 frames skipped\); re-rendered verdict matches the recorded one for [0-9]+ \(100.0 %\)" \
+    "$out/causes.txt" || { echo "FAIL: ivoa-sim-causes did not reproduce every frame"; cat "$out/causes.txt"; exit 1; }
+echo "OK: ivoa-sim-causes found the 4 Hz rate and reproduced the live verdicts of all $frames frames"

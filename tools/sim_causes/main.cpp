@@ -49,7 +49,7 @@ struct Options {
   std::string out;
   std::string scene_file;  // empty: <scene_dir>/<logged scene name>.yaml
   std::string scene_dir = IVOA_SIM_SCENES_DIR;
-  causes::SessionTiming timing;
+  causes::SessionTiming timing{/*start_utime=*/0, /*rate_hz=*/0, /*noise_seed=*/0};  // rate 0: from the log
   int64_t start_utime = -1;  // < 0: the utime of the logged frame with seq 0
   std::string dataset;       // failure cells from this dataset's sessions instead of the logs' labels
   stereo::DetectorConfig detector;
@@ -183,6 +183,16 @@ int64_t session_start(const SessionLog& log, const Options& opt, const std::stri
                            ": the log does not start at the session's first frame (no seq 0); give --start-utime");
 }
 
+// The driver's --rate from the log: it stamps frame k at start + k / rate,
+// so the latest frame gives the rate to a microsecond over the session's
+// span. A one-frame session needs none.
+double session_rate(const SessionLog& log, int64_t start_utime) {
+  for (auto it = log.truth.rbegin(); it != log.truth.rend(); ++it)
+    if (it->second.seq > 0 && it->first > start_utime)
+      return static_cast<double>(it->second.seq) * 1e6 / static_cast<double>(it->first - start_utime);
+  return 1.0;
+}
+
 struct Tally {
   std::map<std::pair<int, std::string>, int64_t> by_label_and_cause;
   int64_t failures = 0, reproduced = 0, frames = 0, skipped_frames = 0, bad_messages = 0;
@@ -260,6 +270,10 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
   const std::string scene_file = opt.scene_file.empty() ? opt.scene_dir + "/" + first.scene + ".yaml" : opt.scene_file;
   causes::SessionTiming timing = opt.timing;
   timing.start_utime = session_start(log, opt, path);
+  if (timing.rate_hz == 0) {
+    timing.rate_hz = session_rate(log, timing.start_utime);
+    spdlog::info("{}: recorded at {:.6g} Hz", session, timing.rate_hz);
+  }
   causes::CauseFinder finder(sim::load_scene_spec(scene_file), static_cast<uint64_t>(first.seed), *log.rig, timing,
                              log.labels.front().detector, opt.detector, opt.variants);
   out.tally.unexplained_fixed.resize(opt.variants.size());
@@ -364,9 +378,9 @@ void add_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--scene", opt.scene_file, "scene file (default: <scene-dir>/<the logged scene name>.yaml)")
       ->check(CLI::ExistingFile);
   app.add_option("--scene-dir", opt.scene_dir, "where the logged scenes' files are")->capture_default_str();
-  app.add_option("--rate", opt.timing.rate_hz, "the simulator driver's --rate (frames per second of session time)")
-      ->check(ivoa::positive_number())
-      ->capture_default_str();
+  app.add_option("--rate", opt.timing.rate_hz,
+                 "the simulator driver's --rate (frames per second of session time; default: from the frames' times)")
+      ->check(ivoa::positive_number());
   app.add_option("--noise-seed", opt.timing.noise_seed, "the simulator driver's --noise-seed")->capture_default_str();
   app.add_option("--start-utime", opt.start_utime,
                  "utime of the session's frame 0 (default: the logged frame with seq 0)")

@@ -38,7 +38,7 @@ class ReplayError : public std::runtime_error {
 // How the simulator driver recorded the session (its defaults are the driver's).
 struct SessionTiming {
   int64_t start_utime = 0;  // utime of frame 0
-  double rate_hz = 2.0;     // frames per second of session time (the main job's)
+  double rate_hz = 2.0;     // frames per second of session time (the driver's --rate)
   uint64_t noise_seed = 0;  // the driver's --noise-seed
 };
 
