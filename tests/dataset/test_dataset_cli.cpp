@@ -53,5 +53,15 @@ TEST(DatasetBuild, DetectorFlagOutOfRangeIsAUsageError) {
   EXPECT_TRUE(contains(r.output, "rect_scale must be in (0, 1]")) << r.output;
 }
 
+// A misspelt --labels is a usage error listing what it takes, before any log is read.
+TEST(DatasetBuild, UnknownLabelSourceIsAUsageErrorListingTheChoices) {
+  test::TempDir dir;
+  std::ofstream(dir.file("a.lcmlog")) << "never read";
+  const auto r = test::run_command("timeout 60 " IVOA_DATASET_EXE " build --out " + dir.file("data") +
+                                   " --labels jpcc " + dir.file("a.lcmlog"));
+  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+  EXPECT_TRUE(contains(r.output, "jpcc not in {recorded,jppc,dense}")) << r.output;
+}
+
 }  // namespace
 }  // namespace ivoa

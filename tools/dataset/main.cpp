@@ -22,6 +22,7 @@
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/logio/session_name.hpp"
 #include "ivoa/stereo/config.hpp"
+#include "ivoa/stereo/detector.hpp"
 #include "ivoa/stereo/options.hpp"
 
 namespace fs = std::filesystem;
@@ -76,8 +77,13 @@ int build_session(const std::string& out, const std::string& session, const std:
   if (r.evidence_mismatches > 0)
     std::printf("%-28s %lld samples' evidence left NaN: the re-run detector's verdict differs from the label's\n", "",
                 static_cast<long long>(r.evidence_mismatches));
+  // Damage and bad messages are skipped, not fatal: the session holds what
+  // could be read, as every offline tool does with a damaged log.
   for (const auto& p : r.problems) spdlog::warn("{}: {}", session, p);
-  return r.problems.empty() ? kExitOk : kExitBadInput;
+  if (!r.problems.empty())
+    std::printf("%-28s %zu problem(s) skipped (warnings above: damage with its byte offset, bad messages)\n", "",
+                r.problems.size());
+  return kExitOk;
 }
 
 int run_build(const std::string& out, const std::string& session, const std::vector<std::string>& logs,
@@ -147,6 +153,13 @@ std::string check_fraction(const std::string& text) {
   return number && v > 0 && v <= 1 ? std::string() : "must be a number in (0, 1], not '" + text + "'";
 }
 
+// What --labels takes: the recorded labels, or a detector to re-run.
+std::vector<std::string> label_sources() {
+  std::vector<std::string> sources{dataset::kRecordedLabels};
+  for (const auto& name : stereo::detector_names()) sources.push_back(name);
+  return sources;
+}
+
 struct BuildCommand {
   CLI::App* command = nullptr;
   std::string out, session;
@@ -163,7 +176,8 @@ void add_build_command(CLI::App& app, BuildCommand& b) {
   build
       ->add_option("--labels", options.labels,
                    "'recorded' (the log's INTROSPECTION_LABELS) or a detector to re-run offline: jppc, dense")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::IsMember(label_sources()));
   build->add_option("--session", b.session, "session name for all logs (default: per log, from the file name)");
   build
       ->add_option("--environment", options.environment,
