@@ -43,6 +43,7 @@ void write_synthetic_session(const std::string& dataset_root, const std::string&
   info.labels_from = "rerun";
   info.evidence_size = s.evidence_size;
   info.patch_scale = s.patch_scale;
+  info.views = s.views;
   dataset::SessionWriter w(dataset_root, info);
   const int64_t frame = w.add_frame(0, 0, 4 * s.per_class);
   for (int k = 0; k < s.per_class; ++k)
@@ -51,7 +52,9 @@ void write_synthetic_session(const std::string& dataset_root, const std::string&
       sample.frame = frame;
       sample.label = label;
       sample.stereo_state = label == 0 || label == 2 ? 1 : 0;  // TP / FP: the detector said obstacle
-      w.add_sample(sample, pattern(label, rng), evidence_of(label, s.evidence_size));
+      cv::Mat patch = pattern(label, rng);
+      if (s.views == 2) cv::vconcat(patch, patch.clone(), patch);
+      w.add_sample(sample, patch, evidence_of(label, s.evidence_size));
     }
 }
 

@@ -11,6 +11,7 @@ struct SyntheticSession {
   int evidence_size = 0;  // > 0: evidence that follows the class (NaN in the third value)
   std::string detector = "jppc";
   double patch_scale = 0;  // recorded only: every patch is the fixed 100 px square
+  int views = 1;           // 2: each patch stacked over a copy of itself (as a two-view session's)
 };
 
 // Writes session `name` under `dataset_root`: one frame, the classes in turn.

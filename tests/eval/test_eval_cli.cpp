@@ -41,7 +41,10 @@ class EvalCli : public ::testing::Test {
     s.detector = "jppc";
     s.patch_scale = 1.6;
     test::write_synthetic_session(dir_.file("data"), "s", s);
-    std::ofstream(dir_.file("split.yaml")) << "train: [a]\nval: [v]\ntest: [t]\ndense: [d]\nscaled: [s]\n";
+    s.views = 2;
+    test::write_synthetic_session(dir_.file("data"), "b", s);
+    std::ofstream(dir_.file("split.yaml"))
+        << "train: [a]\nval: [v]\ntest: [t]\ndense: [d]\nscaled: [s]\nscaled_two_views: [b]\n";
 
     introspection::TrainConfig c;
     c.dataset = dir_.file("data");
@@ -89,6 +92,14 @@ TEST_F(EvalCli, RefusesPatchesCutUnlikeTheModelsNamingTheSessionAndTheFix) {
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
   EXPECT_TRUE(contains(r.output, "session s has patch scale 1.6")) << r.output;
   EXPECT_TRUE(contains(r.output, "--patch-scale 0")) << r.output;
+}
+
+TEST_F(EvalCli, NamesEveryWayThePatchesDifferAtOnce) {
+  const auto r = eval("scaled_two_views");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "session b has patch scale 1.6 (model: 0), 2 view(s) per patch (model: 1)"))
+      << r.output;
+  EXPECT_TRUE(contains(r.output, "--patch-scale 0 --views 1")) << r.output;
 }
 
 TEST_F(EvalCli, UnknownSplitIsBadInput) {

@@ -1,5 +1,6 @@
 // ivoa-eval: a model's MC-dropout predictions and FC2 embeddings on dataset
 // sessions, and per-frame overlay figures from logs (see README.md).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -60,16 +61,22 @@ struct OutputError : std::runtime_error {
 
 // Refuses a session whose patches the model was not trained on; warns
 // where thinned TN cells bias the overall figures.
+// Both mismatches are named at once, so one rebuild fixes them.
 void check_session_fits(const dataset::SessionInfo& info, const introspection::ModelInfo& model) {
-  if (info.patch_scale != model.patch_scale)
+  std::string differs, flags;
+  if (info.patch_scale != model.patch_scale) {
+    differs = fmt::format("patch scale {} (model: {})", info.patch_scale, model.patch_scale);
+    flags = fmt::format("--patch-scale {}", model.patch_scale);
+  }
+  if (info.views != model.views) {
+    differs += fmt::format("{}{} view(s) per patch (model: {})", differs.empty() ? "" : ", ", info.views, model.views);
+    flags += fmt::format("{}--views {}", flags.empty() ? "" : " ", model.views);
+  }
+  if (!differs.empty())
     throw dataset::DatasetError(
-        fmt::format("session {} has patch scale {}, model {} was trained on {} (build the dataset "
-                    "with --patch-scale {})",
-                    info.session, info.patch_scale, model.id, model.patch_scale, model.patch_scale));
-  if (info.views != model.views)
-    throw dataset::DatasetError("session " + info.session + " has " + std::to_string(info.views) +
-                                " view(s) per patch, model " + model.id + " takes " + std::to_string(model.views) +
-                                " (build the dataset with --views " + std::to_string(model.views) + ")");
+        fmt::format("session {} has {}: model {} was not trained on such patches (build the "
+                    "dataset with {})",
+                    info.session, differs, model.id, flags));
   if (info.tn_kept < 1)
     spdlog::warn(
         "session {} stores {:.0f} % of its TN cells (ivoa-dataset --keep-tn): its per-class accuracies stand, "
@@ -160,6 +167,8 @@ cv::Mat overlay_figure(const Options& o, introspection::IntrospectionModel& mode
   return figure;
 }
 
+using SessionList = std::vector<std::pair<std::string, std::string>>;  // (split, session)
+
 // Overlays of one session's log, every overlay_every-th labelled frame, until
 // `written` reaches max_overlays.
 void write_log_overlays(const Options& o, introspection::IntrospectionModel& model, const std::string& log,
@@ -189,7 +198,7 @@ void write_log_overlays(const Options& o, introspection::IntrospectionModel& mod
   if (const std::string why = in.not_a_log(); !why.empty()) spdlog::warn("{}: {}: no overlays from it", log, why);
 }
 
-int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
+int write_overlays(const Options& o, introspection::IntrospectionModel& model, const SessionList& evaluated) {
   std::error_code error;
   fs::create_directories(o.out + "/overlays", error);
   if (error) throw OutputError(o.out + "/overlays: cannot create the folder: " + error.message());
@@ -201,13 +210,14 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model) {
       spdlog::warn("{}: no session '{}' in {}: no labels for its overlays, skipped", log, session, o.dataset);
       continue;
     }
+    if (std::none_of(evaluated.begin(), evaluated.end(), [&](const auto& s) { return s.second == session; }))
+      spdlog::warn("{}: session '{}' is not in the splits evaluated: its overlays are not of the figures' sessions",
+                   log, session);
     write_log_overlays(o, model, log, labelled_frames(dataset::SessionReader(dir)), written);
   }
   spdlog::info("wrote {} overlay figures to {}/overlays", written, o.out);
   return written;
 }
-
-using SessionList = std::vector<std::pair<std::string, std::string>>;  // (split, session)
 
 // A split named twice is evaluated once (its samples would count twice);
 // load_split already refuses a session in two splits.
@@ -304,7 +314,7 @@ int evaluate(const Options& o) {
   if (error) throw OutputError(o.out + ": cannot create the output folder: " + error.message());
   const double samples = write_predictions(o, sessions, *model);
   write_eval_json(o, *model, sessions, samples);
-  if (!o.logs.empty()) write_overlays(o, *model);
+  if (!o.logs.empty()) write_overlays(o, *model, sessions);
   std::printf("predictions: %s/predictions.csv (%.0f samples), embeddings: %s/embeddings.f32\n", o.out.c_str(), samples,
               o.out.c_str());
   return kExitOk;
@@ -322,6 +332,7 @@ int main(int argc, char** argv) {
   add_options(app, o);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("eval", common.log_level);
+  while (o.out.size() > 1 && o.out.back() == '/') o.out.pop_back();  // "eval/" prints as eval/x, not eval//x
   try {
     return evaluate(o);
   } catch (const OutputError& e) {
