@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The README's test command: installs what is missing, builds, runs every test.
-# Extra arguments go to ctest (e.g. -L unit, -R jpp, --rerun-failed).
+# Extra arguments go to ctest (e.g. -L unit, -L stereo, -R Jpp, --rerun-failed).
 source "$(dirname "$0")/setup/common.sh"
 install_packages
 build_project
