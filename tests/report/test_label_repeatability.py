@@ -97,6 +97,27 @@ class LabelRepeatabilityTest(unittest.TestCase):
         self.assertAlmostEqual(m[FP], 1.0)
         self.assertAlmostEqual(m[FN], 0.5)
 
+    def test_a_class_no_realisation_gave_is_left_out_not_scored_zero(self):
+        # Only TN and FP cells: TP and FN have no support, so they are NaN
+        # in both the agreement and the majority, and both means are over
+        # the two classes present (agreement TN 300/320 as above, FP 1/2).
+        groups = [(50, (TN, TN, TN)), (10, (FP, FP, TN))]
+        roots = []
+        for r in range(3):
+            root = os.path.join(self.tmp.name, f"no_tp{r}")
+            write_dataset(root, [g[1][r] for g in groups for _ in range(g[0])])
+            roots.append(root)
+        out = os.path.join(self.tmp.name, "no_tp.json")
+        proc = subprocess.run([sys.executable, TOOL, *roots, "--json", out], capture_output=True, text=True,
+                              timeout=60)
+        self.assertEqual(proc.returncode, 0, proc.stderr)
+        with open(out) as f:
+            r = json.load(f)
+        for name in ("agreement_per_class", "majority_per_class"):
+            self.assertTrue(np.isnan(r[name][TP]) and np.isnan(r[name][FN]), r[name])
+        self.assertAlmostEqual(r["agreement_mean_per_class"], (300 / 320 + 0.5) / 2)
+        self.assertIn("TP nan", proc.stdout)
+
     def test_bad_inputs_are_named(self):
         missing = os.path.join(self.tmp.name, "nowhere")
         proc = subprocess.run([sys.executable, TOOL, self.data[0], missing], capture_output=True, text=True, timeout=60)

@@ -167,14 +167,18 @@ def per_class(truth: np.ndarray, predicted: np.ndarray) -> List[float]:
 
 
 def pairwise_agreement(labels: np.ndarray) -> np.ndarray:
-    """Row-normalised 4x4: P(another realisation's label | this one's), over all ordered pairs."""
+    """Row-normalised 4x4: P(another realisation's label | this one's), over
+    all ordered pairs; a class no realisation gave is a row of NaN (no
+    support), which the means leave out, as per_class does."""
     counts = np.zeros((4, 4))
     k = labels.shape[1]
     for i in range(k):
         for j in range(k):
             if i != j:
                 np.add.at(counts, (labels[:, i], labels[:, j]), 1)
-    return counts / np.maximum(counts.sum(axis=1, keepdims=True), 1)
+    totals = counts.sum(axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(totals > 0, counts / totals, np.nan)
 
 
 def leave_one_out_majority(labels: np.ndarray) -> List[float]:
