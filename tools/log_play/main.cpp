@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/stop_signal.hpp"
@@ -25,7 +26,7 @@ int main(int argc, char** argv) {
   ivoa::log_play::LogPlayerOptions options;
   app.add_option("logs", logs, "LCM log files, played in the order given")->required();
   app.add_option("-s,--speed", options.speed, "multiple of the recorded pace (0: as fast as possible)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(ivoa::non_negative_number())
       ->capture_default_str();
   app.add_option("-c,--channels", options.channels, "play the channels matching this regex (whole name)")
       ->capture_default_str();
