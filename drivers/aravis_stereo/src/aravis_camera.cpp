@@ -97,7 +97,7 @@ struct AravisCamera::Impl {
   void required_setting(const std::string& what, Step step) {
     GError* error = nullptr;
     step(&error);
-    if (error != nullptr) throw CameraConfigError(name() + ": cannot set " + what + ": " + take_error(error));
+    if (error != nullptr) throw CameraConfigError("cannot set " + what + ": " + take_error(error));
   }
 
   void open() {
@@ -138,11 +138,11 @@ struct AravisCamera::Impl {
     GError* error = nullptr;
     arv_camera_set_pixel_format_from_string(camera, config.pixel_format.c_str(), &error);
     if (error != nullptr)
-      throw CameraConfigError(name() + ": pixel format '" + config.pixel_format + "' refused (" + take_error(error) +
+      throw CameraConfigError("pixel format '" + config.pixel_format + "' refused (" + take_error(error) +
                               "); the camera offers: " + available_pixel_formats(camera));
     const ArvPixelFormat format = arv_camera_get_pixel_format(camera, nullptr);
     if (!ivoa_pixelformat_from_genicam(format))
-      throw CameraConfigError(name() + ": pixel format '" + config.pixel_format +
+      throw CameraConfigError("pixel format '" + config.pixel_format +
                               "' has no ivoa image_t equivalent; use BayerRG8/BG8/GB8/GR8, Mono8, RGB8 or BGR8");
     if (config.width > 0 && config.height > 0)
       required_setting("region " + std::to_string(config.width) + "x" + std::to_string(config.height), [&](GError** e) {

@@ -67,6 +67,11 @@ void CameraWorker::on_frame(FrameResult&& result) {
   events_.push(std::move(event));
 }
 
+bool CameraWorker::stop_requested() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stopping_;
+}
+
 void CameraWorker::wait_for(double seconds) {
   std::unique_lock<std::mutex> lock(mutex_);
   wake_.wait_for(lock, std::chrono::duration<double>(seconds), [this] { return stopping_; });
@@ -82,6 +87,10 @@ bool CameraWorker::open_camera() {
     stopping_ = true;
     return false;
   } catch (const std::exception& e) {
+    if (stop_requested()) {  // the driver gave up while this attempt ran: no retry follows
+      spdlog::warn("{}: cannot open: {}", source_->describe(), e.what());
+      return false;
+    }
     const double delay = backoff_.next_delay_s();
     spdlog::warn("{}: cannot open: {}; retrying in {:.1f} s (attempt {})", source_->describe(), e.what(), delay,
                  backoff_.failures());
@@ -108,11 +117,7 @@ void CameraWorker::close_camera(const std::string& reason) {
 }
 
 void CameraWorker::run() {
-  while (true) {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (stopping_) break;
-    }
+  while (!stop_requested()) {
     if (!connected_) {
       open_camera();
       continue;

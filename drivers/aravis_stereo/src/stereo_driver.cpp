@@ -211,7 +211,7 @@ int StereoDriver::run() {
         now - start_ms > s.options.startup_timeout_s * 1000.0) {
       spdlog::error(
           "cameras not ready after {:.0f} s (left {}, right {}); check the addresses, cabling and "
-          "network (see the log above)",
+          "network (each camera's messages say why)",
           s.options.startup_timeout_s, s.ever_connected[0] ? "open" : "NOT open",
           s.ever_connected[1] ? "open" : "NOT open");
       exit_code = kExitFailure;

@@ -17,7 +17,8 @@ class CameraError : public std::runtime_error {
 };
 
 // The camera cannot do what was asked (pixel format, size, trigger source):
-// retrying will not help.
+// retrying will not help. what() says what, not which camera: the worker
+// logs it after the source's describe().
 class CameraConfigError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -46,6 +46,7 @@ class CameraWorker {
   bool open_camera();
   void close_camera(const std::string& reason);
   void wait_for(double seconds);
+  bool stop_requested();
   void on_frame(FrameResult&& result);
 
   const Side side_;
