@@ -4,6 +4,7 @@
 // coloured stripes).
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -44,7 +45,7 @@ cv::Mat fit(const cv::Mat& image, int width, int height) {
 
 struct GalleryOptions {
   std::vector<std::string> scenes;
-  std::string output = "docs/sim/gallery.png";
+  std::string output = "sim_gallery.png";  // the README's picture: --output docs/sim/gallery.png
   uint64_t seed = 1;
   int tile_width = 400;
   double start_time = 5.0;
@@ -113,8 +114,13 @@ int main(int argc, char** argv) {
   rows.push_back(truth_legend(rows.front().cols));
   cv::Mat gallery;
   cv::vconcat(rows, gallery);
+  const std::filesystem::path folder = std::filesystem::path(o.output).parent_path();
+  if (!folder.empty() && !std::filesystem::is_directory(folder)) {
+    spdlog::error("cannot write {}: there is no folder {}", o.output, folder.string());
+    return ivoa::kExitIoError;
+  }
   if (!cv::imwrite(o.output, gallery)) {
-    spdlog::error("cannot write {}", o.output);
+    spdlog::error("cannot write {} (permissions, disk full, or not a .png name?)", o.output);
     return ivoa::kExitIoError;
   }
   spdlog::info("wrote {} ({}x{})", o.output, gallery.cols, gallery.rows);
