@@ -93,6 +93,15 @@ set -e
 [ $code = 2 ] || { echo "FAIL: --increment with --force: exit $code, expected 2"; exit 1; }
 echo "OK: --increment keeps the existing logs and records to out-1, out-2 (and out-1.lcmlog.00 when split)"
 
+# A sidecar caught by a glob (out-1.lcmlog*) is named as such, not as a damaged log.
+set +e
+"$B/bin/ivoa-log-check" "$out/limit/out-1.lcmlog" "$out/limit/out-1.lcmlog.json" >"$out/check_sidecar.txt" 2>&1
+code=$?
+set -e
+[ $code = 3 ] && grep -q "out-1.lcmlog.json: UNREADABLE: not an LCM log.*ivoa-logger's sidecar" "$out/check_sidecar.txt" ||
+  { echo "FAIL: a sidecar given to ivoa-log-check: exit $code"; cat "$out/check_sidecar.txt"; exit 1; }
+echo "OK: ivoa-log-check names a sidecar given as a log"
+
 mkdir "$out/tmpfs" "$out/work"
 if unshare -m true 2>/dev/null; then
   unshare -m "$0" --on-full-tmpfs "$input" "$out/tmpfs" "$out/work"

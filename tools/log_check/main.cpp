@@ -4,6 +4,7 @@
 // and how many good events come before it. Per process: its last
 // heartbeat (final state and counts). Several files (a split session, in
 // order) are checked as one recording.
+#include <filesystem>
 #include <map>
 #include <stdexcept>
 
@@ -49,6 +50,15 @@ FileResult check_file(const std::string& path, bool resync, LogSummary& summary,
       heartbeats.add(event);
     }
     r.problems = reader.problems();
+    if (std::string why = reader.not_a_log(); !why.empty()) {
+      if (std::filesystem::path(path).extension() == ".json")
+        why +=
+            "; a .json beside a log is ivoa-logger's sidecar (a summary of the log): give the logs only, e.g. "
+            "run.lcmlog.[0-9][0-9]";
+      r.error = why;
+      r.problems.clear();
+      r.events_before_problem.clear();
+    }
   } catch (const ivoa::logio::LogReadError& e) {
     r.error = e.what();
   }
