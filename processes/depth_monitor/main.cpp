@@ -115,6 +115,7 @@ int main(int argc, char** argv) {
     const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, offline);
     node.flush();
     heartbeat.publish_now();  // with the labels flush() published
+    spdlog::info("stopped: {}", heartbeat.summary());
     return code;
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());

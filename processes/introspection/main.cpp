@@ -135,6 +135,7 @@ int main(int argc, char** argv) {
     const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, bus.url().rfind("file://", 0) == 0);
     node.stop();
     heartbeat.publish_now();  // with the frames that were in hand and waiting at the stop
+    spdlog::info("stopped: {}", heartbeat.summary());
     return code;
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());

@@ -89,7 +89,7 @@ int run_detector(const std::string& lcm_url, const DetectorFlags& f,
     });
     node.stop();
     heartbeat.publish_now();
-    spdlog::info("published {} grids; {} bad inputs", node.published(), heartbeat.bad_input_count());
+    spdlog::info("stopped: {}", heartbeat.summary());
     return code;
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());

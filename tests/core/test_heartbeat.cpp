@@ -44,5 +44,17 @@ TEST(Heartbeat, PublishesCountersLatencyAndLastError) {
   EXPECT_DOUBLE_EQ(hb.snapshot().latency_ms_max, 0.0);
 }
 
+TEST(Heartbeat, SummaryGivesTheCountsAndTheCountersThatAreNotZero) {
+  Bus bus("memq://");
+  Heartbeat hb(bus, "tester", "HB_SUMMARY_TEST_STATUS", 3600.0);
+  hb.count_in(5);
+  hb.count_out(3);
+  hb.count_dropped(1);
+  hb.bad_input("frame 3: wrong size");
+  hb.set_counter(kFramesWithoutCalibration, 2);
+  hb.set_counter("grids_missing", 0);
+  EXPECT_EQ(hb.summary(), "in 5, out 3, dropped 1, bad 1, frames_without_calibration 2");
+}
+
 }  // namespace
 }  // namespace ivoa

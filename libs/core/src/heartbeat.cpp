@@ -115,6 +115,15 @@ int64_t Heartbeat::bad_input_count() const {
   return bad_;
 }
 
+std::string Heartbeat::summary() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::string out = "in " + std::to_string(in_) + ", out " + std::to_string(out_) + ", dropped " +
+                    std::to_string(dropped_) + ", bad " + std::to_string(bad_);
+  for (const auto& [name, value] : counters_)
+    if (value != 0) out += ", " + name + " " + std::to_string(value);
+  return out;
+}
+
 std::optional<int64_t> Heartbeat::counter(const std::string& name) const {
   std::lock_guard<std::mutex> l(mutex_);
   const auto it = counters_.find(name);

@@ -44,6 +44,9 @@ class Heartbeat {
   int64_t bad_input_count() const;
   // A process-specific counter's value; nullopt if it was never set.
   std::optional<int64_t> counter(const std::string& name) const;
+  // "in 96, out 96, dropped 0, bad 0" and the counters that are not 0, for
+  // the line a process logs as it exits.
+  std::string summary() const;
 
  private:
   process_status_t make_status_locked() const;
