@@ -49,7 +49,7 @@ void ScriptRunner::advance() {
       if (!waiting_) {
         if (names.empty() && step.target_kind != TargetKind::kEverything)
           on_event_("script", "line " + std::to_string(step.line) + ": \"" + step.target +
-                                  "\" has no command on this host; step skipped");
+                                  "\" has no command selected here (another --host's, or --skip); step skipped");
         apply(step, names);
         waiting_ = true;
       }
