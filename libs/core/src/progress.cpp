@@ -10,6 +10,8 @@
 namespace ivoa {
 namespace {
 
+constexpr double kEtaAfterS = 1.0;
+
 std::string duration(double s) {
   if (!std::isfinite(s) || s < 0) return "?";
   char buf[32];
@@ -38,7 +40,9 @@ std::string Progress::line(double done, const std::string& detail) const {
   const double rate = elapsed_s > 0 ? done / elapsed_s : 0;
   char buf[256];
   if (total_ > 0) {
-    const double eta = rate > 0 ? (total_ - done) / rate : NAN;
+    // A rate from the first moments (opening files, a first tiny read) once
+    // promised 21 minutes for a 1 s job: no ETA before kEtaAfterS.
+    const double eta = rate > 0 && elapsed_s >= kEtaAfterS ? (total_ - done) / rate : NAN;
     std::snprintf(buf, sizeof(buf), "%s: %.0f/%.0f %s (%.0f%%), %.1f %s/s, elapsed %s, ETA %s", label_.c_str(), done,
                   total_, unit_.c_str(), 100.0 * done / total_, rate, unit_.c_str(), duration(elapsed_s).c_str(),
                   duration(eta).c_str());
