@@ -43,22 +43,25 @@ TEST(DatasetInfo, FolderWithoutADatasetIsBadInput) {
   EXPECT_TRUE(contains(r.output, "not a dataset")) << r.output;
 }
 
-// A detector flag that cannot work is refused before any log is read, by name.
-TEST(DatasetBuild, DetectorFlagOutOfRangeIsAUsageError) {
+// `ivoa-dataset build` with `flags` on a file that a flag check must refuse
+// before reading it.
+test::CommandResult build_refused_before_reading(const std::string& flags) {
   test::TempDir dir;
   std::ofstream(dir.file("a.lcmlog")) << "never read";
-  const auto r = test::run_command("timeout 60 " IVOA_DATASET_EXE " build --out " + dir.file("data") +
-                                   " --labels jppc --rect_scale -1 " + dir.file("a.lcmlog"));
+  return test::run_command("timeout 60 " IVOA_DATASET_EXE " build --out " + dir.file("data") + " " + flags + " " +
+                           dir.file("a.lcmlog"));
+}
+
+// A detector flag that cannot work is refused before any log is read, by name.
+TEST(DatasetBuild, DetectorFlagOutOfRangeIsAUsageError) {
+  const auto r = build_refused_before_reading("--labels jppc --rect_scale -1");
   EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
   EXPECT_TRUE(contains(r.output, "rect_scale must be in (0, 1]")) << r.output;
 }
 
-// A misspelt --labels is a usage error listing what it takes, before any log is read.
+// A misspelt --labels is a usage error listing what it takes.
 TEST(DatasetBuild, UnknownLabelSourceIsAUsageErrorListingTheChoices) {
-  test::TempDir dir;
-  std::ofstream(dir.file("a.lcmlog")) << "never read";
-  const auto r = test::run_command("timeout 60 " IVOA_DATASET_EXE " build --out " + dir.file("data") +
-                                   " --labels jpcc " + dir.file("a.lcmlog"));
+  const auto r = build_refused_before_reading("--labels jpcc");
   EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
   EXPECT_TRUE(contains(r.output, "jpcc not in {recorded,jppc,dense}")) << r.output;
 }
