@@ -23,6 +23,7 @@ MonitorNode::MonitorNode(Bus& bus, Heartbeat& heartbeat, MonitorNodeOptions opti
                                 [this](const depth_image_t& m, const ReceiveInfo&) { on_depth(m); });
   bus_.subscribe<obstacle_grid_t>(options_.stereo_channel,
                                   [this](const obstacle_grid_t& m, const ReceiveInfo&) { on_stereo(m); });
+  heartbeat_.set_counter(kFramesMissed, 0);
   heartbeat_.set_state("waiting for calibration");
 }
 
@@ -54,6 +55,7 @@ void MonitorNode::on_calibration(const rig_calibration_t& msg) {
 
 void MonitorNode::on_depth(const depth_image_t& msg) {
   heartbeat_.count_in();
+  heartbeat_.add_to_counter(kFramesMissed, missed_.add(msg.seq));
   const std::string where = options_.depth_channel + " utime " + std::to_string(msg.utime);
   if (!has_calibration(where)) return;
   if (!(std::isfinite(msg.fx) && std::isfinite(msg.fy) && std::isfinite(msg.cx) && std::isfinite(msg.cy) &&

@@ -10,6 +10,7 @@
 #include "ivoa/core/calibration_wait.hpp"
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/heartbeat.hpp"
+#include "ivoa/core/seq_gaps.hpp"
 #include "ivoa/monitor/labeling_pipeline.hpp"
 
 namespace ivoa {
@@ -44,6 +45,7 @@ class MonitorNode {
   Heartbeat& heartbeat_;
   MonitorNodeOptions options_;
   CalibrationWait calibration_wait_;
+  SeqGaps missed_;                          // of the depth frames
   std::vector<uint8_t> calibration_bytes_;  // the calibration the pipeline was built for
   std::unique_ptr<monitor::LabelingPipeline> pipeline_;
   int64_t unmatched_ = 0, labelled_cells_ = 0;

@@ -148,8 +148,10 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
                                      IntrospectionNodeOptions options, int mc_passes)
     : bus_(bus), heartbeat_(heartbeat), model_(std::move(model)), options_(std::move(options)), mc_passes_(mc_passes) {
   bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
+  heartbeat_.set_counter(kFramesMissed, 0);
   bus_.subscribe<stereo_image_t>(options_.stereo_channel, [this](const stereo_image_t& m, const ReceiveInfo&) {
     heartbeat_.count_in();
+    heartbeat_.add_to_counter(kFramesMissed, missed_.add(m.seq));
     const uint64_t dropped_before = frames_.dropped();
     frames_.put({m, monotonic_ms()});
     if (frames_.dropped() != dropped_before) heartbeat_.count_dropped();  // the status table's DROP column

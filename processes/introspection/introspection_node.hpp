@@ -29,6 +29,7 @@
 #include "ivoa/core/calibration_wait.hpp"
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/ground_warp.hpp"
+#include "ivoa/core/seq_gaps.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/mailbox.hpp"
 #include "ivoa/introspection/model.hpp"
@@ -124,6 +125,7 @@ class IntrospectionNode {
   LatestMailbox<Frame> frames_;
   RecentGrids grids_;
   bool warned_other_detector_ = false;               // LCM thread only
+  SeqGaps missed_;                                   // LCM thread only
   std::optional<CalibrationWait> calibration_wait_;  // two-view models; worker thread only
   std::mutex calibration_mutex_;
   std::vector<uint8_t> calibration_bytes_;  // the newest calibration's content (utime zeroed)

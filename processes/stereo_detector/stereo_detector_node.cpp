@@ -28,6 +28,7 @@ StereoDetectorNode::StereoDetectorNode(Bus& bus, Heartbeat& heartbeat, StereoDet
       mailbox_(static_cast<size_t>(std::max(options_.queue_frames, 1))),
       calibration_wait_(heartbeat_, options_.calibration_channel) {
   heartbeat_.set_counter(kCalibrationsApplied, 0);
+  heartbeat_.set_counter(kFramesMissed, 0);
 }
 
 StereoDetectorNode::~StereoDetectorNode() { stop(); }
@@ -55,6 +56,7 @@ void StereoDetectorNode::stop() {
 
 void StereoDetectorNode::on_stereo(const stereo_image_t& msg) {
   heartbeat_.count_in();
+  heartbeat_.add_to_counter(kFramesMissed, missed_.add(msg.seq));
   const uint64_t dropped_before = mailbox_.dropped();
   mailbox_.put(Frame{msg, monotonic_ms()});
   if (mailbox_.dropped() != dropped_before) heartbeat_.count_dropped();

@@ -27,6 +27,7 @@
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/mailbox.hpp"
 #include "ivoa/core/query_grid.hpp"
+#include "ivoa/core/seq_gaps.hpp"
 #include "ivoa/rig_calibration_t.hpp"
 #include "ivoa/stereo/detector.hpp"
 #include "ivoa/stereo_image_t.hpp"
@@ -85,6 +86,7 @@ class StereoDetectorNode {
   Heartbeat& heartbeat_;
   StereoDetectorOptions options_;
   LatestMailbox<Frame> mailbox_;
+  SeqGaps missed_;  // LCM thread only
 
   std::mutex calibration_mutex_;
   std::optional<RigCalibration> calibration_;  // newest valid calibration

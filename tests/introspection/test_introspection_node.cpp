@@ -138,7 +138,8 @@ TEST(IntrospectionNode, FramesSkippedWhileBusyAreCountedAsDropped) {
 
 // Stopped right after a burst, the node still runs the frame waiting in its
 // mailbox: every frame received is either published or counted as dropped
-// in the final heartbeat, none silently left behind.
+// in the final heartbeat, none silently left behind; frames that never
+// arrived (seq 3 and 4 of 0, 1, 2, 5) are counted as missed.
 TEST(IntrospectionNode, StopRunsTheFrameStillWaitingSoEveryFrameIsAccountedFor) {
   test::TempDir dir;
   Bus bus("memq://");
@@ -148,12 +149,14 @@ TEST(IntrospectionNode, StopRunsTheFrameStillWaitingSoEveryFrameIsAccountedFor) 
   constexpr int kBurst = 4;
   for (int i = 0; i < kBurst; ++i) {
     stereo_image_t frame = stereo_frame(rig, 1000 * (i + 1));
+    frame.seq = i + 1 < kBurst ? i : i + 2;
     bus.publish(channels::kStereoImages, frame);
   }
   for (int i = 0; i < kBurst; ++i) bus.handle(5);
   node->stop();
   const process_status_t s = heartbeat.snapshot();
   EXPECT_EQ(s.messages_in, kBurst);
+  EXPECT_EQ(heartbeat.counter(kFramesMissed), 2);
   EXPECT_EQ(s.messages_out + s.dropped, kBurst) << "out " << s.messages_out << ", dropped " << s.dropped;
   EXPECT_EQ(node->frames_done(), s.messages_out);
 }

@@ -39,8 +39,9 @@ struct NodeFixture {
     bus.publish(channels::kRigCalibration, msg);
     drain();
   }
-  void send_depth(int64_t utime, const cv::Mat& depth) {
+  void send_depth(int64_t utime, const cv::Mat& depth, int64_t seq = 0) {
     depth_image_t msg = encode_depth(depth, 570, 570, 319.5, 240.25, utime);
+    msg.seq = seq;
     bus.publish(channels::kDepthImage, msg);
     drain();
   }
@@ -95,6 +96,15 @@ TEST(MonitorNode, InputsBeforeTheCalibrationAreCountedApartFromBadInput) {
   EXPECT_EQ(f.labels.size(), 1u);
   EXPECT_EQ(f.heartbeat.counter(kFramesWithoutCalibration), 2);
   EXPECT_EQ(f.heartbeat.snapshot().state, "running");
+}
+
+// Depth frames lost on the way (seq gaps) are counted, as the detector does.
+TEST(MonitorNode, DepthFramesThatNeverArrivedAreCounted) {
+  NodeFixture f;
+  f.send_calibration();
+  const cv::Mat floor = test::render_depth(f.rig, {});
+  for (const int64_t seq : {4, 5, 9}) f.send_depth(seq * 100'000, floor, seq);
+  EXPECT_EQ(f.heartbeat.counter(kFramesMissed), 3);
 }
 
 TEST(MonitorNode, BadInputIsCountedSkippedAndSurvived) {

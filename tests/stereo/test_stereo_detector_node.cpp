@@ -144,6 +144,20 @@ TEST_F(StereoDetectorNodeTest, FramesQueuedPastMaxFramesAreCountedAsDropped) {
   EXPECT_EQ(s.dropped, 3);
 }
 
+// Frames the kernel dropped while the process stalled never reach it: the
+// gaps in their seq are counted, so the loss shows in the heartbeat. A seq
+// that goes back (the driver restarted) starts the count again.
+TEST_F(StereoDetectorNodeTest, FramesThatNeverArrivedAreCountedFromTheSeqGaps) {
+  options_.queue_frames = 8;
+  StereoDetectorNode node(bus_, heartbeat_, options_);
+  node.start();
+  publish_calibration(rig_);
+  for (const int64_t seq : {1, 2, 5, 1, 3}) publish_frame(seq);
+  ASSERT_TRUE(handle_until([&] { return grids_.size() == 5; }));
+  EXPECT_EQ(heartbeat_.counter(kFramesMissed), 3) << "3 and 4, then 2 after the restart";
+  EXPECT_EQ(heartbeat_.snapshot().dropped, 0) << "not dropped by the process: they never came";
+}
+
 TEST_F(StereoDetectorNodeTest, BadInputIsCountedAndSkipped) {
   bus_.on_decode_error([&](const std::string& what) { heartbeat_.bad_input(what); });
   StereoDetectorNode node(bus_, heartbeat_, options_);
