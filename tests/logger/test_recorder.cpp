@@ -4,7 +4,9 @@
 // counted, and a refused write leaves a readable log and says why.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
+#include <thread>
 
 #include "ivoa/core/calibration.hpp"
 #include "ivoa/core/message_counts.hpp"
@@ -114,6 +116,23 @@ TEST(Recorder, SplitFilesEachStartWithTheNewestCalibration) {
   EXPECT_TRUE(second_seen);
   EXPECT_EQ(blobs, 24);
   EXPECT_EQ(recorder.status().written, 26);  // the copies are not counted as received messages
+}
+
+// The pmd files start the logger seconds before the drivers; the processes'
+// heartbeats arrive meanwhile. "No calibration" is said only once data other
+// than heartbeats has gone without one for calibration_warning_s.
+TEST(Recorder, WarnsOfNoCalibrationOnlyOnceDataCameWithoutOne) {
+  test::TempDir dir;
+  RecorderOptions options = options_in(dir);
+  options.calibration_warning_s = 0.05;
+  Recorder recorder(options);
+  offer(recorder, "PROCESS_STATUS", numbered_bytes(100, 1));
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));  // past the limit, not a timing check
+  EXPECT_EQ(recorder.check_health(), "recording") << "only heartbeats so far";
+  offer(recorder, "STEREO_IMAGES", numbered_bytes(1000, 2));
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  EXPECT_EQ(recorder.check_health(), "recording, no RIG_CALIBRATION");
+  ASSERT_TRUE(recorder.finish());
 }
 
 TEST(Recorder, FinishWritesOutEverythingQueued) {

@@ -4,6 +4,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/channels.hpp"
 #include "ivoa/core/time.hpp"
 
 namespace ivoa::logger {
@@ -24,8 +25,7 @@ Recorder::Recorder(RecorderOptions options)
     : options_(std::move(options)),
       filter_(options_.channels, options_.exclude, always_recorded(options_)),
       log_(options_.log, counters_),
-      queue_(options_.max_queue_bytes),
-      start_ms_(monotonic_ms()) {
+      queue_(options_.max_queue_bytes) {
   writer_ = std::thread([this] { write_loop(); });
 }
 
@@ -35,6 +35,7 @@ bool Recorder::on_message(const std::string& channel, int64_t timestamp, const v
   if (!filter_.accepts(channel)) return false;
   counters_.received.fetch_add(1);
   if (channel == options_.log.calibration_channel) calibration_seen_.store(true);
+  if (first_data_ms_.load() < 0 && channel != channels::kProcessStatus) first_data_ms_.store(monotonic_ms());
   RecordedEvent event;
   event.channel = channel;
   event.timestamp = timestamp;
@@ -108,9 +109,10 @@ std::string Recorder::check_health() {
   } else if (queued < queue_.max_bytes() / 4) {
     queue_warned_ = false;
   }
-  if (!s.calibration_seen && !options_.log.calibration_channel.empty() && !calibration_warned_ &&
-      now - start_ms_ > options_.calibration_warning_s * 1000.0) {
-    spdlog::warn("no {} message after {:.0f} s: this log will not be self-contained until one arrives",
+  const double first_data_ms = first_data_ms_.load();
+  if (!s.calibration_seen && !options_.log.calibration_channel.empty() && !calibration_warned_ && first_data_ms >= 0 &&
+      now - first_data_ms > options_.calibration_warning_s * 1000.0) {
+    spdlog::warn("no {} message {:.0f} s after the first data: this log will not be self-contained until one arrives",
                  options_.log.calibration_channel, options_.calibration_warning_s);
     calibration_warned_ = true;
   }

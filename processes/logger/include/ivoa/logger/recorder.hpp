@@ -25,7 +25,10 @@ struct RecorderOptions {
   std::string exclude = "LCM_SELF_TEST";  // exclude regex, empty = none; LCM_SELF_TEST is LCM's start-up probe
   uint64_t max_queue_bytes = 1024ull << 20;
   double max_write_bytes_per_s = 0;  // cap on the disk write rate, 0 = none
-  double calibration_warning_s = 5;  // warn if no calibration arrived by then
+  // Warn if no calibration arrived this long after the first message that is
+  // not a heartbeat: the loggers of the pmd files start seconds before the
+  // drivers, and the processes' heartbeats come first.
+  double calibration_warning_s = 5;
 };
 
 struct RecorderStatus {
@@ -76,13 +79,13 @@ class Recorder {
   EventQueue queue_;
   std::atomic<bool> failed_{false};
   std::atomic<bool> calibration_seen_{false};
+  std::atomic<double> first_data_ms_{-1};  // the first message other than a heartbeat
   mutable std::mutex error_mutex_;
   std::string error_;
   std::thread writer_;
   bool finished_ = false;
 
   // check_health() state (receive thread only).
-  double start_ms_;
   double last_drop_warning_ms_ = -1e18;
   int64_t dropped_reported_ = 0;
   bool queue_warned_ = false;
