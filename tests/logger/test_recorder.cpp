@@ -135,6 +135,27 @@ TEST(Recorder, WarnsOfNoCalibrationOnlyOnceDataCameWithoutOne) {
   ASSERT_TRUE(recorder.finish());
 }
 
+// A logger killed outright never closes its file: the sidecar, refreshed as
+// it writes, still says what the file held (here after every event).
+TEST(Recorder, SidecarFollowsTheFileWhileItIsWritten) {
+  test::TempDir dir;
+  RecorderOptions options = options_in(dir);
+  options.log.sidecar_refresh_s = 0;
+  Recorder recorder(options);
+  offer(recorder, "RIG_CALIBRATION", calibration_payload(5), 10);
+  offer(recorder, "STEREO_IMAGES", numbered_bytes(1000, 1), 11);
+  offer(recorder, "STEREO_IMAGES", numbered_bytes(1000, 2), 12);
+  for (int i = 0; i < 500 && recorder.status().written < 3; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));  // bounded wait for the writer thread
+  ASSERT_EQ(recorder.status().written, 3);
+  const std::string sidecar = read_file(sidecar_path(dir.file("rec.lcmlog")));
+  EXPECT_NE(sidecar.find("\"complete\": false"), std::string::npos) << sidecar;
+  EXPECT_NE(sidecar.find("\"events\": 3"), std::string::npos) << sidecar;
+  EXPECT_FALSE(std::filesystem::exists(sidecar_path(dir.file("rec.lcmlog")) + ".tmp"));
+  ASSERT_TRUE(recorder.finish());
+  EXPECT_NE(read_file(sidecar_path(dir.file("rec.lcmlog"))).find("\"complete\": true"), std::string::npos);
+}
+
 TEST(Recorder, FinishWritesOutEverythingQueued) {
   test::TempDir dir;
   RecorderOptions o = options_in(dir);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -77,13 +78,16 @@ std::string sidecar_json(const SidecarContent& c) {
   return out.str();
 }
 
+// Written beside and renamed over the old one, so a logger killed mid-write
+// leaves the previous sidecar whole rather than half of the new one.
 bool write_sidecar(const SidecarContent& content, std::string& error) {
-  const std::string path = sidecar_path(content.log_path);
-  std::ofstream file(path, std::ios::trunc);
+  const std::string path = sidecar_path(content.log_path), temporary = path + ".tmp";
+  std::ofstream file(temporary, std::ios::trunc);
   file << sidecar_json(content);
   file.close();
-  if (file) return true;
+  if (file && std::rename(temporary.c_str(), path.c_str()) == 0) return true;
   error = "cannot write " + path + ": " + std::strerror(errno);
+  std::remove(temporary.c_str());
   return false;
 }
 

@@ -4,6 +4,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/time.hpp"
 #include "ivoa/logio/log_format.hpp"
 
 namespace ivoa::logger {
@@ -50,6 +51,7 @@ void SplitLog::write(const RecordedEvent& event) {
   }
   write_to_current(event.channel, event.timestamp, event.data);
   if (!options_.calibration_channel.empty() && event.channel == options_.calibration_channel) calibration_ = event;
+  if (monotonic_ms() - sidecar_written_ms_ >= options_.sidecar_refresh_s * 1000.0) update_sidecar(false, "");
 }
 
 void SplitLog::write_to_current(const std::string& channel, int64_t timestamp, const std::vector<uint8_t>& data) {
@@ -87,6 +89,7 @@ void SplitLog::update_sidecar(bool complete, const std::string& error) {
   content.file_bytes = writer_->bytes();
   content.summary = &summary_;
   content.counters = &counters_;
+  sidecar_written_ms_ = monotonic_ms();
   std::string problem;
   if (!write_sidecar(content, problem)) spdlog::warn("{} (the log itself is not affected)", problem);
 }

@@ -4,8 +4,10 @@
 // time span (receive times of its first and last event), every channel with its type, fingerprint and count, the
 // session's totals, and the fingerprints of every ivoa type, so a log
 // whose types later change can still be matched to the code that wrote it.
-// Written when the file is opened (complete: false) and again when it is
-// closed, so a crash leaves a sidecar that says so.
+// Written when the file is opened (complete: false), every few seconds
+// while it is written (complete: false, the counts so far) and when it is
+// closed, so a crash leaves a sidecar that says so and describes what the
+// file held shortly before.
 #include <cstdint>
 #include <string>
 

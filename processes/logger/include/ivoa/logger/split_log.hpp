@@ -24,6 +24,10 @@ struct SplitLogOptions {
   std::string calibration_channel{channels::kRigCalibration};  // copied into every new file; empty = none
   bool overwrite = false;
   bool sidecars = true;
+  // While a file is written its sidecar is rewritten this often ("complete":
+  // false, the counts so far), so a logger killed outright leaves one that
+  // describes what the file holds. 0: after every event.
+  double sidecar_refresh_s = 5;
   LoggerIdentity identity;
 };
 
@@ -57,6 +61,7 @@ class SplitLog {
   logio::LogSummary summary_;  // of the current file
   std::vector<std::string> files_;
   uint64_t opening_bytes_ = 0;  // what the file held before its first new event
+  double sidecar_written_ms_ = 0;
   bool starts_with_calibration_ = false;
   std::optional<RecordedEvent> calibration_;  // the newest one written
 };
