@@ -51,6 +51,23 @@ TEST(LastHeartbeats, KeepsEachProcessesNewestAndCountsItsRuns) {
             std::string::npos)
       << digest.json();
   EXPECT_NE(digest.table().find("stopped"), std::string::npos) << digest.table();
+  EXPECT_NE(digest.table().find("the log closes before they stop"), std::string::npos) << digest.table();
+}
+
+// A process's own counters: the non-zero ones in the table (frames that
+// never arrived show nowhere else), all of them in the JSON.
+TEST(LastHeartbeats, ShowsEachProcessesOwnCounters) {
+  LastHeartbeats digest;
+  process_status_t s = heartbeat("stereo_detector", 10, 1000, "stopped", 51);
+  s.counter_names = {"calibrations_applied", "frames_missed", "frames_without_calibration"};
+  s.counter_values = {1, 7, 0};
+  s.num_counters = 3;
+  digest.add(event_of("PROCESS_STATUS", s));
+  EXPECT_NE(digest.table().find("calibrations_applied 1, frames_missed 7\n"), std::string::npos) << digest.table();
+  EXPECT_NE(digest.json().find("\"counters\": {\"calibrations_applied\": 1, \"frames_missed\": 7, "
+                               "\"frames_without_calibration\": 0}"),
+            std::string::npos)
+      << digest.json();
 }
 
 TEST(LastHeartbeats, ALogWithoutHeartbeatsHasNoTable) {
