@@ -6,6 +6,7 @@
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/process.hpp"
+#include "ivoa/core/receive_buffer.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "monitor_node.hpp"
 
@@ -97,7 +98,9 @@ int main(int argc, char** argv) {
   CLI::App app{"Depth monitor: per-cell obstacle verdicts from the depth sensor and Algorithm 1 labels"};
   ivoa::CommonOptions common;
   ivoa::MonitorNodeOptions options;
+  double socket_buffer_mb = 64;
   ivoa::add_common_options(app, common);
+  ivoa::add_socket_buffer_option(app, socket_buffer_mb);
   ivoa::add_query_grid_options(app, options.grid);
   add_monitor_options(app, options);
   add_channel_options(app, options);
@@ -109,6 +112,7 @@ int main(int argc, char** argv) {
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "depth_monitor");
     ivoa::MonitorNode node(bus, heartbeat, options);
+    ivoa::enlarge_receive_buffer(bus, socket_buffer_mb);
     spdlog::info("listening on {} ({} + {} -> {} + {})", bus.url(), options.depth_channel, options.stereo_channel,
                  options.depth_out_channel, options.labels_out_channel);
     const bool offline = bus.url().rfind("file://", 0) == 0;

@@ -12,6 +12,7 @@
 #include "introspection_node.hpp"
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
+#include "ivoa/core/receive_buffer.hpp"
 #include "ivoa/core/stop_signal.hpp"
 
 #ifndef IVOA_DEFAULT_MODEL
@@ -28,6 +29,7 @@ struct CommandLine {
   std::string lookup = "nearest";
   int grid_wait_ms = static_cast<int>(options.grid_wait.count());
   std::string warm_up = "960x600";
+  double socket_buffer_mb = 64;
 };
 
 // "960x600" -> 960 x 600; empty for anything else ("none").
@@ -110,6 +112,7 @@ int main(int argc, char** argv) {
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
   CommandLine cl;
+  ivoa::add_socket_buffer_option(app, cl.socket_buffer_mb);
   add_model_options(app, cl);
   add_channel_options(app, cl.options);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
@@ -132,6 +135,7 @@ int main(int argc, char** argv) {
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "introspection");
     ivoa::IntrospectionNode node(bus, heartbeat, std::move(model), cl.options, cl.config.mc_passes);
+    ivoa::enlarge_receive_buffer(bus, cl.socket_buffer_mb);
     const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, bus.url().rfind("file://", 0) == 0);
     node.stop();
     heartbeat.publish_now();  // with the frames that were in hand and waiting at the stop

@@ -18,9 +18,9 @@
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/process.hpp"
+#include "ivoa/core/receive_buffer.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/core/time.hpp"
-#include "ivoa/logger/receive_buffer.hpp"
 #include "ivoa/logger/recorder.hpp"
 #include "ivoa/logger/split_log.hpp"
 
@@ -71,22 +71,6 @@ class StatusReporter {
   ivoa::Heartbeat& heartbeat_;
   RecorderStatus last_;
 };
-
-void enlarge_receive_buffer(const std::string& url, double buffer_mb) {
-  const int port = ivoa::logger::udpm_port(url);
-  if (port == 0 || buffer_mb <= 0) return;
-  const auto r = ivoa::logger::force_receive_buffer(port, static_cast<int>(buffer_mb * 1e6));
-  if (r.sockets == 0) spdlog::warn("found no UDP socket on port {} to enlarge its receive buffer", port);
-  else if (r.as_asked)
-    spdlog::info("kernel receive buffer of LCM's socket: {:.0f} MB ({:.0f} MB as the kernel books it)", buffer_mb,
-                 r.bytes / 1e6);
-  else
-    spdlog::warn(
-        "kernel receive buffer of LCM's socket is {:.0f} MB as the kernel books it, less than the {:.0f} MB "
-        "asked: raise net.core.rmem_max, or give the logger CAP_NET_ADMIN; a logger kept off the CPU for "
-        "long can lose images in the kernel",
-        r.bytes / 1e6, buffer_mb);
-}
 
 void handle_what_lcm_already_has(ivoa::Bus& bus) {
   const double until = ivoa::monotonic_ms() + kFinalHandleMs;
@@ -183,8 +167,7 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
   bus->subscribe_raw(".*", [&](const void* data, size_t size, const ivoa::ReceiveInfo& info) {
     recorder->on_message(info.channel, info.recv_utime, data, size);
   });
-  bus->handle(0);  // udpm joins the multicast group (and opens its socket) on the first handle
-  enlarge_receive_buffer(bus->url(), socket_buffer_mb);
+  ivoa::enlarge_receive_buffer(*bus, socket_buffer_mb);
   ivoa::write_ready_file(ready_file);  // a script may wait in vain, but recording goes on
 
   const double start_ms = ivoa::monotonic_ms();
@@ -231,11 +214,7 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
       ->check(ivoa::positive_number());
   app.add_option("--max-write-mb-s", f.max_write_mb_s, "cap the disk write rate (0 = none)")
       ->check(ivoa::non_negative_number());
-  app.add_option("--socket-buffer-mb", f.socket_buffer_mb,
-                 "kernel receive buffer for LCM's udpm socket, past net.core.rmem_max where permitted "
-                 "(CAP_NET_ADMIN); 0 = as LCM sets it")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1000.0));  // the kernel takes an int of bytes, and books twice that
+  ivoa::add_socket_buffer_option(app, f.socket_buffer_mb);
   auto* force = app.add_flag("-f,--force", f.force, "overwrite existing files");
   app.add_flag("-i,--increment", f.increment,
                "if FILE exists, record to FILE-1, FILE-2, ... (before the extension) instead of refusing; lets a "

@@ -11,6 +11,7 @@
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/process.hpp"
+#include "ivoa/core/receive_buffer.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/stereo/options.hpp"
 #include "stereo_detector_node.hpp"
@@ -20,10 +21,12 @@ namespace {
 struct DetectorFlags {
   ivoa::StereoDetectorOptions options;
   std::string calibration_file, status_channel{ivoa::channels::kProcessStatus};
+  double socket_buffer_mb = 64;
 };
 
 void add_detector_flags(CLI::App& app, DetectorFlags& f) {
   ivoa::StereoDetectorOptions& o = f.options;
+  ivoa::add_socket_buffer_option(app, f.socket_buffer_mb);
   app.add_option("--model", o.model, "perception model")
       ->capture_default_str()
       ->check(CLI::IsMember(ivoa::stereo::detector_names()));
@@ -83,6 +86,7 @@ int run_detector(const std::string& lcm_url, const DetectorFlags& f,
     ivoa::StereoDetectorNode node(bus, heartbeat, o);
     if (initial_rig) node.set_calibration(*initial_rig);
     node.start();
+    ivoa::enlarge_receive_buffer(bus, f.socket_buffer_mb);
     spdlog::info("{} on {} -> {} ({})", o.model, o.stereo_channel, o.output_channel, bus.url());
     const int code = ivoa::run_until_stopped(bus, &heartbeat, [&] {
       if (node.finished()) ivoa::request_stop();

@@ -8,9 +8,9 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include "ivoa/logger/receive_buffer.hpp"
+#include "ivoa/core/receive_buffer.hpp"
 
-namespace ivoa::logger {
+namespace ivoa {
 namespace {
 
 // A UDP socket on a free loopback port, as LCM's receive socket would be.
@@ -64,4 +64,4 @@ TEST(ReceiveBuffer, ABufferAlreadyLargerIsLeftAlone) {
 }
 
 }  // namespace
-}  // namespace ivoa::logger
+}  // namespace ivoa

@@ -1,4 +1,4 @@
-#include "ivoa/logger/receive_buffer.hpp"
+#include "ivoa/core/receive_buffer.hpp"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -9,7 +9,12 @@
 #include <filesystem>
 #include <regex>
 
-namespace ivoa::logger {
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include "ivoa/core/bus.hpp"
+
+namespace ivoa {
 namespace {
 
 bool is_udp_socket_on_port(int fd, int port) {
@@ -65,4 +70,29 @@ ReceiveBufferResult force_receive_buffer(int port, int bytes) {
   return result;
 }
 
-}  // namespace ivoa::logger
+void add_socket_buffer_option(CLI::App& app, double& mb) {
+  app.add_option("--socket-buffer-mb", mb,
+                 "kernel receive buffer for LCM's udpm socket, past net.core.rmem_max where permitted "
+                 "(CAP_NET_ADMIN); 0 = as LCM sets it")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1000.0));  // the kernel takes an int of bytes, and books twice that
+}
+
+void enlarge_receive_buffer(Bus& bus, double mb) {
+  const int port = udpm_port(bus.url());
+  if (port == 0 || mb <= 0) return;
+  bus.handle(0);  // udpm joins the multicast group (and opens its socket) on the first handle
+  const ReceiveBufferResult r = force_receive_buffer(port, static_cast<int>(mb * 1e6));
+  if (r.sockets == 0) spdlog::warn("found no UDP socket on port {} to enlarge its receive buffer", port);
+  else if (r.as_asked)
+    spdlog::info("kernel receive buffer of LCM's socket: {:.0f} MB ({:.0f} MB as the kernel books it)", mb,
+                 r.bytes / 1e6);
+  else
+    spdlog::warn(
+        "kernel receive buffer of LCM's socket is {:.0f} MB as the kernel books it, less than the {:.0f} MB "
+        "asked: raise net.core.rmem_max, or give the process CAP_NET_ADMIN; kept off the CPU for long, it "
+        "can lose images in the kernel",
+        r.bytes / 1e6, mb);
+}
+
+}  // namespace ivoa
