@@ -45,7 +45,7 @@ python3 - "$out" $frames <<'PY' || { cat "$out/launch.txt" "$out/status.json"; e
 import json, os, sys
 out, frames = sys.argv[1], int(sys.argv[2])
 status = json.load(open(f"{out}/status.json"))
-assert status["end_reason"] == "--until: done", status["end_reason"]
+assert status["end_reason"] == "--until: logplayer ended", status["end_reason"]
 assert status["exit_code"] == 0
 names = {c["name"] for c in status["commands"]}
 assert names == {"logplayer", "stereo_detector", "depth_monitor", "logger", "viewer"}, names

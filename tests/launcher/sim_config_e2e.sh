@@ -71,7 +71,7 @@ status = json.load(open(f"{out}/status.json"))
 check = json.load(open(f"{out}/check.json"))
 cmds = {c["name"]: c for c in status["commands"]}
 launch = open(f"{out}/launch.txt").read()
-assert status["end_reason"] == "--until: done", status["end_reason"]
+assert status["end_reason"] == "--until: sim_driver ended", status["end_reason"]
 processes = {"sim_driver", "stereo_detector", "depth_monitor", "introspection", "logger", "viewer"}
 if no_introspection:
     processes.remove("introspection")

@@ -95,7 +95,7 @@ cmd "logger" { exec = "sleep 30"; auto_respawn = "true"; }
   const Result r = launch(once + " --until session --grace 0.2 --duration 30 --status-file " + status);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 20.0);
-  EXPECT_TRUE(contains(read_file(status), "\"end_reason\": \"--until: done\"")) << read_file(status);
+  EXPECT_TRUE(contains(read_file(status), "\"end_reason\": \"--until: session ended\"")) << read_file(status);
 }
 
 TEST(LaunchCli, ScriptStartsOnlyWhatItNamesInOrder) {

@@ -224,8 +224,11 @@ class Run {
       return "";
     }
     if (!condition_since_) condition_since_ = Clock::now();
-    if (seconds_since(*condition_since_) >= options_.grace_s) return options_.once ? "--once: done" : "--until: done";
-    return "";
+    if (seconds_since(*condition_since_) < options_.grace_s) return "";
+    if (options_.once) return "--once: done";
+    std::string ended_names;  // how they ended (a failure) is said as each ends
+    for (const auto& name : options_.until) ended_names += (ended_names.empty() ? "" : ", ") + name;
+    return "--until: " + ended_names + " ended";
   }
 
   std::vector<StatusRow> rows() const {
