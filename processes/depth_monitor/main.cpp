@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Depth monitor: per-cell obstacle verdicts from the depth sensor and Algorithm 1 labels"};
   ivoa::CommonOptions common;
   ivoa::MonitorNodeOptions options;
-  double socket_buffer_mb = 64;
+  double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
   ivoa::add_common_options(app, common);
   ivoa::add_socket_buffer_option(app, socket_buffer_mb);
   ivoa::add_query_grid_options(app, options.grid);

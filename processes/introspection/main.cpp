@@ -29,7 +29,7 @@ struct CommandLine {
   std::string lookup = "nearest";
   int grid_wait_ms = static_cast<int>(options.grid_wait.count());
   std::string warm_up = "960x600";
-  double socket_buffer_mb = 64;
+  double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
 };
 
 // "960x600" -> 960 x 600; empty for anything else ("none").

@@ -187,7 +187,7 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
 // The flags, in the units a user types (MB, MB/s); RecorderOptions holds bytes.
 struct LoggerFlags {
   std::string file = "ivoa-%Y%m%d-%H%M%S.lcmlog", ready_file;
-  double split_mb = 0, max_queue_mb = 1024, max_write_mb_s = 0, socket_buffer_mb = 64;
+  double split_mb = 0, max_queue_mb = 1024, max_write_mb_s = 0, socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
   bool force = false, increment = false, no_sidecar = false;
   RecorderOptions options;
 };
@@ -227,10 +227,11 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
 // --increment: the first of PATH, PATH-1, ... whose log (or first split
 // part) does not exist yet; false if none of the first 999 is free.
 bool pick_unused_name(SplitLogOptions& log) {
-  const std::string wanted = log.path;
-  const auto name = ivoa::first_free_numbered_name(wanted, kMaxLogSuffix, [&log](const std::string& candidate) {
-    log.path = candidate;
-    return !std::filesystem::exists(SplitLog::part_path(log, 0));
+  const std::string wanted = log.path, wanted_first_file = SplitLog::part_path(log, 0);
+  SplitLogOptions candidate_log = log;
+  const auto name = ivoa::first_free_numbered_name(wanted, kMaxLogSuffix, [&](const std::string& candidate) {
+    candidate_log.path = candidate;
+    return !std::filesystem::exists(SplitLog::part_path(candidate_log, 0));
   });
   if (!name) {
     spdlog::error(
@@ -239,11 +240,8 @@ bool pick_unused_name(SplitLogOptions& log) {
         wanted, kMaxLogSuffix);
     return false;
   }
-  if (*name != wanted) {
-    SplitLogOptions first = log;
-    first.path = wanted;
-    spdlog::warn("{} exists (a log is never overwritten): logging to {}", SplitLog::part_path(first, 0), *name);
-  }
+  if (*name != wanted) spdlog::warn("{} exists (a log is never overwritten): logging to {}", wanted_first_file, *name);
+  log.path = *name;
   return true;
 }
 

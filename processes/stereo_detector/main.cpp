@@ -21,7 +21,7 @@ namespace {
 struct DetectorFlags {
   ivoa::StereoDetectorOptions options;
   std::string calibration_file, status_channel{ivoa::channels::kProcessStatus};
-  double socket_buffer_mb = 64;
+  double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
 };
 
 void add_detector_flags(CLI::App& app, DetectorFlags& f) {
