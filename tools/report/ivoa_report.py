@@ -165,12 +165,25 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
     figure paths relative to the report, clustering result, overlay paths)."""
     d = os.path.join(out_dir, run.slug)
     os.makedirs(d, exist_ok=True)
+    rm = run_numbers(run, args, noise)
+    figs = run_figures(run, rm, d)
+    res = cluster_failures(run, opt)
+    if res.ok:
+        figs["scatter"] = figures.plot_cluster_scatter(run, res, run.name, os.path.join(d, "clusters_tsne.png"))
+        for c in sorted(res.mosaic_rows):
+            figs[f"mosaic_{c}"] = figures.plot_mosaic(run, res, c, f"{run.name}: cluster {c}",
+                                                     os.path.join(d, f"cluster_{c}_mosaic.png"))
+    rm["clustering"] = clustering_numbers(res, opt)
+    overlays = run.overlays[: args.max_overlays] if args.max_overlays > 0 else run.overlays
+    copied = copy_overlays(overlays, os.path.join(d, "overlays"), out_dir)
+    rel_figs = {k: os.path.relpath(v, out_dir) for k, v in figs.items()}
+    return rm, rel_figs, res, copied
 
-    def rel(name):
-        return os.path.relpath(os.path.join(d, name), out_dir)
 
+def run_numbers(run: EvalRun, args: argparse.Namespace, noise: Optional[dict]) -> dict:
+    """The metrics of one model, as metrics.json holds them (clustering added later)."""
     grid = query_grid(run)
-    rm = {
+    return {
         "name": run.name, "eval_dir": run.path, "dataset": run.dataset.path if run.dataset else None,
         "detector": run.detector, "model": run.meta.get("model"), "mc_passes": run.meta.get("mc_passes"),
         "overall": metrics.class_metrics(run.label, run.predicted),
@@ -187,6 +200,10 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
                                        noise),
         "causes_of_failures": metrics.causes_of_failures(run),
     }
+
+
+def run_figures(run: EvalRun, rm: dict, d: str) -> Dict[str, str]:
+    """The figures of one model's numbers, written into d: {name: path}."""
     figs = {
         "confusion": figures.plot_confusion(rm["overall"], run.name, os.path.join(d, "confusion.png")),
         "sessions": figures.plot_group_bars(rm["sessions"], f"{run.name}: accuracy per session", "session",
@@ -210,14 +227,12 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
                                                          os.path.join(d, "accuracy_by_margin.png"))
     if rm["failure"]["roc"]:
         figs["roc"] = figures.plot_roc([(run.name, rm["failure"])], run.name, os.path.join(d, "failure_roc.png"))
+    return figs
 
-    res = cluster_failures(run, opt)
-    if res.ok:
-        figs["scatter"] = figures.plot_cluster_scatter(run, res, run.name, os.path.join(d, "clusters_tsne.png"))
-        for c in sorted(res.mosaic_rows):
-            figs[f"mosaic_{c}"] = figures.plot_mosaic(run, res, c, f"{run.name}: cluster {c}",
-                                                     os.path.join(d, f"cluster_{c}_mosaic.png"))
-    rm["clustering"] = {
+
+def clustering_numbers(res, opt: ClusterOptions) -> dict:
+    """What metrics.json keeps of a clustering result."""
+    return {
         "ok": res.ok, "message": res.message, "selection": opt.select, "embedding_norm": opt.embedding_norm,
         "space": opt.space, "k": opt.k, "n_predicted_fp": res.n_predicted_fp, "n_predicted_fn": res.n_predicted_fn,
         "n_selected": res.n_selected, "confidence_cut": res.confidence_cut,
@@ -231,17 +246,17 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
         "nmi_by_cause_set": res.cause_nmi,
     }
 
-    overlays = run.overlays[: args.max_overlays] if args.max_overlays > 0 else run.overlays
-    copied = []
+
+def copy_overlays(overlays: List[str], into: str, out_dir: str) -> List[str]:
+    """Copies the overlay pictures into the report; their paths relative to out_dir."""
     if overlays:
-        od = os.path.join(d, "overlays")
-        os.makedirs(od, exist_ok=True)
-        for src in overlays:
-            dst = os.path.join(od, os.path.basename(src))
-            shutil.copyfile(src, dst)
-            copied.append(os.path.relpath(dst, out_dir))
-    rel_figs = {k: os.path.relpath(v, out_dir) for k, v in figs.items()}
-    return rm, rel_figs, res, copied
+        os.makedirs(into, exist_ok=True)
+    copied = []
+    for src in overlays:
+        dst = os.path.join(into, os.path.basename(src))
+        shutil.copyfile(src, dst)
+        copied.append(os.path.relpath(dst, out_dir))
+    return copied
 
 
 def compare(runs: List[EvalRun], numbers: Dict[str, dict], out_dir: str) -> str:

@@ -273,6 +273,35 @@ def cluster_failures(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
 
 def _cluster_failures(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
     """cluster_failures without the thread cap."""
+    res = _select(run, opt)
+    if res.message:
+        return res
+    rows = res.rows
+    x = normalise_embeddings(np.asarray(run.embeddings[rows]), opt.embedding_norm)
+    if np.allclose(x, x[0]):
+        res.message = (f"All {len(rows)} selected embeddings are identical: clustering skipped "
+                       "(is embeddings.f32 all zeros?).")
+        return res
+    z, space = _pca_and_kmeans(res, x, opt)
+    rng = np.random.default_rng(opt.seed)  # one stream: the t-SNE subsample, then the mosaics
+    _tsne_picture(res, z, opt, rng)
+    _describe_clusters(res, run, opt, rng)
+    phen = run.phenomenon[rows]
+    if len(set(phen.tolist())) > 1:
+        res.nmi = float(normalized_mutual_info_score(phen, res.cluster))
+        res.ari = float(adjusted_rand_score(phen, res.cluster))
+        res.k_scan = _purity_by_k(space, phen, opt, run.cause[rows] if run.cause is not None else None)
+    if run.cause is not None:
+        _cause_composition(res, run.cause[rows], opt.k)
+    empty = [e["cluster"] for e in res.clusters if e["n"] == 0]
+    if empty:
+        res.message = f"k-means left cluster(s) {empty} empty (fewer distinct embeddings than clusters)."
+    res.ok = True
+    return res
+
+
+def _select(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
+    """The counts and the selected rows; a message where there is too little to cluster."""
     res = ClusterResult(ok=False)
     res.n_predicted_fp = int(np.sum(run.predicted == FP))
     res.n_predicted_fn = int(np.sum(run.predicted == FN))
@@ -284,36 +313,34 @@ def _cluster_failures(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
     n_fail = res.n_predicted_fp + res.n_predicted_fn
     if n_fail == 0:
         res.message = "No sample is predicted FP or FN: there are no predicted failures to cluster."
-        return res
-    if len(rows) < max(opt.k, 2):
+    elif len(rows) < max(opt.k, 2):
         res.message = (f"Only {len(rows)} selected predicted failure(s) (of {n_fail} predicted FP/FN) for "
                        f"k = {opt.k} clusters: clustering skipped.")
-        return res
+    return res
 
-    x = normalise_embeddings(np.asarray(run.embeddings[rows]), opt.embedding_norm)
-    if np.allclose(x, x[0]):
-        res.message = (f"All {len(rows)} selected embeddings are identical: clustering skipped "
-                       "(is embeddings.f32 all zeros?).")
-        return res
-    n_comp = min(max(2, int(round(x.shape[1] / 10))), len(rows), x.shape[1])
+
+def _pca_and_kmeans(res: ClusterResult, x: np.ndarray, opt: ClusterOptions):
+    """PCA to a tenth of the dimension; k-means in the space chosen. Returns (PCA scores, that space)."""
+    n_comp = min(max(2, int(round(x.shape[1] / 10))), len(res.rows), x.shape[1])
     pca = PCA(n_components=n_comp, random_state=opt.seed)
     z = pca.fit_transform(x)
     res.pca_components = n_comp
     res.pca_explained = float(np.sum(pca.explained_variance_ratio_))
-
     space = z if opt.space == "pca" else x
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # "fewer distinct clusters than k" is reported below instead
+        warnings.simplefilter("ignore")  # "fewer distinct clusters than k" is reported instead
         km = KMeans(n_clusters=opt.k, n_init=10, random_state=opt.seed).fit(space)
     res.cluster = km.labels_.astype(np.int64)
     res.distance = np.linalg.norm(space - km.cluster_centers_[res.cluster], axis=1)
+    return z, space
 
-    # t-SNE on the PCA scores, subsampled with a fixed seed.
-    rng = np.random.default_rng(opt.seed)
-    idx = np.arange(len(rows))
+
+def _tsne_picture(res: ClusterResult, z: np.ndarray, opt: ClusterOptions, rng) -> None:
+    """t-SNE of the PCA scores for the scatter plot, on a subsample drawn from rng."""
+    idx = np.arange(len(res.rows))
     if len(idx) > opt.tsne_max:
         idx = np.sort(rng.choice(idx, size=opt.tsne_max, replace=False))
-        res.tsne_note = f"t-SNE on a random subsample of {opt.tsne_max} of {len(rows)} points (seed {opt.seed})."
+        res.tsne_note = f"t-SNE on a random subsample of {opt.tsne_max} of {len(res.rows)} points (seed {opt.seed})."
     if len(idx) >= 5:
         perplexity = min(opt.perplexity, (len(idx) - 1) / 3.0)
         res.tsne_xy, res.tsne_kl = _tsne(z[idx], perplexity, opt.tsne_iterations, opt.seed)
@@ -325,7 +352,10 @@ def _cluster_failures(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
         res.tsne_note = "Too few points for t-SNE: the picture shows the first two PCA components."
     res.tsne_index = idx
 
-    # Composition, purity and mosaic samples per cluster.
+
+def _describe_clusters(res: ClusterResult, run: EvalRun, opt: ClusterOptions, rng) -> None:
+    """Composition, purity and the mosaic samples (drawn from rng) of each cluster."""
+    rows = res.rows
     phen = run.phenomenon[rows]
     bits = run.phenomena[rows]
     overall = {1 << b: float(np.mean((bits >> b) & 1)) for b in range(8) if np.any((bits >> b) & 1)}
@@ -354,14 +384,3 @@ def _cluster_failures(run: EvalRun, opt: ClusterOptions) -> ClusterResult:
             res.mosaic_rows[c] = rows[chosen[np.argsort(res.distance[chosen])]]  # nearest the centre first
         res.clusters.append(entry)
     res.purity = dominant_total / len(rows)
-    if len(set(phen.tolist())) > 1:
-        res.nmi = float(normalized_mutual_info_score(phen, res.cluster))
-        res.ari = float(adjusted_rand_score(phen, res.cluster))
-        res.k_scan = _purity_by_k(space, phen, opt, run.cause[rows] if run.cause is not None else None)
-    if run.cause is not None:
-        _cause_composition(res, run.cause[rows], opt.k)
-    empty = [e["cluster"] for e in res.clusters if e["n"] == 0]
-    if empty:
-        res.message = f"k-means left cluster(s) {empty} empty (fewer distinct embeddings than clusters)."
-    res.ok = True
-    return res
