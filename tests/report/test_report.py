@@ -366,6 +366,11 @@ class ReportTest(unittest.TestCase):
         self.assertGreaterEqual(c["purity"], 0.99)
         dominant = sorted(e["dominant_phenomenon"] for e in c["clusters"])
         self.assertEqual(dominant, [REFLECTION, TEXTURELESS])
+        # beside it, what one cluster holding every selected failure scores: the most common phenomenon's share
+        self.assertGreaterEqual(c["purity_one_cluster"], 0.5)
+        self.assertLess(c["purity_one_cluster"], 0.99)
+        summary = read_text(os.path.join(self.out, "report.md")).split("## Inputs")[0]
+        self.assertIn(f"{100 * c['purity']:.1f} % ({100 * c['purity_one_cluster']:.1f} %)", summary)
         # purity at other k: the same k-means at k = 2, never above what k clusters could reach
         scan = c["purity_by_k"]
         self.assertEqual([e["k"] for e in scan], [2, 3, 4, 6, 8])
@@ -971,6 +976,15 @@ class MetricUnitTest(unittest.TestCase):
         s = uncertainty_sweep(run)
         self.assertFalse(s["accuracy_rises_as_threshold_falls"])
         self.assertLess(s["at_70"]["overall_accuracy"], s["unfiltered"]["overall_accuracy"])
+
+    def test_withheld_failures_are_named_only_where_the_gate_sets_them_aside(self):
+        load_tool()
+        from report_markdown import _withheld_failures
+        point = {"retained": 0.70, "retained_per_class": [0.36, 0.72, 0.74, 0.47]}  # TP, TN, FP, FN
+        text = _withheld_failures(point)
+        self.assertIn("it keeps 47 % of the true FN, against 70 % of all cells", text)
+        self.assertNotIn("true FP", text)  # kept at about its share
+        self.assertEqual(_withheld_failures({"retained": 0.70, "retained_per_class": [0.5, 0.7, 0.7, None]}), "")
 
     def test_phenomena_present_counts_every_bit_and_its_lift(self):
         """Co-occurring phenomena: each bit counts for every patch that shows

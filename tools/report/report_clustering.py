@@ -90,6 +90,7 @@ class ClusterResult:
     tsne_kl: Optional[float] = None
     clusters: List[dict] = field(default_factory=list)
     purity: Optional[float] = None
+    purity_one_cluster: Optional[float] = None  # the same with every sample in one cluster (base rate)
     nmi: Optional[float] = None
     ari: Optional[float] = None
     # Purity at other k (k, purity, nmi, best possible purity with k clusters).
@@ -384,3 +385,4 @@ def _describe_clusters(res: ClusterResult, run: EvalRun, opt: ClusterOptions, rn
             res.mosaic_rows[c] = rows[chosen[np.argsort(res.distance[chosen])]]  # nearest the centre first
         res.clusters.append(entry)
     res.purity = dominant_total / len(rows)
+    res.purity_one_cluster = next(iter(_composition(phen).values())) / len(rows)

@@ -257,21 +257,34 @@ def make_mosaic(run: EvalRun, rows: np.ndarray, rows_n: int = 5, cols_n: int = 1
     return out
 
 
+def _mosaic_caption(res, cluster: int) -> str:
+    """What a cluster holds: counts; on simulated data the phenomenon covering most patch
+    centres, the one most over-represented anywhere under them, and the leading cause."""
+    e = res.clusters[cluster]
+    caption = f"cluster {cluster}: {e['n']} samples, predicted FP {e['predicted_fp']} / FN {e['predicted_fn']}"
+    if not res.has_truth or e["dominant_phenomenon"] is None:
+        return caption
+    caption += f"; dominant phenomenon {phenomenon_name(e['dominant_phenomenon'])} ({100 * e['purity']:.0f} %)"
+    top = e["present"][0] if e["present"] else None
+    if top is not None and top["lift"] is not None and top["lift"] > 1.5:
+        caption += f"; {phenomenon_name(top['phenomenon'])} under {100 * top['share']:.0f} % (×{top['lift']:.1f})"
+    if e.get("leading_cause") is not None:
+        caption += f"; leading cause {cause_name(e['leading_cause'])} ({100 * e['cause_purity']:.0f} %)"
+    return caption
+
+
 def plot_mosaic(run: EvalRun, res, cluster: int, title: str, path: str) -> str:
     """Sample patches of one cluster (weighted towards its centre), with a
     caption saying what the cluster holds."""
     rows = res.mosaic_rows[cluster]
     img = make_mosaic(run, rows)
-    e = res.clusters[cluster]
     h, w = img.shape[:2]
     fig, ax = plt.subplots(figsize=(w / 90 + 0.5, h / 90 + 1.2))
     ax.imshow(img, interpolation="nearest")
     ax.set_xticks([])
     ax.set_yticks([])
-    caption = f"cluster {cluster}: {e['n']} samples, predicted FP {e['predicted_fp']} / FN {e['predicted_fn']}"
-    if res.has_truth and e["dominant_phenomenon"] is not None:
-        caption += f"; dominant phenomenon {phenomenon_name(e['dominant_phenomenon'])} ({100 * e['purity']:.0f} %)"
-    ax.set_title(f"{title}\n{caption}\n{len(rows)} patches sampled with weight 1/(0.1 + distance to centre), "
+    ax.set_title(f"{title}\n{_mosaic_caption(res, cluster)}\n"
+                 f"{len(rows)} patches sampled with weight 1/(0.1 + distance to centre), "
                  "nearest first", fontsize=9)
     ax.legend(handles=[Patch(color=CLASS_COLOURS[c], label=f"true {LABEL_NAMES[c]}") for c in range(4)],
               loc="upper center", bbox_to_anchor=(0.5, -0.01), ncol=4, fontsize=8, title="frame = true label",

@@ -8,7 +8,7 @@ from typing import Dict, List, Optional, Sequence
 
 from margin_bands import band_name
 from report_clustering import REFERENCE_VAR_CUT, ClusterOptions
-from report_inputs import LABEL_NAMES, EvalRun, cause_name, phenomenon_name, surface_name
+from report_inputs import FN, FP, LABEL_NAMES, EvalRun, cause_name, phenomenon_name, surface_name
 from report_metrics import PAPER_MPCA_AT_70, RETAIN_TARGET
 
 PURITY_TARGET = 0.80
@@ -30,6 +30,11 @@ def fmt(x, digits: int = 3) -> str:
 def pct(x, digits: int = 1) -> str:
     """A fraction as a percentage for prose and tables."""
     return "n/a" if x is None else f"{100 * x:.{digits}f} %"
+
+
+def _points(x: float) -> str:
+    """A difference of two fractions in percentage points."""
+    return f"{100 * x:.1f} points"
 
 
 def table(headers: Sequence[str], rows: Sequence[Sequence]) -> str:
@@ -137,6 +142,20 @@ def _point_row(name: str, p: Optional[dict]) -> List[str]:
             + [pct(r, 0) for r in p["retained_per_class"]])
 
 
+def _withheld_failures(p: dict) -> str:
+    """Which true classes the gate withholds more than its share of: where they are the failures,
+    part of the accuracy gained is the failures set aside, and a robot must treat those cells as unknown."""
+    kept = p["retained_per_class"]
+    fewer = [f"{pct(kept[c], 0)} of the true {LABEL_NAMES[c]}" for c in (FP, FN)
+             if kept[c] is not None and kept[c] < p["retained"] - 0.05]
+    if not fewer:
+        return ""
+    return (f"The gate withholds failures more often than other cells: it keeps {' and '.join(fewer)}, "
+            f"against {pct(p['retained'], 0)} of all cells. Part of the gain is the "
+            "failures set aside, and a withheld cell is one the model declines to judge: a planner should treat "
+            "it as unknown, not as free.\n")
+
+
 def uncertainty_section(rm: dict, figs: Dict[str, str]) -> str:
     """§3: accuracy and retained data vs the uncertainty threshold."""
     s = rm["sweep"]
@@ -144,7 +163,9 @@ def uncertainty_section(rm: dict, figs: Dict[str, str]) -> str:
            "Gate: keep a prediction iff `var_predicted` (the variance over the MC-dropout passes of the predicted "
            "class's probability) ≤ τ. τ sweeps from high to low over 101 quantiles of var_predicted and the "
            "reference code's linspace(2e-5, 0.12, 100). Mean per-class accuracy is over the classes that still "
-           "have retained samples.\n"]
+           "have retained samples. The model's run-time τ is the gate `ivoa-train` calibrated to keep 70 % of "
+           "its validation samples, which the live process uses to announce or withhold a prediction; 'X kept' "
+           "is the share of the cells of true class X whose prediction passes the gate.\n"]
     headers = ["operating point", "τ", "retained", "retained n", "mean per-class acc.", "overall acc."] + \
         [f"{n} kept" for n in LABEL_NAMES]
     rows = [_point_row("no filtering", s["unfiltered"]),
@@ -160,11 +181,13 @@ def uncertainty_section(rm: dict, figs: Dict[str, str]) -> str:
         f"({'+' if gain is not None and gain >= 0 else ''}{fmt(None if gain is None else 100 * gain, 1)} points; "
         f"the paper reports > {int(100 * PAPER_MPCA_AT_70)} % at 70 % retained, +6 points). "
         f"Paper's claim met here: **{'yes' if a70 is not None and a70 > PAPER_MPCA_AT_70 else 'no'}**.\n")
+    out.append(_withheld_failures(s["at_70"]))
     rho = s["spearman_threshold_vs_mpca"]
     out.append(
         f"Does accuracy rise as the threshold falls? **{s['verdict']}** (Spearman rank correlation between τ and mean "
         f"per-class accuracy over quantile thresholds keeping ≥ 10 %: {fmt(rho, 2)}; for overall accuracy: "
-        f"{fmt(s['spearman_threshold_vs_accuracy'], 2)}; negative = accuracy rises as τ falls).\n")
+        f"{fmt(s['spearman_threshold_vs_accuracy'], 2)}; negative = accuracy rises as τ falls; 'yes' takes a "
+        f"correlation of −0.5 or less and a gain at 70 % retained).\n")
     out.append(f"Mean var_predicted of correct predictions: **{fmt(s['mean_var_correct'], 5)}** (n = {s['n_correct']}) "
                f"vs wrong predictions: **{fmt(s['mean_var_wrong'], 5)}** (n = {s['n_wrong']})"
                + (" — wrong predictions are more uncertain, as they should be.\n"
@@ -212,8 +235,9 @@ def verdict_section(rm: dict, figs: Dict[str, str]) -> str:
         [f"{n} kept" for n in LABEL_NAMES]
     rows = [_point_row(f"≥ {pct(p['retained'], 0)}", p) for p in s["retained_table"]]
     if s["at_model_threshold"] is not None:
-        rows.append(_point_row("model's run-time τ (eval.json)", s["at_model_threshold"]))
+        rows.append(_point_row("model's run-time τ (its own gate, calibrated as in §3)", s["at_model_threshold"]))
     out.append(table(headers, rows))
+    out.append("\n" + _withheld_failures(s["at_70"]))
     headers = ["n"] + [f"{n} acc." for n in LABEL_NAMES] + ["mean per-class", "overall"]
     out.append("\n**Per session, given the verdict**\n\n")
     out.append(table(["session"] + headers,
@@ -336,7 +360,8 @@ def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, s
         met = res.purity is not None and res.purity >= PURITY_TARGET
         out.append(
             f"\nOverall purity (samples in their cluster's dominant phenomenon / all clustered): "
-            f"**{pct(res.purity)}** (target ≥ {int(100 * PURITY_TARGET)} %: {'met' if met else 'not met'}); "
+            f"**{pct(res.purity)}** (target ≥ {int(100 * PURITY_TARGET)} %: {'met' if met else 'not met'}; "
+            f"all of them in one cluster would score {pct(res.purity_one_cluster)}); "
             f"normalised mutual information with the phenomenon: {fmt(res.nmi)}, adjusted Rand index: "
             f"{fmt(res.ari)}. 'none' counts as a phenomenon: failures with no simulated phenomenon under the "
             f"patch centre (e.g. geometry, distance). Phenomena co-occur (a polished floor is texture-less and "
@@ -371,7 +396,8 @@ def _cause_text(res) -> str:
             "explains most of its members; purity by cause is the share of clustered true failures (with a known "
             f"cause: {res.n_with_cause}) that their cluster's leading cause explains: **{pct(res.cause_purity)}** "
             f"(target ≥ {int(100 * PURITY_TARGET)} %: {'met' if met else 'not met'}; all of them in one cluster "
-            f"would score {pct(res.cause_purity_one_cluster)}: what the clusters add is that each has a leading "
+            f"would already score {pct(res.cause_purity_one_cluster)}, so the clusters add "
+            f"{_points(res.cause_purity - res.cause_purity_one_cluster)}: what they add is that each has a leading "
             "cause of its own). Counting only the exact "
             f"set of causes (reflection+repetitive apart from reflection): {pct(res.cause_set_purity)}, where the "
             f"best any partition into {len(res.clusters)} clusters could reach is "
@@ -433,7 +459,7 @@ def comparison_section(runs: List[EvalRun], metrics: Dict[str, dict], figs: Dict
     row("retained at the ≥70 % point", lambda m: pct(m["sweep"]["at_70"]["retained"]))
     row("mean per-class acc. at ≥70 %", lambda m: m["sweep"]["at_70"]["mean_per_class_accuracy"])
     row("accuracy rises as τ falls", lambda m: m["sweep"]["verdict"])
-    row("cluster purity", lambda m: pct(m["clustering"].get("purity")))
+    row("cluster purity by dominant phenomenon", lambda m: pct(m["clustering"].get("purity")))
     out.append(table(["metric"] + names, rows))
     out.append("\nNote: each model is evaluated on its own detector's labels (its own dataset), so the sample sets "
                "differ; accuracies compare how well each introspection model predicts its own detector's failures.\n")
