@@ -4,6 +4,8 @@
 // tested end to end elsewhere.)
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -15,6 +17,7 @@
 #include "ivoa/dataset/dataset_format.hpp"
 #include "ivoa/introspection/model.hpp"
 #include "ivoa/introspection/training.hpp"
+#include "file_size_limit.hpp"
 #include "synthetic_sessions.hpp"
 #include "test_rig.hpp"
 
@@ -208,6 +211,64 @@ TEST(Training, DamagedCheckpointStepFileIsRefusedWithTheWayOut) {
     const std::string what = e.what();
     EXPECT_NE(what.find(c.output + ".checkpoint.step is not"), std::string::npos) << what;
     EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
+  }
+}
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST(Training, ADiskThatFillsDuringACheckpointKeepsTheLastOneForResume) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 5);  // a checkpoint at step 5
+  train_model(c);
+  const std::string checkpoint = c.output + ".checkpoint";
+  std::map<std::string, std::string> before;
+  for (const char* part : {".model", ".optimizer", ".step"}) before[part] = file_bytes(checkpoint + part);
+  c.resume = true;
+  c.steps = 10;
+  try {
+    // Room for the model (the best so far, and the checkpoint's), not for the optimiser's state (AdamW: twice it).
+    const test::FileSizeLimit nearly_full_disk(before[".model"].size() + 1000);
+    train_model(c);
+    FAIL() << "the checkpoint at step 10 could not be written, and nobody was told";
+  } catch (const TrainOutputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(checkpoint + ".optimizer: cannot write"), std::string::npos) << what;
+    EXPECT_NE(what.find("the previous file, if any, is kept"), std::string::npos) << what;
+  }
+  for (const auto& [part, bytes] : before) EXPECT_EQ(file_bytes(checkpoint + part), bytes) << part;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_NE(entry.path().extension(), ".tmp") << entry.path();
+  int64_t first = -1;
+  train_model(c, [&](const TrainStatus& s) {
+    if (first < 0) first = s.step;
+  });
+  EXPECT_EQ(first, 6);  // resumed from the step-5 checkpoint kept whole
+}
+
+TEST(Training, AnOptimiserStateCutShortIsRefusedWithTheWayOut) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 5);
+  train_model(c);
+  const std::string optimizer = c.output + ".checkpoint.optimizer";
+  const std::string bytes = file_bytes(optimizer);
+  std::ofstream(optimizer, std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() / 2);
+  c.resume = true;
+  c.steps = 8;
+  try {
+    train_model(c);
+    FAIL() << "resumed from half an optimiser state";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("cannot resume " + c.output + ".checkpoint: its optimiser or side-task state cannot be read"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("remove " + c.output + ".checkpoint.* to start over"), std::string::npos) << what;
+    EXPECT_EQ(what.find("frame #"), std::string::npos) << "LibTorch's backtrace: " << what;
   }
 }
 

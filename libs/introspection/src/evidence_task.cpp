@@ -1,5 +1,7 @@
 #include "evidence_task.hpp"
 
+#include <sstream>
+
 namespace ivoa::introspection {
 
 EvidenceTask::EvidenceTask(int64_t features, int64_t evidence_size, torch::Device device)
@@ -13,7 +15,11 @@ torch::Tensor EvidenceTask::loss(const torch::Tensor& features, const torch::Ten
   return error.sum() / measured.sum().clamp_min(1.0);
 }
 
-void EvidenceTask::save(const std::string& path) const { torch::save(head_, path); }
+std::string EvidenceTask::bytes() const {
+  std::ostringstream out;
+  torch::save(head_, out);
+  return out.str();
+}
 
 void EvidenceTask::load(const std::string& path) { torch::load(head_, path); }
 

@@ -22,7 +22,7 @@ class EvidenceTask {
   torch::Tensor loss(const torch::Tensor& features, const torch::Tensor& targets);
 
   std::vector<torch::Tensor> parameters() const { return head_->parameters(); }
-  void save(const std::string& path) const;
+  std::string bytes() const;  // the head's file, as load() reads it
   void load(const std::string& path);
 
  private:

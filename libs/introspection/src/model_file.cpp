@@ -9,6 +9,7 @@
 #include <torch/script.h>
 #include <yaml-cpp/yaml.h>
 
+#include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/json_text.hpp"
 
 namespace ivoa::introspection {
@@ -90,13 +91,20 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
   return i;
 }
 
-void save_model(IntrospectionNetImpl& net, const ModelInfo& info, const std::string& path) {
+// Serialised in memory first: LibTorch's file writer finishes the archive in
+// its destructor, where a full disk aborts the process instead of throwing.
+std::string model_bytes(IntrospectionNetImpl& net, const ModelInfo& info) {
   torch::serialize::OutputArchive archive;
   net.save(archive);
   archive.write(kMetadataKey, to_bytes(info_to_json(info)), /*is_buffer=*/true);
-  const std::string tmp = path + ".tmp";
-  archive.save_to(tmp);
-  std::filesystem::rename(tmp, path);  // never leave a half-written model under the real name
+  std::ostringstream bytes;
+  archive.save_to(bytes);
+  return bytes.str();
+}
+
+void save_model(IntrospectionNetImpl& net, const ModelInfo& info, const std::string& path) {
+  std::string error;
+  if (!replace_file(path, model_bytes(net, info), error)) throw std::runtime_error(error);
 }
 
 bool read_metadata(const std::string& path, std::string& json) {

@@ -18,6 +18,10 @@ std::string info_to_json(const ModelInfo& info);
 // Throws ModelError naming `where` for JSON that is not ivoa model metadata.
 ModelInfo info_from_json(const std::string& json, const std::string& where);
 
+// The model file's bytes; save_model writes them whole or not at all (a
+// failed write keeps the previous file) and throws std::runtime_error naming
+// the file and the reason.
+std::string model_bytes(IntrospectionNetImpl& net, const ModelInfo& info);
 void save_model(IntrospectionNetImpl& net, const ModelInfo& info, const std::string& path);
 
 struct NativeModel {

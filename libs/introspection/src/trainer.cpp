@@ -11,6 +11,7 @@
 #include <spdlog/spdlog.h>
 #include <torch/torch.h>
 
+#include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/label_confusion.hpp"
 #include "ivoa/core/time.hpp"
@@ -344,17 +345,13 @@ torch::Tensor labels_of(const SplitData& d, const std::vector<SampleRef>& refs) 
   return torch::tensor(labels, torch::kLong);
 }
 
-// Runs `write` of `path`; a failure becomes a TrainOutputError naming the
-// file, without LibTorch's backtrace.
-template <class Write>
-void write_or_throw(const std::string& path, Write&& write) {
-  try {
-    write();
-  } catch (const c10::Error& e) {
-    throw TrainOutputError(path + ": cannot write (" + std::string(e.what_without_backtrace()) + ")");
-  } catch (const std::filesystem::filesystem_error& e) {
-    throw TrainOutputError(path + ": cannot write (" + std::string(e.what()) + ")");
-  }
+// `value` (an optimiser) as torch::save writes it, serialised in memory: the
+// file writer finishes in a destructor, where a full disk aborts the process.
+template <class Value>
+std::string saved_bytes(const Value& value) {
+  std::ostringstream out;
+  torch::save(value, out);
+  return out.str();
 }
 
 // The model file's folder, created if need be, before any training.
@@ -365,23 +362,29 @@ void make_output_folder(const std::string& output) {
   if (error) throw TrainOutputError(output + ": cannot create its folder (" + error.message() + ")");
 }
 
+// Whole or not at all: a write that fails (a full disk) keeps the last model.
 void save_model_or_throw(IntrospectionNetImpl& net, const ModelInfo& info, const std::string& path) {
-  write_or_throw(path, [&] { save_model(net, info, path); });
+  std::string error;
+  if (!replace_file(path, model_bytes(net, info), error)) throw TrainOutputError(error);
 }
 
 // A checkpoint: OUT.checkpoint.model, .optimizer, .evidence (side task) and
 // .step ("step best_val best_step optimizer"; checkpoints from before AdamW
-// have no optimiser name and are SGD's).
+// have no optimiser name and are SGD's). The four are replaced together, so
+// a write that fails part way keeps the last checkpoint whole for --resume.
 void save_checkpoint(const std::string& checkpoint, IntrospectionNetImpl& net, const ModelInfo& info,
                      const EvidenceTask* evidence, Optimizer kind, torch::optim::Optimizer& optimizer, int64_t step,
                      const TrainReport& report) {
-  save_model_or_throw(net, info, checkpoint + ".model");
-  if (evidence) write_or_throw(checkpoint + ".evidence", [&] { evidence->save(checkpoint + ".evidence"); });
-  write_or_throw(checkpoint + ".optimizer", [&] { torch::save(optimizer, checkpoint + ".optimizer"); });
-  std::ofstream step_file(checkpoint + ".step");
-  step_file << step << " " << report.best_val_mean_class_accuracy << " " << report.best_step << " "
+  std::ostringstream step_line;
+  step_line << step << " " << report.best_val_mean_class_accuracy << " " << report.best_step << " "
             << optimizer_name(kind) << "\n";
-  if (!step_file.flush()) throw TrainOutputError(checkpoint + ".step: cannot write the checkpoint (disk full?)");
+  FileSet files;
+  std::string error;
+  const bool staged = files.stage(checkpoint + ".model", model_bytes(net, info), error) &&
+                      (!evidence || files.stage(checkpoint + ".evidence", evidence->bytes(), error)) &&
+                      files.stage(checkpoint + ".optimizer", saved_bytes(optimizer), error) &&
+                      files.stage(checkpoint + ".step", step_line.str(), error);
+  if (!staged || !files.commit(error)) throw TrainOutputError(error);
 }
 
 // Restores the optimiser and side task of a checkpoint; returns its step.
@@ -399,8 +402,13 @@ int64_t load_checkpoint(const std::string& checkpoint, EvidenceTask* evidence, d
     throw std::runtime_error("cannot resume " + checkpoint + ": it was trained with --optimizer " + saved_kind +
                              ", this run uses " + optimizer_name(kind) + " (remove " + checkpoint +
                              ".* to start over)");
-  resume_evidence_task(evidence, checkpoint, evidence_weight);
-  torch::load(optimizer, checkpoint + ".optimizer");
+  try {
+    resume_evidence_task(evidence, checkpoint, evidence_weight);
+    torch::load(optimizer, checkpoint + ".optimizer");
+  } catch (const c10::Error& e) {  // a file missing, cut short or of another run
+    throw std::runtime_error("cannot resume " + checkpoint + ": its optimiser or side-task state cannot be read (" +
+                             e.what_without_backtrace() + "; remove " + checkpoint + ".* to start over)");
+  }
   spdlog::info("resuming from {} at step {}", checkpoint, step);
   report.best_before_resume = true;  // until a validation of this run beats it
   return step;

@@ -1,0 +1,74 @@
+#include "ivoa/core/atomic_files.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+namespace ivoa {
+namespace {
+
+std::string temporary_of(const std::string& path) { return path + ".tmp"; }
+
+std::string system_error(const std::string& what) { return what + " (" + std::strerror(errno) + ")"; }
+
+// All of `bytes` into `path` (created or truncated); false with `reason` set.
+bool write_whole_file(const std::string& path, std::string_view bytes, std::string& reason) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    reason = system_error("cannot create " + path);
+    return false;
+  }
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      if (n == 0) errno = ENOSPC;
+      reason = system_error("cannot write");
+      ::close(fd);
+      return false;
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (::close(fd) != 0) {  // NFS and some file systems report a full disk only here
+    reason = system_error("cannot write");
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool replace_file(const std::string& path, std::string_view bytes, std::string& error) {
+  FileSet one;
+  return one.stage(path, bytes, error) && one.commit(error);
+}
+
+FileSet::~FileSet() {
+  for (const auto& path : staged_) std::remove(temporary_of(path).c_str());
+}
+
+bool FileSet::stage(const std::string& path, std::string_view bytes, std::string& error) {
+  staged_.push_back(path);
+  std::string reason;
+  if (write_whole_file(temporary_of(path), bytes, reason)) return true;
+  error = path + ": " + reason + "; the previous file, if any, is kept";
+  return false;
+}
+
+bool FileSet::commit(std::string& error) {
+  for (size_t k = 0; k < staged_.size(); ++k) {
+    if (std::rename(temporary_of(staged_[k]).c_str(), staged_[k].c_str()) != 0) {
+      error = staged_[k] + ": " + system_error("cannot rename the new file into place");
+      staged_.erase(staged_.begin(), staged_.begin() + static_cast<std::ptrdiff_t>(k));
+      return false;
+    }
+  }
+  staged_.clear();
+  return true;
+}
+
+}  // namespace ivoa
