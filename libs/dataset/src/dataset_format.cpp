@@ -18,6 +18,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/json_text.hpp"
 
 namespace fs = std::filesystem;
@@ -345,18 +346,14 @@ void register_session(const std::string& dataset_root, const std::string& sessio
   std::vector<std::string> sessions = list_sessions(dataset_root);
   if (std::find(sessions.begin(), sessions.end(), session) == sessions.end()) sessions.push_back(session);
   std::sort(sessions.begin(), sessions.end());
-  // Written aside and renamed into place: a reader never sees half a list.
-  const std::string path = dataset_root + "/dataset.json", written = path + ".tmp";
-  std::ofstream out(written);
+  std::ostringstream out;
   out << "{\n  \"format\": \"ivoa-dataset\",\n  \"version\": 1,\n  \"patch_size\": " << patch_size
       << ",\n  \"label_names\": [\"TP\", \"TN\", \"FP\", \"FN\"],\n  \"sessions\": [";
   for (size_t k = 0; k < sessions.size(); ++k) out << (k ? ", " : "") << json_quote(sessions[k]);
   out << "]\n}\n";
-  const bool complete = static_cast<bool>(out.flush());
-  out.close();
-  std::error_code error;
-  if (complete) fs::rename(written, path, error);
-  if (!complete || error) throw DatasetError(path + ": cannot write the list of sessions (disk full?)");
+  std::string error;  // replaced whole: a reader never sees half a list
+  if (!replace_file(dataset_root + "/dataset.json", out.str(), error))
+    throw DatasetError(error + " (the list of sessions)");
 }
 
 std::map<std::string, std::vector<std::string>> load_split(const std::string& path) {

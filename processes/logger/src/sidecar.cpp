@@ -1,12 +1,9 @@
 #include "ivoa/logger/sidecar.hpp"
 
 #include <algorithm>
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
-#include <fstream>
 #include <sstream>
 
+#include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/message_registry.hpp"
 #include "ivoa/logio/log_summary.hpp"
@@ -78,17 +75,10 @@ std::string sidecar_json(const SidecarContent& c) {
   return out.str();
 }
 
-// Written beside and renamed over the old one, so a logger killed mid-write
-// leaves the previous sidecar whole rather than half of the new one.
+// Replaced whole, so a logger killed mid-write leaves the previous sidecar
+// rather than half of the new one.
 bool write_sidecar(const SidecarContent& content, std::string& error) {
-  const std::string path = sidecar_path(content.log_path), temporary = path + ".tmp";
-  std::ofstream file(temporary, std::ios::trunc);
-  file << sidecar_json(content);
-  file.close();
-  if (file && std::rename(temporary.c_str(), path.c_str()) == 0) return true;
-  error = "cannot write " + path + ": " + std::strerror(errno);
-  std::remove(temporary.c_str());
-  return false;
+  return replace_file(sidecar_path(content.log_path), sidecar_json(content), error);
 }
 
 }  // namespace ivoa::logger
