@@ -1,6 +1,7 @@
 #include <atomic>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <fstream>
 #include <iterator>
@@ -200,6 +201,55 @@ TEST(DatasetFormat, IndexThatDisagreesWithSessionJsonIsReported) {
     EXPECT_NE(what.find("session.json says 2 samples (TP 1, TN 0, FP 1, FN 0)"), std::string::npos) << what;
     EXPECT_NE(what.find("samples.csv lists 1 samples (TP 1, TN 0, FP 0, FN 0)"), std::string::npos) << what;
   }
+}
+
+// The error reading a session whose samples.csv has its second row edited by
+// hand ("" if none).
+std::string reading_error_after(const test::TempDir& dir, const std::function<std::string(std::string)>& edit) {
+  {
+    SessionWriter w(dir.path().string(), info("hand"));
+    w.add_frame(1, 1, 2);
+    w.add_sample(SampleRecord{}, numbered_patch(0));
+    w.add_sample(SampleRecord{}, numbered_patch(1));
+  }
+  const auto csv = dir.path() / "hand" / "samples.csv";
+  std::ifstream in(csv);
+  std::string header, first, second;
+  std::getline(in, header);
+  std::getline(in, first);
+  std::getline(in, second);
+  in.close();
+  std::ofstream(csv) << header << "\n" << first << "\n" << edit(second) << "\n";
+  try {
+    SessionReader r((dir.path() / "hand").string());
+  } catch (const DatasetError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Column k (0-based) of a CSV row replaced by `value`.
+std::string with_column(std::string row, int k, const std::string& value) {
+  size_t begin = 0;
+  for (int i = 0; i < k; ++i) begin = row.find(',', begin) + 1;
+  const size_t end = row.find(',', begin);
+  return row.replace(begin, end == std::string::npos ? std::string::npos : end - begin, value);
+}
+
+TEST(DatasetFormat, CoordinatesThatAreNotFiniteAreNamedByLineAndColumn) {
+  test::TempDir dir;
+  const std::string what = reading_error_after(dir, [](std::string row) { return with_column(row, 8, "nan"); });
+  EXPECT_NE(what.find("hand/samples.csv line 3: column x is nan"), std::string::npos) << what;
+  test::TempDir other;
+  const std::string inf = reading_error_after(other, [](std::string row) { return with_column(row, 10, "inf"); });
+  EXPECT_NE(inf.find("samples.csv line 3: column u is inf"), std::string::npos) << inf;
+}
+
+TEST(DatasetFormat, AColumnThatIsNotANumberIsNamed) {
+  test::TempDir dir;
+  const std::string what = reading_error_after(dir, [](std::string row) { return with_column(row, 5, "FP"); });
+  EXPECT_NE(what.find("samples.csv line 3: column label (6 of 16) is missing or not a number"), std::string::npos)
+      << what;
 }
 
 TEST(DatasetFormat, EvidenceRoundTripsPerSampleAndOldSessionsHaveNone) {

@@ -1,6 +1,7 @@
 // ivoa-eval as a user runs it, on a small synthetic dataset and a model
 // trained on it for a few steps: what it writes, what it warns about, what
 // it refuses and with which exit code.
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -43,8 +44,9 @@ class EvalCli : public ::testing::Test {
     test::write_synthetic_session(dir_.file("data"), "s", s);
     s.views = 2;
     test::write_synthetic_session(dir_.file("data"), "b", s);
-    std::ofstream(dir_.file("split.yaml"))
-        << "train: [a]\nval: [v]\ntest: [t]\ndense: [d]\nscaled: [s]\nscaled_two_views: [b]\n";
+    std::filesystem::create_directories(dir_.file("data/unfinished"));  // a build that never wrote session.json
+    std::ofstream(dir_.file("split.yaml")) << "train: [a]\nval: [v]\ntest: [t]\ndense: [d]\nscaled: [s]\n"
+                                              "scaled_two_views: [b]\nempty: []\nunfinished: [unfinished]\n";
 
     introspection::TrainConfig c;
     c.dataset = dir_.file("data");
@@ -75,7 +77,8 @@ TEST_F(EvalCli, WritesARowAndAnEmbeddingPerSampleOfTheSplitsAsked) {
   EXPECT_EQ(csv.rfind("session,environment,split,sample,", 0), 0u);
   EXPECT_EQ(test::read_file(out() + "/embeddings.f32").size(), 4u * kPerClass * 256 * sizeof(float));
   const std::string json = test::read_file(out() + "/eval.json");
-  EXPECT_TRUE(contains(json, "{\"split\": \"test\", \"session\": \"t\"}")) << json;
+  EXPECT_TRUE(contains(json, "{\"split\": \"test\", \"session\": \"t\", \"patch_scale\": 0, \"views\": 1}")) << json;
+  EXPECT_TRUE(contains(json, "\"dataset\": \"" + dir_.file("data") + "\"")) << json;
   EXPECT_TRUE(contains(json, "\"detector\": \"jppc\"")) << json;
 }
 
@@ -100,6 +103,30 @@ TEST_F(EvalCli, NamesEveryWayThePatchesDifferAtOnce) {
   EXPECT_TRUE(contains(r.output, "session b has patch scale 1.6 (model: 0), 2 view(s) per patch (model: 1)"))
       << r.output;
   EXPECT_TRUE(contains(r.output, "--patch-scale 0 --views 1")) << r.output;
+}
+
+TEST_F(EvalCli, OverlaysOfAnEarlierRunAreRemovedNotPassedOffAsThisModels) {
+  std::filesystem::create_directories(out() + "/overlays");
+  std::ofstream(out() + "/overlays/t_1000.png") << "an earlier model's figure";
+  std::ofstream(out() + "/overlays/notes.txt") << "the user's";
+  const auto r = eval("test");
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out() + "/overlays/t_1000.png"));
+  EXPECT_TRUE(std::filesystem::exists(out() + "/overlays/notes.txt"));
+  EXPECT_TRUE(contains(r.output, "removed 1 overlay figures of an earlier run")) << r.output;
+}
+
+TEST_F(EvalCli, ASplitWithoutSessionsIsBadInput) {
+  const auto r = eval("empty");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "split.yaml: the split(s) empty list no session: nothing to evaluate")) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out() + "/eval.json"));
+}
+
+TEST_F(EvalCli, ASessionFolderWithoutItsDescriptionIsNamed) {
+  const auto r = eval("unfinished");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "data/unfinished/session.json: missing")) << r.output;
 }
 
 TEST_F(EvalCli, UnknownSplitIsBadInput) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
@@ -196,6 +197,8 @@ void write_log_overlays(const Options& o, introspection::IntrospectionModel& mod
     ++written;
   }
   if (const std::string why = in.not_a_log(); !why.empty()) spdlog::warn("{}: {}: no overlays from it", log, why);
+  else if (!in.clean())  // cut short or damaged: the overlays stop (or skip) there
+    spdlog::warn("{}: {}: overlays only from the frames before it", log, in.problems().front().describe());
 }
 
 int write_overlays(const Options& o, introspection::IntrospectionModel& model, const SessionList& evaluated) {
@@ -227,16 +230,21 @@ SessionList list_sessions(const Options& o) {
   for (const auto& split : o.splits)
     if (listed.insert(split).second)
       for (const auto& s : dataset::split_sessions(o.split_file, split, o.dataset)) sessions.push_back({split, s});
+  if (sessions.empty())
+    throw dataset::DatasetError(o.split_file + ": the split(s) " + fmt::format("{}", fmt::join(o.splits, ", ")) +
+                                " list no session: nothing to evaluate");
   return sessions;
 }
 
 // predictions.csv and embeddings.f32 (one FC2 vector per row); returns the
-// number of rows.
-double write_predictions(const Options& o, const SessionList& sessions, introspection::IntrospectionModel& model) {
+// number of rows, and each session's description in `infos`.
+double write_predictions(const Options& o, const SessionList& sessions, introspection::IntrospectionModel& model,
+                         std::vector<dataset::SessionInfo>& infos) {
   double total = 0;
   std::vector<std::pair<std::string, std::string>> other_detector;  // (session, detector) unlike the model's
   for (const auto& [split, name] : sessions) {
     const dataset::SessionReader session(o.dataset + "/" + name);
+    infos.push_back(session.info());
     total += static_cast<double>(session.size());
     if (session.info().detector != model.info().detector) other_detector.push_back({name, session.info().detector});
   }
@@ -261,20 +269,24 @@ double write_predictions(const Options& o, const SessionList& sessions, introspe
   // A full disk shows only here: say so rather than leave short files behind unnoticed.
   if (std::fflush(csv.get()) != 0 || std::ferror(csv.get())) throw OutputError(csv_path + ": write failed");
   if (std::fflush(emb.get()) != 0 || std::ferror(emb.get())) throw OutputError(emb_path + ": write failed");
+  if (done == 0) throw dataset::DatasetError("the sessions evaluated hold no samples: nothing to evaluate");
   return done;
 }
 
+// The patches each session was cut as, so the report can refuse a dataset
+// cut otherwise (its mosaics would show other patches than the model saw).
 void write_eval_json(const Options& o, const introspection::IntrospectionModel& model, const SessionList& sessions,
-                     double samples) {
+                     const std::vector<dataset::SessionInfo>& infos, double samples) {
   std::string evaluated;
-  for (const auto& [split, name] : sessions)
-    evaluated += std::string(evaluated.empty() ? "" : ", ") + "{\"split\": " + json_quote(split) +
-                 ", \"session\": " + json_quote(name) + "}";
+  for (size_t k = 0; k < sessions.size(); ++k)
+    evaluated += fmt::format("{}{{\"split\": {}, \"session\": {}, \"patch_scale\": {}, \"views\": {}}}", k ? ", " : "",
+                             json_quote(sessions[k].first), json_quote(sessions[k].second), infos[k].patch_scale,
+                             infos[k].views);
   const auto& info = model.info();
   const std::string path = o.out + "/eval.json";
   std::ofstream json(path);
-  json << "{\"model\": " << json_quote(info.id) << ", \"mc_passes\": " << o.inference.mc_passes
-       << ", \"uncertainty_threshold\": " << model.threshold()
+  json << "{\"model\": " << json_quote(info.id) << ", \"dataset\": " << json_quote(fs::absolute(o.dataset).string())
+       << ", \"mc_passes\": " << o.inference.mc_passes << ", \"uncertainty_threshold\": " << model.threshold()
        << ", \"verdict_uncertainty_threshold\": " << model.verdict_threshold() << ", \"overlay_dots\": \""
        << (o.dots_given_verdict ? "given_verdict" : "image") << "\", \"samples\": " << samples << ", \"sessions\": ["
        << evaluated << "], \"metadata\": {\"detector\": " << json_quote(info.detector)
@@ -306,14 +318,26 @@ void add_options(CLI::App& app, Options& o) {
   app.add_option("--seed", o.inference.seed, "dropout masks")->capture_default_str();
 }
 
+// The figures of an earlier run into the same --out would pass for this
+// model's: the report shows every PNG it finds there.
+void remove_old_overlays(const std::string& folder) {
+  std::error_code error;
+  int removed = 0;
+  for (const auto& entry : fs::directory_iterator(folder, error))
+    if (entry.is_regular_file() && entry.path().extension() == ".png" && fs::remove(entry.path(), error)) ++removed;
+  if (removed > 0) spdlog::info("removed {} overlay figures of an earlier run from {}", removed, folder);
+}
+
 int evaluate(const Options& o) {
   auto model = introspection::IntrospectionModel::load(o.model, o.inference);
   const SessionList sessions = list_sessions(o);
   std::error_code error;
   fs::create_directories(o.out, error);
   if (error) throw OutputError(o.out + ": cannot create the output folder: " + error.message());
-  const double samples = write_predictions(o, sessions, *model);
-  write_eval_json(o, *model, sessions, samples);
+  remove_old_overlays(o.out + "/overlays");
+  std::vector<dataset::SessionInfo> infos;
+  const double samples = write_predictions(o, sessions, *model, infos);
+  write_eval_json(o, *model, sessions, infos, samples);
   if (!o.logs.empty()) write_overlays(o, *model, sessions);
   std::printf("predictions: %s/predictions.csv (%.0f samples), embeddings: %s/embeddings.f32\n", o.out.c_str(), samples,
               o.out.c_str());

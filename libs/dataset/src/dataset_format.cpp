@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <cstdio>
 #include <filesystem>
@@ -103,6 +104,22 @@ SessionInfo parse_session_json(const std::string& path) {
   return i;
 }
 
+// The name of samples.csv's column `index` (0-based).
+std::string sample_column(int index) {
+  std::istringstream header(kSamplesHeader);
+  std::string name;
+  for (int k = 0; k <= index && std::getline(header, name, ','); ++k) {
+  }
+  return name;
+}
+
+// A coordinate that is not finite would travel into every figure and metric by distance.
+void check_finite(const SampleRecord& s, const std::string& where) {
+  const std::pair<const char*, float> coordinates[] = {{"x", s.x}, {"y", s.y}, {"u", s.u}, {"v", s.v}};
+  for (const auto& [name, value] : coordinates)
+    if (!std::isfinite(value)) throw DatasetError(where + ": column " + name + " is " + std::to_string(value));
+}
+
 // `columns`: 15 (before patch_side was recorded) or 16.
 SampleRecord parse_sample_row(const std::string& line, int columns, const std::string& where) {
   SampleRecord s;
@@ -110,7 +127,13 @@ SampleRecord parse_sample_row(const std::string& line, int columns, const std::s
   int n = std::sscanf(line.c_str(), "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%f,%f,%f,%f,%d,%d,%d,%d", &sample, &frame, &utime,
                       &depth_utime, &s.cell, &s.label, &s.stereo_state, &s.depth_state, &s.x, &s.y, &s.u, &s.v,
                       &s.phenomena, &s.phenomenon, &s.surface, &s.patch_side);
-  if (n != columns) throw DatasetError(where + ": malformed row '" + line + "'");
+  if (n > columns) throw DatasetError(where + ": more columns than the header's " + std::to_string(columns));
+  if (n < columns) {
+    const int bad = std::max(n, 0);
+    throw DatasetError(where + ": column " + sample_column(bad) + " (" + std::to_string(bad + 1) + " of " +
+                       std::to_string(columns) + ") is missing or not a number in '" + line + "'");
+  }
+  check_finite(s, where);
   if (s.label < 0 || s.label >= kNumClasses)
     throw DatasetError(where + ": label " + std::to_string(s.label) + " out of range");
   s.frame = frame;
@@ -224,7 +247,7 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
   std::getline(in, line);
   const bool has_side = line == kSamplesHeader;
   if (!has_side && line != kSamplesHeaderV1)
-    throw DatasetError(dir_ + "/samples.csv: unexpected header '" + line + "'");
+    throw DatasetError(dir_ + "/samples.csv: unexpected header '" + line + "' (expected '" + kSamplesHeader + "')");
   size_t row = 1;
   while (std::getline(in, line)) {
     ++row;
@@ -393,10 +416,15 @@ std::vector<std::string> split_sessions(const std::string& path, const std::stri
     for (const auto& [name, sessions] : splits) names += (names.empty() ? "" : ", ") + name;
     throw DatasetError(path + ": no split '" + split + "' (it has: " + (names.empty() ? "none" : names) + ")");
   }
-  for (const auto& session : it->second)
-    if (!fs::exists(dataset_root + "/" + session + "/session.json"))
+  for (const auto& session : it->second) {
+    const std::string folder = dataset_root + "/" + session;
+    if (fs::is_directory(folder) && !fs::exists(folder + "/session.json"))
+      throw DatasetError(folder + "/session.json: missing (split '" + split + "' of " + path +
+                         " names the session; a build that did not finish? rebuild it with ivoa-dataset build)");
+    if (!fs::exists(folder + "/session.json"))
       throw DatasetError(path + ": split '" + split + "' names session '" + session + "', which is not in " +
                          dataset_root);
+  }
   return it->second;
 }
 
