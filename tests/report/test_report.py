@@ -131,8 +131,11 @@ def write_eval(out, sessions, predicted, probs, var, embeddings, detector="jppc"
                 f.write("\n")
                 k += 1
     np.asarray(embeddings, np.float32).tofile(os.path.join(out, "embeddings.f32"))
+    # Per session, the views and patch scale of the dataset (write_dataset's: 1 and the default 0).
     meta = {"model": f"{detector}.pt#0000", "mc_passes": 20, "uncertainty_threshold": threshold,
-            "samples": k, "metadata": {"detector": detector, "architecture": "slidenet", "training": {}}}
+            "samples": k, "sessions": [{"split": "test", "session": name, "patch_scale": 0, "views": 1}
+                                       for name, _, _ in sessions],
+            "metadata": {"detector": detector, "architecture": "slidenet", "training": {}}}
     if verdict:
         meta["verdict_uncertainty_threshold"] = threshold
     if overlay_dots:
@@ -547,6 +550,27 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         shutil.copytree(src, dst)
         return dst
 
+    def eval_with_predictions(self, name, edit, src=None):
+        """A copy of an eval (the known one: it has the verdict columns) whose
+        predictions.csv lines, header first, went through edit(lines as lists)."""
+        d = self.copy_eval(src or self.f.known, name)
+        path = os.path.join(d, "predictions.csv")
+        with open(path, newline="") as fh:
+            lines = list(csv.reader(fh))
+        edit(lines)
+        with open(path, "w", newline="") as fh:
+            csv.writer(fh, lineterminator="\n").writerows(lines)
+        return d
+
+    def eval_with_meta(self, name, edit, src=None):
+        """A copy of an eval (the degenerate one: fast to report) whose eval.json is edit(eval.json)."""
+        d = self.copy_eval(src or self.f.degenerate, name)
+        path = os.path.join(d, "eval.json")
+        meta = edit(json.loads(read_text(path)))
+        with open(path, "w") as fh:
+            json.dump(meta, fh)
+        return d
+
     def test_degenerate_inputs_are_reported(self):
         out = os.path.join(self.root, "report_degenerate")
         code, stdout, stderr = run_main(["--eval", self.f.degenerate, "--dataset", self.f.data2, "--out", out])
@@ -670,8 +694,10 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
             lines = read_text(path).splitlines()
             with open(path, "w") as fh:
                 fh.write("\n".join([lines[0] + ",patch_side"] + [l + ",196" for l in lines[1:]]) + "\n")
+        scaled_eval = self.eval_with_meta("perfect_scaled", lambda m: with_sessions(m, patch_scale=1.6),
+                                          self.f.perfect)
         out = os.path.join(self.root, "report_scaled")
-        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", d, "--out", out])
+        code, _, stderr = run_main(["--eval", scaled_eval, "--dataset", d, "--out", out])
         self.assertEqual(code, 0, stderr)
         m = next(iter(json.loads(read_text(os.path.join(out, "metrics.json")))["models"].values()))
         self.assertEqual(m["patch_scale"], 1.6)
@@ -709,7 +735,7 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         lines[5] = ",".join(fields)
         with open(path, "w") as fh:
             fh.write("\n".join(lines) + "\n")
-        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "row 5", "label")
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "line 6", "label")
 
     def test_verdict_contradicting_the_label(self):
         d = self.copy_eval(self.f.known, "bad_verdict")
@@ -721,7 +747,7 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         lines[3] = ",".join(fields)
         with open(path, "w") as fh:
             fh.write("\n".join(lines) + "\n")
-        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "row 3",
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "line 4",
                               "contradicts label TP")
 
     def test_empty_predictions(self):
@@ -754,6 +780,129 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
             fh.write(b"\0" * 10)
         self.assert_bad_input(["--eval", self.f.perfect, "--dataset", d], "patches.bin", "bytes")
 
+    def test_some_verdict_columns_missing(self):
+        """All four verdict columns or none: three of them is a damaged file, not an older ivoa-eval."""
+        d = self.eval_with_predictions("verdict_dropped", lambda lines: drop_column(lines, "stereo_state"))
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv: missing column(s) "
+                              "stereo_state (the other verdict columns verdict_predicted, p_wrong, var_wrong")
+        d = self.eval_with_predictions("verdict_renamed", lambda lines: set_cell(lines, 1, "p_wrong", "pwrong"))
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv: missing column(s) p_wrong")
+
+    def test_probabilities_and_variances_are_range_checked(self):
+        for i, (column, value, why) in enumerate((
+                ("p_tp", "1.7", "line 6, column 'p_tp': 1.7 is outside 0 .. 1"),
+                ("p_fn", "-0.4", "line 6, column 'p_fn': -0.4 is outside 0 .. 1"),
+                ("p_tn", "nan", "line 6, column 'p_tn': nan is not finite"),
+                ("var_predicted", "inf", "line 6, column 'var_predicted': inf is not finite"),
+                ("var_predicted", "-0.01", "line 6, column 'var_predicted': -0.01 is outside 0 .. 0.2632"),
+                ("uncertainty", "0.3", "line 6, column 'uncertainty': 0.3 is outside 0 .. 0.2632"),
+                ("p_wrong", "1.5", "line 6, column 'p_wrong': 1.5 is outside 0 .. 1"),
+                ("var_wrong", "0.27", "line 6, column 'var_wrong': 0.27 is outside 0 .. 0.2632"))):
+            d = self.eval_with_predictions(f"range_{i}", lambda lines: set_cell(lines, 6, column, value))
+            self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv: " + why)
+        # Swapped columns: every value in range, the row's probabilities no longer sum to 1.
+        d = self.eval_with_predictions("swapped", lambda lines: swap_header(lines, "p_fp", "var_predicted"))
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data],
+                              "predictions.csv: line 2: p_tp + p_tn + p_fp + p_fn = ")
+        # ivoa-eval's variance is over T passes, unbiased: 0.25 T / (T - 1) at most.
+        load_tool()
+        from report_inputs import max_variance
+        self.assertAlmostEqual(max_variance(2), 0.5, places=5)
+        self.assertAlmostEqual(max_variance(20), 0.25 * 20 / 19, places=5)
+
+    def test_non_finite_coordinates(self):
+        for i, (column, value) in enumerate((("x", "nan"), ("v", "-inf"))):
+            d = self.eval_with_predictions(f"coordinate_{i}", lambda lines: set_cell(lines, 9, column, value))
+            self.assert_bad_input(["--eval", d, "--dataset", self.f.data],
+                                  f"predictions.csv: line 9, column '{column}': {value} is not finite")
+
+    def test_repeated_sample(self):
+        """A row given twice (with its embedding) would be counted twice."""
+        d = self.eval_with_predictions("repeated", lambda lines: lines.append(lines[4]))
+        path = os.path.join(d, "embeddings.f32")
+        emb = np.fromfile(path, np.float32).reshape(-1, DIM)
+        np.concatenate([emb, emb[3:4]]).tofile(path)
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data],
+                              "predictions.csv: session office_s1, sample 3 is on line 5 and again on line 202")
+
+    def test_non_finite_embeddings(self):
+        d = self.copy_eval(self.f.perfect, "nan_embeddings")
+        path = os.path.join(d, "embeddings.f32")
+        emb = np.fromfile(path, np.float32).reshape(-1, DIM)
+        emb[7, 100] = np.nan
+        emb.tofile(path)
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data],
+                              "embeddings.f32: row 7 (0-based; the prediction on line 9 of predictions.csv) is not "
+                              "finite")
+
+    def test_eval_json_fields_are_checked(self):
+        """A missing or malformed field used to print as 'None' or drop the run-time gate's row."""
+        for name, edit, why in (
+                ("meta_empty", lambda m: {}, "eval.json: missing field 'model'"),
+                ("meta_no_passes", lambda m: {k: v for k, v in m.items() if k != "mc_passes"},
+                 "eval.json: missing field 'mc_passes'"),
+                ("meta_threshold", lambda m: dict(m, uncertainty_threshold="abc"),
+                 "eval.json: field 'uncertainty_threshold' = 'abc', expected a number"),
+                ("meta_views", lambda m: with_sessions(m, views="two"),
+                 "eval.json: field 'sessions[0].views' = 'two', expected an integer")):
+            self.assert_bad_input(["--eval", self.eval_with_meta(name, edit), "--dataset", self.f.data2], why)
+        d = self.eval_with_meta("meta_no_verdict_threshold", lambda m: m, self.f.known)
+        meta = json.loads(read_text(os.path.join(d, "eval.json")))
+        del meta["verdict_uncertainty_threshold"]
+        with open(os.path.join(d, "eval.json"), "w") as fh:
+            json.dump(meta, fh)
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data],
+                              "eval.json: missing field 'verdict_uncertainty_threshold'")
+
+    def test_dataset_cut_at_another_patch_scale(self):
+        """eval.json's views and patch scale per session against the dataset's
+        session.json: the same samples cut otherwise would fill the mosaics with
+        other squares. An older eval.json without them is not checked."""
+        d = os.path.join(self.root, "data_nofn_scaled")
+        shutil.copytree(self.f.data2, d)
+        info_path = os.path.join(d, "lab_s3", "session.json")
+        info = json.loads(read_text(info_path))
+        with open(info_path, "w") as fh:
+            json.dump(dict(info, patch_scale=1.6), fh)
+        self.assert_bad_input(["--eval", self.f.degenerate, "--dataset", d],
+                              os.path.join(self.f.degenerate, "eval.json") + ": session lab_s3 was evaluated at "
+                              "patch_scale 0, but " + info_path + " has patch_scale 1.6")
+        two_views = self.eval_with_meta("two_views", lambda m: with_sessions(m, views=2))
+        self.assert_bad_input(["--eval", two_views, "--dataset", self.f.data2],
+                              "session lab_s3 was evaluated at views 2, but", "session.json has views 1")
+        older = self.eval_with_meta("older_eval", lambda m: {k: v for k, v in m.items() if k != "sessions"})
+        code, _, stderr = run_main(["--eval", older, "--dataset", d, "--out", os.path.join(self.root, "report_old")])
+        self.assertEqual(code, 0, stderr)
+
+    def test_session_without_session_json(self):
+        """Not a patches.bin size error: without session.json the views are unknown."""
+        d = os.path.join(self.root, "data_no_session_json")
+        shutil.copytree(self.f.data2, d)
+        os.remove(os.path.join(d, "lab_s3", "session.json"))
+        self.assert_bad_input(["--eval", self.f.degenerate, "--dataset", d],
+                              os.path.join(d, "lab_s3", "session.json") + ": missing")
+
+    def test_unwritable_report_is_exit_code_4(self):
+        """The path and the system's reason, exit code 4, no traceback."""
+        taken = os.path.join(self.root, "out_taken")
+        os.makedirs(os.path.join(taken, "report.md"))                     # report.md is a folder
+        os.makedirs(os.path.join(self.root, "out_file"))
+        with open(os.path.join(self.root, "out_file", "jppc_degenerate"), "w"):  # a file where the model's folder goes
+            pass
+        a_file = os.path.join(self.root, "out_file", "jppc_degenerate")
+        cases = [(taken, os.path.join(taken, "report.md") + ": Is a directory"),
+                 (os.path.join(self.root, "out_file"), a_file + ": File exists"),
+                 (os.path.join(a_file, "report"), os.path.join(a_file, "report") + ": Not a directory")]
+        if os.geteuid() != 0:  # root writes into a read-only folder anyway
+            read_only = os.path.join(self.root, "out_read_only")
+            os.makedirs(read_only, mode=0o555)
+            cases.append((read_only, os.path.join(read_only, "jppc_degenerate") + ": Permission denied"))
+        for out, why in cases:
+            code, _, stderr = run_main(["--eval", self.f.degenerate, "--dataset", self.f.data2, "--out", out])
+            self.assertEqual(code, 4, stderr)
+            self.assertIn("ivoa_report: cannot write the report: " + why, stderr)
+            self.assertNotIn("Traceback", stderr)
+
     def test_dataset_count_must_match(self):
         code, _, _ = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--dataset", self.f.data,
                                "--dataset", self.f.data, "--out", os.path.join(self.root, "x")])
@@ -768,6 +917,28 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
                                         os.path.join(self.root, "x"), flag, value])
             self.assertEqual(code, 2, stderr)
             self.assertIn(why, stderr)
+
+
+def set_cell(lines, line, column, value):
+    """predictions.csv as lists: the given file line (1 = header) and column (header name) set to value."""
+    lines[line - 1][lines[0].index(column)] = value
+
+
+def drop_column(lines, column):
+    i = lines[0].index(column)
+    for fields in lines:
+        del fields[i]
+
+
+def swap_header(lines, a, b):
+    """Swaps two column names, not their values: each column then reads as the other."""
+    i, j = lines[0].index(a), lines[0].index(b)
+    lines[0][i], lines[0][j] = b, a
+
+
+def with_sessions(meta, **keys):
+    """eval.json with the given keys set in each "sessions" entry."""
+    return dict(meta, sessions=[dict(s, **keys) for s in meta["sessions"]])
 
 
 def write_causes(path, sessions, detector="jppc", cause_of=None, not_reproduced=0, relabel=None, fixed_by=None):
@@ -946,7 +1117,7 @@ class DetectorSettingsTest(FabricatedInputsCase):
         code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--variants", variants,
                                     "--out", os.path.join(self.root, "report_bad")])
         self.assertEqual(code, 3, stderr)
-        self.assertIn("variants_bad.csv: row 1: 8 right and 5 wrong of 10 cells", stderr)
+        self.assertIn("variants_bad.csv: line 2: 8 right and 5 wrong of 10 cells", stderr)
 
 
 class MetricUnitTest(unittest.TestCase):

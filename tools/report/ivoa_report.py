@@ -13,7 +13,8 @@ folder gets ``report.md``, ``metrics.json`` (every number in the report) and the
 PNG figures, one subfolder per model plus ``comparison/``.
 
 Exit codes: 0 done, 2 bad command line, 3 bad input (the message names the file
-and the problem), 1 anything else (a bug: please report it with the traceback).
+and the problem), 4 the report cannot be written (the message names the path and
+the system's reason), 1 anything else (a bug: please report it with the traceback).
 See tools/report/README.md for what the report holds.
 """
 
@@ -27,7 +28,7 @@ import sys
 # Must be set before the OpenMP runtime loads, i.e. before numpy/sklearn.
 os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
-EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_BAD_INPUT = 0, 1, 2, 3
+EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_BAD_INPUT, EXIT_CANNOT_WRITE = 0, 1, 2, 3, 4
 
 
 def _ensure_scientific_python() -> None:
@@ -335,14 +336,27 @@ def _json_default(o):
     raise TypeError(type(o).__name__)
 
 
+class OutputError(Exception):
+    """The report folder or a file in it cannot be written (exit code 4); the
+    message names the path and the system's reason."""
+
+
 def run_report(args: argparse.Namespace, argv: List[str]) -> int:
     """Loads, analyses, writes report.md + metrics.json, prints the summary."""
     runs, settings, noise, warnings = load_inputs(args)
-    out_dir = args.out
     try:
-        os.makedirs(out_dir, exist_ok=True)
-    except OSError as e:
-        raise InputError(f"{out_dir}: cannot create the report folder ({e.strerror})") from None
+        numbers, report_path = write_report(args, argv, runs, settings, noise, warnings)
+    except OSError as e:  # reading is over: an OSError now is about the report's own files
+        raise OutputError(f"{e.filename or args.out}: {e.strerror or e}") from None
+    print_summary(runs, numbers, warnings, report_path)
+    return EXIT_OK
+
+
+def write_report(args: argparse.Namespace, argv: List[str], runs: List[EvalRun], settings, noise: Optional[dict],
+                 warnings: List[str]):
+    """The analysis, its figures, report.md and metrics.json; returns (numbers per model, report.md's path)."""
+    out_dir = args.out
+    os.makedirs(out_dir, exist_ok=True)
     opt = ClusterOptions(k=args.clusters, select=args.select, embedding_norm=args.embedding_norm,
                          space=args.cluster_space, tsne_max=args.tsne_max, perplexity=args.perplexity,
                          tsne_iterations=args.tsne_iterations, seed=args.seed, threads=max(1, args.threads))
@@ -378,7 +392,11 @@ def run_report(args: argparse.Namespace, argv: List[str]) -> int:
     with open(os.path.join(out_dir, "metrics.json"), "w", encoding="utf-8") as f:
         json.dump({"title": args.title, "models": numbers, "detector_settings": settings,
                    "warnings": sorted(set(warnings))}, f, indent=1, default=_json_default)
+    return numbers, report_path
 
+
+def print_summary(runs: List[EvalRun], numbers: Dict[str, dict], warnings: List[str], report_path: str) -> None:
+    """The warnings on stderr; the headline numbers per model and report.md's path on stdout."""
     for w in sorted(set(warnings)):
         print(f"warning: {w}", file=sys.stderr)
     for run in runs:
@@ -397,11 +415,10 @@ def run_report(args: argparse.Namespace, argv: List[str]) -> int:
                  if c["ok"] and c.get("purity_by_cause") is not None else "")
               + (" (in brackets: all in one cluster)" if c["ok"] and c["purity"] is not None else ""))
     print(f"report: {report_path}")
-    return EXIT_OK
 
 
 def main(argv: Optional[List[str]] = None) -> int:
-    """Entry point; returns the exit code (bad input -> 3 with one message)."""
+    """Entry point; returns the exit code (bad input -> 3, unwritable report -> 4, with one message)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         args = parse_args(argv)
@@ -412,6 +429,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     except InputError as e:
         print(f"ivoa_report: bad input: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except OutputError as e:
+        print(f"ivoa_report: cannot write the report: {e}", file=sys.stderr)
+        return EXIT_CANNOT_WRITE
 
 
 if __name__ == "__main__":

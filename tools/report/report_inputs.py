@@ -136,6 +136,16 @@ class DatasetSession:
     def size(self) -> int:
         return len(self.utime)
 
+    @property
+    def views(self) -> int:
+        """Squares per patch: 1, or 2 with the warped right view (1 in datasets older than views)."""
+        return int(self.info.get("views", 1))
+
+    @property
+    def patch_scale(self) -> float:
+        """The footprint patch scale the session was cut at (0: fixed squares, and datasets older than it)."""
+        return float(self.info.get("patch_scale", 0) or 0)
+
     def patches(self) -> np.ndarray:
         """(N, P, P, 3) uint8 BGR view of the left-image squares in patches.bin
         (a two-view dataset stores the warped right square below each), size-checked
@@ -144,7 +154,7 @@ class DatasetSession:
             p = os.path.join(self.path, "patches.bin")
             if not os.path.isfile(p):
                 raise InputError(f"{p}: missing (the patches of session {self.name})")
-            views = int(self.info.get("views", 1))
+            views = self.views
             per = self.patch_size * self.patch_size * 3 * views
             got = os.path.getsize(p)
             if got != per * self.size:
@@ -200,8 +210,7 @@ class Dataset:
         d = os.path.join(self.path, name)
         if not os.path.isdir(d):
             raise InputError(f"{d}: session folder not found in dataset {self.path}")
-        info_path = os.path.join(d, "session.json")
-        info = _read_json(info_path) if os.path.isfile(info_path) else {}
+        info = _read_session_info(os.path.join(d, "session.json"))
         patch_size = int(info.get("patch_size", self.patch_size))
         samples_path = os.path.join(d, "samples.csv")
         cols = _read_csv_columns(samples_path, ("sample", "utime", "cell", "label"))
@@ -217,6 +226,29 @@ class Dataset:
         if len(sample) and not np.array_equal(sample, np.arange(len(sample))):
             raise InputError(f"{samples_path}: column 'sample' must equal the row number (0, 1, 2, ...)")
         return DatasetSession(name, d, patch_size, info, utime, cell, label, side)
+
+
+def _read_session_info(path: str) -> dict:
+    """session.json, required: without it views and patch scale are unknown and
+    the patches.bin size check would blame the wrong file."""
+    if not os.path.isfile(path):
+        raise InputError(f"{path}: missing (every session folder of a dataset has one)")
+    info = _read_json(path)
+    views, scale = info.get("views", 1), info.get("patch_scale", 0)
+    if not _is_integer(views) or views < 1:
+        raise InputError(f"{path}: field 'views' = {views!r}, expected an integer >= 1")
+    if not _is_number(scale) or not scale >= 0:
+        raise InputError(f"{path}: field 'patch_scale' = {scale!r}, expected a number >= 0")
+    return info
+
+
+def _is_number(x) -> bool:
+    """A finite JSON number (bool is not one, although Python says it is an int)."""
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and bool(np.isfinite(x))
+
+
+def _is_integer(x) -> bool:
+    return isinstance(x, int) and not isinstance(x, bool)
 
 
 # --------------------------------------------------------------------------- eval runs
@@ -354,7 +386,7 @@ def _numeric(path: str, cols: Dict[str, List[str]], name: str, dtype):
             try:
                 dtype(x)
             except ValueError:
-                raise InputError(f"{path}: row {i + 1}, column '{name}': '{x}' is not a number") from None
+                raise InputError(f"{path}: line {_line(i)}, column '{name}': '{x}' is not a number") from None
         raise
 
 
@@ -362,9 +394,12 @@ def load_eval(path: str) -> EvalRun:
     """Reads and checks one ivoa-eval output folder (no dataset yet)."""
     if not os.path.isdir(path):
         raise InputError(f"{path}: eval folder not found")
-    meta = _read_json(os.path.join(path, "eval.json"))
+    meta_path = os.path.join(path, "eval.json")
+    meta = _read_json(meta_path)
     pred_path = os.path.join(path, "predictions.csv")
     cols = _read_csv_columns(pred_path, REQUIRED_COLUMNS)
+    has_verdict = _has_verdict_columns(pred_path, cols)
+    _check_eval_meta(meta_path, meta, has_verdict)
     n = len(cols["label"])
     if n == 0:
         raise InputError(f"{pred_path}: no predictions (header only); nothing to report")
@@ -373,43 +408,32 @@ def load_eval(path: str) -> EvalRun:
     for name, arr in (("label", label), ("predicted", predicted)):
         bad = np.flatnonzero((arr < 0) | (arr > 3))
         if len(bad):
-            raise InputError(f"{pred_path}: row {bad[0] + 1}, column '{name}' = {arr[bad[0]]}, expected 0..3 (TP, TN, FP, FN)")
-    probs = np.stack([_numeric(pred_path, cols, c, float) for c in ("p_tp", "p_tn", "p_fp", "p_fn")], axis=1)
-    var_predicted = _numeric(pred_path, cols, "var_predicted", float)
-    if not np.all(np.isfinite(probs)) or not np.all(np.isfinite(var_predicted)):
-        raise InputError(f"{pred_path}: non-finite probabilities or variances")
-    if np.any(var_predicted < 0):
-        raise InputError(f"{pred_path}: negative var_predicted in row {np.flatnonzero(var_predicted < 0)[0] + 1}")
-
-    emb_path = os.path.join(path, "embeddings.f32")
-    if not os.path.isfile(emb_path):
-        raise InputError(f"{emb_path}: missing (one float32 x {EMBEDDING_DIM} FC2 embedding per prediction)")
-    size = os.path.getsize(emb_path)
-    expected = n * EMBEDDING_DIM * 4
-    if size != expected:
-        raise InputError(
-            f"{emb_path}: {size} bytes, expected {n} rows x {EMBEDDING_DIM} float32 = {expected} bytes "
-            f"(predictions.csv has {n} rows)")
-    embeddings = np.memmap(emb_path, dtype=np.float32, mode="r", shape=(n, EMBEDDING_DIM))
+            raise InputError(f"{pred_path}: line {_line(bad[0])}, column '{name}' = {arr[bad[0]]}, "
+                             f"expected 0..3 (TP, TN, FP, FN)")
+    max_var = max_variance(meta["mc_passes"])
+    probs = np.stack([_checked(pred_path, cols, c, 0, 1) for c in PROBABILITY_COLUMNS], axis=1)
+    _check_probabilities_sum(pred_path, probs)
+    coords = {c: _checked(pred_path, cols, c, -np.inf, np.inf) for c in ("x", "y", "u", "v")}
+    session, sample = np.array(cols["session"]), _numeric(pred_path, cols, "sample", int)
+    _check_unique_samples(pred_path, session, sample)
+    embeddings = _load_embeddings(os.path.join(path, "embeddings.f32"), n)
 
     overlay_dir = os.path.join(path, "overlays")
     overlays = []
     if os.path.isdir(overlay_dir):
         overlays = sorted(os.path.join(overlay_dir, f) for f in os.listdir(overlay_dir) if f.lower().endswith(".png"))
 
-    verdict = _verdict_columns(pred_path, cols, label) if all(c in cols for c in VERDICT_COLUMNS) else None
+    verdict = _verdict_columns(pred_path, cols, label, max_var) if has_verdict else None
     md = meta.get("metadata") if isinstance(meta.get("metadata"), dict) else {}
     detector = str(md.get("detector") or "unknown")
     return EvalRun(
         path=path, name="", slug="", meta=meta, detector=detector,
-        session=np.array(cols["session"]), environment=np.array(cols["environment"]),
-        split=np.array(cols["split"]),
-        sample=_numeric(pred_path, cols, "sample", int), utime=_numeric(pred_path, cols, "utime", int),
-        cell=_numeric(pred_path, cols, "cell", int),
-        x=_numeric(pred_path, cols, "x", float), y=_numeric(pred_path, cols, "y", float),
-        u=_numeric(pred_path, cols, "u", float), v=_numeric(pred_path, cols, "v", float),
-        label=label, predicted=predicted, probs=probs, var_predicted=var_predicted,
-        uncertainty=_numeric(pred_path, cols, "uncertainty", float),
+        session=session, environment=np.array(cols["environment"]), split=np.array(cols["split"]),
+        sample=sample, utime=_numeric(pred_path, cols, "utime", int),
+        cell=_numeric(pred_path, cols, "cell", int), **coords,
+        label=label, predicted=predicted, probs=probs,
+        var_predicted=_checked(pred_path, cols, "var_predicted", 0, max_var, VARIANCE_BOUND_NOTE),
+        uncertainty=_checked(pred_path, cols, "uncertainty", 0, max_var, VARIANCE_BOUND_NOTE),
         phenomena=_numeric(pred_path, cols, "phenomena", int),
         phenomenon=_numeric(pred_path, cols, "phenomenon", int),
         surface=_numeric(pred_path, cols, "surface", int),
@@ -417,29 +441,141 @@ def load_eval(path: str) -> EvalRun:
     )
 
 
-def _verdict_columns(pred_path: str, cols: Dict[str, List[str]], label: np.ndarray) -> VerdictColumns:
+PROBABILITY_COLUMNS = ("p_tp", "p_tn", "p_fp", "p_fn")
+# ivoa-eval writes 5 decimals, so the four sum to 1 within 2e-5; a wider miss
+# means swapped columns or values that are no probabilities.
+PROBABILITY_SUM_TOLERANCE = 1e-3
+VARIANCE_BOUND_NOTE = "a probability's variance over the MC passes cannot exceed it"
+
+
+def max_variance(mc_passes: int) -> float:
+    """The largest variance over T MC passes a probability can have: ivoa-eval's
+    is the unbiased one (libs/introspection mc_dropout.cpp), at most
+    0.25 T / (T - 1), for values half at 0 and half at 1. Plus float slack."""
+    return 0.25 * mc_passes / max(mc_passes - 1, 1) + 1e-6
+
+
+def _line(row: int) -> int:
+    """The line of a CSV file holding data row `row` (0-based): the header is line 1."""
+    return row + 2
+
+
+def _checked(path: str, cols: Dict[str, List[str]], name: str, low: float, high: float, note: str = ""):
+    """A float column whose values must be finite and within [low, high]:
+    InputError naming the first line and the column otherwise."""
+    values = _numeric(path, cols, name, float)
+    bad = np.flatnonzero(~(np.isfinite(values) & (values >= low) & (values <= high)))
+    if len(bad):
+        v = values[bad[0]]
+        why = "is not finite" if not np.isfinite(v) else f"is outside {low:g} .. {high:.4g}"
+        raise InputError(f"{path}: line {_line(bad[0])}, column '{name}': {v:g} {why}"
+                         + (f" ({note})" if note else ""))
+    return values
+
+
+def _check_probabilities_sum(path: str, probs: np.ndarray) -> None:
+    """Each row's four class probabilities are a softmax mean: they sum to 1."""
+    total = probs.sum(axis=1)
+    bad = np.flatnonzero(np.abs(total - 1) > PROBABILITY_SUM_TOLERANCE)
+    if len(bad):
+        raise InputError(f"{path}: line {_line(bad[0])}: {' + '.join(PROBABILITY_COLUMNS)} = {total[bad[0]]:.6g}, "
+                         f"expected 1 (columns swapped, or not probabilities?)")
+
+
+def _check_unique_samples(path: str, session: np.ndarray, sample: np.ndarray) -> None:
+    """Each (session, sample) once: a repeated row would be counted twice in every metric."""
+    first_row = {}
+    for row, key in enumerate(zip(session.tolist(), sample.tolist())):
+        if key in first_row:
+            raise InputError(f"{path}: session {key[0]}, sample {key[1]} is on line {_line(first_row[key])} "
+                             f"and again on line {_line(row)}")
+        first_row[key] = row
+
+
+def _load_embeddings(path: str, n: int) -> np.ndarray:
+    """embeddings.f32 memory-mapped as (n, 256), size- and finiteness-checked (PCA and
+    k-means stop with a traceback at the first NaN)."""
+    if not os.path.isfile(path):
+        raise InputError(f"{path}: missing (one float32 x {EMBEDDING_DIM} FC2 embedding per prediction)")
+    size = os.path.getsize(path)
+    expected = n * EMBEDDING_DIM * 4
+    if size != expected:
+        raise InputError(
+            f"{path}: {size} bytes, expected {n} rows x {EMBEDDING_DIM} float32 = {expected} bytes "
+            f"(predictions.csv has {n} rows)")
+    embeddings = np.memmap(path, dtype=np.float32, mode="r", shape=(n, EMBEDDING_DIM))
+    bad = np.flatnonzero(~np.all(np.isfinite(embeddings), axis=1))
+    if len(bad):
+        raise InputError(f"{path}: row {bad[0]} (0-based; the prediction on line {_line(bad[0])} of "
+                         f"predictions.csv) is not finite ({len(bad)} such rows)")
+    return embeddings
+
+
+def _has_verdict_columns(pred_path: str, cols: Dict[str, List[str]]) -> bool:
+    """True with all four verdict columns, False with none (an older ivoa-eval);
+    some of them is a damaged file, not an older one."""
+    present = [c for c in VERDICT_COLUMNS if c in cols]
+    if present and len(present) < len(VERDICT_COLUMNS):
+        missing = [c for c in VERDICT_COLUMNS if c not in cols]
+        raise InputError(f"{pred_path}: missing column(s) {', '.join(missing)} (the other verdict columns "
+                         f"{', '.join(present)} are there; ivoa-eval writes all four or none)")
+    return bool(present)
+
+
+def _check_eval_meta(path: str, meta: dict, has_verdict: bool) -> None:
+    """The eval.json fields the report quotes or uses, type-checked: a missing one
+    would print as 'None' or drop the run-time gate's row without a word."""
+    _check_field(path, meta, "model", lambda v: isinstance(v, str) and v != "", "the model's name")
+    _check_field(path, meta, "mc_passes", lambda v: _is_integer(v) and v >= 1, "an integer >= 1")
+    _check_field(path, meta, "uncertainty_threshold", lambda v: _is_number(v) and v >= 0, "a number >= 0")
+    if has_verdict or "verdict_uncertainty_threshold" in meta:
+        _check_field(path, meta, "verdict_uncertainty_threshold", lambda v: _is_number(v) and v >= 0,
+                     "a number >= 0")
+    # Per session, the dataset's views and patch scale (newer ivoa-eval; checked against --dataset).
+    _check_field(path, meta, "sessions", lambda v: isinstance(v, list), "a list", required=False)
+    for i, entry in enumerate(meta.get("sessions", [])):
+        where = f"sessions[{i}]"
+        if not isinstance(entry, dict) or not isinstance(entry.get("session"), str):
+            raise InputError(f"{path}: field '{where}' = {entry!r}, expected an object with a 'session' name")
+        _check_field(path, entry, "views", lambda v: _is_integer(v) and v >= 1, "an integer >= 1",
+                     required=False, where=where)
+        _check_field(path, entry, "patch_scale", lambda v: _is_number(v) and v >= 0, "a number >= 0",
+                     required=False, where=where)
+
+
+def _check_field(path: str, obj: dict, key: str, ok, expected: str, required: bool = True, where: str = "") -> None:
+    """InputError naming the file and the field when obj[key] is missing (if required) or not ok()."""
+    name = f"{where}.{key}" if where else key
+    if key not in obj:
+        if required:
+            raise InputError(f"{path}: missing field '{name}' ({expected})")
+        return
+    if not ok(obj[key]):
+        raise InputError(f"{path}: field '{name}' = {obj[key]!r}, expected {expected}")
+
+
+def _verdict_columns(pred_path: str, cols: Dict[str, List[str]], label: np.ndarray,
+                     max_var: float) -> VerdictColumns:
     """The verdict columns, checked against the labels: a TP or FP label means
     the detector said obstacle, a TN or FN label that it said free."""
     v = VerdictColumns(
         stereo_state=_numeric(pred_path, cols, "stereo_state", int),
         predicted=_numeric(pred_path, cols, "verdict_predicted", int),
-        p_wrong=_numeric(pred_path, cols, "p_wrong", float),
-        var_wrong=_numeric(pred_path, cols, "var_wrong", float))
+        p_wrong=_checked(pred_path, cols, "p_wrong", 0, 1),
+        var_wrong=_checked(pred_path, cols, "var_wrong", 0, max_var, VARIANCE_BOUND_NOTE))
     said_obstacle = (label == TP) | (label == FP)
     expected = np.where(said_obstacle, STATE_OBSTACLE, STATE_FREE)
     bad = np.flatnonzero(v.stereo_state != expected)
     if len(bad):
         r = bad[0]
-        raise InputError(f"{pred_path}: row {r + 1}: stereo_state {v.stereo_state[r]} contradicts label "
+        raise InputError(f"{pred_path}: line {_line(r)}: stereo_state {v.stereo_state[r]} contradicts label "
                          f"{LABEL_NAMES[label[r]]} (TP/FP need {STATE_OBSTACLE} = obstacle, TN/FN {STATE_FREE} = free)")
     possible = np.where(said_obstacle[:, None], [TP, FP], [TN, FN])
     bad = np.flatnonzero((v.predicted != possible[:, 0]) & (v.predicted != possible[:, 1]))
     if len(bad):
         r = bad[0]
-        raise InputError(f"{pred_path}: row {r + 1}: verdict_predicted {v.predicted[r]} is impossible for "
+        raise InputError(f"{pred_path}: line {_line(r)}: verdict_predicted {v.predicted[r]} is impossible for "
                          f"stereo_state {v.stereo_state[r]}")
-    if not (np.all(np.isfinite(v.p_wrong)) and np.all(np.isfinite(v.var_wrong)) and np.all(v.var_wrong >= 0)):
-        raise InputError(f"{pred_path}: non-finite p_wrong or negative/non-finite var_wrong")
     return v
 
 
@@ -466,7 +602,7 @@ def patch_scale(run: EvalRun) -> float:
     """The footprint patch scale of the run's dataset (0: fixed squares)."""
     if run.dataset is None or not run.size:
         return 0.0
-    return float(run.dataset.session(str(run.session[0])).info.get("patch_scale", 0) or 0)
+    return run.dataset.session(str(run.session[0])).patch_scale
 
 
 def query_grid(run: EvalRun) -> dict:
@@ -494,13 +630,14 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
     pred_path = os.path.join(run.path, "predictions.csv")
     for name in sorted(set(run.session.tolist())):
         s = dataset.session(name)
+        _check_session_cut(run, s)
         rows = np.flatnonzero(run.session == name)
         idx = run.sample[rows]
         bad = np.flatnonzero((idx < 0) | (idx >= s.size))
         if len(bad):
             r = rows[bad[0]]
             raise InputError(
-                f"{pred_path}: row {r + 1} refers to sample {run.sample[r]} of session {name}, "
+                f"{pred_path}: line {_line(r)} refers to sample {run.sample[r]} of session {name}, "
                 f"but {os.path.join(s.path, 'samples.csv')} has {s.size} samples "
                 f"(is --dataset the dataset this eval ran on?)")
         mismatch = np.flatnonzero((s.utime[idx] != run.utime[rows]) | (s.cell[idx] != run.cell[rows])
@@ -508,7 +645,7 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
         if len(mismatch):
             r = rows[mismatch[0]]
             raise InputError(
-                f"{pred_path}: row {r + 1} (session {name}, sample {run.sample[r]}) does not match "
+                f"{pred_path}: line {_line(r)} (session {name}, sample {run.sample[r]}) does not match "
                 f"{os.path.join(s.path, 'samples.csv')} (utime/cell/label differ in {len(mismatch)} of "
                 f"{len(rows)} rows): is --dataset the dataset this eval ran on?")
         s.patches()  # size checks now, not in the middle of the figures
@@ -524,6 +661,19 @@ def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
     run.dataset = dataset
     run.label_detector = label_detectors.pop() if len(label_detectors) == 1 else run.detector
     return warnings
+
+
+def _check_session_cut(run: EvalRun, s: DatasetSession) -> None:
+    """Newer eval.json files record each session's views and patch scale: a
+    dataset cut otherwise has the same samples.csv but other squares, so the
+    mosaics would show patches the model never saw. Older files: no check."""
+    entry = next((e for e in run.meta.get("sessions", []) if e["session"] == s.name), {})
+    for key, in_dataset in (("patch_scale", s.patch_scale), ("views", s.views)):
+        if key in entry and abs(entry[key] - in_dataset) > 1e-6:
+            raise InputError(
+                f"{os.path.join(run.path, 'eval.json')}: session {s.name} was evaluated at {key} {entry[key]:g}, "
+                f"but {os.path.join(s.path, 'session.json')} has {key} {in_dataset:g}: is --dataset the dataset "
+                f"this eval ran on?")
 
 
 def evidence_margin(run: EvalRun, threshold: float) -> Optional[np.ndarray]:
@@ -578,7 +728,7 @@ def load_causes(path: str) -> Causes:
     rows = {}
     for i, (session, detector, label) in enumerate(zip(cols["session"], cols["detector"], cols["label"])):
         if label not in ("FP", "FN"):
-            raise InputError(f"{path}: row {i + 1}: label '{label}' (causes are for FP and FN cells)")
+            raise InputError(f"{path}: line {_line(i)}: label '{label}' (causes are for FP and FN cells)")
         cause = int(bits[i]) if stereo[i] == replayed[i] else NO_CAUSE
         rows[(session, detector, int(utime[i]), int(cell[i]))] = (LABEL_NAMES.index(label), cause)
     causes = Causes(path=path, rows=rows, detectors=set(cols["detector"]))
@@ -606,10 +756,10 @@ def load_variants(path: str) -> Dict[tuple, Dict[str, int]]:
     out: Dict[tuple, Dict[str, int]] = {}
     for i, (detector, variant, label) in enumerate(zip(cols["detector"], cols["variant"], cols["label"])):
         if label not in LABEL_NAMES:
-            raise InputError(f"{path}: row {i + 1}: label '{label}' (expected one of {', '.join(LABEL_NAMES)})")
+            raise InputError(f"{path}: line {_line(i)}: label '{label}' (expected one of {', '.join(LABEL_NAMES)})")
         n, right, wrong = (int(counts[k][i]) for k in ("cells", "right", "wrong"))
         if min(n, right, wrong) < 0 or right + wrong > n:
-            raise InputError(f"{path}: row {i + 1}: {right} right and {wrong} wrong of {n} cells")
+            raise InputError(f"{path}: line {_line(i)}: {right} right and {wrong} wrong of {n} cells")
         sums = out.setdefault((detector, variant, label), {"cells": 0, "right": 0, "wrong": 0})
         for k, v in (("cells", n), ("right", right), ("wrong", wrong)):
             sums[k] += v
