@@ -2,6 +2,7 @@
 // scores on the real Middlebury "Aloe" pair (Debian's opencv-doc).
 #include <cmath>
 #include <filesystem>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -42,6 +43,23 @@ TEST(DisparityIo, PngValuesAreDividedAndZeroIsUnknown) {
   EXPECT_THROW(load_disparity(dir.file("missing.png")), DisparityFileError);
   const cv::Mat half = scale_disparity(d, 0.5);
   EXPECT_EQ(half.size(), cv::Size(1, 1));
+}
+
+TEST(DisparityIo, AJpegCutShortIsRefusedNamingTheFile) {
+  test::TempDir dir;
+  cv::Mat texture(240, 320, CV_8U);
+  cv::randu(texture, 0, 255);
+  ASSERT_TRUE(cv::imwrite(dir.file("whole.jpg"), texture));
+  EXPECT_EQ(read_image(dir.file("whole.jpg"), cv::IMREAD_GRAYSCALE).size(), texture.size());
+  const auto size = std::filesystem::file_size(dir.file("whole.jpg"));
+  std::filesystem::copy_file(dir.file("whole.jpg"), dir.file("cut.jpg"));
+  std::filesystem::resize_file(dir.file("cut.jpg"), size / 2);
+  try {
+    read_image(dir.file("cut.jpg"), cv::IMREAD_GRAYSCALE);
+    FAIL() << "decoded half a JPEG";
+  } catch (const DisparityFileError& e) {
+    EXPECT_EQ(std::string(e.what()), dir.file("cut.jpg") + ": a JPEG cut short (no end-of-image marker)");
+  }
 }
 
 TEST(PointCheckScoring, SyntheticShiftScoresTruthAboveWrong) {

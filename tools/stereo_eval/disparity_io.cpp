@@ -1,5 +1,6 @@
 #include "disparity_io.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -26,7 +27,29 @@ void mark_unknown(cv::Mat& disparity) {
   });
 }
 
+// A JPEG whose last kilobyte holds no end-of-image marker (FF D9; entropy-
+// coded data never contains one) was cut short.
+bool jpeg_cut_short(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char start[2] = {};
+  if (!in.read(start, 2) || start[0] != '\xFF' || start[1] != '\xD8') return false;
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg(), tail = std::min<std::streamoff>(size, 1024);
+  std::string last(static_cast<size_t>(tail), '\0');
+  in.seekg(size - tail);
+  in.read(last.data(), tail);
+  return last.find("\xFF\xD9") == std::string::npos;
+}
+
 }  // namespace
+
+cv::Mat read_image(const std::string& path, int imread_flags) {
+  if (!std::filesystem::exists(path)) throw DisparityFileError(path + ": no such file");
+  if (jpeg_cut_short(path)) throw DisparityFileError(path + ": a JPEG cut short (no end-of-image marker)");
+  cv::Mat image = cv::imread(path, imread_flags);
+  if (image.empty()) throw DisparityFileError(path + ": cannot read the image");
+  return image;
+}
 
 cv::Mat read_pfm(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -81,8 +104,7 @@ cv::Mat load_disparity(const std::string& path, double divisor) {
   if (ext == ".pfm" || ext == ".PFM") {
     disparity = read_pfm(path) / divisor;
   } else {
-    const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
-    if (image.empty()) throw DisparityFileError(path + ": cannot read (PFM, 8- or 16-bit PNG expected)");
+    const cv::Mat image = read_image(path, cv::IMREAD_UNCHANGED);
     if (image.channels() != 1 || (image.depth() != CV_8U && image.depth() != CV_16U))
       throw DisparityFileError(path + ": a disparity PNG must have one 8- or 16-bit channel");
     image.convertTo(disparity, CV_32F, 1.0 / divisor);

@@ -14,6 +14,11 @@ class DisparityFileError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// cv::imread that refuses, naming the file, what it cannot read and a JPEG
+// cut short (which OpenCV would decode grey below the cut, with only a
+// libjpeg warning that names no file).
+cv::Mat read_image(const std::string& path, int imread_flags);
+
 // CV_32F disparity in pixels of the file's resolution, NaN = unknown.
 cv::Mat load_disparity(const std::string& path, double divisor = 1.0);
 cv::Mat read_pfm(const std::string& path);  // raw floats, top row first

@@ -26,8 +26,7 @@ namespace {
 constexpr const char* kAloeDir = "/usr/share/doc/opencv-doc/examples/data/";
 
 cv::Mat load_gray(const std::string& path, double scale) {
-  const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  if (image.empty()) throw ivoa::stereo_eval::DisparityFileError(path + ": cannot read image");
+  const cv::Mat image = ivoa::stereo_eval::read_image(path, cv::IMREAD_GRAYSCALE);
   if (scale == 1.0) return image;
   cv::Mat out;  // the size rule of scale_disparity, so image and truth agree
   const cv::Size size(static_cast<int>(std::lround(image.cols * scale)),
