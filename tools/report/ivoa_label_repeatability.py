@@ -34,9 +34,13 @@ import os
 import sys
 from typing import Dict, List, Optional, Tuple
 
-import numpy as np
+if __name__ == "__main__":
+    import scientific_python
+    scientific_python.ensure(("numpy",), "python3-numpy")
 
-from margin_bands import MARGIN_AGREEMENT_MIN, band_name, margin_bands
+import numpy as np  # noqa: E402
+
+from margin_bands import MARGIN_AGREEMENT_MIN, band_name, margin_bands  # noqa: E402
 
 LABEL_NAMES = ("TP", "TN", "FP", "FN")
 TP, FP = 0, 2  # the labels whose detector verdict is "obstacle"

@@ -31,32 +31,9 @@ os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_BAD_INPUT, EXIT_CANNOT_WRITE = 0, 1, 2, 3, 4
 
 
-def _ensure_scientific_python() -> None:
-    """Debian's /usr/bin/python3 has numpy, matplotlib and scikit-learn (the
-    project's setup installs them); a pyenv or virtualenv python3 that comes
-    first on PATH may not. Re-run under /usr/bin/python3 rather than fail with an
-    ImportError deep inside a module."""
-    try:
-        import matplotlib  # noqa: F401
-        import numpy  # noqa: F401
-        import sklearn  # noqa: F401
-        return
-    except ImportError as e:
-        missing = e.name
-    alt = "/usr/bin/python3"
-    if (os.path.exists(alt) and os.path.realpath(sys.executable) != os.path.realpath(alt)
-            and not os.environ.get("IVOA_REPORT_REEXEC")):
-        os.environ["IVOA_REPORT_REEXEC"] = "1"
-        print(f"note: {sys.executable} has no module '{missing}'; re-running with {alt}", file=sys.stderr)
-        sys.stderr.flush()
-        os.execv(alt, [alt, os.path.abspath(__file__)] + sys.argv[1:])
-    print(f"error: Python module '{missing}' is missing; install Debian's python3-numpy python3-matplotlib "
-          "python3-sklearn (tools/setup/debian-packages.txt)", file=sys.stderr)
-    sys.exit(EXIT_ERROR)
-
-
 if __name__ == "__main__":
-    _ensure_scientific_python()
+    import scientific_python
+    scientific_python.ensure(("matplotlib", "numpy", "sklearn"), "python3-numpy python3-matplotlib python3-sklearn")
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
