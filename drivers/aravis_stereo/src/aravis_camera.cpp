@@ -142,8 +142,8 @@ struct AravisCamera::Impl {
                               "); the camera offers: " + available_pixel_formats(camera));
     const ArvPixelFormat format = arv_camera_get_pixel_format(camera, nullptr);
     if (!ivoa_pixelformat_from_genicam(format))
-      throw CameraConfigError("pixel format '" + config.pixel_format +
-                              "' has no ivoa image_t equivalent; use BayerRG8/BG8/GB8/GR8, Mono8, RGB8 or BGR8");
+      throw CameraConfigError("pixel format '" + config.pixel_format + "' has no ivoa image_t equivalent; use one of " +
+                              kMappedPixelFormats);
     if (config.width > 0 && config.height > 0)
       required_setting("region " + std::to_string(config.width) + "x" + std::to_string(config.height), [&](GError** e) {
         arv_camera_set_region(camera, config.offset_x, config.offset_y, config.width, config.height, e);

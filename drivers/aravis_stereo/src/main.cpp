@@ -7,6 +7,7 @@
 #include <arv.h>
 
 #include "ivoa/aravis_stereo/aravis_camera.hpp"
+#include "ivoa/aravis_stereo/pixel_formats.hpp"
 #include "ivoa/aravis_stereo/stereo_driver.hpp"
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/calibration.hpp"
@@ -37,8 +38,7 @@ void add_camera_options(CLI::App& app, Flags& f) {
   app.add_option("--right", f.right, "right camera: IP address, Aravis id, serial number or MAC")->required()->group(g);
   app.add_option("--rig", f.rig_path, "rig calibration file (OpenCV YAML, see example_rig.yaml)")->required()->group(g);
   auto& c = f.camera;
-  app.add_option("--pixel-format", c.pixel_format,
-                 "GenICam pixel format: BayerRG8, BayerBG8, BayerGB8, BayerGR8, Mono8")
+  app.add_option("--pixel-format", c.pixel_format, std::string("GenICam pixel format: ") + kMappedPixelFormats)
       ->capture_default_str()
       ->group(g);
   app.add_option("--width", c.width, "image width, pixels (0 = keep the camera's)")

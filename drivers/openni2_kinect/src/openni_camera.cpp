@@ -149,7 +149,10 @@ struct OpenNiCamera::Impl {
   void set_registration() {
     if (!options.register_depth) return;
     if (file) {
-      spdlog::info("{}: a recording plays depth as recorded (registration cannot be changed)", options.device);
+      spdlog::warn(
+          "{}: --register has no effect on a recording: its depth plays as recorded, published with the depth "
+          "camera's intrinsics (give --rig with the colour camera's as K_depth if it was recorded registered)",
+          options.device);
       return;
     }
     if (!device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR))

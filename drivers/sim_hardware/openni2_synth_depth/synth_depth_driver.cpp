@@ -11,6 +11,7 @@
 // IVOA_SYNTH_DEPTH_FPS sets the frame rate (default 30).
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
@@ -32,10 +33,17 @@ using oni::driver::StreamBase;
 
 constexpr const char* kDeviceUri = "synth://ivoa/depth0";
 
+// OpenNI2 video modes count whole frames per second; anything else is said
+// (the driver has no other channel to the user) and replaced by the default.
 int frames_per_second() {
   const char* text = std::getenv("IVOA_SYNTH_DEPTH_FPS");
-  const int fps = text ? std::atoi(text) : scene::kFps;
-  return fps > 0 && fps <= 1000 ? fps : scene::kFps;
+  if (text == nullptr) return scene::kFps;
+  char* end = nullptr;
+  const long fps = std::strtol(text, &end, 10);
+  if (end != text && *end == '\0' && fps > 0 && fps <= 1000) return static_cast<int>(fps);
+  std::fprintf(stderr, "ivoa synth depth: IVOA_SYNTH_DEPTH_FPS=%s is not a whole number of Hz in 1..1000; using %d\n",
+               text, scene::kFps);
+  return scene::kFps;
 }
 
 template <class T>

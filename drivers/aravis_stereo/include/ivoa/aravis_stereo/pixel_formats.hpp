@@ -6,6 +6,9 @@
 
 namespace ivoa::aravis_stereo {
 
+// The GenICam names of the mapped formats, for help and error messages.
+inline constexpr const char* kMappedPixelFormats = "BayerRG8, BayerBG8, BayerGB8, BayerGR8, Mono8, RGB8, BGR8";
+
 // ARV_PIXEL_FORMAT_* -> image_t::PIXEL_FORMAT_*; nothing if unmapped.
 std::optional<int32_t> ivoa_pixelformat_from_genicam(uint32_t arv_pixel_format);
 // image_t::PIXEL_FORMAT_* -> ARV_PIXEL_FORMAT_*; nothing if unmapped.
