@@ -254,7 +254,7 @@ int main(int argc, char** argv) {
   add_build_command(app, build);
   auto* info = app.add_subcommand("info", "sessions, class counts and splits of a dataset");
   std::string root, split;
-  info->add_option("dataset,--dataset", root, "dataset folder (as ivoa-train and ivoa-eval take it)")
+  info->add_option("dataset,--dataset", root, "dataset folder: the argument, or --dataset as ivoa-train takes it")
       ->required()
       ->check(CLI::ExistingDirectory);
   info->add_option("--split", split, "a split file to check against the dataset")->check(CLI::ExistingFile);
