@@ -1148,6 +1148,20 @@ class MetricUnitTest(unittest.TestCase):
         self.assertFalse(s["accuracy_rises_as_threshold_falls"])
         self.assertLess(s["at_70"]["overall_accuracy"], s["unfiltered"]["overall_accuracy"])
 
+    def test_sweep_points_say_how_few_cells_the_smallest_class_keeps(self):
+        load_tool()
+        from report_markdown import _few_cells_note
+        from report_metrics import _point
+        label = np.array([0] * 3 + [1] * 50 + [2] * 50 + [3] * 50)
+        var = np.concatenate([[0.5] * 3, np.linspace(0, 0.4, 150)])
+        p = _point(label, label.copy(), var, 0.45)  # the three TP withheld: the smallest kept class has 50
+        self.assertEqual(p["fewest_kept"], 50)
+        self.assertEqual(_point(label, label.copy(), var, 0.6)["fewest_kept"], 3)
+        ladder = [{"retained": 1.0, "fewest_kept": 3}, {"retained": 0.5, "fewest_kept": 2}]
+        self.assertIn("From ≥ 100 % retained down, some class keeps fewer than 20 cells (3 there)",
+                      _few_cells_note(ladder))
+        self.assertEqual(_few_cells_note([{"retained": 1.0, "fewest_kept": 50}]), "")
+
     def test_withheld_failures_are_named_only_where_the_gate_sets_them_aside(self):
         load_tool()
         from report_markdown import _withheld_failures

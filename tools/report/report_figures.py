@@ -20,6 +20,7 @@ from matplotlib.patches import Patch  # noqa: E402
 
 from margin_bands import band_name  # noqa: E402
 from report_inputs import LABEL_NAMES, NO_CAUSE, EvalRun, cause_name, phenomenon_name  # noqa: E402
+from report_metrics import FEW_CELLS  # noqa: E402
 
 CLASS_COLOURS = ("#2ca02c", "#1f77b4", "#ff7f0e", "#d62728")   # TP, TN, FP, FN
 # One colour per phenomenon code, the same in every figure and model.
@@ -149,21 +150,29 @@ def plot_retained_vs_threshold(sweep: dict, title: str, path: str) -> str:
 
 def plot_accuracy_vs_retained(sweeps: Sequence[Tuple[str, dict]], title: str, path: str) -> str:
     """Mean per-class accuracy vs retained fraction (one line per model), with
-    the paper's claim (> 96 % at 70 % retained) marked."""
+    the paper's claim (> 96 % at 70 % retained) marked. Where a class keeps
+    fewer than FEW_CELLS cells the lines go faint: one or two cells decide there."""
     fig, ax = plt.subplots(figsize=(7.0, 4.6))
+    faint_drawn = False
     for i, (name, s) in enumerate(sweeps):
-        pts = sorted((p["retained"], p["mean_per_class_accuracy"], p["overall_accuracy"]) for p in s["curve"]
-                     if p["mean_per_class_accuracy"] is not None)
+        pts = sorted((p["retained"], p["mean_per_class_accuracy"], p["overall_accuracy"],
+                      p.get("fewest_kept", FEW_CELLS)) for p in s["curve"] if p["mean_per_class_accuracy"] is not None)
         if not pts:
             continue
-        r, mp, oa = np.array(pts).T
-        line, = ax.plot(100 * r, mp, lw=1.8, label=f"{name}: mean per-class accuracy")
-        ax.plot(100 * r, oa, "--", lw=1.2, color=line.get_color(), label=f"{name}: overall accuracy")
+        r, mp, oa, fewest = np.array(pts).T
+        solid = fewest >= FEW_CELLS  # NaN breaks the lines where it is not
+        line, = ax.plot(100 * r, np.where(solid, mp, np.nan), lw=1.8, label=f"{name}: mean per-class accuracy")
+        ax.plot(100 * r, np.where(solid, oa, np.nan), "--", lw=1.2, color=line.get_color(),
+                label=f"{name}: overall accuracy")
+        if not solid.all():
+            ax.plot(100 * r[~solid], mp[~solid], ".", ms=2, alpha=0.35, color=line.get_color(),
+                    label=None if faint_drawn else f"fewer than {FEW_CELLS} cells kept in a class")
+            faint_drawn = True
         a70 = s["at_70"]
         if a70["mean_per_class_accuracy"] is not None:
             ax.plot(100 * a70["retained"], a70["mean_per_class_accuracy"], "o", color=line.get_color())
     ax.axvline(70, color="k", ls=":", lw=1)
-    ax.plot([70], [0.96], "k*", ms=10, label="paper: > 96 % at 70 % retained")
+    ax.plot([70], [0.96], "k*", ms=10, label="paper (from the image alone): > 96 % at 70 % retained")
     ax.set_xlim(102, 0)  # stricter filtering to the right
     ax.set_ylim(0, 1.02)
     ax.set_xlabel("retained samples (%)  (← no filtering ... strict filtering →)")
@@ -303,7 +312,7 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
     width = 0.8 / n_models
     x = np.arange(len(codes))
     colours = _category_colours(n_models)
-    fig, axes = plt.subplots(2, 1, figsize=(max(6.5, 1.0 * len(codes) * max(n_models, 2) + 2.5), 7.0), sharex=True)
+    fig, axes = plt.subplots(2, 1, figsize=(max(6.5, 0.45 * len(codes) * max(n_models, 2) + 3.0), 7.0), sharex=True)
     for ax, (key, truth, kind) in zip(axes, (("pred_fn", "true_fn", "FN"), ("pred_fp", "true_fp", "FP"))):
         for i, (name, entries) in enumerate(zip(names, per_phen)):
             by = {e["phenomenon"]: e for e in entries}
@@ -319,7 +328,7 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
         ax.set_title(f"predicted {kind} per phenomenon", fontsize=10)
     counts = [" / ".join(str(next((e["n"] for e in en if e["phenomenon"] == c), 0)) for en in per_phen) for c in codes]
-    axes[1].set_xticks(x, [f"{phenomenon_name(c)}\n(n = {n})" for c, n in zip(codes, counts)], fontsize=8)
+    axes[1].set_xticks(x, [f"{phenomenon_name(c)}\n(n = {n})" for c, n in zip(codes, counts)], fontsize=9)
     axes[1].set_xlabel("phenomenon under the patch centre (sample count per model, in legend order)")
     fig.suptitle(f"{title}: which phenomena each model predicts as stereo failures")
     fig.tight_layout()
@@ -336,8 +345,11 @@ def plot_group_bars(groups: List[dict], title: str, xlabel: str, path: str) -> s
     # character), so long session names do not run into each other.
     per_group = max(1.3, 0.08 * max((len(n) for n in names), default=0))
     fig, ax = plt.subplots(figsize=(max(5.0, per_group * len(names) + 2), 4.2))
-    ax.bar(x - 0.2, mp, 0.4, color="#444466", label="mean per-class accuracy")
-    ax.bar(x + 0.2, oa, 0.4, color="#aaaacc", label="overall accuracy")
+    for offset, values, colour, label in ((-0.2, mp, "#444466", "mean per-class accuracy"),
+                                          (0.2, oa, "#aaaacc", "overall accuracy")):
+        bars = ax.bar(x + offset, values, 0.4, color=colour, label=label)
+        # a value on each bar, so that an accuracy of 0 is not read as "no data"
+        ax.bar_label(bars, labels=["" if v != v else f"{v:.2f}" for v in values], fontsize=6, padding=1)
     ax.set_xticks(x, [f"{n}\n({g['split'] + ', ' if g.get('split') else ''}n = {g['n']})"
                       for n, g in zip(names, groups)], fontsize=8)
     ax.set_ylim(0, 1.05)

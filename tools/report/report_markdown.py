@@ -9,7 +9,7 @@ from typing import Dict, List, Optional, Sequence
 from margin_bands import band_name
 from report_clustering import REFERENCE_VAR_CUT, ClusterOptions
 from report_inputs import FN, FP, LABEL_NAMES, EvalRun, cause_name, phenomenon_name, surface_name
-from report_metrics import PAPER_MPCA_AT_70, RETAIN_TARGET
+from report_metrics import FEW_CELLS, PAPER_MPCA_AT_70, RETAIN_TARGET
 
 PURITY_TARGET = 0.80
 
@@ -142,6 +142,15 @@ def _point_row(name: str, p: Optional[dict]) -> List[str]:
             + [pct(r, 0) for r in p["retained_per_class"]])
 
 
+def _few_cells_note(ladder: List[dict]) -> str:
+    """Where the ladder's mean per-class accuracy starts to rest on a handful of cells of some class."""
+    few = next((p for p in ladder if p.get("fewest_kept", FEW_CELLS) < FEW_CELLS), None)
+    if few is None:
+        return ""
+    return (f"\nFrom ≥ {pct(few['retained'], 0)} retained down, some class keeps fewer than {FEW_CELLS} cells "
+            f"({few['fewest_kept']} there): those rows, and the curves' faint part, rest on a handful of cells.\n")
+
+
 def _withheld_failures(p: dict) -> str:
     """Which true classes the gate withholds more than its share of: where they are the failures,
     part of the accuracy gained is the failures set aside, and a robot must treat those cells as unknown."""
@@ -195,6 +204,7 @@ def uncertainty_section(rm: dict, figs: Dict[str, str]) -> str:
                   and s["mean_var_wrong"] > s["mean_var_correct"] else ".\n"))
     out.append("\nRetained fraction ladder:\n")
     out.append(table(headers, [_point_row(f"≥ {pct(p['retained'], 0)}", p) for p in s["retained_table"]]))
+    out.append(_few_cells_note(s["retained_table"]))
     out.append("\n" + image(figs["accuracy_vs_threshold"], "accuracy vs threshold"))
     out.append(image(figs["retained_vs_threshold"], "retained data vs threshold"))
     out.append(image(figs["accuracy_vs_retained"], "accuracy vs retained data"))
@@ -237,6 +247,7 @@ def verdict_section(rm: dict, figs: Dict[str, str]) -> str:
     if s["at_model_threshold"] is not None:
         rows.append(_point_row("model's run-time τ (its own gate, calibrated as in §3)", s["at_model_threshold"]))
     out.append(table(headers, rows))
+    out.append(_few_cells_note(s["retained_table"]))
     out.append("\n" + _withheld_failures(s["at_70"]))
     headers = ["n"] + [f"{n} acc." for n in LABEL_NAMES] + ["mean per-class", "overall"]
     out.append("\n**Per session, given the verdict**\n\n")
