@@ -91,9 +91,14 @@ TEST(LiveScorer, MatchesCellsByPositionWhicheverMessageComesFirst) {
   // Frame 2: labels only (the introspection dropped it); frame 3: prediction only.
   scorer.add(labels_message(2, {{0.75f, 0.0f, kFN, kFree}}));
   scorer.add(prediction_message(3, {{0.75f, 0.0f, kTN, 1, kFree, kTN, 1}}));
+  // The same messages again (a file given twice, a run recorded twice): each frame counts once.
+  scorer.add(labels_message(2, {{0.75f, 0.0f, kFN, kFree}}));
+  scorer.add(prediction_message(3, {{0.75f, 0.0f, kTN, 1, kFree, kTN, 1}}));
   const LiveScore s = scorer.finish();
   EXPECT_EQ(s.labelled_frames, 2);
   EXPECT_EQ(s.predicted_frames, 2);
+  EXPECT_EQ(s.repeated_messages, 2);
+  EXPECT_EQ(s.compute.frames, 2);
   EXPECT_EQ(s.scored_frames, 1);
   EXPECT_EQ(s.labelled_cells, 4);
   EXPECT_EQ(s.outside_view_cells, 1);
@@ -207,6 +212,19 @@ TEST_F(LiveScoreTool, ALogWithoutIntrospectionIsRefusedByName) {
   std::string out;
   EXPECT_EQ(run(log_path, out), 3);
   EXPECT_NE(out.find("labels_only.lcmlog: no INTROSPECTION messages to score"), std::string::npos) << out;
+}
+
+TEST_F(LiveScoreTool, ALogGivenTwiceIsRefusedRatherThanCountedTwice) {
+  const std::string log_path = (dir / "live.lcmlog").string();
+  {
+    logio::LogWriter log(log_path);
+    write(log, "INTROSPECTION_LABELS", labels_message(1, {{1.0f, 0.0f, kTN, kFree}}));
+    write(log, "INTROSPECTION", prediction_message(1, {{1.0f, 0.0f, kTN, 1, kFree, kTN, 1}}));
+    log.close();
+  }
+  std::string out;
+  EXPECT_EQ(run(log_path + " " + (dir / "." / "live.lcmlog").string(), out), 3);
+  EXPECT_NE(out.find("live.lcmlog is given twice: its frames would count twice"), std::string::npos) << out;
 }
 
 TEST_F(LiveScoreTool, AFileThatIsNotALogIsRefused) {

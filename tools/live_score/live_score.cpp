@@ -16,8 +16,8 @@ std::pair<long, long> cell_key(float x, float y) { return {std::lround(x * 1000.
 }  // namespace
 
 void LiveScorer::add(const introspection_labels_t& m) {
-  ++labelled_frames_;
   detectors_.insert(m.detector);
+  repeated_messages_ += labels_.count(m.utime);
   auto& cells = labels_[m.utime];
   cells.clear();  // a repeated frame counts once, with its latest labels
   for (int i = 0; i < m.num_cells; ++i)
@@ -25,9 +25,9 @@ void LiveScorer::add(const introspection_labels_t& m) {
 }
 
 void LiveScorer::add(const introspection_t& m) {
-  ++predicted_frames_;
   models_.insert(m.model_id);
-  compute_ms_.push_back(m.compute_ms);
+  repeated_messages_ += predictions_.count(m.utime);
+  compute_ms_[m.utime] = m.compute_ms;
   auto& queries = predictions_[m.utime];
   queries.clear();
   for (int i = 0; i < m.num_queries; ++i)
@@ -72,11 +72,14 @@ void LiveScorer::score_frame(int64_t utime, const std::vector<LabelledCell>& cel
 
 LiveScore LiveScorer::finish() const {
   LiveScore s;
-  s.labelled_frames = labelled_frames_;
-  s.predicted_frames = predicted_frames_;
+  s.labelled_frames = static_cast<int64_t>(labels_.size());
+  s.predicted_frames = static_cast<int64_t>(predictions_.size());
+  s.repeated_messages = repeated_messages_;
   s.models = models_;
   s.detectors = detectors_;
-  s.compute = summarize_compute_ms(compute_ms_);
+  std::vector<double> compute_ms;
+  for (const auto& [utime, ms] : compute_ms_) compute_ms.push_back(ms);
+  s.compute = summarize_compute_ms(compute_ms);
   for (const auto& [utime, cells] : labels_) {
     const auto it = predictions_.find(utime);
     if (it == predictions_.end()) continue;

@@ -35,8 +35,9 @@ struct ComputeTimes {
 struct LiveScore {
   PredictionScore image;           // from the image alone (the paper's)
   PredictionScore given_verdict;   // given the detector's verdict for the cell
-  int64_t labelled_frames = 0;     // INTROSPECTION_LABELS messages
-  int64_t predicted_frames = 0;    // INTROSPECTION messages
+  int64_t labelled_frames = 0;     // frames with INTROSPECTION_LABELS
+  int64_t predicted_frames = 0;    // frames with INTROSPECTION
+  int64_t repeated_messages = 0;   // of either, for a frame already read (counted once, the latest kept)
   int64_t scored_frames = 0;       // frames with both
   int64_t labelled_cells = 0;      // cells of the scored frames with a label (not NONE)
   int64_t outside_view_cells = 0;  // of those, outside the introspection's view (the grid's in_image 0)
@@ -72,9 +73,9 @@ class LiveScorer {
   std::map<int64_t, std::vector<LabelledCell>> labels_;  // by frame utime
   std::map<int64_t, std::vector<Query>> predictions_;
   std::map<int64_t, std::set<std::pair<long, long>>> outside_view_;  // by frame: cells not in_image
-  std::vector<double> compute_ms_;
+  std::map<int64_t, double> compute_ms_;                             // by frame utime
   std::set<std::string> models_, detectors_;
-  int64_t labelled_frames_ = 0, predicted_frames_ = 0;
+  int64_t repeated_messages_ = 0;
 };
 
 ComputeTimes summarize_compute_ms(std::vector<double> ms);

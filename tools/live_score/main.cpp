@@ -3,6 +3,8 @@
 // README.md). Several files (a split session, in order) are one recording.
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -50,7 +52,8 @@ void read_log(const std::string& path, bool resync, tools::LiveScorer& scorer, R
   }
   if (const std::string why = reader.not_a_log(); !why.empty()) spdlog::warn("{}: {}", path, why);
   else
-    for (const auto& p : reader.problems()) spdlog::warn("{}: {}", path, p.describe());
+    for (const auto& p : reader.problems())
+      spdlog::warn("{}: {}{}", path, p.describe(), resync ? "" : " (--resync reads on past it)");
   if (!reader.clean()) ++counts.damaged_files;
 }
 
@@ -74,6 +77,9 @@ void print_score(const LiveScore& s) {
   std::printf("frames: %lld labelled, %lld predicted, %lld both (scored); %lld labelled cells in them\n",
               static_cast<long long>(s.labelled_frames), static_cast<long long>(s.predicted_frames),
               static_cast<long long>(s.scored_frames), static_cast<long long>(s.labelled_cells));
+  if (s.repeated_messages > 0)
+    std::printf("repeated: %lld messages for frames already read (a run recorded twice?), each frame counted once\n",
+                static_cast<long long>(s.repeated_messages));
   if (s.outside_view_cells || s.no_grid_cells || s.unmatched_cells)
     std::printf(
         "not scored: %lld outside the introspection's view (patch leaves the image), %lld in frames it "
@@ -117,16 +123,28 @@ std::string score_json(const LiveScore& s) {
   for (const auto& d : s.detectors) detectors += (detectors.empty() ? "" : ", ") + json_quote(d);
   return fmt::format(
       "{{\"models\": [{}], \"detectors\": [{}], \"labelled_frames\": {}, \"predicted_frames\": {}, "
+      "\"repeated_messages\": {}, "
       "\"scored_frames\": {}, \"labelled_cells\": {}, \"outside_view_cells\": {}, \"no_grid_cells\": {}, "
       "\"unmatched_cells\": {}, \"verdict_unknown\": {}, "
       "\"verdict_disagrees\": {},\n \"image\": {{\"all\": {}, \"announced\": {}}},\n \"given_verdict\": {{\"all\": {}, "
       "\"announced\": {}}},\n \"compute_ms\": {{\"frames\": {}, \"median\": {:.3f}, \"p90\": {:.3f}, \"max\": "
       "{:.3f}}}, "
       "\"class_order\": [\"TP\", \"TN\", \"FP\", \"FN\"]}}\n",
-      models, detectors, s.labelled_frames, s.predicted_frames, s.scored_frames, s.labelled_cells, s.outside_view_cells,
-      s.no_grid_cells, s.unmatched_cells, s.verdict_unknown, s.verdict_disagrees, counts_json(s.image.all),
-      counts_json(s.image.announced), counts_json(s.given_verdict.all), counts_json(s.given_verdict.announced),
-      s.compute.frames, s.compute.median, s.compute.p90, s.compute.max);
+      models, detectors, s.labelled_frames, s.predicted_frames, s.repeated_messages, s.scored_frames, s.labelled_cells,
+      s.outside_view_cells, s.no_grid_cells, s.unmatched_cells, s.verdict_unknown, s.verdict_disagrees,
+      counts_json(s.image.all), counts_json(s.image.announced), counts_json(s.given_verdict.all),
+      counts_json(s.given_verdict.announced), s.compute.frames, s.compute.median, s.compute.p90, s.compute.max);
+}
+
+// A file among `files` given twice (under any name), or "".
+std::string named_twice(const std::vector<std::string>& files) {
+  std::set<std::string> seen;
+  for (const auto& f : files) {
+    std::error_code error;
+    const auto canonical = std::filesystem::weakly_canonical(f, error);
+    if (!seen.insert(error ? f : canonical.string()).second) return f;
+  }
+  return "";
 }
 
 struct ScoreCommandLine {
@@ -151,6 +169,10 @@ void add_score_options(CLI::App& app, ScoreCommandLine& cl) {
 // Reads every log into `s`; false (after saying why) when one is unreadable
 // or the logs hold nothing to score.
 bool score_logs(const ScoreCommandLine& cl, LiveScore& s, ReadCounts& counts) {
+  if (const std::string twice = named_twice(cl.files); !twice.empty()) {
+    spdlog::error("{} is given twice: its frames would count twice", twice);
+    return false;
+  }
   tools::LiveScorer scorer;
   try {
     for (const auto& path : cl.files) read_log(path, cl.resync, scorer, counts);
