@@ -14,7 +14,6 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
 
@@ -23,6 +22,7 @@
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/ground_warp.hpp"
 #include "ivoa/core/image_convert.hpp"
+#include "ivoa/core/image_files.hpp"
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
@@ -193,7 +193,7 @@ void write_log_overlays(const Options& o, introspection::IntrospectionModel& mod
       throw dataset::DatasetError(log + ": no rig calibration before the first frame (a two-view model needs it)");
     const cv::Mat figure = overlay_figure(o, model, msg, warp.get(), it->second);
     const std::string path = o.out + "/overlays/" + session + "_" + std::to_string(msg.utime) + ".png";
-    if (!cv::imwrite(path, figure)) throw OutputError(path + ": cannot write the overlay figure");
+    if (std::string error; !write_image_file(path, figure, error)) throw OutputError(error);
     ++written;
   }
   if (const std::string why = in.not_a_log(); !why.empty()) spdlog::warn("{}: {}: no overlays from it", log, why);

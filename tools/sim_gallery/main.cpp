@@ -7,11 +7,11 @@
 #include <filesystem>
 
 #include <CLI/CLI.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/flag_checks.hpp"
+#include "ivoa/core/image_files.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/sim/simulator.hpp"
 #include "ivoa/sim/trajectory.hpp"
@@ -99,6 +99,10 @@ int main(int argc, char** argv) {
   add_gallery_options(app, o);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("sim-gallery", common.log_level);
+  if (const std::string problem = ivoa::image_file_name_problem(o.output); !problem.empty()) {
+    spdlog::error("{}", problem);  // before minutes of rendering
+    return ivoa::kExitUsage;
+  }
   if (o.scenes.empty())
     for (const char* name : {"indoor_office", "home", "corridor", "polished_lobby", "warehouse", "outdoor_campus",
                              "sidewalk", "wet_parking_lot", "night_plaza"})
@@ -114,13 +118,8 @@ int main(int argc, char** argv) {
   rows.push_back(truth_legend(rows.front().cols));
   cv::Mat gallery;
   cv::vconcat(rows, gallery);
-  const std::filesystem::path folder = std::filesystem::path(o.output).parent_path();
-  if (!folder.empty() && !std::filesystem::is_directory(folder)) {
-    spdlog::error("cannot write {}: there is no folder {}", o.output, folder.string());
-    return ivoa::kExitIoError;
-  }
-  if (!cv::imwrite(o.output, gallery)) {
-    spdlog::error("cannot write {} (permissions, disk full, or not a .png name?)", o.output);
+  if (std::string error; !ivoa::write_image_file(o.output, gallery, error)) {
+    spdlog::error("{}", error);
     return ivoa::kExitIoError;
   }
   spdlog::info("wrote {} ({}x{})", o.output, gallery.cols, gallery.rows);

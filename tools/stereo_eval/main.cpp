@@ -17,6 +17,7 @@
 
 #include "disparity_io.hpp"
 #include "ivoa/core/flag_checks.hpp"
+#include "ivoa/core/image_files.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/stereo/options.hpp"
 #include "point_check_scoring.hpp"
@@ -127,8 +128,8 @@ int write_outputs(const CommandLine& cl, const std::vector<ivoa::stereo_eval::Mo
                   const cv::Mat& overlay) {
   std::printf("%s", ivoa::stereo_eval::to_table(scores).c_str());
   if (!ivoa::write_text_file(cl.json_path, ivoa::stereo_eval::to_json(scores, cl.scoring))) return ivoa::kExitIoError;
-  if (!overlay.empty() && !cv::imwrite(cl.overlay_path, overlay)) {
-    spdlog::error("cannot write {}", cl.overlay_path);
+  if (std::string error; !overlay.empty() && !ivoa::write_image_file(cl.overlay_path, overlay, error)) {
+    spdlog::error("{}", error);
     return ivoa::kExitIoError;
   }
   return ivoa::kExitOk;

@@ -5,11 +5,12 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #ifdef IVOA_VIEWER_HAS_VIDEOIO
 #include <opencv2/videoio.hpp>
 #endif
+
+#include "ivoa/core/image_files.hpp"
 
 namespace ivoa::viewer {
 struct FigureWriter::Video {
@@ -50,13 +51,7 @@ void FigureWriter::write_png(const cv::Mat& figure, int64_t utime) {
   char name[64];
   std::snprintf(name, sizeof(name), "frame_%" PRId64 ".png", utime);
   const std::string path = (std::filesystem::path(options_.out_dir) / name).string();
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path, figure);
-  } catch (const cv::Exception& e) {
-    throw OutputError("cannot write " + path + ": " + e.what());
-  }
-  if (!ok) throw OutputError("cannot write " + path);
+  if (std::string error; !write_image_file(path, figure, error)) throw OutputError(error);
   ++images_written_;
   written_.push_back(path);
   while (options_.max_images > 0 && static_cast<int>(written_.size()) > options_.max_images) {
