@@ -472,8 +472,13 @@ def comparison_section(runs: List[EvalRun], metrics: Dict[str, dict], figs: Dict
     row("accuracy rises as τ falls", lambda m: m["sweep"]["verdict"])
     row("cluster purity by dominant phenomenon", lambda m: pct(m["clustering"].get("purity")))
     out.append(table(["metric"] + names, rows))
+    counts = ", ".join(f"{r.name} {len(r.label)}" for r in runs)
+    coverage = (f" A cell is labelled only where its detector gave a verdict (cells: {counts}); SGBM finds no "
+                "disparity on much of a texture-less or dark floor, so each detector's failures are counted among "
+                "the cells it judged, not among the same cells." if len({r.detector for r in runs}) > 1 else "")
     out.append("\nNote: each model is evaluated on its own detector's labels (its own dataset), so the sample sets "
-               "differ; accuracies compare how well each introspection model predicts its own detector's failures.\n")
+               "differ; accuracies compare how well each introspection model predicts its own detector's failures."
+               + coverage + "\n")
     out.append("\n**Per phenomenon** — fraction of the phenomenon's samples that each model predicts as FN / FP, "
                "next to the detector's true FN / FP rate (from the labels):\n\n")
     codes = sorted({e["phenomenon"] for r in runs for e in metrics[r.slug]["per_phenomenon"]})
@@ -525,7 +530,8 @@ def _causes_comparison(runs: List[EvalRun], metrics: Dict[str, dict]) -> str:
         rows.append(cells)
     return ("\n**By cause** (`ivoa-sim-causes`) — share of each detector's true FP and FN (with a known cause) "
             "that removing the phenomenon alone fixes, and in brackets how many of those the model predicts as "
-            "that failure. A failure can have several causes, so a column can add up to more than 100 %.\n\n"
+            "that failure. A failure can have several causes, so a column can add up to more than 100 %. "
+            "'0 %': the cause explains a few failures, under half a percent; '–': none.\n\n"
             + table(headers, rows))
 
 
