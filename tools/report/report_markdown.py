@@ -571,11 +571,13 @@ def _rate_extremes(runs: List[EvalRun], metrics: Dict[str, dict], code, key: str
 
 
 def comparison_sentences(runs: List[EvalRun], metrics: Dict[str, dict], min_diff: float = 0.2,
-                         min_samples: int = 5) -> List[str]:
-    """Plain-language differences such as "textureless patches are a predicted FN
-    for jppc (60 %) and not for dense (3 %)", for predicted rates differing by
-    >= 20 points on phenomena with enough samples in both models; then the same
-    for the true rates (which detector really fails where, from the labels)."""
+                         min_samples: int = 30) -> List[str]:
+    """Plain-language differences such as
+    "textureless patches are a predicted FN for jppc (60 %) and not for dense
+    (3 %)", for predicted rates differing by >= 20 points on phenomena with at
+    least min_samples cells in both models (fewer make the rates noise); then
+    the same for the true rates (which detector really fails where, from the
+    labels)."""
     out = []
     codes = sorted({e["phenomenon"] for r in runs for e in metrics[r.slug]["per_phenomenon"]})
     for c in codes:
