@@ -297,9 +297,16 @@ def inputs_section(runs: List[EvalRun]) -> str:
         sessions = ", ".join(f"{s} ({sp})" for s, sp in sorted({(a, b) for a, b in zip(r.session, r.split)}))
         rows.append([r.name, r.meta.get("model", "n/a"), (r.meta.get("metadata") or {}).get("architecture", "n/a"),
                      r.meta.get("mc_passes", "n/a"), r.path, r.dataset.path if r.dataset else "n/a", sessions,
-                     tr.get("steps", "n/a")])
+                     _training_steps(tr)])
     return md.table(["model", "model file", "architecture", "T (MC passes)", "eval folder", "dataset",
-                     "sessions (split)", "training steps"], rows)
+                     "evaluated sessions (split)", "weights from training step"], rows)
+
+
+def _training_steps(training: dict) -> str:
+    """The training step whose weights the file holds (the best-validated or the last; the
+    file is written at that step, so the steps run after it are not recorded in it)."""
+    step = training.get("best_step", training.get("steps"))
+    return "n/a" if step is None else str(step)
 
 
 def _json_default(o):
