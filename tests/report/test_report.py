@@ -1162,6 +1162,17 @@ class MetricUnitTest(unittest.TestCase):
                       _few_cells_note(ladder))
         self.assertEqual(_few_cells_note([{"retained": 1.0, "fewest_kept": 50}]), "")
 
+    def test_a_cause_has_one_colour_in_every_figure_whatever_its_rank(self):
+        load_tool()
+        from report_figures import PHENOMENON_COLOURS, _cause_panel
+        few_reflections = np.array([REFLECTION] * 2 + [TEXTURELESS] * 5 + [REFLECTION | TEXTURELESS] * 3)
+        many_reflections = np.array([REFLECTION] * 9 + [TEXTURELESS] * 1 + [REFLECTION | TEXTURELESS] * 4)
+        colour_of = [dict(zip(legend, colours)) for _, _, legend, colours in
+                     (_cause_panel(few_reflections), _cause_panel(many_reflections))]
+        self.assertEqual(colour_of[0], colour_of[1])
+        self.assertEqual(colour_of[0]["reflection"], PHENOMENON_COLOURS[REFLECTION])  # as in the phenomenon panel
+        self.assertNotIn(colour_of[0]["reflection+textureless"], PHENOMENON_COLOURS.values())
+
     def test_withheld_failures_are_named_only_where_the_gate_sets_them_aside(self):
         load_tool()
         from report_markdown import _withheld_failures

@@ -19,13 +19,15 @@ import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from margin_bands import band_name  # noqa: E402
-from report_inputs import LABEL_NAMES, NO_CAUSE, EvalRun, cause_name, phenomenon_name  # noqa: E402
+from report_inputs import LABEL_NAMES, NO_CAUSE, ONLY_TOGETHER, EvalRun, cause_name, phenomenon_name  # noqa: E402
 from report_metrics import FEW_CELLS  # noqa: E402
 
 CLASS_COLOURS = ("#2ca02c", "#1f77b4", "#ff7f0e", "#d62728")   # TP, TN, FP, FN
 # One colour per phenomenon code, the same in every figure and model.
 PHENOMENON_COLOURS = {0: "#9e9e9e", 1: "#1f77b4", 2: "#2ca02c", 4: "#e6b800", 8: "#8c564b", 16: "#9467bd",
                       32: "#17becf", 64: "#e377c2"}
+# Sets of causes (reflection+glare): colours none of the single phenomena use.
+SET_COLOURS = ("#d62728", "#bcbd22", "#ff9896", "#98df8a", "#c49c94", "#f7b6d2", "#7f7f7f", "#9edae5")
 CLUSTER_CMAP = "Dark2"
 DPI = 110
 
@@ -199,8 +201,21 @@ def _cause_panel(cause: np.ndarray, top: int = 6):
              for c in cause.tolist()]
     greys = {"other causes": (0.45, 0.45, 0.45, 1.0), "no true failure / not replayed": (0.82, 0.82, 0.82, 1.0)}
     legend = [cause_name(c) for c in common] + [n for n in greys if n in names]
-    colours = _category_colours(len(common)) + [greys[n] for n in legend[len(common):]]
+    colours = [_cause_colour(c) for c in common] + [greys[n] for n in legend[len(common):]]
     return ("what causes the failure (re-rendered without each phenomenon)", names, legend, colours)
+
+
+def _cause_colour(code: int):
+    """The same colour for a cause in every figure: a single phenomenon's own
+    colour (as in the phenomenon panel), fixed ones for 'none found' and 'only
+    together', and for a set of causes one of SET_COLOURS chosen by the set."""
+    if code == 0:
+        return "black"
+    if code == ONLY_TOGETHER:
+        return "#ff7f0e"
+    if code & (code - 1) == 0 and code in PHENOMENON_COLOURS:
+        return PHENOMENON_COLOURS[code]
+    return SET_COLOURS[(code * 5) % len(SET_COLOURS)]
 
 
 def plot_cluster_scatter(run: EvalRun, res, title: str, path: str) -> str:
