@@ -1,8 +1,6 @@
 // Files replaced whole or not at all: what keeps a checkpoint, a model or a
 // sidecar usable when the disk fills while it is rewritten.
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -14,20 +12,13 @@
 namespace ivoa {
 namespace {
 
-std::string read_all(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 TEST(ReplaceFile, WritesANewFileAndReplacesAnOldOne) {
   test::TempDir dir;
   const std::string path = dir.file("a.bin");
   std::string error;
   ASSERT_TRUE(replace_file(path, "first", error)) << error;
   ASSERT_TRUE(replace_file(path, std::string(3, '\0') + "second", error)) << error;
-  EXPECT_EQ(read_all(path), std::string(3, '\0') + "second");
+  EXPECT_EQ(test::read_file(path), std::string(3, '\0') + "second");
   EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
 }
 
@@ -40,7 +31,7 @@ TEST(ReplaceFile, AWriteThatFailsKeepsTheOldFileWhole) {
     const test::FileSizeLimit nearly_full_disk(1000);
     EXPECT_FALSE(replace_file(path, std::string(5000, 'x'), error));
   }
-  EXPECT_EQ(read_all(path), "the old model");
+  EXPECT_EQ(test::read_file(path), "the old model");
   EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
   EXPECT_NE(error.find(path + ": cannot write (File too large)"), std::string::npos) << error;
   EXPECT_NE(error.find("the previous file, if any, is kept"), std::string::npos) << error;
@@ -70,9 +61,9 @@ TEST(FileSet, AFailurePartWayLeavesTheWholeOldSet) {
     const test::FileSizeLimit nearly_full_disk(100);
     EXPECT_FALSE(next.stage(b, std::string(500, 'o'), error));  // the set is dropped, not committed
   }
-  EXPECT_EQ(read_all(a), "model 1");
-  EXPECT_EQ(read_all(b), "optimizer 1");
-  EXPECT_EQ(read_all(step), "1");
+  EXPECT_EQ(test::read_file(a), "model 1");
+  EXPECT_EQ(test::read_file(b), "optimizer 1");
+  EXPECT_EQ(test::read_file(step), "1");
   for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
     EXPECT_NE(entry.path().extension(), ".tmp") << entry.path();
 }

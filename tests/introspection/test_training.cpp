@@ -214,20 +214,13 @@ TEST(Training, DamagedCheckpointStepFileIsRefusedWithTheWayOut) {
   }
 }
 
-std::string file_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 TEST(Training, ADiskThatFillsDuringACheckpointKeepsTheLastOneForResume) {
   test::TempDir dir;
   TrainConfig c = tiny_run(dir, 5, 5);  // a checkpoint at step 5
   train_model(c);
   const std::string checkpoint = c.output + ".checkpoint";
   std::map<std::string, std::string> before;
-  for (const char* part : {".model", ".optimizer", ".step"}) before[part] = file_bytes(checkpoint + part);
+  for (const char* part : {".model", ".optimizer", ".step"}) before[part] = test::read_file(checkpoint + part);
   c.resume = true;
   c.steps = 10;
   try {
@@ -240,7 +233,7 @@ TEST(Training, ADiskThatFillsDuringACheckpointKeepsTheLastOneForResume) {
     EXPECT_NE(what.find(checkpoint + ".optimizer: cannot write"), std::string::npos) << what;
     EXPECT_NE(what.find("the previous file, if any, is kept"), std::string::npos) << what;
   }
-  for (const auto& [part, bytes] : before) EXPECT_EQ(file_bytes(checkpoint + part), bytes) << part;
+  for (const auto& [part, bytes] : before) EXPECT_EQ(test::read_file(checkpoint + part), bytes) << part;
   for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
     EXPECT_NE(entry.path().extension(), ".tmp") << entry.path();
   int64_t first = -1;
@@ -255,7 +248,7 @@ TEST(Training, AnOptimiserStateCutShortIsRefusedWithTheWayOut) {
   TrainConfig c = tiny_run(dir, 5, 5);
   train_model(c);
   const std::string optimizer = c.output + ".checkpoint.optimizer";
-  const std::string bytes = file_bytes(optimizer);
+  const std::string bytes = test::read_file(optimizer);
   std::ofstream(optimizer, std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() / 2);
   c.resume = true;
   c.steps = 8;

@@ -1,13 +1,12 @@
 #pragma once
-// Shared pieces of the logger unit tests: payloads, reading a log back,
-// and a temporary file-size limit that makes writes fail like a full disk.
-#include <sys/resource.h>
-
-#include <csignal>
+// Shared pieces of the logger unit tests: payloads, reading a log back, and
+// (file_size_limit.hpp) a temporary file-size limit that makes writes fail
+// like a full disk.
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "file_size_limit.hpp"
 #include "ivoa/logio/log_reader.hpp"
 
 namespace ivoa::test {
@@ -32,28 +31,5 @@ inline ReadBack read_back(const std::string& path, bool resync = false) {
   r.problems = reader.problems();
   return r;
 }
-
-// Writes past `bytes` fail with EFBIG (SIGXFSZ ignored) until destroyed:
-// the same short writes and errors a full disk gives, without mounting one.
-class FileSizeLimit {
- public:
-  explicit FileSizeLimit(rlim_t bytes) {
-    getrlimit(RLIMIT_FSIZE, &old_);
-    rlimit limit = old_;
-    limit.rlim_cur = bytes;
-    setrlimit(RLIMIT_FSIZE, &limit);
-    old_handler_ = std::signal(SIGXFSZ, SIG_IGN);
-  }
-  ~FileSizeLimit() {
-    setrlimit(RLIMIT_FSIZE, &old_);
-    std::signal(SIGXFSZ, old_handler_);
-  }
-  FileSizeLimit(const FileSizeLimit&) = delete;
-  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
-
- private:
-  rlimit old_{};
-  void (*old_handler_)(int) = nullptr;
-};
 
 }  // namespace ivoa::test
