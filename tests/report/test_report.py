@@ -1172,6 +1172,10 @@ class MetricUnitTest(unittest.TestCase):
         self.assertEqual(colour_of[0], colour_of[1])
         self.assertEqual(colour_of[0]["reflection"], PHENOMENON_COLOURS[REFLECTION])  # as in the phenomenon panel
         self.assertNotIn(colour_of[0]["reflection+textureless"], PHENOMENON_COLOURS.values())
+        # two sets whose own colours are the same get different ones in the same panel
+        both = np.array([REFLECTION | DARK_STRIPE] * 3 + [REFLECTION | 16] * 2)
+        _, _, legend, colours = _cause_panel(both)
+        self.assertEqual(len(set(colours[:2])), 2, dict(zip(legend, colours)))
 
     def test_withheld_failures_are_named_only_where_the_gate_sets_them_aside(self):
         load_tool()

@@ -330,10 +330,19 @@ def run_report(args: argparse.Namespace, argv: List[str]) -> int:
     runs, settings, noise, warnings = load_inputs(args)
     try:
         numbers, report_path = write_report(args, argv, runs, settings, noise, warnings)
-    except OSError as e:  # reading is over: an OSError now is about the report's own files
-        raise OutputError(f"{e.filename or args.out}: {e.strerror or e}") from None
+    except OSError as e:  # the report's own files cannot be written, or an input read late cannot be read
+        where = e.filename or args.out
+        if _inside(where, args.out):
+            raise OutputError(f"{where}: {e.strerror or e}") from None
+        raise InputError(f"{where}: cannot read ({e.strerror or e})") from None
     print_summary(runs, numbers, warnings, report_path)
     return EXIT_OK
+
+
+def _inside(path, folder: str) -> bool:
+    """Whether `path` is `folder` or lies under it."""
+    path, folder = os.path.realpath(str(path)), os.path.realpath(folder)
+    return path == folder or path.startswith(folder + os.sep)
 
 
 def write_report(args: argparse.Namespace, argv: List[str], runs: List[EvalRun], settings, noise: Optional[dict],

@@ -27,7 +27,8 @@ CLASS_COLOURS = ("#2ca02c", "#1f77b4", "#ff7f0e", "#d62728")   # TP, TN, FP, FN
 PHENOMENON_COLOURS = {0: "#9e9e9e", 1: "#1f77b4", 2: "#2ca02c", 4: "#e6b800", 8: "#8c564b", 16: "#9467bd",
                       32: "#17becf", 64: "#e377c2"}
 # Sets of causes (reflection+glare): colours none of the single phenomena use.
-SET_COLOURS = ("#d62728", "#bcbd22", "#ff9896", "#98df8a", "#c49c94", "#f7b6d2", "#7f7f7f", "#9edae5")
+SET_COLOURS = ("#d62728", "#bcbd22", "#ff9896", "#98df8a", "#c49c94", "#f7b6d2", "#393b79", "#9edae5", "#ad494a",
+               "#637939")
 CLUSTER_CMAP = "Dark2"
 DPI = 110
 
@@ -201,8 +202,25 @@ def _cause_panel(cause: np.ndarray, top: int = 6):
              for c in cause.tolist()]
     greys = {"other causes": (0.45, 0.45, 0.45, 1.0), "no true failure / not replayed": (0.82, 0.82, 0.82, 1.0)}
     legend = [cause_name(c) for c in common] + [n for n in greys if n in names]
-    colours = [_cause_colour(c) for c in common] + [greys[n] for n in legend[len(common):]]
+    colours = _cause_colours(common) + [greys[n] for n in legend[len(common):]]
     return ("what causes the failure (re-rendered without each phenomenon)", names, legend, colours)
+
+
+def _cause_colours(codes: List[int]) -> list:
+    """_cause_colour of each code, but a set whose colour another cause in the
+    panel already has takes the next free one (in code order, so the same
+    causes get the same colours in every figure)."""
+    colours = {c: _cause_colour(c) for c in codes if not _is_set(c)}
+    for c in sorted(c for c in codes if _is_set(c)):
+        start = (c * 5) % len(SET_COLOURS)
+        free = [SET_COLOURS[(start + i) % len(SET_COLOURS)] for i in range(len(SET_COLOURS))]
+        colours[c] = next((x for x in free if x not in colours.values()), free[0])
+    return [colours[c] for c in codes]
+
+
+def _is_set(code: int) -> bool:
+    """Two phenomena or more (reflection+glare), not 'none found' or 'only together'."""
+    return code not in (0, ONLY_TOGETHER) and code & (code - 1) != 0
 
 
 def _cause_colour(code: int):
@@ -213,7 +231,7 @@ def _cause_colour(code: int):
         return "black"
     if code == ONLY_TOGETHER:
         return "#ff7f0e"
-    if code & (code - 1) == 0 and code in PHENOMENON_COLOURS:
+    if not _is_set(code) and code in PHENOMENON_COLOURS:
         return PHENOMENON_COLOURS[code]
     return SET_COLOURS[(code * 5) % len(SET_COLOURS)]
 

@@ -475,7 +475,8 @@ def comparison_section(runs: List[EvalRun], metrics: Dict[str, dict], figs: Dict
     counts = ", ".join(f"{r.name} {len(r.label)}" for r in runs)
     coverage = (f" A cell is labelled only where its detector gave a verdict (cells: {counts}); SGBM finds no "
                 "disparity on much of a texture-less or dark floor, so each detector's failures are counted among "
-                "the cells it judged, not among the same cells." if len({r.detector for r in runs}) > 1 else "")
+                "the cells it judged, not among the same cells." if "dense" in {r.detector for r in runs}
+                and len({r.detector for r in runs}) > 1 else "")
     out.append("\nNote: each model is evaluated on its own detector's labels (its own dataset), so the sample sets "
                "differ; accuracies compare how well each introspection model predicts its own detector's failures."
                + coverage + "\n")
