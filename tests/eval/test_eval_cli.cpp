@@ -44,9 +44,12 @@ class EvalCli : public ::testing::Test {
     test::write_synthetic_session(dir_.file("data"), "s", s);
     s.views = 2;
     test::write_synthetic_session(dir_.file("data"), "b", s);
+    s.per_class = 0;
+    test::write_synthetic_session(dir_.file("data"), "z", s);           // a session without samples
     std::filesystem::create_directories(dir_.file("data/unfinished"));  // a build that never wrote session.json
     std::ofstream(dir_.file("split.yaml")) << "train: [a]\nval: [v]\ntest: [t]\ndense: [d]\nscaled: [s]\n"
-                                              "scaled_two_views: [b]\nempty: []\nunfinished: [unfinished]\n";
+                                              "scaled_two_views: [b]\nempty: []\nunfinished: [unfinished]\n"
+                                              "no_samples: [z]\n";
 
     introspection::TrainConfig c;
     c.dataset = dir_.file("data");
@@ -107,12 +110,14 @@ TEST_F(EvalCli, NamesEveryWayThePatchesDifferAtOnce) {
 
 TEST_F(EvalCli, OverlaysOfAnEarlierRunAreRemovedNotPassedOffAsThisModels) {
   std::filesystem::create_directories(out() + "/overlays");
-  std::ofstream(out() + "/overlays/t_1000.png") << "an earlier model's figure";
+  std::ofstream(out() + "/overlays/t_1700310000000000.png") << "an earlier model's figure";
   std::ofstream(out() + "/overlays/notes.txt") << "the user's";
+  std::ofstream(out() + "/overlays/summary.png") << "the user's too";
   const auto r = eval("test");
   ASSERT_EQ(r.exit_code, kExitOk) << r.output;
-  EXPECT_FALSE(std::filesystem::exists(out() + "/overlays/t_1000.png"));
+  EXPECT_FALSE(std::filesystem::exists(out() + "/overlays/t_1700310000000000.png"));
   EXPECT_TRUE(std::filesystem::exists(out() + "/overlays/notes.txt"));
+  EXPECT_TRUE(std::filesystem::exists(out() + "/overlays/summary.png"));
   EXPECT_TRUE(contains(r.output, "removed 1 overlay figures of an earlier run")) << r.output;
 }
 
@@ -121,6 +126,15 @@ TEST_F(EvalCli, ASplitWithoutSessionsIsBadInput) {
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
   EXPECT_TRUE(contains(r.output, "split.yaml: the split(s) empty list no session: nothing to evaluate")) << r.output;
   EXPECT_FALSE(std::filesystem::exists(out() + "/eval.json"));
+}
+
+TEST_F(EvalCli, SessionsWithoutSamplesAreRefusedBeforeAnEarlierEvalIsTouched) {
+  ASSERT_EQ(eval("test").exit_code, kExitOk);
+  const std::string before = test::read_file(out() + "/predictions.csv");
+  const auto r = eval("no_samples");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "split.yaml: the 1 session(s) of split(s) no_samples hold no samples")) << r.output;
+  EXPECT_EQ(test::read_file(out() + "/predictions.csv"), before);
 }
 
 TEST_F(EvalCli, ASessionFolderWithoutItsDescriptionIsNamed) {

@@ -2,6 +2,7 @@
 // scores on the real Middlebury "Aloe" pair (Debian's opencv-doc).
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -52,6 +53,10 @@ TEST(DisparityIo, AJpegCutShortIsRefusedNamingTheFile) {
   ASSERT_TRUE(cv::imwrite(dir.file("whole.jpg"), texture));
   EXPECT_EQ(read_image(dir.file("whole.jpg"), cv::IMREAD_GRAYSCALE).size(), texture.size());
   const auto size = std::filesystem::file_size(dir.file("whole.jpg"));
+  std::filesystem::copy_file(dir.file("whole.jpg"), dir.file("trailer.jpg"));
+  std::ofstream(dir.file("trailer.jpg"), std::ios::app | std::ios::binary) << std::string(4096, '\x5A');
+  EXPECT_EQ(read_image(dir.file("trailer.jpg"), cv::IMREAD_GRAYSCALE).size(), texture.size())
+      << "data a phone appends after the end of the image";
   std::filesystem::copy_file(dir.file("whole.jpg"), dir.file("cut.jpg"));
   std::filesystem::resize_file(dir.file("cut.jpg"), size / 2);
   try {

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <regex>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -236,24 +237,37 @@ SessionList list_sessions(const Options& o) {
   return sessions;
 }
 
-// predictions.csv and embeddings.f32 (one FC2 vector per row); returns the
-// number of rows, and each session's description in `infos`.
-double write_predictions(const Options& o, const SessionList& sessions, introspection::IntrospectionModel& model,
-                         std::vector<dataset::SessionInfo>& infos) {
-  double total = 0;
+// The sessions to evaluate, read and checked before anything is written.
+struct Evaluated {
+  std::vector<dataset::SessionInfo> infos;  // in the order of the SessionList
+  double samples = 0;
+};
+
+Evaluated describe_sessions(const Options& o, const SessionList& sessions, const introspection::ModelInfo& model) {
+  Evaluated e;
   std::vector<std::pair<std::string, std::string>> other_detector;  // (session, detector) unlike the model's
   for (const auto& [split, name] : sessions) {
     const dataset::SessionReader session(o.dataset + "/" + name);
-    infos.push_back(session.info());
-    total += static_cast<double>(session.size());
-    if (session.info().detector != model.info().detector) other_detector.push_back({name, session.info().detector});
+    e.infos.push_back(session.info());
+    e.samples += static_cast<double>(session.size());
+    if (session.info().detector != model.detector) other_detector.push_back({name, session.info().detector});
   }
+  if (e.samples == 0)
+    throw dataset::DatasetError(fmt::format("{}: the {} session(s) of split(s) {} hold no samples: nothing to evaluate",
+                                            o.split_file, sessions.size(), fmt::join(o.splits, ", ")));
   if (!other_detector.empty())
     spdlog::warn(
         "model {} introspects the '{}' detector, but {} of the {} sessions are labelled from another (the first, "
         "{}, from '{}'): their figures say how well it predicts that detector's failures, not its own",
-        model.info().id, model.info().detector, other_detector.size(), sessions.size(), other_detector.front().first,
+        model.id, model.detector, other_detector.size(), sessions.size(), other_detector.front().first,
         other_detector.front().second);
+  return e;
+}
+
+// predictions.csv and embeddings.f32 (one FC2 vector per row); returns the
+// number of rows.
+double write_predictions(const Options& o, const SessionList& sessions, introspection::IntrospectionModel& model,
+                         double total) {
   const std::string csv_path = o.out + "/predictions.csv", emb_path = o.out + "/embeddings.f32";
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> csv(std::fopen(csv_path.c_str(), "w"), &std::fclose);
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> emb(std::fopen(emb_path.c_str(), "wb"), &std::fclose);
@@ -269,7 +283,6 @@ double write_predictions(const Options& o, const SessionList& sessions, introspe
   // A full disk shows only here: say so rather than leave short files behind unnoticed.
   if (std::fflush(csv.get()) != 0 || std::ferror(csv.get())) throw OutputError(csv_path + ": write failed");
   if (std::fflush(emb.get()) != 0 || std::ferror(emb.get())) throw OutputError(emb_path + ": write failed");
-  if (done == 0) throw dataset::DatasetError("the sessions evaluated hold no samples: nothing to evaluate");
   return done;
 }
 
@@ -319,25 +332,30 @@ void add_options(CLI::App& app, Options& o) {
 }
 
 // The figures of an earlier run into the same --out would pass for this
-// model's: the report shows every PNG it finds there.
+// model's (the report shows every overlay it finds there): those named as
+// write_log_overlays names them, <session>_<utime>.png, are removed.
 void remove_old_overlays(const std::string& folder) {
+  static const std::regex kOverlayName(R"(.+_[0-9]{10,}\.png)");
   std::error_code error;
   int removed = 0;
-  for (const auto& entry : fs::directory_iterator(folder, error))
-    if (entry.is_regular_file() && entry.path().extension() == ".png" && fs::remove(entry.path(), error)) ++removed;
+  for (const auto& entry : fs::directory_iterator(folder, error)) {
+    if (!entry.is_regular_file() || !std::regex_match(entry.path().filename().string(), kOverlayName)) continue;
+    if (fs::remove(entry.path(), error)) ++removed;
+    else spdlog::warn("{}: cannot remove this overlay of an earlier run: {}", entry.path().string(), error.message());
+  }
   if (removed > 0) spdlog::info("removed {} overlay figures of an earlier run from {}", removed, folder);
 }
 
 int evaluate(const Options& o) {
   auto model = introspection::IntrospectionModel::load(o.model, o.inference);
   const SessionList sessions = list_sessions(o);
+  const Evaluated evaluated = describe_sessions(o, sessions, model->info());
   std::error_code error;
   fs::create_directories(o.out, error);
   if (error) throw OutputError(o.out + ": cannot create the output folder: " + error.message());
   remove_old_overlays(o.out + "/overlays");
-  std::vector<dataset::SessionInfo> infos;
-  const double samples = write_predictions(o, sessions, *model, infos);
-  write_eval_json(o, *model, sessions, infos, samples);
+  const double samples = write_predictions(o, sessions, *model, evaluated.samples);
+  write_eval_json(o, *model, sessions, evaluated.infos, samples);
   if (!o.logs.empty()) write_overlays(o, *model, sessions);
   std::printf("predictions: %s/predictions.csv (%.0f samples), embeddings: %s/embeddings.f32\n", o.out.c_str(), samples,
               o.out.c_str());

@@ -169,10 +169,6 @@ void add_score_options(CLI::App& app, ScoreCommandLine& cl) {
 // Reads every log into `s`; false (after saying why) when one is unreadable
 // or the logs hold nothing to score.
 bool score_logs(const ScoreCommandLine& cl, LiveScore& s, ReadCounts& counts) {
-  if (const std::string twice = named_twice(cl.files); !twice.empty()) {
-    spdlog::error("{} is given twice: its frames would count twice", twice);
-    return false;
-  }
   tools::LiveScorer scorer;
   try {
     for (const auto& path : cl.files) read_log(path, cl.resync, scorer, counts);
@@ -218,6 +214,10 @@ int main(int argc, char** argv) {
   init_logging("live-score", common.log_level);
   LiveScore s;
   ReadCounts counts;
+  if (const std::string twice = named_twice(cl.files); !twice.empty()) {
+    spdlog::error("{} is given twice: its frames would count twice", twice);
+    return kExitUsage;
+  }
   if (!score_logs(cl, s, counts)) return kExitBadInput;
   return report(cl, s, counts);
 }

@@ -101,7 +101,7 @@ int main(int argc, char** argv) {
   ivoa::init_logging("sim-gallery", common.log_level);
   if (const std::string problem = ivoa::image_file_name_problem(o.output); !problem.empty()) {
     spdlog::error("{}", problem);  // before minutes of rendering
-    return ivoa::kExitUsage;
+    return ivoa::kExitIoError;
   }
   if (o.scenes.empty())
     for (const char* name : {"indoor_office", "home", "corridor", "polished_lobby", "warehouse", "outdoor_campus",

@@ -27,18 +27,41 @@ void mark_unknown(cv::Mat& disparity) {
   });
 }
 
-// A JPEG whose last kilobyte holds no end-of-image marker (FF D9; entropy-
-// coded data never contains one) was cut short.
+// The offset after the entropy-coded data that starts at `i`: at the next
+// marker (FF, then neither a stuffed 00 nor a restart D0-D7), or the end.
+size_t skip_scan_data(const std::string& d, size_t i) {
+  while (i + 1 < d.size()) {
+    const auto next = static_cast<unsigned char>(d[i + 1]);
+    if (static_cast<unsigned char>(d[i]) == 0xFF && next != 0x00 && (next < 0xD0 || next > 0xD7)) return i;
+    ++i;
+  }
+  return d.size();
+}
+
+// Walks a JPEG's segments from its start (skipping what they hold, so an
+// EXIF thumbnail's own end marker does not count) to the end-of-image marker
+// FF D9; what follows it (phones append data) does not matter. A file whose
+// structure is not a JPEG's is left to OpenCV.
 bool jpeg_cut_short(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  char start[2] = {};
-  if (!in.read(start, 2) || start[0] != '\xFF' || start[1] != '\xD8') return false;
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg(), tail = std::min<std::streamoff>(size, 1024);
-  std::string last(static_cast<size_t>(tail), '\0');
-  in.seekg(size - tail);
-  in.read(last.data(), tail);
-  return last.find("\xFF\xD9") == std::string::npos;
+  const std::string d((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto byte = [&d](size_t i) { return static_cast<unsigned char>(d[i]); };
+  if (d.size() < 2 || byte(0) != 0xFF || byte(1) != 0xD8) return false;
+  size_t i = 2;
+  while (i + 1 < d.size()) {
+    if (byte(i) != 0xFF) return false;  // not a segment boundary: not ours to judge
+    const unsigned char marker = byte(i + 1);
+    if (marker == 0xD9) return false;  // the end of the image: whole
+    if (marker == 0xFF || marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) {
+      i += marker == 0xFF ? 1 : 2;  // fill byte, or a marker without a length
+      continue;
+    }
+    if (i + 3 >= d.size()) return true;
+    i += 2 + (static_cast<size_t>(byte(i + 2)) << 8 | byte(i + 3));
+    if (i > d.size()) return true;  // the segment runs past the end
+    if (marker == 0xDA) i = skip_scan_data(d, i);
+  }
+  return true;  // no end-of-image marker
 }
 
 }  // namespace

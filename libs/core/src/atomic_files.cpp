@@ -12,13 +12,17 @@ namespace {
 
 std::string temporary_of(const std::string& path) { return path + ".tmp"; }
 
-std::string system_error(const std::string& what) { return what + " (" + std::strerror(errno) + ")"; }
+// `what` and the system's reason (an errno value taken before anything could change it).
+std::string system_error(const std::string& what, int error_number) {
+  return what + " (" + std::strerror(error_number) + ")";
+}
 
 // All of `bytes` into `path` (created or truncated); false with `reason` set.
 bool write_whole_file(const std::string& path, std::string_view bytes, std::string& reason) {
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) {
-    reason = system_error("cannot create " + path);
+    const int error_number = errno;
+    reason = system_error("cannot create " + path, error_number);
     return false;
   }
   size_t done = 0;
@@ -26,15 +30,16 @@ bool write_whole_file(const std::string& path, std::string_view bytes, std::stri
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
-      if (n == 0) errno = ENOSPC;
-      reason = system_error("cannot write");
+      const int error_number = n == 0 ? ENOSPC : errno;
+      reason = system_error("cannot write", error_number);
       ::close(fd);
       return false;
     }
     done += static_cast<size_t>(n);
   }
   if (::close(fd) != 0) {  // NFS and some file systems report a full disk only here
-    reason = system_error("cannot write");
+    const int error_number = errno;
+    reason = system_error("cannot write", error_number);
     return false;
   }
   return true;
@@ -62,7 +67,8 @@ bool FileSet::stage(const std::string& path, std::string_view bytes, std::string
 bool FileSet::commit(std::string& error) {
   for (size_t k = 0; k < staged_.size(); ++k) {
     if (std::rename(temporary_of(staged_[k]).c_str(), staged_[k].c_str()) != 0) {
-      error = staged_[k] + ": " + system_error("cannot rename the new file into place");
+      const int error_number = errno;
+      error = staged_[k] + ": " + system_error("cannot rename the new file into place", error_number);
       staged_.erase(staged_.begin(), staged_.begin() + static_cast<std::ptrdiff_t>(k));
       return false;
     }

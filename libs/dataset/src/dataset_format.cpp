@@ -195,6 +195,7 @@ void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch, const std::
   if (s.label < 0 || s.label >= kNumClasses)
     throw DatasetError("sample label " + std::to_string(s.label) + " out of range");
   if (s.frame < 0 || s.frame >= static_cast<int64_t>(frames_.size())) throw DatasetError("sample refers to no frame");
+  check_finite(s, dir_ + " sample " + std::to_string(info_.samples));  // what SessionReader would refuse
   if (static_cast<int>(evidence.size()) != info_.evidence_size)
     throw DatasetError(fmt::format("sample {}: {} evidence values, the session stores {}", info_.samples,
                                    evidence.size(), info_.evidence_size));

@@ -14,8 +14,11 @@ bool replace_file(const std::string& path, std::string_view bytes, std::string& 
 
 // Files that only make sense together (a training checkpoint): each staged
 // beside its name, then all renamed into place by commit() once every one was
-// written. A failure part way leaves the old set whole; whatever was staged
-// and not committed is removed when the set is destroyed.
+// written. A write that fails (a full disk) leaves the old set whole, and
+// whatever was staged and not committed is removed when the set is destroyed.
+// The renames themselves are not one step: a process killed between them
+// leaves the files staged first new and the rest old, so stage the file that
+// says which set it is (a checkpoint's step) last.
 class FileSet {
  public:
   FileSet() = default;
