@@ -345,7 +345,8 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
     width = 0.8 / n_models
     x = np.arange(len(codes))
     colours = _category_colours(n_models)
-    fig, axes = plt.subplots(2, 1, figsize=(max(6.5, 0.45 * len(codes) * max(n_models, 2) + 3.0), 7.0), sharex=True)
+    # room under each group for "(n = 2549 / 1234 / 2549)" at fontsize 8 (about 0.07 in a character)
+    fig, axes = plt.subplots(2, 1, figsize=(max(6.5, 0.6 * len(codes) * max(n_models, 2) + 3.0), 7.0), sharex=True)
     for ax, (key, truth, kind) in zip(axes, (("pred_fn", "true_fn", "FN"), ("pred_fp", "true_fp", "FP"))):
         for i, (name, entries) in enumerate(zip(names, per_phen)):
             by = {e["phenomenon"]: e for e in entries}
@@ -361,7 +362,7 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
         ax.set_title(f"predicted {kind} per phenomenon", fontsize=10)
     counts = [" / ".join(str(next((e["n"] for e in en if e["phenomenon"] == c), 0)) for en in per_phen) for c in codes]
-    axes[1].set_xticks(x, [f"{phenomenon_name(c)}\n(n = {n})" for c, n in zip(codes, counts)], fontsize=9)
+    axes[1].set_xticks(x, [f"{phenomenon_name(c)}\n(n = {n})" for c, n in zip(codes, counts)], fontsize=8)
     axes[1].set_xlabel("phenomenon under the patch centre (sample count per model, in legend order)")
     fig.suptitle(f"{title}: which phenomena each model predicts as stereo failures")
     fig.tight_layout()
