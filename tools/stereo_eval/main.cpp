@@ -108,6 +108,11 @@ void fit_sgbm_range(const CLI::App& app, const Pair& p, CommandLine& cl) {
   if (app.count("--sgbm_num_disparities") == 0) cl.sgbm.num_disparities = round_up_16(max_disparity + 8);
   spdlog::info("{}x{} pair at scale {}, ground truth {:.1f}% known, max disparity {:.1f} px", p.left.cols, p.left.rows,
                cl.scale, 100.0 * cv::countNonZero(finite > 0) / static_cast<double>(finite.total()), max_disparity);
+  if (max_disparity > 0 && max_disparity < 4)  // no real stereo pair is that flat: a divisor for another format
+    spdlog::warn(
+        "{}: the largest ground-truth disparity is {:.2f} px after --gt-divisor {}: is the divisor right "
+        "(KITTI's 16-bit PNG: 256; an 8-bit Middlebury PNG: 1)?",
+        cl.gt_path, max_disparity, cl.gt_divisor);
 }
 
 std::vector<ivoa::stereo_eval::ModelScore> score_models(const CommandLine& cl, const Pair& p, cv::Mat& overlay) {
