@@ -161,21 +161,28 @@ TEST(Training, KeepLastWritesTheFinalStepsModelWhateverItsValidation) {
   EXPECT_NE(summary.find("\"best_step\": \"20\""), std::string::npos) << summary;
 }
 
+// Why resuming `c` from its checkpoint, to `steps`, was refused; "" if it resumed.
+std::string resume_refusal(TrainConfig c, int64_t steps) {
+  c.resume = true;
+  c.steps = steps;
+  try {
+    train_model(c);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
 TEST(Training, StaleCheckpointIsRefusedWithTheWayOut) {
   test::TempDir dir;
   TrainConfig c = tiny_run(dir, 5, 5);  // a checkpoint at step 5
   train_model(c);
-  c.resume = true;
   c.architecture = "alexnet";  // another setup in the same --out
-  try {
-    train_model(c);
-    FAIL() << "resumed from a checkpoint of another architecture";
-  } catch (const std::runtime_error& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("cannot resume"), std::string::npos) << what;
-    EXPECT_NE(what.find("architecture slidenet, not alexnet"), std::string::npos) << what;
-    EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
-  }
+  const std::string what = resume_refusal(c, c.steps);
+  ASSERT_FALSE(what.empty()) << "resumed from a checkpoint of another architecture";
+  EXPECT_NE(what.find("cannot resume"), std::string::npos) << what;
+  EXPECT_NE(what.find("architecture slidenet, not alexnet"), std::string::npos) << what;
+  EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
 }
 
 TEST(Training, CheckpointOfAnotherOptimiserIsRefusedWithTheWayOut) {
@@ -183,17 +190,11 @@ TEST(Training, CheckpointOfAnotherOptimiserIsRefusedWithTheWayOut) {
   TrainConfig c = tiny_run(dir, 5, 5);  // an SGD checkpoint at step 5
   use_optimizer(c, Optimizer::kSgd);
   train_model(c);
-  c.resume = true;
-  c.steps = 8;
   use_optimizer(c, Optimizer::kAdamW);
-  try {
-    train_model(c);
-    FAIL() << "resumed AdamW from SGD's optimiser state";
-  } catch (const std::runtime_error& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("trained with --optimizer sgd, this run uses adamw"), std::string::npos) << what;
-    EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
-  }
+  const std::string what = resume_refusal(c, 8);
+  ASSERT_FALSE(what.empty()) << "resumed AdamW from SGD's optimiser state";
+  EXPECT_NE(what.find("trained with --optimizer sgd, this run uses adamw"), std::string::npos) << what;
+  EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
 }
 
 TEST(Training, DamagedCheckpointStepFileIsRefusedWithTheWayOut) {
@@ -201,16 +202,10 @@ TEST(Training, DamagedCheckpointStepFileIsRefusedWithTheWayOut) {
   TrainConfig c = tiny_run(dir, 5, 5);  // a checkpoint at step 5
   train_model(c);
   std::ofstream(c.output + ".checkpoint.step") << "5 0.";  // cut short, as by a full disk
-  c.resume = true;
-  c.steps = 8;
-  try {
-    train_model(c);
-    FAIL() << "resumed from a step file that does not say where it stopped";
-  } catch (const std::runtime_error& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find(c.output + ".checkpoint.step is not"), std::string::npos) << what;
-    EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
-  }
+  const std::string what = resume_refusal(c, 8);
+  ASSERT_FALSE(what.empty()) << "resumed from a step file that does not say where it stopped";
+  EXPECT_NE(what.find(c.output + ".checkpoint.step is not"), std::string::npos) << what;
+  EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
 }
 
 TEST(Training, ADiskThatFillsDuringACheckpointKeepsTheLastOneForResume) {
@@ -249,19 +244,13 @@ TEST(Training, AnOptimiserStateCutShortIsRefusedWithTheWayOut) {
   const std::string optimizer = c.output + ".checkpoint.optimizer";
   const std::string bytes = test::read_file(optimizer);
   std::ofstream(optimizer, std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() / 2);
-  c.resume = true;
-  c.steps = 8;
-  try {
-    train_model(c);
-    FAIL() << "resumed from half an optimiser state";
-  } catch (const std::runtime_error& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("cannot resume " + c.output + ".checkpoint: its optimiser or side-task state cannot be read"),
-              std::string::npos)
-        << what;
-    EXPECT_NE(what.find("remove " + c.output + ".checkpoint.* to start over"), std::string::npos) << what;
-    EXPECT_EQ(what.find("frame #"), std::string::npos) << "LibTorch's backtrace: " << what;
-  }
+  const std::string what = resume_refusal(c, 8);
+  ASSERT_FALSE(what.empty()) << "resumed from half an optimiser state";
+  EXPECT_NE(what.find("cannot resume " + c.output + ".checkpoint: its optimiser or side-task state cannot be read"),
+            std::string::npos)
+      << what;
+  EXPECT_NE(what.find("remove " + c.output + ".checkpoint.* to start over"), std::string::npos) << what;
+  EXPECT_EQ(what.find("frame #"), std::string::npos) << "LibTorch's backtrace: " << what;
 }
 
 TEST(Training, LearnsTheDetectorsEvidenceAsASideTaskWhenTheDatasetHasIt) {
