@@ -21,6 +21,7 @@
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/launcher/config.hpp"
+#include "ivoa/launcher/group_watchdog.hpp"
 #include "ivoa/launcher/launcher.hpp"
 #include "ivoa/launcher/selection.hpp"
 #include "ivoa/launcher/variables.hpp"
@@ -181,11 +182,18 @@ int main(int argc, char** argv) {
   // Orphans of the commands come to us, so a command's group can be seen to empty.
   prctl(PR_SET_CHILD_SUBREAPER, 1);
   o.launcher.supervisor.reap_orphans = true;
+  // Forked before anything else runs: it stops what we leave running if we are killed.
+  GroupWatchdog watchdog(argc, argv);
+  if (!watchdog.running()) spdlog::warn("no watchdog: if ivoa-launch is killed, compound commands' children run on");
+  o.launcher.supervisor.on_group_started = [&](int pgid, const CommandSpec& spec) {
+    watchdog.watch(pgid, spec.stop_signal, spec.stop_time_allowed_s);
+  };
+  o.launcher.supervisor.on_group_gone = [&](int pgid) { watchdog.forget(pgid); };
   install_launcher_signal_handlers();
   try {
     return run_launcher(config, std::move(selected.commands), o.selection.host, o.launcher);
   } catch (const std::exception& e) {
-    // The commands die with us (PR_SET_PDEATHSIG): say why.
+    // The supervisor has SIGKILLed the commands on its way out: say why.
     spdlog::error("{}", e.what());
     return ivoa::kExitFailure;
   }

@@ -163,6 +163,7 @@ void Supervisor::spawn(Instance& c) {
   c.leader_alive = true;
   c.kill_sent = false;
   c.status.state = RunState::kRunning;
+  if (options_.on_group_started) options_.on_group_started(child.pid, spec);
   on_event_(spec.name, "started, pid " + std::to_string(child.pid));
 }
 
@@ -266,6 +267,7 @@ void Supervisor::check_group_gone(Instance& c) {
 }
 
 void Supervisor::finish(Instance& c) {
+  if (options_.on_group_gone) options_.on_group_gone(c.status.pid);
   if (c.output_fd >= 0) read_output(c, true);
   if (c.start_when_ended) {
     spawn(c);

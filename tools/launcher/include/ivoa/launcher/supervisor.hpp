@@ -51,6 +51,10 @@ struct SupervisorOptions {
   double healthy_after_s = 60.0;                   // a run at least this long resets the back-off
   std::map<std::string, std::string> environment;  // added to every command's environment
   bool reap_orphans = false;                       // also reap any child (set when this process is a child subreaper)
+  // Told of each command's process group once it has started and once it
+  // has gone (ivoa-launch hands them to its GroupWatchdog).
+  std::function<void(int pgid, const CommandSpec& spec)> on_group_started;
+  std::function<void(int pgid)> on_group_gone;
 };
 
 // A line a command wrote (without its newline), and launcher events about it.
