@@ -40,6 +40,11 @@ void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   app.add_option("--scale", o.figure.scale, "figure panel size relative to the image")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 4.0));
+  app.add_option("--uncertainty-max", o.figure.uncertainty_max,
+                 "top of the uncertainty panel's colour scale, class variance (0: each frame its own maximum, as "
+                 "the paper's figures)")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_flag("--dots-given-verdict", o.figure.dots_given_verdict,
                "dots: the prediction given the detector's verdict (default: from the image alone, as the paper)");
   app.add_flag("--every-frame,!--newest-only", o.every_frame,

@@ -65,6 +65,35 @@ TEST(EvalOverlay, RefusesPredictionsThatDoNotMatchTheCells) {
   EXPECT_THROW(set_predictions(cells, {}, true, 0.01), std::invalid_argument);
 }
 
+// A frame whose heatmaps are uniform: every class's probability 0.25, the
+// given uncertainty everywhere.
+introspection::Heatmaps uniform_heatmaps(float uncertainty) {
+  introspection::Heatmaps h;
+  h.rows = h.cols = 2;
+  h.stride = h.patch_size = 100;
+  for (auto& p : h.probability) p = cv::Mat(2, 2, CV_32F, cv::Scalar(0.25));
+  h.uncertainty = cv::Mat(2, 2, CV_32F, cv::Scalar(uncertainty));
+  return h;
+}
+
+// The uncertainty panel's colour at a patch centre below its title band.
+cv::Vec3b uncertainty_colour(const introspection::Heatmaps& h, double uncertainty_max) {
+  const cv::Mat left(200, 200, CV_8UC3, cv::Scalar(0, 0, 0));
+  const cv::Mat figure = compose_frame_figure(left, h, {}, false, uncertainty_max);
+  return figure.at<cv::Vec3b>(150, 2 * left.cols + 150);
+}
+
+TEST(EvalOverlay, ASharedUncertaintyScaleKeepsFramesComparable) {
+  const auto calm = uniform_heatmaps(0.02f), unsure = uniform_heatmaps(0.04f);
+  // Each frame on its own scale: both panels show their maximum, alike.
+  EXPECT_EQ(uncertainty_colour(calm, 0), uncertainty_colour(unsure, 0));
+  EXPECT_EQ(uncertainty_colour(unsure, 0), uncertainty_colour(unsure, 0.04)) << "its own scale is its maximum";
+  // On one scale they differ, and a colour stands for one value: the calm
+  // frame on 0.04 looks as the unsure one does on twice that.
+  EXPECT_NE(uncertainty_colour(calm, 0.04), uncertainty_colour(unsure, 0.04));
+  EXPECT_EQ(uncertainty_colour(calm, 0.04), uncertainty_colour(unsure, 0.08));
+}
+
 TEST(EvalOverlay, DrawsFilledAndHollowDotsInTheClassColour) {
   const cv::Mat image(160, 200, CV_8UC3, cv::Scalar(255, 255, 255));
   LabelledCell filled = cell_with_verdict(obstacle_grid_t::STATE_OBSTACLE);

@@ -120,6 +120,18 @@ TEST(ViewerFigure, HeatmapsFollowThePatchGeometry) {
   EXPECT_GT(u_right[2], u_right[0]);
 }
 
+TEST(ViewerFigure, AFixedUncertaintyScaleCoolsAFrameBelowIt) {
+  FrameSet f;
+  f.utime = 100;
+  f.introspection = introspection(100);
+  FigureOptions fixed = full_size();
+  const cv::Vec3b own = draw_frame_figure(background(), f, fixed).at<cv::Vec3b>(120, 3 * kWidth - 20);
+  fixed.uncertainty_max = 100.0;  // far above anything in the frame: its hottest cell is cold
+  const cv::Vec3b scaled = draw_frame_figure(background(), f, fixed).at<cv::Vec3b>(120, 3 * kWidth - 20);
+  EXPECT_GT(own[2], own[0]) << "on its own scale the frame's maximum is red";
+  EXPECT_GT(scaled[0], scaled[2] + 40) << "far under a fixed maximum it is blue: " << scaled;
+}
+
 TEST(ViewerFigure, MissingIntrospectionLeavesDimPanelsAndTheFigureSizeStays) {
   FrameSet f;
   f.utime = 100;

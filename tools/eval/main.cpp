@@ -47,6 +47,7 @@ struct Options {
   int overlay_every = 10;
   int max_overlays = 12;
   double overlay_scale = 0.6;
+  double uncertainty_max = -1;      // < 0: the largest of the run's overlays; 0: each frame's own
   bool dots_given_verdict = false;  // overlay dots: predictions given the recorded verdict
   introspection::InferenceConfig inference;
 };
@@ -157,30 +158,57 @@ LabelledFrames labelled_frames(const dataset::SessionReader& reader) {
   return frames;
 }
 
-// One frame's figure: the model run on it, its labelled cells' rings and dots.
-cv::Mat overlay_figure(const Options& o, introspection::IntrospectionModel& model, const stereo_image_t& msg,
-                       const GroundWarp* warp, std::vector<tools::LabelledCell>& cells) {
+// One frame for an overlay figure: the model run on it and on its labelled
+// cells. Drawn once every figure's heatmaps are known (their shared scale);
+// the left image stays as the log has it until then.
+struct PendingOverlay {
+  std::string path;
+  image_t left;
+  introspection::Heatmaps heatmaps;
+  std::vector<tools::LabelledCell> cells;
+};
+
+PendingOverlay prepare_overlay(const Options& o, introspection::IntrospectionModel& model, const stereo_image_t& msg,
+                               const GroundWarp* warp, std::vector<tools::LabelledCell> cells, std::string path) {
   const cv::Mat left = decode_image(msg.left);
   const cv::Mat input = warp ? warp->stack(left, decode_image(msg.right)) : left;
-  const introspection::Heatmaps h = model.run(input);
+  introspection::Heatmaps h = model.run(input);
   predict_cells(model, h, input, cells, o.dots_given_verdict);
-  cv::Mat figure = tools::compose_frame_figure(left, h, cells, o.dots_given_verdict);
+  return {std::move(path), msg.left, std::move(h), std::move(cells)};
+}
+
+// The top of the uncertainty panels' scale: --uncertainty-max, else the
+// largest value over every figure's heatmap.
+double uncertainty_scale(const Options& o, const std::vector<PendingOverlay>& overlays) {
+  if (o.uncertainty_max >= 0) return o.uncertainty_max;
+  double scale = 0;
+  for (const auto& p : overlays) {
+    double frame_max = 0;
+    cv::minMaxLoc(p.heatmaps.uncertainty, nullptr, &frame_max);
+    scale = std::max(scale, frame_max);
+  }
+  return scale;
+}
+
+void write_overlay(const Options& o, const PendingOverlay& p, double uncertainty_max) {
+  cv::Mat figure =
+      tools::compose_frame_figure(decode_image(p.left), p.heatmaps, p.cells, o.dots_given_verdict, uncertainty_max);
   cv::resize(figure, figure, cv::Size(), o.overlay_scale, o.overlay_scale, cv::INTER_AREA);
-  return figure;
+  if (std::string error; !write_image_file(p.path, figure, error)) throw OutputError(error);
 }
 
 using SessionList = std::vector<std::pair<std::string, std::string>>;  // (split, session)
 
 // Overlays of one session's log, every overlay_every-th labelled frame, until
-// `written` reaches max_overlays.
-void write_log_overlays(const Options& o, introspection::IntrospectionModel& model, const std::string& log,
-                        LabelledFrames frames, int& written) {
+// there are max_overlays.
+void prepare_log_overlays(const Options& o, introspection::IntrospectionModel& model, const std::string& log,
+                          LabelledFrames frames, std::vector<PendingOverlay>& overlays) {
   const std::string session = session_of_log(log);
   logio::LogReader in(log);
   logio::LogEvent e;
   int64_t index = 0;
   std::unique_ptr<GroundWarp> warp;  // two-view models, from the log's calibration
-  while (written < o.max_overlays && in.next(e)) {
+  while (static_cast<int>(overlays.size()) < o.max_overlays && in.next(e)) {
     if (model.info().views == 2 && !warp && e.channel == channels::kRigCalibration) {
       rig_calibration_t rig;
       if (logio::decode(e, rig)) warp = std::make_unique<GroundWarp>(from_message(rig));
@@ -192,10 +220,8 @@ void write_log_overlays(const Options& o, introspection::IntrospectionModel& mod
     if (it == frames.end() || index++ % o.overlay_every != 0) continue;
     if (model.info().views == 2 && !warp)
       throw dataset::DatasetError(log + ": no rig calibration before the first frame (a two-view model needs it)");
-    const cv::Mat figure = overlay_figure(o, model, msg, warp.get(), it->second);
     const std::string path = o.out + "/overlays/" + session + "_" + std::to_string(msg.utime) + ".png";
-    if (std::string error; !write_image_file(path, figure, error)) throw OutputError(error);
-    ++written;
+    overlays.push_back(prepare_overlay(o, model, msg, warp.get(), it->second, path));
   }
   if (const std::string why = in.not_a_log(); !why.empty()) spdlog::warn("{}: {}: no overlays from it", log, why);
   else if (!in.clean())  // cut short or damaged: the overlays stop (or skip) there
@@ -206,7 +232,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
   std::error_code error;
   fs::create_directories(o.out + "/overlays", error);
   if (error) throw OutputError(o.out + "/overlays: cannot create the folder: " + error.message());
-  int written = 0;
+  std::vector<PendingOverlay> overlays;
   for (const auto& log : o.logs) {
     const std::string session = session_of_log(log);
     const std::string dir = o.dataset + "/" + session;
@@ -217,10 +243,12 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
     if (std::none_of(evaluated.begin(), evaluated.end(), [&](const auto& s) { return s.second == session; }))
       spdlog::warn("{}: session '{}' is not in the splits evaluated: its overlays are not of the figures' sessions",
                    log, session);
-    write_log_overlays(o, model, log, labelled_frames(dataset::SessionReader(dir)), written);
+    prepare_log_overlays(o, model, log, labelled_frames(dataset::SessionReader(dir)), overlays);
   }
-  spdlog::info("wrote {} overlay figures to {}/overlays", written, o.out);
-  return written;
+  const double scale = uncertainty_scale(o, overlays);
+  for (const auto& p : overlays) write_overlay(o, p, scale);
+  spdlog::info("wrote {} overlay figures to {}/overlays", overlays.size(), o.out);
+  return static_cast<int>(overlays.size());
 }
 
 // A split named twice is evaluated once (its samples would count twice);
@@ -320,6 +348,10 @@ void add_options(CLI::App& app, Options& o) {
       ->check(positive_number());
   app.add_option("--max-overlays", o.max_overlays, "at most this many overlay figures in all")
       ->capture_default_str()
+      ->check(non_negative_number());
+  app.add_option("--uncertainty-max", o.uncertainty_max,
+                 "top of the overlays' uncertainty colour scale, class variance (default: the largest value over "
+                 "the run's overlays, one scale for all; 0: each frame its own maximum, as the paper's figures)")
       ->check(non_negative_number());
   app.add_flag("--dots-given-verdict", o.dots_given_verdict,
                "overlay dots: predictions given the detector's recorded verdict (default: from the image alone, as the "

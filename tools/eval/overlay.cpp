@@ -40,16 +40,18 @@ cv::Mat draw_grid(const cv::Mat& left, const std::vector<LabelledCell>& cells, b
 }
 
 cv::Mat compose_frame_figure(const cv::Mat& left, const introspection::Heatmaps& h,
-                             const std::vector<LabelledCell>& cells, bool dots_given_verdict) {
+                             const std::vector<LabelledCell>& cells, bool dots_given_verdict, double uncertainty_max) {
   const cv::Mat failure = h.probability[2] + h.probability[3];
-  double max_unc = 0;
-  cv::minMaxLoc(h.uncertainty, nullptr, &max_unc);
+  const bool own_scale = uncertainty_max <= 0;
+  if (own_scale) cv::minMaxLoc(h.uncertainty, nullptr, &uncertainty_max);
+  uncertainty_max = std::max(uncertainty_max, 0.01);
   const figures::HeatmapGrid grid{h.rows, h.cols, h.stride, h.patch_size};
   const cv::Mat a = draw_grid(left, cells, dots_given_verdict);
   const cv::Mat b = figures::blend_heatmap(left, grid, failure, 1.0, "P(FP) + P(FN): 0 blue .. 1 red");
   char title[96];
-  std::snprintf(title, sizeof(title), "uncertainty (class variance): 0 .. %.3f", std::max(max_unc, 0.01));
-  const cv::Mat c = figures::blend_heatmap(left, grid, h.uncertainty, std::max(max_unc, 0.01), title);
+  std::snprintf(title, sizeof(title), "uncertainty (class variance): 0 .. %.3f%s", uncertainty_max,
+                own_scale ? " (this frame)" : " (every overlay)");
+  const cv::Mat c = figures::blend_heatmap(left, grid, h.uncertainty, uncertainty_max, title);
   cv::Mat row;
   cv::hconcat(std::vector<cv::Mat>{a, b, c}, row);
   return row;

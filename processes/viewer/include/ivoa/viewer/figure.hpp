@@ -24,6 +24,9 @@ struct FigureOptions {
   // the message has it (else the image-alone one), instead of the paper's
   // image-alone prediction.
   bool dots_given_verdict = false;
+  // Top of the uncertainty panel's colour scale (class variance); 0: each
+  // frame's own maximum, as the paper's figures (a stream then flickers).
+  double uncertainty_max = 0;
 };
 
 // What the grid panel draws at one cell.
