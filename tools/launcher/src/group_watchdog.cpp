@@ -127,7 +127,7 @@ bool read_record(int fd, Record& r) {
   while (read_record(fd, r)) {
     if (r.kind == kStandDown) _exit(0);
     if (r.kind == kForget) {
-      for (int i = 0; i < count; ++i)
+      for (int i = count - 1; i >= 0; --i)
         if (groups[i].pgid == r.pgid) groups[i] = groups[--count];
     } else if (r.kind == kWatch && count < kMaxGroups) {
       groups[count++] = {r.pgid, r.stop_signal, r.stop_time_ms / 1000.0, false};
