@@ -44,12 +44,16 @@ void write_synthetic_session(const std::string& dataset_root, const std::string&
   info.evidence_size = s.evidence_size;
   info.patch_scale = s.patch_scale;
   info.views = s.views;
+  info.scene = s.scene;
+  info.seed = s.scene_seed;
   dataset::SessionWriter w(dataset_root, info);
   const int64_t frame = w.add_frame(0, 0, 4 * s.per_class);
   for (int k = 0; k < s.per_class; ++k)
     for (int label = 0; label < 4; ++label) {
       dataset::SampleRecord sample;
       sample.frame = frame;
+      sample.u = kSyntheticCellU;
+      sample.v = kSyntheticCellV;
       sample.label = label;
       sample.stereo_state = label == 0 || label == 2 ? 1 : 0;  // TP / FP: the detector said obstacle
       cv::Mat patch = pattern(label, rng);

@@ -1,6 +1,7 @@
 #pragma once
 // Small dataset sessions whose four classes look different (stripes one
 // way or the other, a blob, noise), for training and evaluation tests.
+#include <cstdint>
 #include <string>
 
 namespace ivoa::test {
@@ -12,9 +13,13 @@ struct SyntheticSession {
   std::string detector = "jppc";
   double patch_scale = 0;  // recorded only: every patch is the fixed 100 px square
   int views = 1;           // 2: each patch stacked over a copy of itself (as a two-view session's)
+  std::string scene;       // recorded in session.json, as a simulated session's scene and seed
+  int64_t scene_seed = -1;
 };
 
-// Writes session `name` under `dataset_root`: one frame, the classes in turn.
+// Writes session `name` under `dataset_root`: one frame (utime 0), the
+// classes in turn, every cell at pixel (kSyntheticCellU, kSyntheticCellV).
+inline constexpr double kSyntheticCellU = 150, kSyntheticCellV = 100;
 void write_synthetic_session(const std::string& dataset_root, const std::string& name, const SyntheticSession& s);
 
 }  // namespace ivoa::test

@@ -7,8 +7,12 @@
 
 #include <gtest/gtest.h>
 
+#include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/introspection/training.hpp"
+#include "ivoa/logio/log_writer.hpp"
+#include "ivoa/sim_ground_truth_t.hpp"
+#include "ivoa/stereo_image_t.hpp"
 #include "synthetic_sessions.hpp"
 #include "test_rig.hpp"
 
@@ -33,6 +37,8 @@ class EvalCli : public ::testing::Test {
   void SetUp() override {
     test::SyntheticSession s;
     s.per_class = kPerClass;
+    s.scene = "office";
+    s.scene_seed = 31;
     for (const char* name : {"a", "v", "t"}) {
       test::write_synthetic_session(dir_.file("data"), name, s);
       ++s.seed;
@@ -61,10 +67,10 @@ class EvalCli : public ::testing::Test {
     introspection::train_model(c);
   }
 
-  test::CommandResult eval(const std::string& splits) const {
+  test::CommandResult eval(const std::string& splits, const std::string& more = "") const {
     return test::run_command("timeout 120 " IVOA_EVAL_EXE " --model " + dir_.file("model.pt") + " --dataset " +
                              dir_.file("data") + " --split " + dir_.file("split.yaml") + " --out " + out() +
-                             " --mc-passes 2 --threads 1 --splits " + splits);
+                             " --mc-passes 2 --threads 1 --splits " + splits + " " + more);
   }
   std::string out() const { return dir_.file("eval"); }
 
@@ -119,6 +125,50 @@ TEST_F(EvalCli, OverlaysOfAnEarlierRunAreRemovedNotPassedOffAsThisModels) {
   EXPECT_TRUE(std::filesystem::exists(out() + "/overlays/notes.txt"));
   EXPECT_TRUE(std::filesystem::exists(out() + "/overlays/summary.png"));
   EXPECT_TRUE(contains(r.output, "removed 1 overlay figures of an earlier run")) << r.output;
+}
+
+template <typename Message>
+void write_message(logio::LogWriter& log, const char* channel, const Message& m) {
+  std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  log.write(channel, m.utime, bytes.data(), bytes.size());
+}
+
+// A simulated log of the synthetic sessions' one frame (utime 0), its
+// truth naming `scene` and `seed`.
+void write_simulated_log(const std::string& path, const std::string& scene, int64_t seed) {
+  logio::LogWriter log(path);
+  const cv::Mat image(2 * static_cast<int>(test::kSyntheticCellV), 2 * static_cast<int>(test::kSyntheticCellU), CV_8UC3,
+                      cv::Scalar(60, 120, 180));
+  stereo_image_t frame{};
+  frame.left = frame.right = encode_image(image, image_t::PIXEL_FORMAT_BGR, 0);
+  write_message(log, "STEREO_IMAGES", frame);
+  sim_ground_truth_t truth{};
+  truth.scene = scene;
+  truth.seed = seed;
+  truth.environment = "indoor";
+  write_message(log, "SIM_GROUND_TRUTH", truth);
+}
+
+TEST_F(EvalCli, OverlaysComeOnlyFromALogOfTheSessionsSceneAndSeed) {
+  std::filesystem::create_directories(dir_.file("own"));
+  std::filesystem::create_directories(dir_.file("other"));
+  write_simulated_log(dir_.file("own/t.lcmlog"), "office", 31);
+  auto r = eval("test", "--logs " + dir_.file("own/t.lcmlog"));
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(out() + "/overlays/t_0.png")) << r.output;
+
+  // Another scene's log under this session's name: its frame times match,
+  // so without the check the session's labels would be drawn on it.
+  std::filesystem::remove(out() + "/overlays/t_0.png");
+  write_simulated_log(dir_.file("other/t.lcmlog"), "lobby", 31);
+  r = eval("test", "--logs " + dir_.file("other/t.lcmlog"));
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out() + "/overlays/t_0.png"));
+  EXPECT_TRUE(contains(r.output,
+                       "a log of scene lobby seed 31, but session 't' was recorded from scene office seed "
+                       "31: no overlays from it"))
+      << r.output;
 }
 
 TEST_F(EvalCli, ASplitWithoutSessionsIsBadInput) {

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <regex>
@@ -32,6 +33,7 @@
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
 #include "ivoa/rig_calibration_t.hpp"
+#include "ivoa/sim_ground_truth_t.hpp"
 #include "ivoa/stereo_image_t.hpp"
 #include "overlay.hpp"
 
@@ -199,16 +201,37 @@ void write_overlay(const Options& o, const PendingOverlay& p, double uncertainty
 
 using SessionList = std::vector<std::pair<std::string, std::string>>;  // (split, session)
 
+// Why a simulated log is not of the session's scene and seed ("" if it is,
+// or says nothing): every seed-31 session shares its frame times, so a log
+// given under another session's name would have that session's labels
+// drawn on its images.
+std::string other_scene(const logio::LogEvent& e, const dataset::SessionInfo& session) {
+  sim_ground_truth_t truth;
+  if (session.scene.empty() || !logio::decode(e, truth)) return "";
+  if (truth.scene == session.scene && (session.seed < 0 || truth.seed == session.seed)) return "";
+  return fmt::format("a log of scene {} seed {}, but session '{}' was recorded from scene {} seed {}", truth.scene,
+                     truth.seed, session.session, session.scene, session.seed);
+}
+
 // Overlays of one session's log, every overlay_every-th labelled frame, until
 // there are max_overlays.
 void prepare_log_overlays(const Options& o, introspection::IntrospectionModel& model, const std::string& log,
-                          LabelledFrames frames, std::vector<PendingOverlay>& overlays) {
-  const std::string session = session_of_log(log);
+                          const dataset::SessionReader& session, std::vector<PendingOverlay>& overlays) {
+  const LabelledFrames frames = labelled_frames(session);
   logio::LogReader in(log);
   logio::LogEvent e;
   int64_t index = 0;
-  std::unique_ptr<GroundWarp> warp;  // two-view models, from the log's calibration
-  while (static_cast<int>(overlays.size()) < o.max_overlays && in.next(e)) {
+  bool scene_checked = false;
+  std::vector<PendingOverlay> from_log;  // kept only if the log is the session's
+  std::unique_ptr<GroundWarp> warp;      // two-view models, from the log's calibration
+  while (static_cast<int>(overlays.size() + from_log.size()) < o.max_overlays && in.next(e)) {
+    if (!scene_checked && e.channel == channels::kSimGroundTruth) {
+      scene_checked = true;
+      if (const std::string why = other_scene(e, session.info()); !why.empty()) {
+        spdlog::warn("{}: {}: no overlays from it", log, why);
+        return;
+      }
+    }
     if (model.info().views == 2 && !warp && e.channel == channels::kRigCalibration) {
       rig_calibration_t rig;
       if (logio::decode(e, rig)) warp = std::make_unique<GroundWarp>(from_message(rig));
@@ -220,9 +243,10 @@ void prepare_log_overlays(const Options& o, introspection::IntrospectionModel& m
     if (it == frames.end() || index++ % o.overlay_every != 0) continue;
     if (model.info().views == 2 && !warp)
       throw dataset::DatasetError(log + ": no rig calibration before the first frame (a two-view model needs it)");
-    const std::string path = o.out + "/overlays/" + session + "_" + std::to_string(msg.utime) + ".png";
-    overlays.push_back(prepare_overlay(o, model, msg, warp.get(), it->second, path));
+    const std::string path = o.out + "/overlays/" + session_of_log(log) + "_" + std::to_string(msg.utime) + ".png";
+    from_log.push_back(prepare_overlay(o, model, msg, warp.get(), it->second, path));
   }
+  std::move(from_log.begin(), from_log.end(), std::back_inserter(overlays));
   if (const std::string why = in.not_a_log(); !why.empty()) spdlog::warn("{}: {}: no overlays from it", log, why);
   else if (!in.clean())  // cut short or damaged: the overlays stop (or skip) there
     spdlog::warn("{}: {}: overlays only from the frames before it", log, in.problems().front().describe());
@@ -243,7 +267,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
     if (std::none_of(evaluated.begin(), evaluated.end(), [&](const auto& s) { return s.second == session; }))
       spdlog::warn("{}: session '{}' is not in the splits evaluated: its overlays are not of the figures' sessions",
                    log, session);
-    prepare_log_overlays(o, model, log, labelled_frames(dataset::SessionReader(dir)), overlays);
+    prepare_log_overlays(o, model, log, dataset::SessionReader(dir), overlays);
   }
   const double scale = uncertainty_scale(o, overlays);
   for (const auto& p : overlays) write_overlay(o, p, scale);
