@@ -2,11 +2,14 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <random>
+#include <thread>
 
 namespace ivoa::test {
 
@@ -61,6 +64,22 @@ CommandResult run_command(const std::string& command) {
   const int status = pclose(pipe);
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+bool process_has_ended(int pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text;
+  if (!std::getline(stat, text)) return true;
+  const size_t paren = text.rfind(')');  // the name may hold spaces and parentheses
+  return paren == std::string::npos || paren + 2 >= text.size() || text[paren + 2] == 'Z';
+}
+
+bool processes_end_within(const std::vector<int>& pids, double limit_s) {
+  for (int i = 0; i < limit_s * 20; ++i) {
+    if (std::all_of(pids.begin(), pids.end(), process_has_ended)) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return std::all_of(pids.begin(), pids.end(), process_has_ended);
 }
 
 }  // namespace ivoa::test

@@ -1,6 +1,7 @@
 #pragma once
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "ivoa/core/calibration.hpp"
 
@@ -20,6 +21,12 @@ struct CommandResult {
   std::string output;
 };
 CommandResult run_command(const std::string& command);
+
+// True once `pid` has exited, reaped or not (a process whose parent died
+// is reaped by init, if at all).
+bool process_has_ended(int pid);
+// Waits up to `limit_s`, polling, for every pid to end; true if they all did.
+bool processes_end_within(const std::vector<int>& pids, double limit_s);
 
 // A fresh, empty folder under the system temp dir, removed at destruction.
 class TempDir {

@@ -194,10 +194,12 @@ group "robot" {
   EXPECT_FALSE(contains(r.output, "cam --rate")) << r.output;
 }
 
-// ivoa-launch in the background, its stdout and stderr in `out`.
-pid_t spawn_launcher(const std::string& config, const std::string& out) {
+// ivoa-launch in the background, its stdout and stderr in `out`; its stdin
+// closed if `close_stdin`, as a service manager or `<&-` may start it.
+pid_t spawn_launcher(const std::string& config, const std::string& out, bool close_stdin = false) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
+  if (close_stdin) posix_spawn_file_actions_addclose(&actions, STDIN_FILENO);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   const char* argv[] = {IVOA_LAUNCH_EXE, config.c_str(), "--lcm-url", "none", "--duration", "60", nullptr};
@@ -270,25 +272,6 @@ TEST(LaunchCli, SecondStopSignalKillsAtOnce) {
   EXPECT_NE(kill(stubborn, 0), 0);
 }
 
-// A process that has exited, reaped or not: once the launcher is gone,
-// nobody here reaps what it started.
-bool has_ended(int pid) {
-  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-  std::string text;
-  if (!std::getline(stat, text)) return true;
-  const size_t paren = text.rfind(')');
-  return paren == std::string::npos || paren + 2 >= text.size() || text[paren + 2] == 'Z';
-}
-
-// Waits up to `limit_s` for every pid to end; true if they all did.
-bool all_end_within(const std::vector<int>& pids, double limit_s) {
-  for (int i = 0; i < limit_s * 20; ++i) {
-    if (std::all_of(pids.begin(), pids.end(), has_ended)) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  return false;
-}
-
 TEST(LaunchCli, SigkilledLauncherStillStopsCompoundCommandsChildren) {
   ivoa::test::TempDir dir;
   const std::string fg_file = dir.file("fg.pid"), bg_file = dir.file("bg.pid");
@@ -302,18 +285,20 @@ TEST(LaunchCli, SigkilledLauncherStillStopsCompoundCommandsChildren) {
                                      "cmd \"bg\" { exec = \"sleep 300 & echo $! > " +
                                      bg_file + "; wait\"; stop_time_allowed = 1; }\n");
   const std::string out = dir.file("out.txt");
-  const pid_t launcher = spawn_launcher(config, out);
+  // stdin closed: the watchdog's pipe must not land on descriptor 0.
+  const pid_t launcher = spawn_launcher(config, out, true);
   ASSERT_GT(launcher, 0);
   const int fg = wait_for_pid_file(fg_file), bg = wait_for_pid_file(bg_file);
   ASSERT_GT(fg, 0);
   ASSERT_GT(bg, 0);
   kill(launcher, SIGKILL);
   waitpid(launcher, nullptr, 0);
-  const bool ended = all_end_within({fg, bg}, 15);
+  const bool ended = ivoa::test::processes_end_within({fg, bg}, 15);
   kill(fg, SIGKILL);
   kill(bg, SIGKILL);
   EXPECT_TRUE(ended) << "a compound command's children outlived the SIGKILLed launcher: fg "
-                     << (has_ended(fg) ? "ended" : "running") << ", bg " << (has_ended(bg) ? "ended" : "running");
+                     << (ivoa::test::process_has_ended(fg) ? "ended" : "running") << ", bg "
+                     << (ivoa::test::process_has_ended(bg) ? "ended" : "running");
   for (int i = 0; i < 100 && !contains(read_file(out), "SIGKILL"); ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   EXPECT_TRUE(contains(read_file(out), "the watchdog stops 2 process group(s)")) << read_file(out);

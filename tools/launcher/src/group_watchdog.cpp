@@ -167,11 +167,27 @@ void detach_watchdog(int fd) {
   close_range(4, ~0U, 0);
 }
 
+// `fd` moved to 3 or above (a launcher started with stdin or stdout closed
+// gets 0 or 1 from pipe2, which the watchdog points at /dev/null); -1 on failure.
+int above_standard_streams(int fd) {
+  if (fd > STDERR_FILENO) return fd;
+  const int moved = fcntl(fd, F_DUPFD_CLOEXEC, STDERR_FILENO + 1);
+  close(fd);
+  return moved;
+}
+
 }  // namespace
 
 GroupWatchdog::GroupWatchdog(int argc, char** argv) {
   int fds[2];
   if (pipe2(fds, O_CLOEXEC) != 0) return;
+  fds[0] = above_standard_streams(fds[0]);
+  fds[1] = above_standard_streams(fds[1]);
+  if (fds[0] < 0 || fds[1] < 0) {
+    if (fds[0] >= 0) close(fds[0]);
+    if (fds[1] >= 0) close(fds[1]);
+    return;
+  }
   std::fflush(nullptr);  // nothing buffered twice
   const pid_t pid = fork();
   if (pid < 0) {
@@ -207,7 +223,8 @@ void GroupWatchdog::forget(pid_t pgid) { send(kForget, pgid, 0, 0); }
 
 void GroupWatchdog::send(int kind, pid_t pgid, int stop_signal, double stop_time_allowed_s) {
   if (!running()) return;
-  const Record r{kind, pgid, stop_signal, static_cast<int32_t>(stop_time_allowed_s * 1000.0)};
+  const double ms = std::clamp(stop_time_allowed_s * 1000.0, 0.0, 2147483647.0);
+  const Record r{kind, pgid, stop_signal, static_cast<int32_t>(ms)};
   ssize_t n;
   do n = write(fd_, &r, sizeof(r));
   while (n < 0 && errno == EINTR);

@@ -163,6 +163,8 @@ void Supervisor::spawn(Instance& c) {
   c.leader_alive = true;
   c.kill_sent = false;
   c.status.state = RunState::kRunning;
+  // (A launcher killed between the fork and here leaves this group to the
+  // kernel's death signal alone: microseconds.)
   if (options_.on_group_started) options_.on_group_started(child.pid, spec);
   on_event_(spec.name, "started, pid " + std::to_string(child.pid));
 }
