@@ -169,6 +169,12 @@ TEST_F(EvalCli, OverlaysComeOnlyFromALogOfTheSessionsSceneAndSeed) {
                        "a log of scene lobby seed 31, but session 't' was recorded from scene office seed "
                        "31: no overlays from it"))
       << r.output;
+  // The truth comes after the frame's images: a budget full at the first
+  // frame must not skip the check.
+  r = eval("test", "--max-overlays 1 --logs " + dir_.file("other/t.lcmlog"));
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(out() + "/overlays/t_0.png"));
+  EXPECT_TRUE(contains(r.output, "a log of scene lobby seed 31")) << r.output;
 }
 
 TEST_F(EvalCli, ASplitWithoutSessionsIsBadInput) {

@@ -83,6 +83,13 @@ cv::Vec3b uncertainty_colour(const introspection::Heatmaps& h, double uncertaint
   return figure.at<cv::Vec3b>(150, 2 * left.cols + 150);
 }
 
+TEST(EvalOverlay, TheSharedScaleIsTheLargestValueAnyFrameShows) {
+  const auto calm = uniform_heatmaps(0.02f), unsure = uniform_heatmaps(0.04f), sure = uniform_heatmaps(0.0f);
+  EXPECT_DOUBLE_EQ(shared_uncertainty_max({calm.uncertainty, unsure.uncertainty}), 0.04f);
+  EXPECT_DOUBLE_EQ(shared_uncertainty_max({sure.uncertainty}), kMinUncertaintyScale) << "not stretched from 0";
+  EXPECT_DOUBLE_EQ(shared_uncertainty_max({}), kMinUncertaintyScale);
+}
+
 TEST(EvalOverlay, ASharedUncertaintyScaleKeepsFramesComparable) {
   const auto calm = uniform_heatmaps(0.02f), unsure = uniform_heatmaps(0.04f);
   // Each frame on its own scale: both panels show their maximum, alike.

@@ -179,19 +179,6 @@ PendingOverlay prepare_overlay(const Options& o, introspection::IntrospectionMod
   return {std::move(path), msg.left, std::move(h), std::move(cells)};
 }
 
-// The top of the uncertainty panels' scale: --uncertainty-max, else the
-// largest value over every figure's heatmap.
-double uncertainty_scale(const Options& o, const std::vector<PendingOverlay>& overlays) {
-  if (o.uncertainty_max >= 0) return o.uncertainty_max;
-  double scale = 0;
-  for (const auto& p : overlays) {
-    double frame_max = 0;
-    cv::minMaxLoc(p.heatmaps.uncertainty, nullptr, &frame_max);
-    scale = std::max(scale, frame_max);
-  }
-  return scale;
-}
-
 void write_overlay(const Options& o, const PendingOverlay& p, double uncertainty_max) {
   cv::Mat figure =
       tools::compose_frame_figure(decode_image(p.left), p.heatmaps, p.cells, o.dots_given_verdict, uncertainty_max);
@@ -213,23 +200,26 @@ std::string other_scene(const logio::LogEvent& e, const dataset::SessionInfo& se
                      truth.seed, session.session, session.scene, session.seed);
 }
 
-// Overlays of one session's log, every overlay_every-th labelled frame, until
-// there are max_overlays.
-void prepare_log_overlays(const Options& o, introspection::IntrospectionModel& model, const std::string& log,
-                          const dataset::SessionReader& session, std::vector<PendingOverlay>& overlays) {
+// At most `room` overlays of one session's log, every overlay_every-th
+// labelled frame; none if a simulated log turns out to be of another scene.
+std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection::IntrospectionModel& model,
+                                                 const std::string& log, const dataset::SessionReader& session,
+                                                 size_t room) {
   const LabelledFrames frames = labelled_frames(session);
   logio::LogReader in(log);
   logio::LogEvent e;
   int64_t index = 0;
-  bool scene_checked = false;
-  std::vector<PendingOverlay> from_log;  // kept only if the log is the session's
-  std::unique_ptr<GroundWarp> warp;      // two-view models, from the log's calibration
-  while (static_cast<int>(overlays.size() + from_log.size()) < o.max_overlays && in.next(e)) {
+  // The simulator publishes a frame's truth after its images: read on past
+  // a full budget until the truth has been checked.
+  bool scene_checked = session.info().scene.empty();
+  std::vector<PendingOverlay> from_log;
+  std::unique_ptr<GroundWarp> warp;  // two-view models, from the log's calibration
+  while ((from_log.size() < room || !scene_checked) && in.next(e)) {
     if (!scene_checked && e.channel == channels::kSimGroundTruth) {
       scene_checked = true;
       if (const std::string why = other_scene(e, session.info()); !why.empty()) {
         spdlog::warn("{}: {}: no overlays from it", log, why);
-        return;
+        return {};
       }
     }
     if (model.info().views == 2 && !warp && e.channel == channels::kRigCalibration) {
@@ -238,7 +228,7 @@ void prepare_log_overlays(const Options& o, introspection::IntrospectionModel& m
       continue;
     }
     stereo_image_t msg;
-    if (e.channel != channels::kStereoImages || !logio::decode(e, msg)) continue;
+    if (from_log.size() >= room || e.channel != channels::kStereoImages || !logio::decode(e, msg)) continue;
     const auto it = frames.find(msg.utime);
     if (it == frames.end() || index++ % o.overlay_every != 0) continue;
     if (model.info().views == 2 && !warp)
@@ -246,17 +236,23 @@ void prepare_log_overlays(const Options& o, introspection::IntrospectionModel& m
     const std::string path = o.out + "/overlays/" + session_of_log(log) + "_" + std::to_string(msg.utime) + ".png";
     from_log.push_back(prepare_overlay(o, model, msg, warp.get(), it->second, path));
   }
-  std::move(from_log.begin(), from_log.end(), std::back_inserter(overlays));
   if (const std::string why = in.not_a_log(); !why.empty()) spdlog::warn("{}: {}: no overlays from it", log, why);
   else if (!in.clean())  // cut short or damaged: the overlays stop (or skip) there
     spdlog::warn("{}: {}: overlays only from the frames before it", log, in.problems().front().describe());
+  return from_log;
 }
 
+// Writes the overlays of --logs. With a fixed --uncertainty-max each log's
+// are written as they come; otherwise all are held (the logged left image,
+// the heatmaps, the cells: about 2 MB a 960x600 frame) until the shared
+// scale is known.
 int write_overlays(const Options& o, introspection::IntrospectionModel& model, const SessionList& evaluated) {
   std::error_code error;
   fs::create_directories(o.out + "/overlays", error);
   if (error) throw OutputError(o.out + "/overlays: cannot create the folder: " + error.message());
-  std::vector<PendingOverlay> overlays;
+  const bool fixed_scale = o.uncertainty_max >= 0;
+  std::vector<PendingOverlay> held;
+  size_t written = 0;
   for (const auto& log : o.logs) {
     const std::string session = session_of_log(log);
     const std::string dir = o.dataset + "/" + session;
@@ -267,12 +263,24 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
     if (std::none_of(evaluated.begin(), evaluated.end(), [&](const auto& s) { return s.second == session; }))
       spdlog::warn("{}: session '{}' is not in the splits evaluated: its overlays are not of the figures' sessions",
                    log, session);
-    prepare_log_overlays(o, model, log, dataset::SessionReader(dir), overlays);
+    const size_t room = static_cast<size_t>(o.max_overlays) - std::min<size_t>(o.max_overlays, written + held.size());
+    if (room == 0) continue;
+    for (auto& p : prepare_log_overlays(o, model, log, dataset::SessionReader(dir), room)) {
+      if (!fixed_scale) {
+        held.push_back(std::move(p));
+        continue;
+      }
+      write_overlay(o, p, o.uncertainty_max);
+      ++written;
+    }
   }
-  const double scale = uncertainty_scale(o, overlays);
-  for (const auto& p : overlays) write_overlay(o, p, scale);
-  spdlog::info("wrote {} overlay figures to {}/overlays", overlays.size(), o.out);
-  return static_cast<int>(overlays.size());
+  std::vector<cv::Mat> maps;
+  for (const auto& p : held) maps.push_back(p.heatmaps.uncertainty);
+  const double shared_max = tools::shared_uncertainty_max(maps);
+  for (const auto& p : held) write_overlay(o, p, shared_max);
+  written += held.size();
+  spdlog::info("wrote {} overlay figures to {}/overlays", written, o.out);
+  return static_cast<int>(written);
 }
 
 // A split named twice is evaluated once (its samples would count twice);

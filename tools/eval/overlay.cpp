@@ -39,12 +39,21 @@ cv::Mat draw_grid(const cv::Mat& left, const std::vector<LabelledCell>& cells, b
   return out;
 }
 
+double shared_uncertainty_max(const std::vector<cv::Mat>& uncertainty_maps) {
+  double top = kMinUncertaintyScale;
+  for (const auto& map : uncertainty_maps) {
+    double map_max = 0;
+    if (!map.empty()) cv::minMaxLoc(map, nullptr, &map_max);
+    top = std::max(top, map_max);
+  }
+  return top;
+}
+
 cv::Mat compose_frame_figure(const cv::Mat& left, const introspection::Heatmaps& h,
                              const std::vector<LabelledCell>& cells, bool dots_given_verdict, double uncertainty_max) {
   const cv::Mat failure = h.probability[2] + h.probability[3];
   const bool own_scale = uncertainty_max <= 0;
-  if (own_scale) cv::minMaxLoc(h.uncertainty, nullptr, &uncertainty_max);
-  uncertainty_max = std::max(uncertainty_max, 0.01);
+  if (own_scale) uncertainty_max = shared_uncertainty_max({h.uncertainty});
   const figures::HeatmapGrid grid{h.rows, h.cols, h.stride, h.patch_size};
   const cv::Mat a = draw_grid(left, cells, dots_given_verdict);
   const cv::Mat b = figures::blend_heatmap(left, grid, failure, 1.0, "P(FP) + P(FN): 0 blue .. 1 red");

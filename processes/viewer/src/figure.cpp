@@ -149,8 +149,10 @@ cv::Mat draw_frame_figure(const cv::Mat& left, const FrameSet& f, const FigureOp
     const cv::Mat u = heatmap_of(h, h.uncertainty);
     double max_u = options.uncertainty_max;
     const bool own_scale = max_u <= 0;
-    if (own_scale) cv::minMaxLoc(u, nullptr, &max_u);
-    max_u = std::max(max_u, 0.01);
+    if (own_scale) {
+      cv::minMaxLoc(u, nullptr, &max_u);
+      max_u = std::max(max_u, 0.01);  // a frame sure everywhere is not stretched to look unsure
+    }
     char title[96];
     std::snprintf(title, sizeof(title), "uncertainty (class variance): 0 .. %.3f%s", max_u,
                   own_scale ? " (this frame)" : "");
