@@ -441,7 +441,9 @@ def overlays_section(overlays: List[str], dots: str = "image") -> str:
     what = ("prediction given the detector's recorded verdict (`--dots-given-verdict`)" if dots == "given_verdict"
             else "prediction from the image alone")
     out.append(f"From ivoa-eval: left image with the ground grid (outer ring = label, inner dot = {what}; hollow = "
-               "withheld by the uncertainty gate), the P(FP)+P(FN) heatmap and the uncertainty heatmap.\n")
+               "withheld by the uncertainty gate), the P(FP)+P(FN) heatmap and the uncertainty heatmap, whose "
+               "colour scale its title gives (one scale for every overlay of a model unless ivoa-eval was given "
+               "`--uncertainty-max 0`).\n")
     for rel in overlays:
         out.append(f"**{os.path.basename(rel)}**\n\n" + image(rel, os.path.basename(rel)))
     return "\n".join(out)
