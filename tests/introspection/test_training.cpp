@@ -78,6 +78,9 @@ TEST_P(TrainingWith, LossFallsAndHeldOutSessionsBeatChance) {
   EXPECT_GE(r.val_verdict_accuracy_retained, r.val_accuracy_retained - 1e-9) << "the verdict leaves fewer ways to err";
   EXPECT_EQ(model->info().training_summary.find("held_out"), std::string::npos) << "test sessions must not be listed";
   EXPECT_NE(model->info().training_summary.find("\"a\""), std::string::npos);
+  EXPECT_NE(model->info().training_summary.find("\"steps_planned\": \"150\", \"kept\": \"best_validated\""),
+            std::string::npos)
+      << model->info().training_summary;
   EXPECT_NE(model->info().training_summary.find("\"augment_noise_max\": \"0.03\""), std::string::npos)
       << model->info().training_summary;
   EXPECT_NE(model->info().training_summary.find(std::string("\"optimizer\": \"") + optimizer_name(GetParam()) + "\""),

@@ -1186,6 +1186,16 @@ class MetricUnitTest(unittest.TestCase):
         self.assertNotIn("true FP", text)  # kept at about its share
         self.assertEqual(_withheld_failures({"retained": 0.70, "retained_per_class": [0.5, 0.7, 0.7, None]}), "")
 
+    def test_the_weights_step_says_how_far_the_run_went_where_the_file_records_it(self):
+        load_tool()
+        from ivoa_report import _training_steps
+        self.assertEqual(_training_steps({"steps": "6999", "best_step": "6999"}), "6999")  # files before 2026-12-03
+        self.assertEqual(_training_steps({"steps": "6999", "best_step": "6999", "steps_planned": "14000",
+                                          "kept": "best_validated"}), "6999 of 14000, best on validation")
+        self.assertEqual(_training_steps({"steps": "1400", "best_step": "1400", "steps_planned": "1400",
+                                          "kept": "last"}), "1400 of 1400, the last")
+        self.assertEqual(_training_steps({}), "n/a")
+
     def test_phenomena_present_counts_every_bit_and_its_lift(self):
         """Co-occurring phenomena: each bit counts for every patch that shows
         it, and the lift compares with all clustered samples."""

@@ -303,10 +303,15 @@ def inputs_section(runs: List[EvalRun]) -> str:
 
 
 def _training_steps(training: dict) -> str:
-    """The training step whose weights the file holds (the best-validated or the last; the
-    file is written at that step, so the steps run after it are not recorded in it)."""
+    """The training step whose weights the file holds, and, where the file records them (ivoa-train
+    since 2026-12-03), the steps the run was set to and which model it kept."""
     step = training.get("best_step", training.get("steps"))
-    return "n/a" if step is None else str(step)
+    if step is None:
+        return "n/a"
+    planned, kept = training.get("steps_planned"), training.get("kept")
+    if planned is None:
+        return str(step)
+    return f"{step} of {planned}" + {"best_validated": ", best on validation", "last": ", the last"}.get(kept, "")
 
 
 def _json_default(o):

@@ -186,8 +186,12 @@ std::string training_summary(const TrainConfig& c, const SplitData& train, const
   o << "{\"dataset\": \"" << c.dataset << "\", \"split_file\": \"" << c.split_file
     << "\", \"train_sessions\": " << json_list(train.names) << ", \"val_sessions\": " << json_list(val.names)
     << ", \"train_class_counts\": [" << r.train_class_counts[0] << ", " << r.train_class_counts[1] << ", "
-    << r.train_class_counts[2] << ", " << r.train_class_counts[3] << "], \"steps\": " << step
-    << ", \"batch_size\": " << c.batch_size << ", \"optimizer\": \"" << optimizer_name(c.optimizer)
+    << r.train_class_counts[2] << ", " << r.train_class_counts[3] << "], \"steps\": "
+    << step
+    // The weights are from `step`; the run goes on to steps_planned (a file
+    // written mid-run cannot say how far it got), keeping the kept one.
+    << ", \"steps_planned\": " << c.steps << ", \"kept\": \"" << (c.keep_last ? "last" : "best_validated")
+    << "\", \"batch_size\": " << c.batch_size << ", \"optimizer\": \"" << optimizer_name(c.optimizer)
     << "\", \"learning_rate\": " << c.learning_rate << ", \"momentum\": " << c.momentum
     << ", \"weight_decay\": " << c.weight_decay << ", \"seed\": " << c.seed
     << ", \"augment\": " << (c.augment ? "true" : "false") << ", \"augment_noise_max\": " << c.augment_noise_max
