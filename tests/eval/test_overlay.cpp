@@ -85,9 +85,10 @@ cv::Vec3b uncertainty_colour(const introspection::Heatmaps& h, double uncertaint
 
 TEST(EvalOverlay, TheSharedScaleIsTheLargestValueAnyFrameShows) {
   const auto calm = uniform_heatmaps(0.02f), unsure = uniform_heatmaps(0.04f), sure = uniform_heatmaps(0.0f);
-  EXPECT_DOUBLE_EQ(shared_uncertainty_max({calm.uncertainty, unsure.uncertainty}), 0.04f);
-  EXPECT_DOUBLE_EQ(shared_uncertainty_max({sure.uncertainty}), kMinUncertaintyScale) << "not stretched from 0";
-  EXPECT_DOUBLE_EQ(shared_uncertainty_max({}), kMinUncertaintyScale);
+  EXPECT_DOUBLE_EQ(figures::uncertainty_scale_top({calm.uncertainty, unsure.uncertainty}), 0.04f);
+  EXPECT_DOUBLE_EQ(figures::uncertainty_scale_top({sure.uncertainty}), figures::kMinUncertaintyScale)
+      << "not stretched from 0";
+  EXPECT_DOUBLE_EQ(figures::uncertainty_scale_top({}), figures::kMinUncertaintyScale);
 }
 
 TEST(EvalOverlay, ASharedUncertaintyScaleKeepsFramesComparable) {

@@ -29,6 +29,7 @@
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
+#include "ivoa/figures/paper_figure.hpp"
 #include "ivoa/introspection/model.hpp"
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
@@ -276,7 +277,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
   }
   std::vector<cv::Mat> maps;
   for (const auto& p : held) maps.push_back(p.heatmaps.uncertainty);
-  const double shared_max = tools::shared_uncertainty_max(maps);
+  const double shared_max = figures::uncertainty_scale_top(maps);
   for (const auto& p : held) write_overlay(o, p, shared_max);
   written += held.size();
   spdlog::info("wrote {} overlay figures to {}/overlays", written, o.out);

@@ -39,28 +39,13 @@ cv::Mat draw_grid(const cv::Mat& left, const std::vector<LabelledCell>& cells, b
   return out;
 }
 
-double shared_uncertainty_max(const std::vector<cv::Mat>& uncertainty_maps) {
-  double top = kMinUncertaintyScale;
-  for (const auto& map : uncertainty_maps) {
-    double map_max = 0;
-    if (!map.empty()) cv::minMaxLoc(map, nullptr, &map_max);
-    top = std::max(top, map_max);
-  }
-  return top;
-}
-
 cv::Mat compose_frame_figure(const cv::Mat& left, const introspection::Heatmaps& h,
                              const std::vector<LabelledCell>& cells, bool dots_given_verdict, double uncertainty_max) {
   const cv::Mat failure = h.probability[2] + h.probability[3];
-  const bool own_scale = uncertainty_max <= 0;
-  if (own_scale) uncertainty_max = shared_uncertainty_max({h.uncertainty});
   const figures::HeatmapGrid grid{h.rows, h.cols, h.stride, h.patch_size};
   const cv::Mat a = draw_grid(left, cells, dots_given_verdict);
   const cv::Mat b = figures::blend_heatmap(left, grid, failure, 1.0, "P(FP) + P(FN): 0 blue .. 1 red");
-  char title[96];
-  std::snprintf(title, sizeof(title), "uncertainty (class variance): 0 .. %.3f%s", uncertainty_max,
-                own_scale ? " (this frame)" : " (every overlay)");
-  const cv::Mat c = figures::blend_heatmap(left, grid, h.uncertainty, uncertainty_max, title);
+  const cv::Mat c = figures::uncertainty_panel(left, grid, h.uncertainty, uncertainty_max, " (every overlay)");
   cv::Mat row;
   cv::hconcat(std::vector<cv::Mat>{a, b, c}, row);
   return row;

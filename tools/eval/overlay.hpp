@@ -30,17 +30,9 @@ void set_predictions(std::vector<LabelledCell>& cells, const std::vector<introsp
 // The left image with each cell's ring (label) and dot (prediction);
 // dots_given_verdict only changes the caption (set_predictions fills the dots).
 cv::Mat draw_grid(const cv::Mat& left_bgr, const std::vector<LabelledCell>& cells, bool dots_given_verdict = false);
-// The floor of an uncertainty colour scale taken from the data: a frame
-// the model is sure of everywhere is not stretched to look unsure.
-inline constexpr double kMinUncertaintyScale = 0.01;
-
-// The top of a colour scale the uncertainty panels of several frames
-// share: the largest value any shows, at least kMinUncertaintyScale.
-double shared_uncertainty_max(const std::vector<cv::Mat>& uncertainty_maps);
-
 // uncertainty_max: the top of the uncertainty panel's colour scale (class
 // variance), shared by every figure of a run so that they compare; <= 0:
-// this frame's own maximum (at least kMinUncertaintyScale), as the paper's
+// this frame's own top (figures::uncertainty_panel), as the paper's
 // figures are drawn.
 cv::Mat compose_frame_figure(const cv::Mat& left_bgr, const introspection::Heatmaps& h,
                              const std::vector<LabelledCell>& cells, bool dots_given_verdict = false,

@@ -1,6 +1,7 @@
 #include "ivoa/figures/paper_figure.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 #include <opencv2/imgproc.hpp>
 
@@ -67,6 +68,27 @@ cv::Mat blend_heatmap(const cv::Mat& left, const HeatmapGrid& grid, const cv::Ma
   cv::addWeighted(left, 0.45, full, 0.55, 0, out);
   draw_caption(out, 0, kCaptionHeight, title);
   return out;
+}
+
+double uncertainty_scale_top(const std::vector<cv::Mat>& uncertainty_maps) {
+  double top = kMinUncertaintyScale;
+  for (const auto& map : uncertainty_maps) {
+    double map_max = 0;
+    if (!map.empty()) cv::minMaxLoc(map, nullptr, &map_max);
+    top = std::max(top, map_max);
+  }
+  return top;
+}
+
+cv::Mat uncertainty_panel(const cv::Mat& left, const HeatmapGrid& grid, const cv::Mat& uncertainty, double scale_max,
+                          const std::string& shared_note) {
+  const bool own_scale = scale_max <= 0;
+  if (own_scale) scale_max = uncertainty_scale_top({uncertainty});
+  char scale[32];
+  std::snprintf(scale, sizeof(scale), "%.3f", scale_max);
+  const std::string note = own_scale ? " (this frame)" : shared_note;
+  return blend_heatmap(left, grid, uncertainty, scale_max,
+                       "uncertainty (class variance): 0 .. " + std::string(scale) + note);
 }
 
 }  // namespace ivoa::figures

@@ -179,6 +179,9 @@ double learning_rate_at(const TrainConfig& c, int64_t step) {
   return c.learning_rate * (0.01 + 0.99 * 0.5 * (1.0 + std::cos(M_PI * std::min(t, 1.0))));
 }
 
+// `step`: the step the weights are from. A file written mid-run cannot say
+// how far the run got, so steps_planned and which model it keeps say where
+// it was going.
 std::string training_summary(const TrainConfig& c, const SplitData& train, const SplitData& val, const TrainReport& r,
                              int64_t step) {
   std::ostringstream o;
@@ -186,10 +189,7 @@ std::string training_summary(const TrainConfig& c, const SplitData& train, const
   o << "{\"dataset\": \"" << c.dataset << "\", \"split_file\": \"" << c.split_file
     << "\", \"train_sessions\": " << json_list(train.names) << ", \"val_sessions\": " << json_list(val.names)
     << ", \"train_class_counts\": [" << r.train_class_counts[0] << ", " << r.train_class_counts[1] << ", "
-    << r.train_class_counts[2] << ", " << r.train_class_counts[3] << "], \"steps\": "
-    << step
-    // The weights are from `step`; the run goes on to steps_planned (a file
-    // written mid-run cannot say how far it got), keeping the kept one.
+    << r.train_class_counts[2] << ", " << r.train_class_counts[3] << "], \"steps\": " << step
     << ", \"steps_planned\": " << c.steps << ", \"kept\": \"" << (c.keep_last ? "last" : "best_validated")
     << "\", \"batch_size\": " << c.batch_size << ", \"optimizer\": \"" << optimizer_name(c.optimizer)
     << "\", \"learning_rate\": " << c.learning_rate << ", \"momentum\": " << c.momentum

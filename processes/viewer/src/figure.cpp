@@ -147,18 +147,9 @@ cv::Mat draw_frame_figure(const cv::Mat& left, const FrameSet& f, const FigureOp
   if (problem.empty()) {
     const auto& h = *f.introspection;
     const cv::Mat u = heatmap_of(h, h.uncertainty);
-    double max_u = options.uncertainty_max;
-    const bool own_scale = max_u <= 0;
-    if (own_scale) {
-      cv::minMaxLoc(u, nullptr, &max_u);
-      max_u = std::max(max_u, 0.01);  // a frame sure everywhere is not stretched to look unsure
-    }
-    char title[96];
-    std::snprintf(title, sizeof(title), "uncertainty (class variance): 0 .. %.3f%s", max_u,
-                  own_scale ? " (this frame)" : "");
     const figures::HeatmapGrid cells_at{h.rows, h.cols, h.stride, h.patch_size};
     failure = figures::blend_heatmap(left, cells_at, heatmap_of(h, h.prob_fp, &h.prob_fn), 1.0, failure_title);
-    uncertainty = figures::blend_heatmap(left, cells_at, u, max_u, title);
+    uncertainty = figures::uncertainty_panel(left, cells_at, u, options.uncertainty_max);
   } else {
     failure = missing_panel(left, failure_title, problem);
     uncertainty = missing_panel(left, "uncertainty", problem);

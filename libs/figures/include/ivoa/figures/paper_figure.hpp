@@ -4,6 +4,7 @@
 // bands with the class legend, and a heatmap blended over the left image.
 // ivoa-viewer and ivoa-eval compose their figures from these.
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -40,5 +41,19 @@ struct HeatmapGrid {
 // image, with the title in a caption band. Parts outside the image are cut.
 cv::Mat blend_heatmap(const cv::Mat& left_bgr, const HeatmapGrid& grid, const cv::Mat& values, double max_value,
                       const std::string& title);
+
+// The floor of an uncertainty colour scale taken from the data: a frame
+// the model is sure of everywhere is not stretched to look unsure.
+inline constexpr double kMinUncertaintyScale = 0.01;
+
+// The top of a colour scale the uncertainty maps (class variance) of one or
+// more frames share: the largest value any shows, at least kMinUncertaintyScale.
+double uncertainty_scale_top(const std::vector<cv::Mat>& uncertainty_maps);
+
+// The uncertainty heatmap panel on the scale 0 .. scale_max, which its title
+// gives; scale_max <= 0: this frame's own top (the paper's figures), said
+// "(this frame)"; otherwise `shared_note` follows the scale in the title.
+cv::Mat uncertainty_panel(const cv::Mat& left_bgr, const HeatmapGrid& grid, const cv::Mat& uncertainty,
+                          double scale_max, const std::string& shared_note = "");
 
 }  // namespace ivoa::figures
