@@ -18,7 +18,7 @@
 #      purity by phenomenon and by cause, figures).
 #
 # Usage: ivoa-main-job.sh [--scale default|smoke|full] [--views 1|2] [--patch-scale K] [--out DIR]
-#                         [--noise-draws K] [--live]
+#                         [--noise-draws K] [--live | --shipped-only]
 #   --scale full   more sessions and training: the recipe of the shipped model
 #   --scale smoke  a few frames per session: checks the whole chain (a test)
 #   --views 1      the paper's input, the left image only (default 2: the
@@ -32,6 +32,12 @@
 #                  minute per draw at the default scale, 3 at full)
 #   --live         the short variant: run the shipped model live on the
 #                  simulator (sim.pmd with introspection and the viewer)
+#   --shipped-only only the shipped JPP-C model: record the scale's test
+#                  sessions, build their JPP-C dataset, evaluate the model,
+#                  find the causes and write the report (no training, no
+#                  dense detector; default --out gets "-shipped"). With
+#                  --scale full --noise-draws 3 it draws the README's
+#                  figures of the shipped model in about 20 minutes
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
@@ -46,6 +52,7 @@ views=2
 patch_scale=1.6
 out=""
 live=0
+shipped_only=0
 noise_draws=0
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -55,6 +62,7 @@ while [ $# -gt 0 ]; do
     --out) out=$2; shift 2 ;;
     --noise-draws) noise_draws=$2; shift 2 ;;
     --live) live=1; shift ;;
+    --shipped-only) shipped_only=1; shift ;;
     -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d'; exit 0 ;;
     *) echo "ivoa-main-job: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
@@ -62,7 +70,16 @@ done
 case "$views" in 1|2) ;; *) echo "ivoa-main-job: --views must be 1 or 2, not '$views'" >&2; exit 2 ;; esac
 case "$noise_draws" in 0|[2-9]|[1-9][0-9]) ;;
   *) echo "ivoa-main-job: --noise-draws must be 0 (off) or 2 or more, not '$noise_draws'" >&2; exit 2 ;; esac
-out=${out:-$ROOT/out/main-job-$scale}
+if [ $shipped_only = 1 ]; then
+  [ $live = 0 ] || { echo "ivoa-main-job: --live and --shipped-only are two different runs; give one" >&2; exit 2; }
+  if [ "$views" != "$SHIPPED_VIEWS" ] || [ "$patch_scale" != "$SHIPPED_PATCH_SCALE" ]; then
+    echo "ivoa-main-job: --shipped-only evaluates the shipped model, which takes --views $SHIPPED_VIEWS" \
+      "--patch-scale $SHIPPED_PATCH_SCALE (given: $views, $patch_scale)" >&2
+    exit 2
+  fi
+  [ -f "$SHIPPED" ] || { echo "ivoa-main-job: no shipped model at $SHIPPED" >&2; exit 3; }
+fi
+out=${out:-$ROOT/out/main-job-$scale$([ $shipped_only = 1 ] && echo -shipped)}
 
 # Scene files, and the sessions of each split per scale.
 SCENE_NAMES=(indoor_office home corridor polished_lobby warehouse outdoor_campus sidewalk wet_parking_lot night_plaza)
@@ -169,8 +186,11 @@ fi
 mkdir -p "$out/logs" "$out/process_logs"
 split_file=$out/split.yaml
 declare -a train=() val=() test=()
+# The detectors whose introspection this run trains: none with --shipped-only.
+trained=(jppc dense)
+[ $shipped_only = 1 ] && trained=()
 
-step "Recording sessions through the process graph (scale: $scale)"
+step "Recording sessions through the process graph (scale: $scale$([ $shipped_only = 1 ] && echo ', the test sessions only'))"
 echo "  sim.pmd per session: simulator -> stereo detector (JPP-C) + depth monitor -> logger, viewer; UDP multicast LCM"
 # Two at a time where each gets its own network namespace (the simulator
 # renders on one core); one at a time on the shared host network.
@@ -178,10 +198,12 @@ parallel=1
 have_netns && parallel=2
 echo "  $parallel session(s) at a time"
 sessions=()  # "name scene seed frames"
-for seed in "${TRAIN_SEEDS[@]}"; do for s in "${SCENE_NAMES[@]}"; do
-  sessions+=("${s}_s$seed $s $seed $TRAIN_FRAMES"); train+=("${s}_s$seed"); done; done
-for seed in "${VAL_SEEDS[@]}"; do for s in "${VAL_SCENES[@]}"; do
-  sessions+=("${s}_s$seed $s $seed $VAL_FRAMES"); val+=("${s}_s$seed"); done; done
+if [ $shipped_only = 0 ]; then
+  for seed in "${TRAIN_SEEDS[@]}"; do for s in "${SCENE_NAMES[@]}"; do
+    sessions+=("${s}_s$seed $s $seed $TRAIN_FRAMES"); train+=("${s}_s$seed"); done; done
+  for seed in "${VAL_SEEDS[@]}"; do for s in "${VAL_SCENES[@]}"; do
+    sessions+=("${s}_s$seed $s $seed $VAL_FRAMES"); val+=("${s}_s$seed"); done; done
+fi
 for seed in "${TEST_SEEDS[@]}"; do for s in "${SCENE_NAMES[@]}"; do
   sessions+=("${s}_s$seed $s $seed $TEST_FRAMES"); test+=("${s}_s$seed"); done; done
 running=0
@@ -207,16 +229,18 @@ rm -rf "$out/data_jppc" "$out/data_dense"
 echo "  JPP-C: the labels the live stereo detector and depth monitor published"
 "$BIN/ivoa-dataset" --log-level warn build --out "$out/data_jppc" --labels recorded --views "$views" \
   --patch-scale "$patch_scale" "${logs[@]}" | tee "$out/dataset_jppc.txt"
-echo "  dense (SGBM): the detector and the monitor re-run offline on the same raw frames"
-"$BIN/ivoa-dataset" --log-level warn build --out "$out/data_dense" --labels dense --views "$views" \
-  --patch-scale "$patch_scale" "${logs[@]}" | tee "$out/dataset_dense.txt"
+if [ $shipped_only = 0 ]; then
+  echo "  dense (SGBM): the detector and the monitor re-run offline on the same raw frames"
+  "$BIN/ivoa-dataset" --log-level warn build --out "$out/data_dense" --labels dense --views "$views" \
+    --patch-scale "$patch_scale" "${logs[@]}" | tee "$out/dataset_dense.txt"
+fi
 
 # --resume continues an interrupted run; a checkpoint left by a run with
 # other settings in the same --out cannot be continued, so start over.
 # JPP-C's datasets carry its window costs, which training also learns to
 # predict (ivoa-train --evidence-weight); the dense detector keeps none.
 keep=$([ "$KEEP_LAST" = 1 ] && echo --keep-last || true)
-for detector in jppc dense; do
+for detector in "${trained[@]}"; do
   evidence_weight=$([ "$detector" = jppc ] && echo 5 || echo 0)
   training_setup="views $views, patch scale $patch_scale, $OPTIMIZER, $STEPS steps, batch $BATCH, evidence weight $evidence_weight${keep:+, keep last}"
   step "Training introspection for $detector ($STEPS steps, batch $BATCH)"
@@ -237,7 +261,7 @@ overlay_logs=()
 for i in 0 3 7; do [ $i -lt ${#test[@]} ] && overlay_logs+=("$out/logs/${test[$i]}.lcmlog"); done
 evals=()
 datasets=()
-for detector in jppc dense; do
+for detector in "${trained[@]}"; do
   "$BIN/ivoa-eval" --log-level warn --model "$out/model_$detector.pt" --dataset "$out/data_$detector" \
     --split "$split_file" --splits test --out "$out/eval_$detector" --logs "${overlay_logs[@]}" --max-overlays 6
   evals+=(--eval "$out/eval_$detector"); datasets+=(--dataset "$out/data_$detector")
@@ -257,10 +281,14 @@ for s in "${test[@]}"; do test_logs+=("$out/logs/$s.lcmlog"); done
 echo "  JPP-C (the labels recorded live):"
 "$BIN/ivoa-sim-causes" --log-level warn --jobs 2 --rate "$RATE" --out "$out/causes_jppc.csv" \
   --variants-out "$out/variants_jppc.csv" "${test_logs[@]}" | tee "$out/causes_jppc.txt"
-echo "  dense (the labels made offline, from its dataset):"
-"$BIN/ivoa-sim-causes" --log-level warn --jobs 2 --rate "$RATE" --dataset "$out/data_dense" \
-  --out "$out/causes_dense.csv" --variants-out "$out/variants_dense.csv" "${test_logs[@]}" |
-  tee "$out/causes_dense.txt"
+causes=(--causes "$out/causes_jppc.csv" --variants "$out/variants_jppc.csv")
+if [ $shipped_only = 0 ]; then
+  echo "  dense (the labels made offline, from its dataset):"
+  "$BIN/ivoa-sim-causes" --log-level warn --jobs 2 --rate "$RATE" --dataset "$out/data_dense" \
+    --out "$out/causes_dense.csv" --variants-out "$out/variants_dense.csv" "${test_logs[@]}" |
+    tee "$out/causes_dense.txt"
+  causes+=(--causes "$out/causes_dense.csv" --variants "$out/variants_dense.csv")
+fi
 
 repeatability=()
 if [ "$noise_draws" -gt 0 ]; then
@@ -273,9 +301,7 @@ if [ "$noise_draws" -gt 0 ]; then
 fi
 
 step "Writing the report"
-"$PY" "$ROOT/tools/report/ivoa_report.py" "${evals[@]}" "${datasets[@]}" "${repeatability[@]}" \
-  --causes "$out/causes_jppc.csv" \
-  --causes "$out/causes_dense.csv" --variants "$out/variants_jppc.csv" --variants "$out/variants_dense.csv" \
+"$PY" "$ROOT/tools/report/ivoa_report.py" "${evals[@]}" "${datasets[@]}" "${repeatability[@]}" "${causes[@]}" \
   --out "$out/report" --title "IVOA on the simulated robot ($scale scale)" |
   tee "$out/report_summary.txt"
 
@@ -283,4 +309,5 @@ elapsed=$(($(date +%s) - start_time))
 printf '\n\033[1mMain job done in %dm%02ds.\033[0m\n' $((elapsed / 60)) $((elapsed % 60))
 echo "  sessions: ${#train[@]} train, ${#val[@]} validation, ${#test[@]} test (held out): $split_file"
 echo "  report:   $out/report/report.md"
-echo "  models:   $out/model_jppc.pt, $out/model_dense.pt"
+if [ $shipped_only = 1 ]; then echo "  model:    $SHIPPED (shipped)"
+else echo "  models:   $out/model_jppc.pt, $out/model_dense.pt"; fi

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# The main job's --shipped-only run at smoke scale: records only the test
+# sessions, trains nothing and reports the shipped model alone, on exactly
+# the held-out sessions. Settings the shipped model cannot take are refused.
+set -euo pipefail
+S=${IVOA_SOURCE_DIR:?}
+JOB=$S/tools/main_job/ivoa-main-job.sh
+OUT=$(mktemp -d)
+trap 'if [ "${KEEP_OUT:-0}" = 1 ]; then echo "outputs kept in $OUT" >&2; else rm -rf "$OUT"; fi' EXIT
+
+for bad in "--views 1" "--patch-scale 0" "--live"; do
+  rc=0
+  # shellcheck disable=SC2086
+  "$JOB" --scale smoke --shipped-only $bad --out "$OUT/refused" > "$OUT/refused.log" 2>&1 || rc=$?
+  if [ $rc != 2 ] || ! grep -q -- "--shipped-only" "$OUT/refused.log"; then
+    echo "FAILED: --shipped-only $bad gave exit $rc, not a usage error:" >&2; cat "$OUT/refused.log" >&2; exit 1
+  fi
+  [ ! -e "$OUT/refused" ] || { echo "FAILED: --shipped-only $bad started a run" >&2; exit 1; }
+done
+
+"$JOB" --scale smoke --shipped-only --out "$OUT/run" > "$OUT/main_job.log" 2>&1 ||
+  { echo "FAILED: the main job exited non-zero" >&2; tail -40 "$OUT/main_job.log" >&2; exit 1; }
+for f in eval_shipped_jppc/eval.json causes_jppc.csv report/report.md report/jppc_eval_shipped_jppc/clusters_tsne.png; do
+  [ -s "$OUT/run/$f" ] || { echo "FAILED: $f missing or empty" >&2; tail -40 "$OUT/main_job.log" >&2; exit 1; }
+done
+for f in model_jppc.pt model_dense.pt data_dense eval_jppc causes_dense.csv; do
+  [ ! -e "$OUT/run/$f" ] || { echo "FAILED: $f made by a run that should train nothing" >&2; exit 1; }
+done
+
+/usr/bin/python3 - "$OUT/run" <<'PY'
+import json, sys, pathlib
+out = pathlib.Path(sys.argv[1])
+logs = sorted(p.stem for p in (out / "logs").glob("*.lcmlog"))
+assert logs == ["indoor_office_s31", "polished_lobby_s31", "wet_parking_lot_s31"], f"recorded {logs}"
+models = json.loads((out / "report/metrics.json").read_text())["models"]
+assert list(models) == ["jppc_eval_shipped_jppc"], f"the report holds {list(models)}"
+ev = json.loads((out / "eval_shipped_jppc/eval.json").read_text())
+assert sorted(s["session"] for s in ev["sessions"]) == logs and {s["split"] for s in ev["sessions"]} == {"test"}, ev["sessions"]
+assert models["jppc_eval_shipped_jppc"]["overall"]["n"] == ev["samples"] > 0
+print(f"shipped model alone on {len(logs)} test sessions, {ev['samples']} cells")
+PY
+echo "OK: main job --shipped-only (smoke) $(grep -o 'Main job done in [0-9ms]*' "$OUT/main_job.log")"
