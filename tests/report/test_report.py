@@ -1162,6 +1162,17 @@ class MetricUnitTest(unittest.TestCase):
                       _few_cells_note(ladder))
         self.assertEqual(_few_cells_note([{"retained": 1.0, "fewest_kept": 50}]), "")
 
+    def test_bars_a_few_cells_decide_are_the_ones_drawn_faint(self):
+        load_tool()
+        from report_figures import few_cell_groups
+        groups = [{"n": 6, "support": [0, 5, 1, 0]},       # 0.5 m ahead: six cells in all
+                  {"n": 1573, "support": [8, 1000, 500, 65]},  # eight TP decide a quarter of the mean
+                  {"n": 2360, "support": [40, 1500, 700, 120]},
+                  {"n": 900, "support": [0, 600, 300, 0]}]      # absent classes are not few
+        mean, overall = few_cell_groups(groups)
+        self.assertEqual(mean, [True, True, False, False])
+        self.assertEqual(overall, [True, False, False, False])
+
     def test_a_cause_has_one_colour_in_every_figure_whatever_its_rank(self):
         load_tool()
         from report_figures import PHENOMENON_COLOURS, _cause_panel

@@ -369,19 +369,30 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
     return _save(fig, path)
 
 
+def few_cell_groups(groups: List[dict]) -> Tuple[List[bool], List[bool]]:
+    """Which groups' bars a few cells decide: the mean per-class accuracy where
+    a class present has fewer than FEW_CELLS cells, the overall accuracy where
+    the whole group has (as the accuracy-vs-retained curves go faint)."""
+    mean = [any(0 < s < FEW_CELLS for s in g["support"]) for g in groups]
+    overall = [g["n"] < FEW_CELLS for g in groups]
+    return mean, overall
+
+
 def plot_group_bars(groups: List[dict], title: str, xlabel: str, path: str) -> str:
-    """Mean per-class and overall accuracy per group (session or environment)."""
+    """Mean per-class and overall accuracy per group (session, environment or
+    distance ahead); bars a few cells decide are faint (few_cell_groups)."""
     names = [g["group"] for g in groups]
     mp = [g["mean_per_class_accuracy"] if g["mean_per_class_accuracy"] is not None else np.nan for g in groups]
     oa = [g["overall_accuracy"] if g["overall_accuracy"] is not None else np.nan for g in groups]
+    faint_mp, faint_oa = few_cell_groups(groups)
     x = np.arange(len(names))
     # Each group gets room for its label at fontsize 8 (about 0.08 in a
     # character), so long session names do not run into each other.
     per_group = max(1.3, 0.08 * max((len(n) for n in names), default=0))
     fig, ax = plt.subplots(figsize=(max(5.0, per_group * len(names) + 2), 4.2))
-    for offset, values, colour, label in ((-0.2, mp, "#444466", "mean per-class accuracy"),
-                                          (0.2, oa, "#aaaacc", "overall accuracy")):
-        bars = ax.bar(x + offset, values, 0.4, color=colour, label=label)
+    for offset, values, faint, colour in ((-0.2, mp, faint_mp, "#444466"), (0.2, oa, faint_oa, "#aaaacc")):
+        colours = [matplotlib.colors.to_rgba(colour, 0.3 if f else 1.0) for f in faint]
+        bars = ax.bar(x + offset, values, 0.4, color=colours)
         # a value on each bar, so that an accuracy of 0 is not read as "no data"
         ax.bar_label(bars, labels=["" if v != v else f"{v:.2f}" for v in values], fontsize=6, padding=1)
     ax.set_xticks(x, [f"{n}\n({g['split'] + ', ' if g.get('split') else ''}n = {g['n']})"
@@ -390,8 +401,14 @@ def plot_group_bars(groups: List[dict], title: str, xlabel: str, path: str) -> s
     ax.set_ylabel("accuracy")
     ax.set_xlabel(xlabel)
     ax.grid(axis="y", alpha=0.3)
-    ax.legend(fontsize=8)
+    # Patches, not the bars: the first bar may be a faint one.
+    handles = [Patch(color="#444466", label="mean per-class accuracy"), Patch(color="#aaaacc", label="overall accuracy")]
+    if any(faint_mp) or any(faint_oa):
+        handles.append(Patch(color="#444466", alpha=0.3, label=f"faint: a class with fewer than {FEW_CELLS} cells"))
+    # Beside the axes: the bars reach the top, where a legend inside would hide them.
+    ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     ax.set_title(title)
+    fig.tight_layout()
     return _save(fig, path)
 
 
