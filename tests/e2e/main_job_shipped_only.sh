@@ -8,15 +8,27 @@ JOB=$S/tools/main_job/ivoa-main-job.sh
 OUT=$(mktemp -d)
 trap 'if [ "${KEEP_OUT:-0}" = 1 ]; then echo "outputs kept in $OUT" >&2; else rm -rf "$OUT"; fi' EXIT
 
-for bad in "--views 1" "--patch-scale 0" "--live"; do
-  rc=0
-  # shellcheck disable=SC2086
-  "$JOB" --scale smoke --shipped-only $bad --out "$OUT/refused" > "$OUT/refused.log" 2>&1 || rc=$?
-  if [ $rc != 2 ] || ! grep -q -- "--shipped-only" "$OUT/refused.log"; then
-    echo "FAILED: --shipped-only $bad gave exit $rc, not a usage error:" >&2; cat "$OUT/refused.log" >&2; exit 1
+# usage_error EXPECTED_TEXT ARGS...: the job must refuse ARGS with exit 2, saying EXPECTED_TEXT.
+usage_error() {
+  local expected=$1 rc=0
+  shift
+  "$JOB" "$@" > "$OUT/refused.log" 2>&1 || rc=$?
+  if [ $rc != 2 ] || ! grep -q -- "$expected" "$OUT/refused.log"; then
+    echo "FAILED: '$*' gave exit $rc, not a usage error naming '$expected':" >&2; cat "$OUT/refused.log" >&2; exit 1
   fi
+}
+for bad in "--views 1" "--patch-scale 0" "--live"; do
+  # shellcheck disable=SC2086
+  usage_error "--shipped-only" --scale smoke --shipped-only $bad --out "$OUT/refused"
   [ ! -e "$OUT/refused" ] || { echo "FAILED: --shipped-only $bad started a run" >&2; exit 1; }
 done
+# Without --out (the default folder is chosen before the scale is checked).
+usage_error "--scale must be" --scale no-such-scale
+usage_error "--scale must be" --scale no-such-scale --shipped-only
+# A full run's folder is not overwritten.
+mkdir -p "$OUT/full_run" && echo model > "$OUT/full_run/model_dense.pt"
+usage_error "holds a full run" --scale smoke --shipped-only --out "$OUT/full_run"
+[ "$(ls "$OUT/full_run")" = model_dense.pt ] || { echo "FAILED: the full run's folder was touched" >&2; exit 1; }
 
 "$JOB" --scale smoke --shipped-only --out "$OUT/run" > "$OUT/main_job.log" 2>&1 ||
   { echo "FAILED: the main job exited non-zero" >&2; tail -40 "$OUT/main_job.log" >&2; exit 1; }

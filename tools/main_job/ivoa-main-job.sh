@@ -79,7 +79,18 @@ if [ $shipped_only = 1 ]; then
   fi
   [ -f "$SHIPPED" ] || { echo "ivoa-main-job: no shipped model at $SHIPPED" >&2; exit 3; }
 fi
-out=${out:-$ROOT/out/main-job-$scale$([ $shipped_only = 1 ] && echo -shipped)}
+if [ $shipped_only = 1 ]; then
+  out=${out:-$ROOT/out/main-job-$scale-shipped}
+  # A full run's folder: its split, datasets and report would be replaced by the test sessions' alone.
+  for f in model_jppc.pt model_dense.pt data_dense; do
+    if [ -e "$out/$f" ]; then
+      echo "ivoa-main-job: $out holds a full run ($f); --shipped-only would replace its split, datasets and report: give another --out" >&2
+      exit 2
+    fi
+  done
+else
+  out=${out:-$ROOT/out/main-job-$scale}
+fi
 
 # Scene files, and the sessions of each split per scale.
 SCENE_NAMES=(indoor_office home corridor polished_lobby warehouse outdoor_campus sidewalk wet_parking_lot night_plaza)
@@ -225,7 +236,8 @@ EOF
 step "Building datasets from the logs"
 logs=()
 for s in "${train[@]}" "${val[@]}" "${test[@]}"; do logs+=("$out/logs/$s.lcmlog"); done
-rm -rf "$out/data_jppc" "$out/data_dense"
+rm -rf "$out/data_jppc"
+[ $shipped_only = 1 ] || rm -rf "$out/data_dense"
 echo "  JPP-C: the labels the live stereo detector and depth monitor published"
 "$BIN/ivoa-dataset" --log-level warn build --out "$out/data_jppc" --labels recorded --views "$views" \
   --patch-scale "$patch_scale" "${logs[@]}" | tee "$out/dataset_jppc.txt"
