@@ -25,6 +25,8 @@ done
 # Without --out (the default folder is chosen before the scale is checked).
 usage_error "--scale must be" --scale no-such-scale
 usage_error "--scale must be" --scale no-such-scale --shipped-only
+# The model's patch scale written another way passes the check (the scale's error comes after it).
+usage_error "--scale must be" --scale no-such-scale --shipped-only --patch-scale 1.60
 # A full run's folder is not overwritten.
 mkdir -p "$OUT/full_run" && echo model > "$OUT/full_run/model_dense.pt"
 usage_error "holds a full run" --scale smoke --shipped-only --out "$OUT/full_run"

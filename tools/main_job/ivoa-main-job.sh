@@ -47,6 +47,10 @@ PY=/usr/bin/python3          # Debian's, with numpy/matplotlib/sklearn
 SCENES=$ROOT/libs/sim/scenes
 SHIPPED=$ROOT/libs/introspection/models/introspection_jppc.pt
 SHIPPED_VIEWS=2 SHIPPED_PATCH_SCALE=1.6  # its metadata (checked by the test shipped_model_metadata)
+# fits_shipped: whether --views and --patch-scale are the shipped model's (1.60 is 1.6).
+fits_shipped() {
+  [ "$views" = "$SHIPPED_VIEWS" ] && awk -v a="$patch_scale" -v b="$SHIPPED_PATCH_SCALE" 'BEGIN { exit !(a + 0 == b + 0) }'
+}
 scale=default
 views=2
 patch_scale=1.6
@@ -72,7 +76,7 @@ case "$noise_draws" in 0|[2-9]|[1-9][0-9]) ;;
   *) echo "ivoa-main-job: --noise-draws must be 0 (off) or 2 or more, not '$noise_draws'" >&2; exit 2 ;; esac
 if [ $shipped_only = 1 ]; then
   [ $live = 0 ] || { echo "ivoa-main-job: --live and --shipped-only are two different runs; give one" >&2; exit 2; }
-  if [ "$views" != "$SHIPPED_VIEWS" ] || [ "$patch_scale" != "$SHIPPED_PATCH_SCALE" ]; then
+  if ! fits_shipped; then
     echo "ivoa-main-job: --shipped-only evaluates the shipped model, which takes --views $SHIPPED_VIEWS" \
       "--patch-scale $SHIPPED_PATCH_SCALE (given: $views, $patch_scale)" >&2
     exit 2
@@ -278,7 +282,7 @@ for detector in "${trained[@]}"; do
     --split "$split_file" --splits test --out "$out/eval_$detector" --logs "${overlay_logs[@]}" --max-overlays 6
   evals+=(--eval "$out/eval_$detector"); datasets+=(--dataset "$out/data_$detector")
 done
-if [ -f "$SHIPPED" ] && [ "$views" = "$SHIPPED_VIEWS" ] && [ "$patch_scale" = "$SHIPPED_PATCH_SCALE" ]; then
+if [ -f "$SHIPPED" ] && fits_shipped; then
   echo "  and the shipped JPP-C model (trained with --scale full) on the same test sessions"
   "$BIN/ivoa-eval" --log-level warn --model "$SHIPPED" --dataset "$out/data_jppc" --split "$split_file" --splits test \
     --out "$out/eval_shipped_jppc" --logs "${overlay_logs[@]}" --max-overlays 6
