@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The main job at smoke scale: records sessions through sim.pmd, builds both
-# datasets, trains, evaluates on held-out sessions and writes the report.
+# datasets, trains, evaluates on held-out sessions (the shipped model too: its
+# views and patch scale are the defaults) and writes the report.
 # Checks that every stage produced its output and that the report's numbers
 # are consistent with the evaluation (not that the tiny model is accurate).
 # With two sensor-noise draws of the test sessions: draw 0 must reproduce the
@@ -14,7 +15,7 @@ trap 'if [ "${KEEP_OUT:-0}" = 1 ]; then echo "outputs kept in $OUT" >&2; else rm
 "$S/tools/main_job/ivoa-main-job.sh" --scale smoke --noise-draws 2 --out "$OUT" > "$OUT/main_job.log" 2>&1 ||
   { echo "FAILED: the main job exited non-zero" >&2; tail -40 "$OUT/main_job.log" >&2; exit 1; }
 
-for f in split.yaml model_jppc.pt model_dense.pt eval_jppc/eval.json eval_dense/eval.json \
+for f in split.yaml model_jppc.pt model_dense.pt eval_jppc/eval.json eval_dense/eval.json eval_shipped_jppc/eval.json \
   report/report.md report/metrics.json report/jppc_eval_jppc/confusion.png report/jppc_eval_jppc/clusters_tsne.png; do
   [ -s "$OUT/$f" ] || { echo "FAILED: $f missing or empty" >&2; tail -40 "$OUT/main_job.log" >&2; exit 1; }
 done
