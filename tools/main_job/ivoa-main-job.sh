@@ -201,9 +201,13 @@ split_file=$out/split.yaml
 declare -a train=() val=() test=()
 # The detectors whose introspection this run trains: none with --shipped-only.
 trained=(jppc dense)
-[ $shipped_only = 1 ] && trained=()
+recorded="scale: $scale"
+if [ $shipped_only = 1 ]; then
+  trained=()
+  recorded+=", the test sessions only"
+fi
 
-step "Recording sessions through the process graph (scale: $scale$([ $shipped_only = 1 ] && echo ', the test sessions only'))"
+step "Recording sessions through the process graph ($recorded)"
 echo "  sim.pmd per session: simulator -> stereo detector (JPP-C) + depth monitor -> logger, viewer; UDP multicast LCM"
 # Two at a time where each gets its own network namespace (the simulator
 # renders on one core); one at a time on the shared host network.

@@ -390,7 +390,9 @@ def plot_group_bars(groups: List[dict], title: str, xlabel: str, path: str) -> s
     # character), so long session names do not run into each other.
     per_group = max(1.3, 0.08 * max((len(n) for n in names), default=0))
     fig, ax = plt.subplots(figsize=(max(5.0, per_group * len(names) + 2), 4.2))
-    for offset, values, faint, colour in ((-0.2, mp, faint_mp, "#444466"), (0.2, oa, faint_oa, "#aaaacc")):
+    series = ((-0.2, mp, faint_mp, "#444466", "mean per-class accuracy"),
+              (0.2, oa, faint_oa, "#aaaacc", "overall accuracy"))
+    for offset, values, faint, colour, _ in series:
         colours = [matplotlib.colors.to_rgba(colour, 0.3 if f else 1.0) for f in faint]
         bars = ax.bar(x + offset, values, 0.4, color=colours)
         # a value on each bar, so that an accuracy of 0 is not read as "no data"
@@ -402,9 +404,9 @@ def plot_group_bars(groups: List[dict], title: str, xlabel: str, path: str) -> s
     ax.set_xlabel(xlabel)
     ax.grid(axis="y", alpha=0.3)
     # Patches, not the bars: the first bar may be a faint one.
-    handles = [Patch(color="#444466", label="mean per-class accuracy"), Patch(color="#aaaacc", label="overall accuracy")]
+    handles = [Patch(color=colour, label=label) for _, _, _, colour, label in series]
     if any(faint_mp) or any(faint_oa):
-        handles.append(Patch(color="#444466", alpha=0.3, label=f"faint: a class with fewer than {FEW_CELLS} cells"))
+        handles.append(Patch(color=series[0][3], alpha=0.3, label=f"faint: a class with fewer than {FEW_CELLS} cells"))
     # Beside the axes: the bars reach the top, where a legend inside would hide them.
     ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     ax.set_title(title)
