@@ -1173,6 +1173,13 @@ class MetricUnitTest(unittest.TestCase):
         self.assertEqual(mean, [True, True, False, False])
         self.assertEqual(overall, [True, False, False, False])
 
+    def test_phenomenon_bars_a_few_cells_decide_are_the_ones_drawn_faint(self):
+        load_tool()
+        from report_figures import few_cell_phenomena
+        entries = [{"phenomenon": 0, "n": 1884}, {"phenomenon": 64, "n": 9},  # nine saturated cells
+                   {"phenomenon": 8, "n": 20}]
+        self.assertEqual(few_cell_phenomena(entries, [0, 2, 8, 64]), [False, False, False, True])  # 2: absent
+
     def test_a_cause_has_one_colour_in_every_figure_whatever_its_rank(self):
         load_tool()
         from report_figures import PHENOMENON_COLOURS, _cause_panel

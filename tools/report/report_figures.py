@@ -16,6 +16,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from margin_bands import band_name  # noqa: E402
@@ -339,7 +340,9 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
     """Two panels (predicted FN on top, predicted FP below): for each phenomenon,
     the fraction of its samples each model predicts as that failure (bars, one
     colour per model), with the detector's true rate from the labels as a black
-    tick on each bar, so "predicted" and "true" can be read together."""
+    tick on each bar, so "predicted" and "true" can be read together. A
+    model's bars for a phenomenon under fewer than FEW_CELLS of its cells are
+    faint, and each bar carries its value, so that 0 is not read as "absent"."""
     codes = sorted({e["phenomenon"] for entries in per_phen for e in entries})
     n_models = len(names)
     width = 0.8 / n_models
@@ -352,14 +355,23 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
             by = {e["phenomenon"]: e for e in entries}
             vals = [by[c][key] if c in by else np.nan for c in codes]
             true = [by[c][truth] if c in by else np.nan for c in codes]
+            faint = few_cell_phenomena(entries, codes)
             pos = x - 0.4 + width * (i + 0.5)
-            ax.bar(pos, vals, width * 0.92, color=colours[i], label=f"{name}: predicted {kind}")
-            ax.scatter(pos, true, marker="_", s=max(60, 400 * width), linewidths=2.2, color="black", zorder=3,
-                       label=f"true {kind} rate (labels)" if i == 0 else None)
+            bars = ax.bar(pos, vals, width * 0.92,
+                          color=[matplotlib.colors.to_rgba(colours[i], 0.3 if f else 1.0) for f in faint])
+            ax.bar_label(bars, labels=["" if v != v else f"{v:.2f}" for v in vals], fontsize=6, padding=1)
+            ax.scatter(pos, true, marker="_", s=max(60, 400 * width), linewidths=2.2, zorder=3,
+                       color=[(0, 0, 0, 0.3 if f else 1.0) for f in faint])
         ax.set_ylabel(f"fraction predicted {kind}")
         ax.set_ylim(0, 1.05)
         ax.grid(axis="y", alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        # Patches and a line, not the bars: a model's first bar may be a faint one.
+        handles = [Line2D([], [], marker="_", markersize=12, markeredgewidth=2.2, linestyle="", color="black",
+                          label=f"true {kind} rate (labels)")]
+        handles += [Patch(color=colours[i], label=f"{name}: predicted {kind}") for i, name in enumerate(names)]
+        if any(any(few_cell_phenomena(entries, codes)) for entries in per_phen):
+            handles.append(Patch(color="grey", alpha=0.3, label=f"faint: fewer than {FEW_CELLS} cells"))
+        ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
         ax.set_title(f"predicted {kind} per phenomenon", fontsize=10)
     counts = [" / ".join(str(next((e["n"] for e in en if e["phenomenon"] == c), 0)) for en in per_phen) for c in codes]
     axes[1].set_xticks(x, [f"{phenomenon_name(c)}\n(n = {n})" for c, n in zip(codes, counts)], fontsize=8)
@@ -367,6 +379,13 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
     fig.suptitle(f"{title}: which phenomena each model predicts as stereo failures")
     fig.tight_layout()
     return _save(fig, path)
+
+
+def few_cell_phenomena(entries: List[dict], codes: Sequence[int]) -> List[bool]:
+    """For each phenomenon code, whether one model's fractions rest on fewer
+    than FEW_CELLS cells (a phenomenon absent from its cells draws no bar)."""
+    n = {e["phenomenon"]: e["n"] for e in entries}
+    return [0 < n.get(c, 0) < FEW_CELLS for c in codes]
 
 
 def few_cell_groups(groups: List[dict]) -> Tuple[List[bool], List[bool]]:
