@@ -98,8 +98,7 @@ void add_output_options(CLI::App& app, CommandLine& cl) {
       ->capture_default_str();
   app.add_option("--truth-channel", config.truth_channel, "out: what each left pixel shows (ivoa.sim_ground_truth_t)")
       ->capture_default_str();
-  app.add_option("--status-channel", cl.status_channel, "out: heartbeat (ivoa.process_status_t)")
-      ->capture_default_str();
+  ivoa::add_status_channel_option(app, cl.status_channel);
 }
 
 // The rig to render with (--rig, else the built-in one), written to --save-rig

@@ -100,6 +100,7 @@ int main(int argc, char** argv) {
   ivoa::MonitorNodeOptions options;
   double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
   ivoa::add_common_options(app, common);
+  ivoa::add_status_channel_option(app, common.status_channel);
   ivoa::add_socket_buffer_option(app, socket_buffer_mb);
   ivoa::add_query_grid_options(app, options.grid);
   add_monitor_options(app, options);
@@ -110,7 +111,7 @@ int main(int argc, char** argv) {
   ivoa::install_stop_handlers();
   try {
     ivoa::Bus bus(common.lcm_url);
-    ivoa::Heartbeat heartbeat(bus, "depth_monitor");
+    ivoa::Heartbeat heartbeat(bus, "depth_monitor", common.status_channel);
     ivoa::MonitorNode node(bus, heartbeat, options);
     ivoa::enlarge_receive_buffer(bus, socket_buffer_mb);
     spdlog::info("listening on {} ({} + {} -> {} + {})", bus.url(), options.depth_channel, options.stereo_channel,

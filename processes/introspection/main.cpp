@@ -111,6 +111,7 @@ int main(int argc, char** argv) {
   CLI::App app{"Introspection: heatmaps of predicted stereo failures (TP/TN/FP/FN) with MC-dropout uncertainty"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
+  ivoa::add_status_channel_option(app, common.status_channel);
   CommandLine cl;
   ivoa::add_socket_buffer_option(app, cl.socket_buffer_mb);
   add_model_options(app, cl);
@@ -133,7 +134,7 @@ int main(int argc, char** argv) {
   cl.options.warm_up = frame_size(cl.warm_up);
   try {
     ivoa::Bus bus(common.lcm_url);
-    ivoa::Heartbeat heartbeat(bus, "introspection");
+    ivoa::Heartbeat heartbeat(bus, "introspection", common.status_channel);
     ivoa::IntrospectionNode node(bus, heartbeat, std::move(model), cl.options, cl.config.mc_passes);
     ivoa::enlarge_receive_buffer(bus, cl.socket_buffer_mb);
     const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, bus.url().rfind("file://", 0) == 0);

@@ -159,10 +159,11 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
     return e.exit_code();
   }
   options.log.identity.lcm_url = bus->url();
+  options.status_channel = common.status_channel;
   int code = ivoa::kExitOk;
   const std::unique_ptr<Recorder> recorder = start_recorder(std::move(options), code);
   if (!recorder) return code;
-  ivoa::Heartbeat heartbeat(*bus, "logger");
+  ivoa::Heartbeat heartbeat(*bus, "logger", common.status_channel);
   StatusReporter reporter(heartbeat);
   bus->subscribe_raw(".*", [&](const void* data, size_t size, const ivoa::ReceiveInfo& info) {
     recorder->on_message(info.channel, info.recv_utime, data, size);
@@ -273,6 +274,7 @@ int main(int argc, char** argv) {
       "2 bad flags, 4 cannot write the log (the file written so far stays readable)."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
+  ivoa::add_status_channel_option(app, common.status_channel);
   LoggerFlags flags;
   add_logger_options(app, flags);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;

@@ -41,9 +41,7 @@ void add_detector_flags(CLI::App& app, DetectorFlags& f) {
   app.add_option("--output-channel", o.output_channel, "out: obstacle grid (ivoa.obstacle_grid_t)")
       ->capture_default_str()
       ->group("Channels");
-  app.add_option("--status-channel", f.status_channel, "out: heartbeat (ivoa.process_status_t)")
-      ->capture_default_str()
-      ->group("Channels");
+  ivoa::add_status_channel_option(app, f.status_channel);
   app.add_option("--max-frames", o.max_frames, "exit after publishing this many grids (0: run until stopped)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());

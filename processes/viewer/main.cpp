@@ -127,9 +127,10 @@ std::array<bool, ivoa::viewer::kNumParts> parts_in_log(const std::string& url, c
 }
 
 // Draws until stopped (or, offline, until the log ends); the exit code.
-int run_viewer(const std::string& lcm_url, const ivoa::viewer::ViewerOptions& options, bool window, bool offline) {
-  ivoa::Bus bus(lcm_url);
-  ivoa::Heartbeat heartbeat(bus, "viewer");
+int run_viewer(const ivoa::CommonOptions& common, const ivoa::viewer::ViewerOptions& options, bool window,
+               bool offline) {
+  ivoa::Bus bus(common.lcm_url);
+  ivoa::Heartbeat heartbeat(bus, "viewer", common.status_channel);
   ivoa::viewer::ViewerNode node(bus, heartbeat, options);
   spdlog::info("listening on {}{}{}{}", bus.url(),
                options.output.out_dir.empty() ? "" : "; PNGs in " + options.output.out_dir,
@@ -158,6 +159,7 @@ int main(int argc, char** argv) {
   ivoa::CommonOptions common;
   ivoa::viewer::ViewerOptions options;
   ivoa::add_common_options(app, common);
+  ivoa::add_status_channel_option(app, common.status_channel);
   add_output_options(app, options);
   add_matching_options(app, options);
   add_channel_options(app, options);
@@ -171,7 +173,7 @@ int main(int argc, char** argv) {
   const std::optional<bool> window = choose_window(options);
   if (!window) return ivoa::kExitUsage;
   try {
-    return run_viewer(common.lcm_url, options, *window, offline);
+    return run_viewer(common, options, *window, offline);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
     return e.exit_code();

@@ -35,6 +35,20 @@ TEST(CommonOptions, ProcessesTakeAnLcmUrlAndOfflineToolsRefuseOne) {
   EXPECT_EQ(parse(add_offline_options, {"--log-level", "loud"}, offline), kExitUsage);
 }
 
+TEST(CommonOptions, HeartbeatsGoToProcessStatusUnlessTheFlagNamesAnotherChannel) {
+  const auto add_with_status = [](CLI::App& app, CommonOptions& o) {
+    add_common_options(app, o);
+    add_status_channel_option(app, o.status_channel);
+  };
+  CommonOptions options;
+  EXPECT_EQ(parse(add_with_status, {}, options), -1);
+  EXPECT_EQ(options.status_channel, "PROCESS_STATUS");
+  EXPECT_EQ(parse(add_with_status, {"--status-channel", "ROBOT_B_STATUS"}, options), -1);
+  EXPECT_EQ(options.status_channel, "ROBOT_B_STATUS");
+  CommonOptions tool;  // a tool that publishes no heartbeat refuses the flag
+  EXPECT_EQ(parse(add_common_options, {"--status-channel", "ROBOT_B_STATUS"}, tool), kExitUsage);
+}
+
 TEST(CommonOptions, ConfigFileSetsFlagsAndRefusesKeysThatNameNone) {
   test::TempDir dir;
   const std::string good = dir.file("good.ini"), typo = dir.file("typo.ini");

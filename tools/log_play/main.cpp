@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
       "1 LCM failure, 2 bad flags, 3 a log cannot be opened (nothing played) or holds no event (the others played)."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
+  ivoa::add_status_channel_option(app, common.status_channel);
   std::vector<std::string> logs;
   ivoa::log_play::LogPlayerOptions options;
   app.add_option("logs", logs, "LCM log files, played in the order given")->required();
@@ -36,7 +37,7 @@ int main(int argc, char** argv) {
   ivoa::install_stop_handlers();
   try {
     ivoa::Bus bus(common.lcm_url);
-    ivoa::Heartbeat heartbeat(bus, "log_play");
+    ivoa::Heartbeat heartbeat(bus, "log_play", common.status_channel);
     ivoa::log_play::LogPlayer player(bus, heartbeat, logs, options);
     const bool whole = player.play();
     const auto& c = player.counts();

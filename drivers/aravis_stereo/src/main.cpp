@@ -149,6 +149,7 @@ void add_driver_options(CLI::App& app, Flags& f) {
 
 void add_options(CLI::App& app, Flags& f) {
   ivoa::add_common_options(app, f.common);
+  ivoa::add_status_channel_option(app, f.common.status_channel);
   add_camera_options(app, f);
   add_transport_options(app, f);
   add_driver_options(app, f);
@@ -186,7 +187,7 @@ int main(int argc, char** argv) {
   int exit_code = ivoa::kExitOk;
   try {
     ivoa::Bus bus(f.common.lcm_url);
-    ivoa::Heartbeat heartbeat(bus, "aravis_stereo");
+    ivoa::Heartbeat heartbeat(bus, "aravis_stereo", f.common.status_channel);
     AravisCameraConfig left = f.camera, right = f.camera;
     left.device = f.left;
     right.device = f.right;

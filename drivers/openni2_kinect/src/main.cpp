@@ -41,6 +41,7 @@ struct Flags {
 
 void add_options(CLI::App& app, Flags& f) {
   ivoa::add_common_options(app, f.common);
+  ivoa::add_status_channel_option(app, f.common.status_channel);
   app.add_option("--device", f.camera.device, "ANY_DEVICE (the first sensor), an OpenNI2 device URI, or an .oni file")
       ->capture_default_str();
   app.add_flag("--color", f.camera.color, "also publish the 640x480 colour image");
@@ -186,7 +187,7 @@ int main(int argc, char** argv) {
 
   try {
     ivoa::Bus bus(f.common.lcm_url);
-    ivoa::Heartbeat heartbeat(bus, "openni2_kinect");
+    ivoa::Heartbeat heartbeat(bus, "openni2_kinect", f.common.status_channel);
     int exit_code = ivoa::kExitOk;
     try {
       OpenNiCamera camera(f.camera);

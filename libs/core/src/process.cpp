@@ -20,6 +20,12 @@ void add_common_options(CLI::App& app, CommonOptions& options) {
   add_offline_options(app, options);
 }
 
+void add_status_channel_option(CLI::App& app, std::string& channel) {
+  app.add_option("--status-channel", channel, "out: heartbeat (ivoa.process_status_t)")
+      ->capture_default_str()
+      ->group("Channels");
+}
+
 void add_offline_options(CLI::App& app, CommonOptions& options) {
   app.add_option("--log-level", options.log_level, "trace, debug, info, warn, error")
       ->capture_default_str()

@@ -35,7 +35,7 @@ bool Recorder::on_message(const std::string& channel, int64_t timestamp, const v
   if (!filter_.accepts(channel)) return false;
   counters_.received.fetch_add(1);
   if (channel == options_.log.calibration_channel) calibration_seen_.store(true);
-  if (first_data_ms_.load() < 0 && channel != channels::kProcessStatus) first_data_ms_.store(monotonic_ms());
+  if (first_data_ms_.load() < 0 && channel != options_.status_channel) first_data_ms_.store(monotonic_ms());
   RecordedEvent event;
   event.channel = channel;
   event.timestamp = timestamp;

@@ -5,6 +5,8 @@
 #include <functional>
 #include <string>
 
+#include "ivoa/core/channels.hpp"
+
 namespace CLI {
 class App;
 }
@@ -25,6 +27,7 @@ enum ExitCode : int {
 struct CommonOptions {
   std::string lcm_url;  // empty = default_lcm_url()
   std::string log_level = "info";
+  std::string status_channel{channels::kProcessStatus};  // for add_status_channel_option
 };
 
 // Adds --lcm-url, --log-level and --config (a TOML/INI file that sets any
@@ -34,6 +37,10 @@ void add_common_options(CLI::App& app, CommonOptions& options);
 // For tools that talk no LCM: --log-level and --config only, so that an
 // --lcm-url is refused rather than accepted and ignored.
 void add_offline_options(CLI::App& app, CommonOptions& options);
+
+// --status-channel, in the "Channels" group: where a process publishes its
+// heartbeat (`channel` holds the default, channels::kProcessStatus).
+void add_status_channel_option(CLI::App& app, std::string& channel);
 
 // Parses argv; on --help or a usage error prints and returns the exit code
 // to use, otherwise returns -1 and the caller continues.
