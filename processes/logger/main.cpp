@@ -159,7 +159,6 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
     return e.exit_code();
   }
   options.log.identity.lcm_url = bus->url();
-  options.status_channel = common.status_channel;
   int code = ivoa::kExitOk;
   const std::unique_ptr<Recorder> recorder = start_recorder(std::move(options), code);
   if (!recorder) return code;

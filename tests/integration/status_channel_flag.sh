@@ -19,8 +19,9 @@ for program in ivoa-sim-driver ivoa-aravis-stereo ivoa-openni2-kinect ivoa-stere
 done
 
 # heartbeat_channels PROGRAM ARGS...: runs the program writing to a log until
-# it has said something (it is running: 20 s at most), stops it as a user
-# would (SIGINT; it publishes a last heartbeat) and prints the log's channels.
+# it has said something (it is running: 20 s at most) or ended, stops it as a
+# user would (SIGINT; it publishes a last heartbeat) and prints the channels
+# its heartbeats went to (those of type ivoa.process_status_t).
 heartbeat_channels() {
   local log="$OUT/$1.lcmlog" pid code=0
   "$B/bin/$1" --lcm-url "file://$log?mode=w" "${@:2}" >"$OUT/$1.out" 2>&1 &
@@ -29,7 +30,7 @@ heartbeat_channels() {
     [ -s "$OUT/$1.out" ] && break
     sleep 0.1
   done
-  kill -INT "$pid"
+  kill -INT "$pid" 2>/dev/null || true  # a log player may have played its log already
   wait "$pid" || code=$?
   if [ "$code" != 0 ]; then
     echo "FAIL: $1 exited $code" >&2
@@ -37,17 +38,29 @@ heartbeat_channels() {
     exit 1
   fi
   "$B/bin/ivoa-log-check" --json "$OUT/$1.json" "$log" >/dev/null
-  python3 -c 'import json, sys; print(" ".join(sorted(json.load(open(sys.argv[1]))["channels"])))' "$OUT/$1.json"
+  python3 -c 'import json, sys
+channels = json.load(open(sys.argv[1]))["channels"]
+print(" ".join(sorted(c for c, v in channels.items() if v["type"] == "ivoa.process_status_t")))' "$OUT/$1.json"
 }
 
-expect_heartbeats_on_b() {
+# expect_heartbeats_on CHANNEL PROGRAM ARGS...
+expect_heartbeats_on() {
   local channels
-  channels=$(heartbeat_channels "$@" --status-channel ROBOT_B_STATUS)
-  if [ "$channels" != "ROBOT_B_STATUS" ]; then
-    echo "FAIL: $1 --status-channel ROBOT_B_STATUS wrote channels: '$channels'" >&2
+  channels=$(heartbeat_channels "${@:2}" --status-channel "$1")
+  if [ "$channels" != "$1" ]; then
+    echo "FAIL: $2 --status-channel $1 sent heartbeats to: '$channels'" >&2
     exit 1
   fi
 }
-expect_heartbeats_on_b ivoa-depth-monitor
-expect_heartbeats_on_b ivoa-logger "$OUT/recorded.lcmlog"
+expect_heartbeats_on ROBOT_B_STATUS ivoa-depth-monitor
+expect_heartbeats_on ROBOT_B_STATUS ivoa-logger "$OUT/recorded.lcmlog"
+expect_heartbeats_on ROBOT_B_STATUS ivoa-viewer --out-dir "$OUT/figures"
+expect_heartbeats_on ROBOT_B_STATUS ivoa-introspection
+expect_heartbeats_on ROBOT_B_STATUS ivoa-sim-driver --rate 2
+# The player's own heartbeats, beside the monitor's it replays from its log.
+channels=$(heartbeat_channels ivoa-log-play --status-channel ROBOT_C_STATUS "$OUT/ivoa-depth-monitor.lcmlog")
+if [ "$channels" != "ROBOT_B_STATUS ROBOT_C_STATUS" ]; then
+  echo "FAIL: ivoa-log-play --status-channel ROBOT_C_STATUS: heartbeats on '$channels'" >&2
+  exit 1
+fi
 echo "heartbeats on the channel asked for"

@@ -12,6 +12,7 @@
 #include "ivoa/core/message_counts.hpp"
 #include "ivoa/logger/recorder.hpp"
 #include "ivoa/logger/sidecar.hpp"
+#include "ivoa/process_status_t.hpp"
 #include "logger_test_util.hpp"
 #include "test_rig.hpp"
 
@@ -29,12 +30,22 @@ RecorderOptions options_in(const test::TempDir& dir, const std::string& name = "
   return o;
 }
 
-std::vector<uint8_t> calibration_payload(int64_t utime) {
-  rig_calibration_t msg = to_message(test::make_test_rig(), utime);
+template <class Msg>
+std::vector<uint8_t> encoded(Msg msg) {
   set_counts(msg);
   std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
   msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   return bytes;
+}
+
+std::vector<uint8_t> calibration_payload(int64_t utime) { return encoded(to_message(test::make_test_rig(), utime)); }
+
+std::vector<uint8_t> heartbeat_payload(const std::string& process) {
+  process_status_t msg{};
+  msg.utime = 1;
+  msg.name = process;
+  msg.state = "running";
+  return encoded(msg);
 }
 
 void offer(Recorder& r, const std::string& channel, const std::vector<uint8_t>& data, int64_t timestamp = 1) {
@@ -120,13 +131,15 @@ TEST(Recorder, SplitFilesEachStartWithTheNewestCalibration) {
 
 // The pmd files start the logger seconds before the drivers; the processes'
 // heartbeats arrive meanwhile. "No calibration" is said only once data other
-// than heartbeats has gone without one for calibration_warning_s.
+// than heartbeats has gone without one for calibration_warning_s. Heartbeats
+// are known by their type, on whatever --status-channel they came.
 TEST(Recorder, WarnsOfNoCalibrationOnlyOnceDataCameWithoutOne) {
   test::TempDir dir;
   RecorderOptions options = options_in(dir);
   options.calibration_warning_s = 0.05;
   Recorder recorder(options);
-  offer(recorder, "PROCESS_STATUS", numbered_bytes(100, 1));
+  offer(recorder, "PROCESS_STATUS", heartbeat_payload("depth_monitor"));
+  offer(recorder, "ROBOT_B_STATUS", heartbeat_payload("stereo_detector"));
   std::this_thread::sleep_for(std::chrono::milliseconds(150));  // past the limit, not a timing check
   EXPECT_EQ(recorder.check_health(), "recording") << "only heartbeats so far";
   offer(recorder, "STEREO_IMAGES", numbered_bytes(1000, 2));

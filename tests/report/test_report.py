@@ -1180,6 +1180,17 @@ class MetricUnitTest(unittest.TestCase):
                    {"phenomenon": 8, "n": 20}]
         self.assertEqual(few_cell_phenomena(entries, [0, 2, 8, 64]), [False, False, False, True])  # 2: absent
 
+    def test_a_bar_value_goes_over_its_true_rate_tick_where_the_tick_would_cross_it(self):
+        load_tool()
+        from report_figures import value_label_heights
+        nan = float("nan")
+        h = value_label_heights([0.49, 0.58, 0.04, 0.72, nan], [0.55, 0.55, 0.09, 0.55, 0.2])
+        self.assertAlmostEqual(h[0], 0.565)  # the tick 0.06 over the bar: the label over the tick
+        self.assertAlmostEqual(h[1], 0.595)  # the tick just under the bar's top: over the bar
+        self.assertAlmostEqual(h[2], 0.105)
+        self.assertAlmostEqual(h[3], 0.735)  # the tick well inside the bar: no clash
+        self.assertAlmostEqual(h[4], 0.015)  # no bar (drawn without a label)
+
     def test_a_cause_has_one_colour_in_every_figure_whatever_its_rank(self):
         load_tool()
         from report_figures import PHENOMENON_COLOURS, _cause_panel

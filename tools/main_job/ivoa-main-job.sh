@@ -28,8 +28,10 @@
 #   --noise-draws K  also record the test sessions with K sensor-noise draws
 #                  (ivoa-label-repeatability.sh) and set, band by band of
 #                  JPP-C's margin, how often another draw keeps its verdict
-#                  beside the models in the report (default 0: off; about a
-#                  minute per draw at the default scale, 3 at full)
+#                  beside the models in the report (default 0: off; K
+#                  realisations, noise seeds 0 to K-1, seed 0 the recorded
+#                  sessions' own; about a minute per draw at the default
+#                  scale, 2-3 at full)
 #   --live         the short variant: run the shipped model live on the
 #                  simulator (sim.pmd with introspection and the viewer)
 #   --shipped-only only the shipped JPP-C model: record the scale's test

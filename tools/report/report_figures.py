@@ -345,40 +345,61 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
     faint, and each bar carries its value, so that 0 is not read as "absent"."""
     codes = sorted({e["phenomenon"] for entries in per_phen for e in entries})
     n_models = len(names)
-    width = 0.8 / n_models
     x = np.arange(len(codes))
-    colours = _category_colours(n_models)
     # room under each group for "(n = 2549 / 1234 / 2549)" at fontsize 8 (about 0.07 in a character)
     fig, axes = plt.subplots(2, 1, figsize=(max(6.5, 0.6 * len(codes) * max(n_models, 2) + 3.0), 7.0), sharex=True)
-    for ax, (key, truth, kind) in zip(axes, (("pred_fn", "true_fn", "FN"), ("pred_fp", "true_fp", "FP"))):
-        for i, (name, entries) in enumerate(zip(names, per_phen)):
-            by = {e["phenomenon"]: e for e in entries}
-            vals = [by[c][key] if c in by else np.nan for c in codes]
-            true = [by[c][truth] if c in by else np.nan for c in codes]
-            faint = few_cell_phenomena(entries, codes)
-            pos = x - 0.4 + width * (i + 0.5)
-            bars = ax.bar(pos, vals, width * 0.92,
-                          color=[matplotlib.colors.to_rgba(colours[i], 0.3 if f else 1.0) for f in faint])
-            ax.bar_label(bars, labels=["" if v != v else f"{v:.2f}" for v in vals], fontsize=6, padding=1)
-            ax.scatter(pos, true, marker="_", s=max(60, 400 * width), linewidths=2.2, zorder=3,
-                       color=[(0, 0, 0, 0.3 if f else 1.0) for f in faint])
-        ax.set_ylabel(f"fraction predicted {kind}")
-        ax.set_ylim(0, 1.05)
-        ax.grid(axis="y", alpha=0.3)
-        # Patches and a line, not the bars: a model's first bar may be a faint one.
-        handles = [Line2D([], [], marker="_", markersize=12, markeredgewidth=2.2, linestyle="", color="black",
-                          label=f"true {kind} rate (labels)")]
-        handles += [Patch(color=colours[i], label=f"{name}: predicted {kind}") for i, name in enumerate(names)]
-        if any(any(few_cell_phenomena(entries, codes)) for entries in per_phen):
-            handles.append(Patch(color="grey", alpha=0.3, label=f"faint: fewer than {FEW_CELLS} cells"))
-        ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-        ax.set_title(f"predicted {kind} per phenomenon", fontsize=10)
+    for ax, panel in zip(axes, (("pred_fn", "true_fn", "FN"), ("pred_fp", "true_fp", "FP"))):
+        _phenomenon_panel(ax, names, per_phen, codes, *panel)
     counts = [" / ".join(str(next((e["n"] for e in en if e["phenomenon"] == c), 0)) for en in per_phen) for c in codes]
     axes[1].set_xticks(x, [f"{phenomenon_name(c)}\n(n = {n})" for c, n in zip(codes, counts)], fontsize=8)
     axes[1].set_xlabel("phenomenon under the patch centre (sample count per model, in legend order)")
     fig.suptitle(f"{title}: which phenomena each model predicts as stereo failures")
     fig.tight_layout()
     return _save(fig, path)
+
+
+def _phenomenon_panel(ax, names: Sequence[str], per_phen: Sequence[List[dict]], codes: List[int], key: str,
+                      truth: str, kind: str) -> None:
+    """One panel of plot_phenomenon_comparison: each model's bars for `key`
+    (pred_fn or pred_fp) with its true rate (`truth`) as ticks."""
+    width = 0.8 / len(names)
+    colours = _category_colours(len(names))
+    for i, entries in enumerate(per_phen):
+        by = {e["phenomenon"]: e for e in entries}
+        vals = [by[c][key] if c in by else np.nan for c in codes]
+        true = [by[c][truth] if c in by else np.nan for c in codes]
+        faint = few_cell_phenomena(entries, codes)
+        pos = np.arange(len(codes)) - 0.4 + width * (i + 0.5)
+        ax.bar(pos, vals, width * 0.92, color=[matplotlib.colors.to_rgba(colours[i], 0.3 if f else 1.0) for f in faint])
+        for px, v, y in zip(pos, vals, value_label_heights(vals, true)):
+            if v == v:
+                ax.text(px, y, f"{v:.2f}", ha="center", va="bottom", fontsize=6)
+        ax.scatter(pos, true, marker="_", s=max(60, 400 * width), linewidths=2.2, zorder=3,
+                   color=[(0, 0, 0, 0.3 if f else 1.0) for f in faint])
+    ax.set_ylabel(f"fraction predicted {kind}")
+    ax.set_ylim(0, 1.05)
+    ax.grid(axis="y", alpha=0.3)
+    # Patches and a line, not the bars: a model's first bar may be a faint one.
+    handles = [Line2D([], [], marker="_", markersize=12, markeredgewidth=2.2, linestyle="", color="black",
+                      label=f"true {kind} rate (labels)")]
+    handles += [Patch(color=colours[i], label=f"{name}: predicted {kind}") for i, name in enumerate(names)]
+    if any(any(few_cell_phenomena(entries, codes)) for entries in per_phen):
+        handles.append(Patch(color="grey", alpha=0.3, label=f"faint: fewer than {FEW_CELLS} cells"))
+    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    ax.set_title(f"predicted {kind} per phenomenon", fontsize=10)
+
+
+def value_label_heights(values: Sequence[float], ticks: Sequence[float]) -> List[float]:
+    """Where each bar's value label sits (its bottom, in data units): just over
+    the bar, or over the bar's true-rate tick where that tick would run
+    through the label (a label is about 0.05 tall at these figures' size)."""
+    heights = []
+    for v, t in zip(values, ticks):
+        top = 0.0 if v != v else v
+        if t == t and top - 0.02 < t < top + 0.07:
+            top = max(top, t)
+        heights.append(top + 0.015)
+    return heights
 
 
 def few_cell_phenomena(entries: List[dict], codes: Sequence[int]) -> List[bool]:

@@ -4,7 +4,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "ivoa/core/channels.hpp"
+#include "ivoa/core/message_registry.hpp"
 #include "ivoa/core/time.hpp"
 
 namespace ivoa::logger {
@@ -35,7 +35,10 @@ bool Recorder::on_message(const std::string& channel, int64_t timestamp, const v
   if (!filter_.accepts(channel)) return false;
   counters_.received.fetch_add(1);
   if (channel == options_.log.calibration_channel) calibration_seen_.store(true);
-  if (first_data_ms_.load() < 0 && channel != options_.status_channel) first_data_ms_.store(monotonic_ms());
+  // Heartbeats are told by their type, not their channel: each process may
+  // have been given its own --status-channel.
+  if (first_data_ms_.load() < 0 && payload_type_name(data, size) != "ivoa.process_status_t")
+    first_data_ms_.store(monotonic_ms());
   RecordedEvent event;
   event.channel = channel;
   event.timestamp = timestamp;

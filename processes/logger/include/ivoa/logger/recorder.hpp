@@ -12,7 +12,6 @@
 #include <thread>
 #include <vector>
 
-#include "ivoa/core/channels.hpp"
 #include "ivoa/logger/event_queue.hpp"
 #include "ivoa/logger/session_counters.hpp"
 #include "ivoa/logger/split_log.hpp"
@@ -30,7 +29,6 @@ struct RecorderOptions {
   // not a heartbeat: the loggers of the pmd files start seconds before the
   // drivers, and the processes' heartbeats come first.
   double calibration_warning_s = 5;
-  std::string status_channel{channels::kProcessStatus};  // heartbeats: not "data" for that warning
 };
 
 struct RecorderStatus {
