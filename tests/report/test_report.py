@@ -1154,9 +1154,10 @@ class MetricUnitTest(unittest.TestCase):
         from report_metrics import _point
         label = np.array([0] * 3 + [1] * 50 + [2] * 50 + [3] * 50)
         var = np.concatenate([[0.5] * 3, np.linspace(0, 0.4, 150)])
-        p = _point(label, label.copy(), var, 0.45)  # the three TP withheld: the smallest kept class has 50
-        self.assertEqual(p["fewest_kept"], 50)
+        p = _point(label, label.copy(), var, 0.45)  # the three TP withheld: the mean is over three classes
+        self.assertEqual(p["fewest_kept"], 0)
         self.assertEqual(_point(label, label.copy(), var, 0.6)["fewest_kept"], 3)
+        self.assertEqual(_point(label[3:], label[3:].copy(), var[3:], 0.45)["fewest_kept"], 50)  # no TP at all
         ladder = [{"retained": 1.0, "fewest_kept": 3}, {"retained": 0.5, "fewest_kept": 2}]
         self.assertIn("From ≥ 100 % retained down, some class keeps fewer than 20 cells (3 there)",
                       _few_cells_note(ladder))

@@ -195,8 +195,9 @@ def _point(label, predicted, var, tau) -> dict:
         "retained": float(keep.mean()),
         "retained_count": int(keep.sum()),
         "retained_per_class": [float(kept[c] / support_all[c]) if support_all[c] else None for c in range(N_CLASSES)],
-        # the mean per-class accuracy leans on its smallest retained class: a handful of cells make it noise
-        "fewest_kept": int(kept[kept > 0].min()) if kept.any() else 0,
+        # the mean per-class accuracy leans on its smallest retained class: a handful of cells make it noise,
+        # and a class withheld whole (0 kept) leaves it a mean over the other classes
+        "fewest_kept": int(kept[support_all > 0].min()) if support_all.any() else 0,
         "mean_per_class_accuracy": m["mean_per_class_accuracy"],
         "overall_accuracy": m["overall_accuracy"],
         "per_class_accuracy": m["per_class_accuracy"],
