@@ -1212,7 +1212,8 @@ class MetricUnitTest(unittest.TestCase):
         from report_markdown import _withheld_failures
         point = {"retained": 0.70, "retained_per_class": [0.36, 0.72, 0.74, 0.47]}  # TP, TN, FP, FN
         text = _withheld_failures(point)
-        self.assertIn("it keeps 47 % of the true FN, against 70 % of all cells", text)
+        self.assertIn("withholds these failures more often than other cells: it keeps 47 % of the true FN, "
+                      "against 70 % of all cells", text)
         self.assertNotIn("true FP", text)  # kept at about its share
         self.assertEqual(_withheld_failures({"retained": 0.70, "retained_per_class": [0.5, 0.7, 0.7, None]}), "")
 

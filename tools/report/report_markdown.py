@@ -159,7 +159,8 @@ def _withheld_failures(p: dict) -> str:
              if kept[c] is not None and kept[c] < p["retained"] - 0.05]
     if not fewer:
         return ""
-    return (f"The gate withholds failures more often than other cells: it keeps {' and '.join(fewer)}, "
+    # Only the classes named: the other failure class may be kept at its share.
+    return (f"The gate withholds these failures more often than other cells: it keeps {' and '.join(fewer)}, "
             f"against {pct(p['retained'], 0)} of all cells. Part of the gain is the "
             "failures set aside, and a withheld cell is one the model declines to judge: a planner should treat "
             "it as unknown, not as free.\n")
