@@ -38,7 +38,6 @@ struct CommandLine {
   ivoa::sim::SimDriverConfig driver;
   std::string pixel_format = "bayer_rggb";
   std::string rig_file, save_rig;
-  std::string status_channel{ivoa::channels::kProcessStatus};
   bool fast = false, no_truth = false;
   uint64_t noise_seed = 0;
 };
@@ -98,7 +97,6 @@ void add_output_options(CLI::App& app, CommandLine& cl) {
       ->capture_default_str();
   app.add_option("--truth-channel", config.truth_channel, "out: what each left pixel shows (ivoa.sim_ground_truth_t)")
       ->capture_default_str();
-  ivoa::add_status_channel_option(app, cl.status_channel);
 }
 
 // The rig to render with (--rig, else the built-in one), written to --save-rig
@@ -152,6 +150,7 @@ int main(int argc, char** argv) {
       "image, the rig calibration and the simulator's ground truth"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
+  ivoa::add_status_channel_option(app, common.status_channel);
   CommandLine cl;
   cl.driver.scene_file = std::string(IVOA_SIM_SCENES_DIR) + "/indoor_office.yaml";
   add_session_options(app, cl);
@@ -167,7 +166,7 @@ int main(int argc, char** argv) {
   if (const int code = prepare_rig(cl, sim_config); code >= 0) return code;
   ivoa::install_stop_handlers();
   try {
-    return drive(cl.driver, sim_config, common.lcm_url, cl.status_channel);
+    return drive(cl.driver, sim_config, common.lcm_url, common.status_channel);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
     return e.exit_code();

@@ -20,7 +20,7 @@ namespace {
 
 struct DetectorFlags {
   ivoa::StereoDetectorOptions options;
-  std::string calibration_file, status_channel{ivoa::channels::kProcessStatus};
+  std::string calibration_file;
   double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
 };
 
@@ -41,7 +41,6 @@ void add_detector_flags(CLI::App& app, DetectorFlags& f) {
   app.add_option("--output-channel", o.output_channel, "out: obstacle grid (ivoa.obstacle_grid_t)")
       ->capture_default_str()
       ->group("Channels");
-  ivoa::add_status_channel_option(app, f.status_channel);
   app.add_option("--max-frames", o.max_frames, "exit after publishing this many grids (0: run until stopped)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
@@ -74,12 +73,12 @@ std::optional<int> prepare(const DetectorFlags& f, std::optional<ivoa::RigCalibr
   return std::nullopt;
 }
 
-int run_detector(const std::string& lcm_url, const DetectorFlags& f,
+int run_detector(const ivoa::CommonOptions& common, const DetectorFlags& f,
                  const std::optional<ivoa::RigCalibration>& initial_rig) {
   const ivoa::StereoDetectorOptions& o = f.options;
   try {
-    ivoa::Bus bus(lcm_url);
-    ivoa::Heartbeat heartbeat(bus, "stereo_detector", f.status_channel);
+    ivoa::Bus bus(common.lcm_url);
+    ivoa::Heartbeat heartbeat(bus, "stereo_detector", common.status_channel);
     bus.on_decode_error([&](const std::string& what) { heartbeat.bad_input(what); });
     ivoa::StereoDetectorNode node(bus, heartbeat, o);
     if (initial_rig) node.set_calibration(*initial_rig);
@@ -105,11 +104,12 @@ int main(int argc, char** argv) {
   CLI::App app{"Stereo obstacle detector: per query-grid cell FREE / OBSTACLE / UNKNOWN from each stereo pair"};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
+  ivoa::add_status_channel_option(app, common.status_channel);
   DetectorFlags flags;
   add_detector_flags(app, flags);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("stereo-detector", common.log_level);
   std::optional<ivoa::RigCalibration> initial_rig;
   if (const auto code = prepare(flags, initial_rig)) return *code;
-  return run_detector(common.lcm_url, flags, initial_rig);
+  return run_detector(common, flags, initial_rig);
 }

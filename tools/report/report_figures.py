@@ -364,11 +364,11 @@ def _phenomenon_panel(ax, names: Sequence[str], per_phen: Sequence[List[dict]], 
     (pred_fn or pred_fp) with its true rate (`truth`) as ticks."""
     width = 0.8 / len(names)
     colours = _category_colours(len(names))
-    for i, entries in enumerate(per_phen):
+    faint_by_model = [few_cell_phenomena(entries, codes) for entries in per_phen]
+    for i, (entries, faint) in enumerate(zip(per_phen, faint_by_model)):
         by = {e["phenomenon"]: e for e in entries}
         vals = [by[c][key] if c in by else np.nan for c in codes]
         true = [by[c][truth] if c in by else np.nan for c in codes]
-        faint = few_cell_phenomena(entries, codes)
         pos = np.arange(len(codes)) - 0.4 + width * (i + 0.5)
         ax.bar(pos, vals, width * 0.92, color=[matplotlib.colors.to_rgba(colours[i], 0.3 if f else 1.0) for f in faint])
         for px, v, y in zip(pos, vals, value_label_heights(vals, true)):
@@ -383,7 +383,7 @@ def _phenomenon_panel(ax, names: Sequence[str], per_phen: Sequence[List[dict]], 
     handles = [Line2D([], [], marker="_", markersize=12, markeredgewidth=2.2, linestyle="", color="black",
                       label=f"true {kind} rate (labels)")]
     handles += [Patch(color=colours[i], label=f"{name}: predicted {kind}") for i, name in enumerate(names)]
-    if any(any(few_cell_phenomena(entries, codes)) for entries in per_phen):
+    if any(any(faint) for faint in faint_by_model):
         handles.append(Patch(color="grey", alpha=0.3, label=f"faint: fewer than {FEW_CELLS} cells"))
     ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     ax.set_title(f"predicted {kind} per phenomenon", fontsize=10)
