@@ -250,7 +250,8 @@ def fabricate(root):
     write_eval(degenerate, d_sessions, d_pred, one_hot_probs(d_pred), rng.uniform(0.001, 0.05, len(d_label)),
                np.abs(rng.normal(0, 1, (len(d_label), DIM))))
     return types.SimpleNamespace(data=data, data2=data2, perfect=perfect, known=known, degenerate=degenerate,
-                                 label=label, predicted=predicted, wrong=wrong, margin=margin, sessions=sessions,
+                                 label=label, predicted=predicted, wrong=wrong, var=var, margin=margin,
+                                 sessions=sessions,
                                  perfect_confidence=p_top)
 
 
@@ -415,6 +416,17 @@ class ReportTest(unittest.TestCase):
         self.assertEqual(s["at_70"]["retained_count"], 140)
         self.assertAlmostEqual(s["at_70"]["mean_per_class_accuracy"], 1.0)
         self.assertAlmostEqual(s["at_70"]["overall_accuracy"], 1.0)
+        # the gate keeps the 140 most certain predictions, all right, and of the true failures only some: the
+        # summary and the comparison say how many beside the 1.0, which withholding the others bought
+        kept = np.argsort(self.f.var)[:140]
+        kept = [100 * np.isin(np.flatnonzero(self.f.label == c), kept).mean() for c in (FP, FN)]
+        self.assertLess(max(kept), 70)
+        report = read_text(os.path.join(self.out, "report.md"))
+        summary, comparison = report.split("## Inputs")[0], report.split("## Comparison")[1]
+        said = f"FP {kept[0]:.0f} %, FN {kept[1]:.0f} % kept"
+        self.assertIn(f"70.0 % → 1.000 ({said})", summary)
+        row = next(line for line in comparison.splitlines() if line.startswith("| true failures kept at ≥70 % |"))
+        self.assertTrue(row.endswith(f"| {said} |"), row)  # the known model is the second column
         self.assertTrue(s["accuracy_rises_as_threshold_falls"])
         self.assertGreater(s["mean_var_wrong"], 0.05)
         self.assertLess(s["mean_var_correct"], 0.02)
@@ -1147,6 +1159,22 @@ class MetricUnitTest(unittest.TestCase):
         s = uncertainty_sweep(run)
         self.assertFalse(s["accuracy_rises_as_threshold_falls"])
         self.assertLess(s["at_70"]["overall_accuracy"], s["unfiltered"]["overall_accuracy"])
+
+    def test_whether_accuracy_rises_is_judged_where_every_class_keeps_enough_cells(self):
+        """Three classes of 200, their wrong predictions the most uncertain; FN 40, of which the 10 wrong ones
+        are the most certain of all. Under τ = 0.03 the FN kept are those 10 alone, and the mean per-class
+        accuracy falls to 0.75 there: 10 cells would decide the rank correlation over most of the sweep."""
+        load_tool()
+        from report_metrics import uncertainty_sweep
+        rng = np.random.default_rng(4)
+        y = np.repeat(np.arange(4), [200, 200, 200, 40])
+        wrong = np.concatenate([rng.random(600) < 0.2, np.arange(40) < 10])
+        p = np.where(wrong, (y + 1) % 4, y)
+        var = np.where(wrong, rng.uniform(0.05, 0.1, 640), rng.uniform(0.001, 0.02, 640))
+        var[600:] = np.where(wrong[600:], rng.uniform(0.0001, 0.0005, 40), 0.03)
+        run = types.SimpleNamespace(label=y, predicted=p, var_predicted=var, model_threshold=None)
+        s = uncertainty_sweep(run)
+        self.assertLess(s["spearman_threshold_vs_mpca"], -0.9)  # over the points keeping ≥ 20 FN: it rises
 
     def test_sweep_points_say_how_few_cells_the_smallest_class_keeps(self):
         load_tool()

@@ -265,10 +265,12 @@ def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
         h = metrics.headline(numbers[r.slug])
         c = numbers[r.slug]["clustering"]
         given = (f"{md.fmt(h['verdict_mean_per_class_accuracy'])}; {md.pct(h['verdict_retained_at_70'])} → "
-                 f"{md.fmt(h['verdict_mpca_at_70'])}" if h["verdict_mean_per_class_accuracy"] is not None else "n/a")
+                 f"{md.fmt(h['verdict_mpca_at_70'])} ({md.failures_kept(h['verdict_at_70'])})"
+                 if h["verdict_mean_per_class_accuracy"] is not None else "n/a")
         rows.append([r.name, r.detector, h["samples"], md.fmt(h["mean_per_class_accuracy"]),
                      md.fmt(h["overall_accuracy"]), md.fmt(h["failure_auroc"]),
-                     f"{md.pct(h['retained_at_70'])} → {md.fmt(h['mpca_at_70'])}", given,
+                     f"{md.pct(h['retained_at_70'])} → {md.fmt(h['mpca_at_70'])} ({md.failures_kept(h['at_70'])})",
+                     given,
                      _purity_with_base(c, "purity", "purity_one_cluster"),
                      _purity_with_base(c, "purity_by_cause", "purity_by_cause_one_cluster")])
     key = ("Each sample is a ground cell ahead of the robot, labelled by the depth monitor against the stereo "
@@ -402,9 +404,11 @@ def print_summary(runs: List[EvalRun], numbers: Dict[str, dict], warnings: List[
         c = numbers[run.slug]["clustering"]
         print(f"{run.name}: {h['samples']} samples, mean per-class accuracy {md.fmt(h['mean_per_class_accuracy'])}, "
               f"overall {md.fmt(h['overall_accuracy'])}, failure AUROC {md.fmt(h['failure_auroc'])}, "
-              f"at {md.pct(h['retained_at_70'])} retained {md.fmt(h['mpca_at_70'])}, "
+              f"at {md.pct(h['retained_at_70'])} retained {md.fmt(h['mpca_at_70'])} "
+              f"({md.failures_kept(h['at_70'])}), "
               + (f"given the detector's verdict {md.fmt(h['verdict_mean_per_class_accuracy'])} "
-                 f"({md.fmt(h['verdict_mpca_at_70'])} at {md.pct(h['verdict_retained_at_70'])}), "
+                 f"({md.fmt(h['verdict_mpca_at_70'])} at {md.pct(h['verdict_retained_at_70'])}, "
+                 f"{md.failures_kept(h['verdict_at_70'])}), "
                  if h["verdict_mean_per_class_accuracy"] is not None else "")
               + (f"cluster purity {_purity_with_base(c, 'purity', 'purity_one_cluster')}"
                  if c["ok"] and c["purity"] is not None

@@ -32,6 +32,16 @@ def pct(x, digits: int = 1) -> str:
     return "n/a" if x is None else f"{100 * x:.{digits}f} %"
 
 
+def failures_kept(point: Optional[dict]) -> str:
+    """How many of the true failures an operating point still judges: a gate
+    can raise the mean per-class accuracy by withholding the failures it is
+    meant to find."""
+    if point is None:
+        return "n/a"
+    kept = point["retained_per_class"]
+    return f"FP {pct(kept[FP], 0)}, FN {pct(kept[FN], 0)} kept"
+
+
 def _points(x: float) -> str:
     """A difference of two fractions in percentage points."""
     return f"{100 * x:.1f} points"
@@ -195,7 +205,8 @@ def uncertainty_section(rm: dict, figs: Dict[str, str]) -> str:
     rho = s["spearman_threshold_vs_mpca"]
     out.append(
         f"Does accuracy rise as the threshold falls? **{s['verdict']}** (Spearman rank correlation between τ and mean "
-        f"per-class accuracy over quantile thresholds keeping ≥ 10 %: {fmt(rho, 2)}; for overall accuracy: "
+        f"per-class accuracy over quantile thresholds keeping ≥ 10 % of the cells and ≥ {FEW_CELLS} of every class: "
+        f"{fmt(rho, 2)}; for overall accuracy: "
         f"{fmt(s['spearman_threshold_vs_accuracy'], 2)}; negative = accuracy rises as τ falls; 'yes' takes a "
         f"correlation of −0.5 or less and a gain at 70 % retained).\n")
     out.append(f"Mean var_predicted of correct predictions: **{fmt(s['mean_var_correct'], 5)}** (n = {s['n_correct']}) "
@@ -472,6 +483,7 @@ def comparison_section(runs: List[EvalRun], metrics: Dict[str, dict], figs: Dict
     row("failure AUROC", lambda m: m["failure"]["auroc"])
     row("retained at the ≥70 % point", lambda m: pct(m["sweep"]["at_70"]["retained"]))
     row("mean per-class acc. at ≥70 %", lambda m: m["sweep"]["at_70"]["mean_per_class_accuracy"])
+    row("true failures kept at ≥70 %", lambda m: failures_kept(m["sweep"]["at_70"]))
     row("accuracy rises as τ falls", lambda m: m["sweep"]["verdict"])
     row("cluster purity by dominant phenomenon", lambda m: pct(m["clustering"].get("purity")))
     out.append(table(["metric"] + names, rows))

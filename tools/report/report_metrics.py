@@ -18,7 +18,7 @@ Conventions (spec §4.3):
 from __future__ import annotations
 
 import math
-from typing import Dict, List, Optional
+from typing import Any, Dict, List, Optional
 
 import numpy as np
 from sklearn.metrics import roc_auc_score, roc_curve
@@ -239,9 +239,12 @@ def gate_sweep(label: np.ndarray, predicted: np.ndarray, var: np.ndarray, model_
 
     # Does accuracy rise as the threshold falls? Rank correlation between the
     # threshold and mean per-class accuracy over quantile thresholds that keep
-    # at least 10 % of the data (below that a handful of samples decide).
+    # at least 10 % of the data and FEW_CELLS of every class (below that a
+    # handful of samples decide, or a class withheld whole leaves the mean to
+    # the others).
     pts = [_point(label, predicted, var, t) for t in np.unique(qs)]
-    pts = [p for p in pts if p["retained"] >= 0.10 and p["mean_per_class_accuracy"] is not None]
+    pts = [p for p in pts if p["retained"] >= 0.10 and p["fewest_kept"] >= FEW_CELLS
+           and p["mean_per_class_accuracy"] is not None]
     rho = _spearman(np.array([p["threshold"] for p in pts]), np.array([p["mean_per_class_accuracy"] for p in pts]))
     rho_overall = _spearman(np.array([p["threshold"] for p in pts]), np.array([p["overall_accuracy"] for p in pts]))
     gain = (at70["mean_per_class_accuracy"] - unfiltered["mean_per_class_accuracy"]
@@ -405,14 +408,16 @@ def causes_of_failures(run: EvalRun) -> Optional[dict]:
     return out
 
 
-def headline(run_metrics: dict) -> Dict[str, Optional[float]]:
-    """The few numbers quoted per model in the summary and comparison tables."""
+def headline(run_metrics: dict) -> Dict[str, Any]:
+    """The few numbers quoted per model in the summary and comparison tables,
+    and the ≥70 % operating points they come from (for the failures kept)."""
     m, f, s = run_metrics["overall"], run_metrics["failure"], run_metrics["sweep"]
     v = run_metrics.get("given_verdict")
     return {
         "verdict_mean_per_class_accuracy": v["overall"]["mean_per_class_accuracy"] if v else None,
         "verdict_mpca_at_70": v["sweep"]["at_70"]["mean_per_class_accuracy"] if v else None,
         "verdict_retained_at_70": v["sweep"]["at_70"]["retained"] if v else None,
+        "verdict_at_70": v["sweep"]["at_70"] if v else None,
         "samples": m["n"],
         "mean_per_class_accuracy": m["mean_per_class_accuracy"],
         "overall_accuracy": m["overall_accuracy"],
@@ -420,6 +425,7 @@ def headline(run_metrics: dict) -> Dict[str, Optional[float]]:
         "retained_at_70": s["at_70"]["retained"],
         "mpca_at_70": s["at_70"]["mean_per_class_accuracy"],
         "accuracy_at_70": s["at_70"]["overall_accuracy"],
+        "at_70": s["at_70"],
     }
 
 
