@@ -1160,6 +1160,24 @@ class MetricUnitTest(unittest.TestCase):
         self.assertFalse(s["accuracy_rises_as_threshold_falls"])
         self.assertLess(s["at_70"]["overall_accuracy"], s["unfiltered"]["overall_accuracy"])
 
+    def test_per_class_selection_keeps_the_confident_half_of_each_failure_class(self):
+        """Pooled, the confident half of ten predicted FP (p 0.90-0.99) and six predicted FN (p 0.50-0.55) is
+        eight FP; split by class it is five FP and three FN."""
+        load_tool()
+        from report_clustering import select_failures
+        predicted = np.array([FP] * 10 + [FN] * 6 + [TP] * 4)
+        conf = np.concatenate([np.linspace(0.90, 0.99, 10), np.linspace(0.50, 0.55, 6), [0.99] * 4])
+        probs = np.zeros((20, 4))
+        probs[np.arange(20), predicted] = conf
+        run = types.SimpleNamespace(predicted=predicted, probs=probs)
+        pooled, cut = select_failures(run, "confidence")
+        self.assertEqual(list(pooled), list(range(2, 10)))
+        self.assertAlmostEqual(cut, 0.92)
+        split, cuts = select_failures(run, "confidence-per-class")
+        self.assertEqual(list(split), [5, 6, 7, 8, 9, 13, 14, 15])
+        self.assertAlmostEqual(cuts["FP"], 0.95)
+        self.assertAlmostEqual(cuts["FN"], 0.53)
+
     def test_whether_accuracy_rises_is_judged_where_every_class_keeps_enough_cells(self):
         """Three classes of 200, their wrong predictions the most uncertain; FN 40, of which the 10 wrong ones
         are the most certain of all. Under τ = 0.03 the FN kept are those 10 alone, and the mean per-class

@@ -6,6 +6,9 @@ Pipeline, with the paper's choices and where the reference code differed:
    confidence (predicted-class mean probability, median split) — the paper's
    rule. The reference script kept var_predicted <= 0.03 instead (0.005 at HEAD);
    ``--select variance`` reproduces that, and the report counts both.
+   ``--select confidence-per-class`` splits the predicted FP and the predicted
+   FN at their own medians: pooled, the less confident class can all but
+   vanish from the selection.
 2. **Embedding**: the 256-d post-ReLU FC2 activation (embeddings.f32). The
    reference softmax-normalised it over the 256 dims; we L2-normalise by default
    (``--embedding-norm``): the direction of the activation pattern is what
@@ -35,7 +38,7 @@ import inspect
 import warnings
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 from sklearn.cluster import KMeans
@@ -43,7 +46,7 @@ from sklearn.decomposition import PCA
 from sklearn.manifold import TSNE
 from sklearn.metrics import adjusted_rand_score, normalized_mutual_info_score
 
-from report_inputs import FN, FP, NO_CAUSE, ONLY_TOGETHER, EvalRun
+from report_inputs import FN, FP, LABEL_NAMES, NO_CAUSE, ONLY_TOGETHER, EvalRun
 
 try:
     from threadpoolctl import threadpool_limits  # a scikit-learn dependency
@@ -58,7 +61,8 @@ MOSAIC_ROWS, MOSAIC_COLS = 5, 10
 class ClusterOptions:
     """Knobs of the clustering step (command-line options)."""
     k: int = 2
-    select: str = "confidence"          # "confidence" (paper, median split) or "variance" (reference, var <= 0.03)
+    select: str = "confidence"          # "confidence" (paper, median split), "confidence-per-class" (split
+                                        # within FP and within FN) or "variance" (reference, var <= 0.03)
     embedding_norm: str = "l2"          # "l2", "softmax" (reference), "none"
     space: str = "embedding"            # where k-means runs: "embedding" (paper) or "pca"
     tsne_max: int = 3000
@@ -77,7 +81,7 @@ class ClusterResult:
     n_predicted_fp: int = 0
     n_predicted_fn: int = 0
     n_selected: int = 0
-    confidence_cut: Optional[float] = None
+    confidence_cut: Union[None, float, Dict[str, Optional[float]]] = None  # per class: {"FP": .., "FN": ..}
     n_reference_rule: int = 0
     rows: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))   # selected rows of predictions.csv
     pca_components: int = 0
@@ -120,22 +124,34 @@ def normalise_embeddings(x: np.ndarray, how: str) -> np.ndarray:
     raise ValueError(f"unknown embedding normalisation '{how}'")
 
 
+def _more_confident_half(run: EvalRun, rows: np.ndarray):
+    """The ceil(n/2) rows of the highest predicted-class probability (ranked,
+    so exactly that many even with ties) and the lowest probability kept."""
+    conf = run.probs[rows, run.predicted[rows]]
+    order = np.argsort(-conf, kind="mergesort")
+    n_keep = int(np.ceil(len(rows) / 2))
+    return rows[order[:n_keep]], (float(conf[order[n_keep - 1]]) if n_keep else None)
+
+
 def select_failures(run: EvalRun, select: str):
-    """Rows predicted FP or FN that pass the selection rule, plus the cut used.
+    """Rows predicted FP or FN that pass the selection rule, plus the cut used
+    (for per-class, a dict of the FP and FN cuts).
 
     confidence: the predicted-class probability at or above the median of the
-    predicted failures (ranked, so exactly ceil(n/2) rows even with ties);
-    variance: var_predicted <= 0.03 (reference script)."""
+    predicted failures; confidence-per-class: the same split within the
+    predicted FP and within the predicted FN, so that the less confident class
+    (FN, on the simulator) is not left out; variance: var_predicted <= 0.03
+    (reference script)."""
     failures = np.flatnonzero((run.predicted == FP) | (run.predicted == FN))
     if select == "variance":
         keep = failures[run.var_predicted[failures] <= REFERENCE_VAR_CUT]
         return keep, REFERENCE_VAR_CUT
-    conf = run.probs[failures, run.predicted[failures]]
-    order = np.argsort(-conf, kind="mergesort")
-    n_keep = int(np.ceil(len(failures) / 2))
-    keep = np.sort(failures[order[:n_keep]])
-    cut = float(conf[order[n_keep - 1]]) if n_keep else None
-    return keep, cut
+    if select == "confidence-per-class":
+        halves = {LABEL_NAMES[c]: _more_confident_half(run, np.flatnonzero(run.predicted == c)) for c in (FP, FN)}
+        keep = np.concatenate([rows for rows, _ in halves.values()])
+        return np.sort(keep), {name: cut for name, (_, cut) in halves.items()}
+    keep, cut = _more_confident_half(run, failures)
+    return np.sort(keep), cut
 
 
 def _tsne(x: np.ndarray, perplexity: float, iterations: int, seed: int):
