@@ -344,14 +344,15 @@ def _present_text(present, min_share: float = 0.1, top: int = 4) -> str:
 def clustering_section(run: EvalRun, res, opt: ClusterOptions, figs: Dict[str, str]) -> str:
     """§4: clustering of confident predicted failures, composition and purity."""
     out = ["### 5. Failure clustering\n"]
-    rule = {"confidence": f"the top 50 % by confidence (predicted-class probability ≥ {fmt(res.confidence_cut)}, "
-                          "median split; the paper's rule)",
-            "confidence-per-class": "the top 50 % by confidence of the predicted FP and, apart, of the predicted FN "
-                                    "(predicted-class probability ≥ "
-                                    + ", ".join(f"{fmt(cut)} for {name}"
-                                                for name, cut in (res.confidence_cut or {}).items())
-                                    + "; median splits)",
-            "variance": f"var_predicted ≤ {REFERENCE_VAR_CUT} (the reference script's rule)"}[opt.select]
+    if opt.select == "confidence-per-class":
+        cuts = ", ".join(f"{fmt(cut)} for {name}" for name, cut in res.confidence_cut.items())
+        rule = ("the top 50 % by confidence of the predicted FP and, apart, of the predicted FN (predicted-class "
+                f"probability ≥ {cuts}; median splits)")
+    elif opt.select == "confidence":
+        rule = (f"the top 50 % by confidence (predicted-class probability ≥ {fmt(res.confidence_cut)}, median split; "
+                "the paper's rule)")
+    else:
+        rule = f"var_predicted ≤ {REFERENCE_VAR_CUT} (the reference script's rule)"
     out.append(f"Predicted failures: {res.n_predicted_fp} predicted FP, {res.n_predicted_fn} predicted FN. Selected "
                f"**{res.n_selected}** by {rule}. (The reference script's rule, var_predicted ≤ {REFERENCE_VAR_CUT}, "
                f"would keep {res.n_reference_rule}.)\n")
