@@ -1,5 +1,6 @@
 // What every executable shares: its common flags and the small file outputs
 // (--json, --ready-file).
+#include <cstdlib>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -47,6 +48,26 @@ TEST(CommonOptions, HeartbeatsGoToProcessStatusUnlessTheFlagNamesAnotherChannel)
   EXPECT_EQ(options.status_channel, "ROBOT_B_STATUS");
   CommonOptions tool;  // a tool that publishes no heartbeat refuses the flag
   EXPECT_EQ(parse(add_common_options, {"--status-channel", "ROBOT_B_STATUS"}, tool), kExitUsage);
+}
+
+// ivoa-launch hands its --status-channel to its commands this way.
+TEST(CommonOptions, TheEnvironmentsStatusChannelIsTheDefaultAndTheFlagOrConfigBeatIt) {
+  const auto add_with_status = [](CLI::App& app, CommonOptions& o) {
+    add_common_options(app, o);
+    add_status_channel_option(app, o.status_channel);
+  };
+  test::TempDir dir;
+  const std::string config = dir.file("robot.ini");
+  std::ofstream(config) << "status-channel = FROM_CONFIG\n";
+  ASSERT_EQ(setenv(kStatusChannelEnv, "FROM_ENV", 1), 0);
+  CommonOptions from_env, from_flag, from_config;
+  EXPECT_EQ(parse(add_with_status, {}, from_env), -1);
+  EXPECT_EQ(parse(add_with_status, {"--status-channel", "FROM_FLAG"}, from_flag), -1);
+  EXPECT_EQ(parse(add_with_status, {"--config", config.c_str()}, from_config), -1);
+  unsetenv(kStatusChannelEnv);
+  EXPECT_EQ(from_env.status_channel, "FROM_ENV");
+  EXPECT_EQ(from_flag.status_channel, "FROM_FLAG");
+  EXPECT_EQ(from_config.status_channel, "FROM_CONFIG");
 }
 
 TEST(CommonOptions, ConfigFileSetsFlagsAndRefusesKeysThatNameNone) {

@@ -2,7 +2,8 @@
 # Every program that publishes a heartbeat takes --status-channel (two
 # robots' stacks on one LAN keep their heartbeats apart, as their other
 # channels), and a process given one publishes there and not on
-# PROCESS_STATUS. No network: the processes write to a log (file://...?mode=w).
+# PROCESS_STATUS; so does one whose environment's IVOA_STATUS_CHANNEL names
+# one (ivoa-launch sets it for its commands). No network: the processes write to a log (file://...?mode=w).
 set -euo pipefail
 B=${IVOA_BUILD_DIR:?}
 OUT=$(mktemp -d)
@@ -63,4 +64,11 @@ if [ "$channels" != "ROBOT_B_STATUS ROBOT_C_STATUS" ]; then
   echo "FAIL: ivoa-log-play --status-channel ROBOT_C_STATUS: heartbeats on '$channels'" >&2
   exit 1
 fi
+# $IVOA_STATUS_CHANNEL (what ivoa-launch hands its commands) replaces the
+# default; the flag still beats it.
+channels=$(IVOA_STATUS_CHANNEL=ROBOT_D_STATUS heartbeat_channels ivoa-depth-monitor)  # after the player read its log
+[ "$channels" = ROBOT_D_STATUS ] || { echo "FAIL: IVOA_STATUS_CHANNEL=ROBOT_D_STATUS: heartbeats on '$channels'" >&2; exit 1; }
+export IVOA_STATUS_CHANNEL=ROBOT_D_STATUS
+expect_heartbeats_on ROBOT_B_STATUS ivoa-viewer --out-dir "$OUT/figures"
+unset IVOA_STATUS_CHANNEL
 echo "heartbeats on the channel asked for"

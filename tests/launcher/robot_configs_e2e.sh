@@ -7,9 +7,10 @@
 #           files); every split file must be self-contained and whole, the
 #           frames labelled, and ivoa-dataset must build a dataset from them;
 #   deploy: deploy.pmd on "robot" (stereo driver, detector, introspection)
-#           and on "laptop" (the viewer), two launchers at once; the
-#           introspection must answer frames with no input skipped or bad,
-#           and the viewer must draw figures.
+#           and on "laptop" (the viewer), two launchers at once, on a port
+#           and heartbeat channel of their own given to the launchers only;
+#           the introspection must answer frames with no input skipped or
+#           bad, and the viewer must draw figures.
 # Usage: robot_configs_e2e.sh record|deploy
 set -euo pipefail
 mode=${1:?record or deploy}
@@ -54,9 +55,13 @@ if [ "$mode" = record ]; then
   "$B/bin/ivoa-dataset" --log-level warn build --out "$out/data" --labels recorded --views 2 --patch-scale 1.6 \
     "$out"/logs/record-*.lcmlog.[0-9][0-9] > "$out/dataset.txt" 2>&1 || { cat "$out/dataset.txt"; exit 1; }
 else
-  launch robot deploy.pmd --host robot "${cameras[@]}"
+  # A robot of its own on the network: a port and a heartbeat channel given
+  # to the launchers only, which hand them to every command they start
+  # (each status table must still hold every command's heartbeat).
+  bus=(--lcm-url "udpm://239.255.76.67:7668?ttl=0" --status-channel ROBOT_A_STATUS)
+  launch robot deploy.pmd --host robot "${bus[@]}" "${cameras[@]}"
   robot=${pids[-1]}
-  launch laptop deploy.pmd --host laptop --set VIEWER_DIR="$out/viewer" \
+  launch laptop deploy.pmd --host laptop "${bus[@]}" --set VIEWER_DIR="$out/viewer" \
     --set VIEWER_ARGS="--every-seconds 1 --max-images 0"
   finish "$robot" robot
   finish "${pids[-1]}" laptop

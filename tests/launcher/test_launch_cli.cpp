@@ -100,6 +100,33 @@ cmd "logger" { exec = "sleep 30"; auto_respawn = "true"; }
   EXPECT_TRUE(contains(read_file(status), "\"end_reason\": \"--until: session ended\"")) << read_file(status);
 }
 
+// Given a port or a heartbeat channel, the launcher listens there; its
+// commands must publish there too, or its table stays empty.
+TEST(LaunchCli, CommandsGetTheLaunchersLcmUrlAndHeartbeatChannel) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "e.pmd", R"(
+cmd "env" { exec = "echo channel=$IVOA_STATUS_CHANNEL url=$LCM_DEFAULT_URL"; }
+)");
+  const std::string url = "file://" + dir.file("launcher.lcmlog") + "?mode=w";
+  const Result r =
+      ivoa::test::run_command("timeout 60 " IVOA_LAUNCH_EXE " --log-level warn --once --grace 0 --lcm-url '" + url +
+                              "' --status-channel ROBOT_B_STATUS " + config);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "[env] channel=ROBOT_B_STATUS url=" + url)) << r.output;
+}
+
+TEST(LaunchCli, WithoutLcmTheCommandsKeepTheirLcmUrl) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "e.pmd", R"pmd(
+cmd "env" { exec = "echo channel=$IVOA_STATUS_CHANNEL url=$(printenv LCM_DEFAULT_URL || echo unset)"; }
+)pmd");
+  const Result r = ivoa::test::run_command("env -u LCM_DEFAULT_URL -u IVOA_STATUS_CHANNEL timeout 60 " IVOA_LAUNCH_EXE
+                                           " --lcm-url none --log-level warn --once --grace 0 " +
+                                           config);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "[env] channel=PROCESS_STATUS url=unset")) << r.output;
+}
+
 TEST(LaunchCli, ScriptStartsOnlyWhatItNamesInOrder) {
   ivoa::test::TempDir dir;
   const auto config = write_file(dir, "s.pmd", R"(

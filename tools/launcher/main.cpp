@@ -68,7 +68,11 @@ void add_options(CLI::App& app, CliOptions& o) {
       ->check(ivoa::non_negative_number());
   app.add_flag("--plain", o.plain, "on a terminal too: prefixed lines and a periodic table instead of a live table");
   app.add_option("--output-dir", l.output_dir, "also append each command's output to DIR/NAME.log");
-  app.add_option("--status-channel", l.status_channel, "heartbeat channel")->capture_default_str();
+  app.add_option("--status-channel", l.status_channel,
+                 "heartbeat channel: the status table and `wait \"running\"` read it, the launcher publishes its "
+                 "own there, and its commands get it as $IVOA_STATUS_CHANNEL")
+      ->capture_default_str()
+      ->envname(ivoa::kStatusChannelEnv);
   app.add_option("--ready-timeout", l.ready_timeout_s,
                  "a script's wait \"running\" on an ivoa program waits for its first heartbeat at most this long, "
                  "s (0: not at all)")
@@ -150,6 +154,16 @@ bool something_to_run(const Config& config, const SelectedCommands& selected, co
   return true;
 }
 
+// The commands report where the launcher listens: they get its heartbeat
+// channel as IVOA_STATUS_CHANNEL and its --lcm-url, when one is given, as
+// LCM_DEFAULT_URL (the default of every ivoa program's flags and of
+// lcm-logplayer's). A command's own flags still win.
+void hand_bus_settings_to_commands(const std::string& lcm_url, LauncherOptions& l) {
+  auto& environment = l.supervisor.environment;
+  environment[ivoa::kStatusChannelEnv] = l.status_channel;
+  if (!lcm_url.empty() && lcm_url != "none") environment["LCM_DEFAULT_URL"] = lcm_url;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -169,6 +183,7 @@ int main(int argc, char** argv) {
   SelectedCommands selected;
   try {
     selected = prepare(o, config);
+    hand_bus_settings_to_commands(common.lcm_url, o.launcher);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;

@@ -23,6 +23,7 @@ void add_common_options(CLI::App& app, CommonOptions& options) {
 void add_status_channel_option(CLI::App& app, std::string& channel) {
   app.add_option("--status-channel", channel, "out: heartbeat (ivoa.process_status_t)")
       ->capture_default_str()
+      ->envname(kStatusChannelEnv)
       ->group("Channels");
 }
 
