@@ -1193,6 +1193,16 @@ class MetricUnitTest(unittest.TestCase):
         run = types.SimpleNamespace(label=y, predicted=p, var_predicted=var, model_threshold=None)
         s = uncertainty_sweep(run)
         self.assertLess(s["spearman_threshold_vs_mpca"], -0.9)  # over the points keeping ≥ 20 FN: it rises
+        # the 70 % point keeps the 10 sure-and-wrong FN only (a loss of 5 points there): not held against it
+        self.assertLess(s["gain_at_70"], 0)
+        self.assertEqual(s["verdict"], "yes")
+        # a class with fewer than 20 cells in all does not stop the judgement
+        y = np.repeat(np.arange(4), [300, 300, 300, 18])
+        wrong = rng.random(918) < 0.2
+        var = np.where(wrong, rng.uniform(0.05, 0.1, 918), rng.uniform(0.001, 0.02, 918))
+        run = types.SimpleNamespace(label=y, predicted=np.where(wrong, (y + 1) % 4, y), var_predicted=var,
+                                    model_threshold=None)
+        self.assertEqual(uncertainty_sweep(run)["verdict"], "yes")
 
     def test_sweep_points_say_how_few_cells_the_smallest_class_keeps(self):
         load_tool()

@@ -277,7 +277,8 @@ def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
     key = ("Each sample is a ground cell ahead of the robot, labelled by the depth monitor against the stereo "
            "detector's verdict: TP = an obstacle the detector reports, TN = free space it reports free, FP = an "
            "obstacle it reports where there is none, FN = an obstacle it misses. The introspection model predicts "
-           "that label from the image; FP and FN are the detector's failures.\n\n")
+           "that label from the image; FP and FN are the detector's failures. \"FP x %, FN y % kept\": the share of "
+           "the true FP and FN whose prediction the uncertainty gate still passes at that point.\n\n")
     return key + md.table(["model", "detector", "samples", "mean per-class acc.", "overall acc.", "failure AUROC",
                      "≥70 % retained → mean per-class acc.", "given the detector's verdict: mean per-class acc.; "
                      "≥70 % retained →", "cluster purity by dominant phenomenon (one cluster)",

@@ -205,10 +205,10 @@ def uncertainty_section(rm: dict, figs: Dict[str, str]) -> str:
     rho = s["spearman_threshold_vs_mpca"]
     out.append(
         f"Does accuracy rise as the threshold falls? **{s['verdict']}** (Spearman rank correlation between τ and mean "
-        f"per-class accuracy over quantile thresholds keeping ≥ 10 % of the cells and ≥ {FEW_CELLS} of every class: "
-        f"{fmt(rho, 2)}; for overall accuracy: "
+        f"per-class accuracy over the {s['spearman_points']} quantile thresholds keeping ≥ 10 % of the cells and "
+        f"≥ {FEW_CELLS} of every class that has as many: {fmt(rho, 2)}; for overall accuracy: "
         f"{fmt(s['spearman_threshold_vs_accuracy'], 2)}; negative = accuracy rises as τ falls; 'yes' takes a "
-        f"correlation of −0.5 or less and a gain at 70 % retained).\n")
+        f"correlation of −0.5 or less and a gain at 70 % retained, where that point keeps as many cells).\n")
     out.append(f"Mean var_predicted of correct predictions: **{fmt(s['mean_var_correct'], 5)}** (n = {s['n_correct']}) "
                f"vs wrong predictions: **{fmt(s['mean_var_wrong'], 5)}** (n = {s['n_wrong']})"
                + (" — wrong predictions are more uncertain, as they should be.\n"

@@ -195,6 +195,7 @@ def _point(label, predicted, var, tau) -> dict:
         "retained": float(keep.mean()),
         "retained_count": int(keep.sum()),
         "retained_per_class": [float(kept[c] / support_all[c]) if support_all[c] else None for c in range(N_CLASSES)],
+        "kept_per_class": kept.tolist(),
         # the mean per-class accuracy leans on its smallest retained class: a handful of cells make it noise,
         # and a class withheld whole (0 kept) leaves it a mean over the other classes
         "fewest_kept": int(kept[support_all > 0].min()) if support_all.any() else 0,
@@ -210,6 +211,43 @@ def threshold_for_retained(var: np.ndarray, fraction: float) -> float:
     s = np.sort(var)
     k = max(1, int(math.ceil(fraction * len(s) - 1e-9)))
     return float(s[k - 1])
+
+
+def _accuracy_trend(label: np.ndarray, pts: List[dict], unfiltered: dict, at70: dict) -> dict:
+    """Does accuracy rise as the threshold falls? The rank correlation between
+    the threshold and mean per-class accuracy over the quantile thresholds
+    that keep at least 10 % of the cells and FEW_CELLS of every class that has
+    as many (fewer, and a handful of cells decide the mean, or a class withheld
+    whole leaves it to the others); "yes" takes -0.5 or less and a gain at the
+    70 % point, where that point rests on enough cells too."""
+    support = np.bincount(label, minlength=N_CLASSES)
+
+    def enough_cells(p):
+        return all(k >= FEW_CELLS for k, n in zip(p["kept_per_class"], support) if n >= FEW_CELLS)
+
+    pts = [p for p in pts if p["retained"] >= 0.10 and enough_cells(p) and p["mean_per_class_accuracy"] is not None]
+    thresholds = np.array([p["threshold"] for p in pts])
+    rho = _spearman(thresholds, np.array([p["mean_per_class_accuracy"] for p in pts]))
+    gain = (at70["mean_per_class_accuracy"] - unfiltered["mean_per_class_accuracy"]
+            if at70["mean_per_class_accuracy"] is not None and unfiltered["mean_per_class_accuracy"] is not None
+            else None)
+    gain_counts = gain is not None and enough_cells(at70)
+    if rho is None:
+        verdict, rises = ("undetermined (" + (f"fewer than three thresholds keep ≥ 10 % of the cells and ≥ "
+                                              f"{FEW_CELLS} of every class" if len(pts) < 3 else
+                                              "the accuracy does not change over the sweep") + ")"), None
+    elif rho <= -0.5 and (not gain_counts or gain > 0):
+        verdict, rises = "yes", True
+    elif rho <= -0.5:
+        verdict, rises = "over the sweep, but not at 70 % retained", None
+    elif rho < 0:
+        verdict, rises = "weakly (noisy)", None
+    else:
+        verdict, rises = "no", False
+    return {"spearman_threshold_vs_mpca": rho,
+            "spearman_threshold_vs_accuracy": _spearman(thresholds, np.array([p["overall_accuracy"] for p in pts])),
+            "spearman_points": len(pts), "gain_at_70": gain, "accuracy_rises_as_threshold_falls": rises,
+            "verdict": verdict}
 
 
 def uncertainty_sweep(run: EvalRun, quantiles: int = 101) -> dict:
@@ -237,28 +275,7 @@ def gate_sweep(label: np.ndarray, predicted: np.ndarray, var: np.ndarray, model_
     table = [_point(label, predicted, var, threshold_for_retained(var, f))
              for f in (1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2)]
 
-    # Does accuracy rise as the threshold falls? Rank correlation between the
-    # threshold and mean per-class accuracy over quantile thresholds that keep
-    # at least 10 % of the data and FEW_CELLS of every class (below that a
-    # handful of samples decide, or a class withheld whole leaves the mean to
-    # the others).
-    pts = [_point(label, predicted, var, t) for t in np.unique(qs)]
-    pts = [p for p in pts if p["retained"] >= 0.10 and p["fewest_kept"] >= FEW_CELLS
-           and p["mean_per_class_accuracy"] is not None]
-    rho = _spearman(np.array([p["threshold"] for p in pts]), np.array([p["mean_per_class_accuracy"] for p in pts]))
-    rho_overall = _spearman(np.array([p["threshold"] for p in pts]), np.array([p["overall_accuracy"] for p in pts]))
-    gain = (at70["mean_per_class_accuracy"] - unfiltered["mean_per_class_accuracy"]
-            if at70["mean_per_class_accuracy"] is not None and unfiltered["mean_per_class_accuracy"] is not None
-            else None)
-    if rho is None:
-        verdict = "undetermined (too few distinct thresholds)"
-        rises = None
-    elif rho <= -0.5 and (gain is None or gain > 0):
-        verdict, rises = "yes", True
-    elif rho < 0:
-        verdict, rises = "weakly (noisy)", None
-    else:
-        verdict, rises = "no", False
+    trend = _accuracy_trend(label, [_point(label, predicted, var, t) for t in np.unique(qs)], unfiltered, at70)
 
     correct = label == predicted
     return {
@@ -269,11 +286,7 @@ def gate_sweep(label: np.ndarray, predicted: np.ndarray, var: np.ndarray, model_
         "at_model_threshold": at_model,
         "model_threshold": model_thr,
         "retained_table": table,
-        "spearman_threshold_vs_mpca": rho,
-        "spearman_threshold_vs_accuracy": rho_overall,
-        "gain_at_70": gain,
-        "accuracy_rises_as_threshold_falls": rises,
-        "verdict": verdict,
+        **trend,
         "mean_var_correct": float(var[correct].mean()) if correct.any() else None,
         "mean_var_wrong": float(var[~correct].mean()) if (~correct).any() else None,
         "n_correct": int(correct.sum()),
