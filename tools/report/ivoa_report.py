@@ -68,9 +68,10 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     p.add_argument("--out", required=True, metavar="REPORT_DIR", help="report folder (created)")
     p.add_argument("--title", default="IVOA introspection report")
     p.add_argument("--clusters", type=int, default=2, metavar="K", help="k-means clusters (paper: 2)")
-    p.add_argument("--select", choices=("confidence", "confidence-per-class", "variance"), default="confidence",
-                   help="failures to cluster: top 50%% by confidence (paper), the same within predicted FP and "
-                        "within predicted FN, or var_predicted <= 0.03 (reference)")
+    p.add_argument("--select", choices=("confidence-per-class", "confidence", "variance"),
+                   default="confidence-per-class",
+                   help="failures to cluster: the top 50%% by confidence of the predicted FP and of the predicted "
+                        "FN, of both pooled, or var_predicted <= 0.03 (reference)")
     p.add_argument("--embedding-norm", choices=("l2", "softmax", "none"), default="l2",
                    help="FC2 embedding normalisation before clustering (reference code: softmax)")
     p.add_argument("--cluster-space", choices=("embedding", "pca"), default="embedding",
