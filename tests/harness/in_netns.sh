@@ -20,4 +20,5 @@ ip route add 224.0.0.0/4 dev lo || exit 77
 ip addr add 127.0.0.2/8 dev lo 2>/dev/null || true
 # Tests use a non-default port so they never mix with a live system.
 export LCM_DEFAULT_URL="${IVOA_TEST_LCM_URL:-udpm://239.255.76.67:7671?ttl=0}"
+unset IVOA_STATUS_CHANNEL  # the tests listen for heartbeats on PROCESS_STATUS
 exec "$@"

@@ -9,11 +9,13 @@
 #include <cstdio>
 #include <fstream>
 #include <initializer_list>
+#include <map>
 #include <string>
 #include <thread>
 
 #include <gtest/gtest.h>
 
+#include "ivoa/launcher/launcher.hpp"
 #include "test_rig.hpp"
 
 extern char** environ;
@@ -102,29 +104,33 @@ cmd "logger" { exec = "sleep 30"; auto_respawn = "true"; }
 
 // Given a port or a heartbeat channel, the launcher listens there; its
 // commands must publish there too, or its table stays empty.
-TEST(LaunchCli, CommandsGetTheLaunchersLcmUrlAndHeartbeatChannel) {
+TEST(BusEnvironment, CommandsGetTheHeartbeatChannelAndAUdpmUrlOnly) {
+  ivoa::launcher::LauncherOptions options;
+  options.status_channel = "ROBOT_B_STATUS";
+  options.lcm_url = "udpm://239.255.76.67:7668?ttl=1";
+  const std::map<std::string, std::string> both{{"IVOA_STATUS_CHANNEL", "ROBOT_B_STATUS"},
+                                                {"LCM_DEFAULT_URL", "udpm://239.255.76.67:7668?ttl=1"}};
+  EXPECT_EQ(ivoa::launcher::bus_environment(options), both);
+  // the launcher's own bus: each command would get a queue or a file of its own
+  for (const char* own : {"", "none", "memq://", "file:///tmp/run.lcmlog?mode=w"}) {
+    options.lcm_url = own;
+    EXPECT_EQ(ivoa::launcher::bus_environment(options),
+              (std::map<std::string, std::string>{{"IVOA_STATUS_CHANNEL", "ROBOT_B_STATUS"}}))
+        << own;
+  }
+}
+
+TEST(LaunchCli, CommandsGetTheLaunchersHeartbeatChannelAndKeepTheirLcmUrlForAnInProcessOne) {
   ivoa::test::TempDir dir;
   const auto config = write_file(dir, "e.pmd", R"(
 cmd "env" { exec = "echo channel=$IVOA_STATUS_CHANNEL url=$LCM_DEFAULT_URL"; }
 )");
-  const std::string url = "file://" + dir.file("launcher.lcmlog") + "?mode=w";
-  const Result r =
-      ivoa::test::run_command("timeout 60 " IVOA_LAUNCH_EXE " --log-level warn --once --grace 0 --lcm-url '" + url +
-                              "' --status-channel ROBOT_B_STATUS " + config);
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_TRUE(contains(r.output, "[env] channel=ROBOT_B_STATUS url=" + url)) << r.output;
-}
-
-TEST(LaunchCli, WithoutLcmTheCommandsKeepTheirLcmUrl) {
-  ivoa::test::TempDir dir;
-  const auto config = write_file(dir, "e.pmd", R"pmd(
-cmd "env" { exec = "echo channel=$IVOA_STATUS_CHANNEL url=$(printenv LCM_DEFAULT_URL || echo unset)"; }
-)pmd");
-  const Result r = ivoa::test::run_command("env -u LCM_DEFAULT_URL -u IVOA_STATUS_CHANNEL timeout 60 " IVOA_LAUNCH_EXE
-                                           " --lcm-url none --log-level warn --once --grace 0 " +
+  const Result r = ivoa::test::run_command("LCM_DEFAULT_URL=udpm://239.255.76.67:7669 timeout 60 " IVOA_LAUNCH_EXE
+                                           " --lcm-url memq:// --once --grace 0 --status-channel ROBOT_B_STATUS " +
                                            config);
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_TRUE(contains(r.output, "[env] channel=PROCESS_STATUS url=unset")) << r.output;
+  EXPECT_TRUE(contains(r.output, "[env] channel=ROBOT_B_STATUS url=udpm://239.255.76.67:7669")) << r.output;
+  EXPECT_TRUE(contains(r.output, "--lcm-url memq://: the commands do not get it")) << r.output;
 }
 
 TEST(LaunchCli, ScriptStartsOnlyWhatItNamesInOrder) {

@@ -154,14 +154,15 @@ bool something_to_run(const Config& config, const SelectedCommands& selected, co
   return true;
 }
 
-// The commands report where the launcher listens: they get its heartbeat
-// channel as IVOA_STATUS_CHANNEL and its --lcm-url, when one is given, as
-// LCM_DEFAULT_URL (the default of every ivoa program's flags and of
-// lcm-logplayer's). A command's own flags still win.
-void hand_bus_settings_to_commands(const std::string& lcm_url, LauncherOptions& l) {
-  auto& environment = l.supervisor.environment;
-  environment[ivoa::kStatusChannelEnv] = l.status_channel;
-  if (!lcm_url.empty() && lcm_url != "none") environment["LCM_DEFAULT_URL"] = lcm_url;
+// The commands report where the launcher listens (bus_environment); says so
+// where they cannot.
+void hand_bus_settings_to_commands(LauncherOptions& l) {
+  for (const auto& [name, value] : bus_environment(l)) l.supervisor.environment[name] = value;
+  if (!l.lcm_url.empty() && l.lcm_url != "none" && l.lcm_url.rfind("udpm://", 0) != 0)
+    spdlog::warn(
+        "--lcm-url {}: the commands do not get it (they would each have a bus of their own), so their "
+        "heartbeats reach the status table only if they publish there",
+        l.lcm_url);
 }
 
 }  // namespace
@@ -183,7 +184,7 @@ int main(int argc, char** argv) {
   SelectedCommands selected;
   try {
     selected = prepare(o, config);
-    hand_bus_settings_to_commands(common.lcm_url, o.launcher);
+    hand_bus_settings_to_commands(o.launcher);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;

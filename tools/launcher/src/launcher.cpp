@@ -19,6 +19,7 @@
 #include "readiness_gate.hpp"
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/heartbeat.hpp"
+#include "ivoa/core/process.hpp"
 #include "ivoa/launcher/script_runner.hpp"
 #include "ivoa/launcher/status_report.hpp"
 
@@ -309,6 +310,12 @@ class Run {
 };
 
 }  // namespace
+
+std::map<std::string, std::string> bus_environment(const LauncherOptions& options) {
+  std::map<std::string, std::string> environment{{kStatusChannelEnv, options.status_channel}};
+  if (options.lcm_url.rfind("udpm://", 0) == 0) environment["LCM_DEFAULT_URL"] = options.lcm_url;
+  return environment;
+}
 
 void install_launcher_signal_handlers() {
   struct sigaction action {};

@@ -40,13 +40,13 @@ void add_offline_options(CLI::App& app, CommonOptions& options);
 
 // The environment variable that, when set, replaces PROCESS_STATUS as every
 // program's heartbeat channel; ivoa-launch sets it in its commands'
-// environment to its own --status-channel, as it sets LCM_DEFAULT_URL to
-// its --lcm-url, so that a launched stack reports where the launcher listens.
+// environment to its own --status-channel, as it sets LCM_DEFAULT_URL to a
+// udpm --lcm-url, so that a launched stack reports where the launcher listens.
 inline constexpr const char* kStatusChannelEnv = "IVOA_STATUS_CHANNEL";
 
 // --status-channel, in the "Channels" group: where a process publishes its
 // heartbeat (`channel` holds the default, channels::kProcessStatus). The flag,
-// then a --config file's status_channel, then $IVOA_STATUS_CHANNEL decide.
+// then a --config file's `status-channel`, then $IVOA_STATUS_CHANNEL decide.
 void add_status_channel_option(CLI::App& app, std::string& channel);
 
 // Parses argv; on --help or a usage error prints and returns the exit code

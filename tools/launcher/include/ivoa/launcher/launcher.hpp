@@ -3,6 +3,7 @@
 // script), follows their heartbeats, shows the status table, and decides
 // when to end (signal, --duration, --once/--until, or nothing left to run);
 // then runs the stop script, if any, and stops what is left.
+#include <map>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,14 @@ struct LauncherOptions {
   std::string stop_script = "stop";
   SupervisorOptions supervisor;
 };
+
+// What the commands get in their environment so that they report where the
+// launcher listens (every ivoa program takes both as its defaults, a
+// command's own flags still win): IVOA_STATUS_CHANNEL = status_channel, and
+// LCM_DEFAULT_URL = lcm_url where it is a udpm:// URL. A memq:// or file://
+// URL is the launcher's alone: handed on, each command would talk to a
+// queue or a file of its own.
+std::map<std::string, std::string> bus_environment(const LauncherOptions& options);
 
 // SIGINT, SIGTERM and SIGHUP stop the run cleanly; a second one kills
 // every command at once. SIGPIPE is ignored.
