@@ -1162,6 +1162,16 @@ class MetricUnitTest(unittest.TestCase):
         self.assertFalse(s["accuracy_rises_as_threshold_falls"])
         self.assertLess(s["at_70"]["overall_accuracy"], s["unfiltered"]["overall_accuracy"])
 
+    def test_clusters_that_are_only_the_predicted_fp_and_fn_are_called_so(self):
+        load_tool()
+        from report_markdown import _split_by_predicted_class
+        split = [{"n": 10, "predicted_fp": 10, "predicted_fn": 0}, {"n": 4, "predicted_fp": 0, "predicted_fn": 4}]
+        self.assertIn("The two clusters are the predicted FP and the predicted FN", _split_by_predicted_class(split))
+        mixed = [{"n": 10, "predicted_fp": 9, "predicted_fn": 1}, {"n": 4, "predicted_fp": 1, "predicted_fn": 3}]
+        self.assertEqual(_split_by_predicted_class(mixed), "")
+        both_fp = [{"n": 10, "predicted_fp": 10, "predicted_fn": 0}, {"n": 4, "predicted_fp": 4, "predicted_fn": 0}]
+        self.assertEqual(_split_by_predicted_class(both_fp), "")
+
     def test_per_class_selection_keeps_the_confident_half_of_each_failure_class(self):
         """Pooled, the confident half of ten predicted FP (p 0.90-0.99) and six predicted FN (p 0.50-0.55) is
         eight FP; split by class it is five FP and three FN."""

@@ -6,9 +6,10 @@ Pipeline, with the paper's choices and where the reference code differed:
    confidence (predicted-class mean probability, median split) of the
    predicted FP and, apart, of the predicted FN. The paper keeps "the top 50 %
    most confident" failures; pooled (``--select confidence``), the less
-   confident class all but vanishes (16 predicted FN among 1902 selected in
-   the default main job's JPP-C model), and with it the cluster of misses
-   the paper found beside the reflections. The reference script kept
+   confident class can all but vanish (JPP-C's FN in the default main job:
+   16 among 1902 selected; the dense model's FN are the more confident
+   class), and with it the cluster of misses the paper found beside the
+   reflections. At k = 2 the clusters then tend to be the two halves. The reference script kept
    var_predicted <= 0.03 instead (0.005 at HEAD); ``--select variance``
    reproduces that, and the report counts it beside the rule used.
 2. **Embedding**: the 256-d post-ReLU FC2 activation (embeddings.f32). The
@@ -142,7 +143,7 @@ def select_failures(run: EvalRun, select: str):
     confidence: the predicted-class probability at or above the median of the
     predicted failures; confidence-per-class: the same split within the
     predicted FP and within the predicted FN, so that the less confident class
-    (FN, on the simulator) is not left out; variance: var_predicted <= 0.03
+    is not left out; variance: var_predicted <= 0.03
     (reference script)."""
     failures = np.flatnonzero((run.predicted == FP) | (run.predicted == FN))
     if select == "variance":

@@ -234,7 +234,7 @@ def _accuracy_trend(label: np.ndarray, pts: List[dict], unfiltered: dict, at70: 
     gain_counts = gain is not None and enough_cells(at70)
     if rho is None:
         verdict, rises = ("undetermined (" + (f"fewer than three thresholds keep ≥ 10 % of the cells and ≥ "
-                                              f"{FEW_CELLS} of every class" if len(pts) < 3 else
+                                              f"{FEW_CELLS} of every class that has as many" if len(pts) < 3 else
                                               "the accuracy does not change over the sweep") + ")"), None
     elif rho <= -0.5 and (not gain_counts or gain > 0):
         verdict, rises = "yes", True
