@@ -426,7 +426,7 @@ class ReportTest(unittest.TestCase):
         report = read_text(os.path.join(self.out, "report.md"))
         summary, comparison = report.split("## Inputs")[0], report.split("## Comparison")[1]
         said = f"FP {kept[0]:.0f} %, FN {kept[1]:.0f} % kept"
-        self.assertIn(f"70.0 % → 1.000 ({said})", summary)
+        self.assertRegex(summary, r"70\.0 % → 1\.000 \[1\.000, 1\.000\] \(" + said + r"\)")
         row = next(line for line in comparison.splitlines() if line.startswith("| true failures kept at ≥70 % |"))
         self.assertTrue(row.endswith(f"| {said} |"), row)  # the known model is the second column
         self.assertTrue(s["accuracy_rises_as_threshold_falls"])
@@ -1161,6 +1161,28 @@ class MetricUnitTest(unittest.TestCase):
         s = uncertainty_sweep(run)
         self.assertFalse(s["accuracy_rises_as_threshold_falls"])
         self.assertLess(s["at_70"]["overall_accuracy"], s["unfiltered"]["overall_accuracy"])
+
+    def test_the_frame_bootstrap_interval_resamples_whole_frames(self):
+        """40 frames of 4 cells, one of each class. Where every frame has the same right and wrong cells, any
+        resample of frames scores the same; where whole frames are right or wrong, the interval widens around
+        the figure; kept rows only count."""
+        load_tool()
+        from report_metrics import class_metrics, frame_bootstrap_interval
+        frames, label = np.repeat(np.arange(40), 4), np.tile(np.arange(4), 40)
+        same = np.where(label == FN, TN, label)  # FN wrong in every frame: 0.75 whatever is drawn
+        run = types.SimpleNamespace(session=np.array(["s"] * 160), utime=frames * 1000, label=label, predicted=same)
+        self.assertEqual(frame_bootstrap_interval(run), [0.75, 0.75])
+        run.predicted = np.where(frames < 10, (label + 1) % 4, label)  # frames 0-9 wholly wrong: 0.75 again
+        low, high = frame_bootstrap_interval(run)
+        self.assertLess(low, 0.75)
+        self.assertGreater(high, 0.75)
+        self.assertLess(high - low, 0.35)
+        self.assertAlmostEqual(class_metrics(run.label, run.predicted)["mean_per_class_accuracy"], 0.75)
+        self.assertEqual(frame_bootstrap_interval(run, keep=frames >= 10), [1.0, 1.0])
+        run.session = np.where(frames < 20, "a", "b")  # frames are (session, utime): 0-19 and 20-39 both count
+        run.utime = (frames % 20) * 1000
+        self.assertEqual(frame_bootstrap_interval(run, keep=frames >= 10), [1.0, 1.0])
+        self.assertEqual(frame_bootstrap_interval(run), [low, high])
 
     def test_clusters_that_are_only_the_predicted_fp_and_fn_are_called_so(self):
         load_tool()

@@ -163,17 +163,19 @@ def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out
 def run_numbers(run: EvalRun, args: argparse.Namespace, noise: Optional[dict]) -> dict:
     """The metrics of one model, as metrics.json holds them (clustering added later)."""
     grid = query_grid(run)
+    sweep = metrics.uncertainty_sweep(run)
     return {
         "name": run.name, "eval_dir": run.path, "dataset": run.dataset.path if run.dataset else None,
         "detector": run.detector, "model": run.meta.get("model"), "mc_passes": run.meta.get("mc_passes"),
         "overall": metrics.class_metrics(run.label, run.predicted),
+        "intervals": metrics.headline_intervals(run, sweep),
         "environments": metrics.grouped_metrics(run, run.environment),
         "sessions": metrics.grouped_metrics(run, run.session, describe_sessions=True),
         "distances": metrics.by_distance(run, grid.get("safety_radius"), patch_sides(run)),
         "patch_size": patch_size(run),
         "patch_scale": patch_scale(run),
         "failure": metrics.failure_detection(run.label, run.predicted, run.probs),
-        "sweep": metrics.uncertainty_sweep(run),
+        "sweep": sweep,
         "per_phenomenon": metrics.per_phenomenon(run),
         "given_verdict": metrics.given_verdict(run),
         "by_margin": metrics.by_margin(run, evidence_margin(run, args.evidence_threshold), args.evidence_threshold,
@@ -269,9 +271,12 @@ def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
         given = (f"{md.fmt(h['verdict_mean_per_class_accuracy'])}; {md.pct(h['verdict_retained_at_70'])} → "
                  f"{md.fmt(h['verdict_mpca_at_70'])} ({md.failures_kept(h['verdict_at_70'])})"
                  if h["verdict_mean_per_class_accuracy"] is not None else "n/a")
-        rows.append([r.name, r.detector, h["samples"], md.fmt(h["mean_per_class_accuracy"]),
+        ci = h["intervals"]
+        rows.append([r.name, r.detector, h["samples"],
+                     md.with_interval(h["mean_per_class_accuracy"], ci.get("mean_per_class_accuracy")),
                      md.fmt(h["overall_accuracy"]), md.fmt(h["failure_auroc"]),
-                     f"{md.pct(h['retained_at_70'])} → {md.fmt(h['mpca_at_70'])} ({md.failures_kept(h['at_70'])})",
+                     f"{md.pct(h['retained_at_70'])} → {md.with_interval(h['mpca_at_70'], ci.get('mpca_at_70'))} "
+                     f"({md.failures_kept(h['at_70'])})",
                      given,
                      _purity_with_base(c, "purity", "purity_one_cluster"),
                      _purity_with_base(c, "purity_by_cause", "purity_by_cause_one_cluster")])
@@ -279,7 +284,8 @@ def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
            "detector's verdict: TP = an obstacle the detector reports, TN = free space it reports free, FP = an "
            "obstacle it reports where there is none, FN = an obstacle it misses. The introspection model predicts "
            "that label from the image; FP and FN are the detector's failures. \"FP x %, FN y % kept\": the share of "
-           "the true FP and FN whose prediction the uncertainty gate still passes at that point.\n\n")
+           "the true FP and FN whose prediction the uncertainty gate still passes at that point. [a, b]: the 95 % "
+           "interval over 1000 resamples of whole frames (a frame's cells share its image and noise).\n\n")
     return key + md.table(["model", "detector", "samples", "mean per-class acc.", "overall acc.", "failure AUROC",
                      "≥70 % retained → mean per-class acc.", "given the detector's verdict: mean per-class acc.; "
                      "≥70 % retained →", "cluster purity by dominant phenomenon (one cluster)",
@@ -405,9 +411,11 @@ def print_summary(runs: List[EvalRun], numbers: Dict[str, dict], warnings: List[
     for run in runs:
         h = metrics.headline(numbers[run.slug])
         c = numbers[run.slug]["clustering"]
-        print(f"{run.name}: {h['samples']} samples, mean per-class accuracy {md.fmt(h['mean_per_class_accuracy'])}, "
+        ci = h["intervals"]
+        print(f"{run.name}: {h['samples']} samples, mean per-class accuracy "
+              f"{md.with_interval(h['mean_per_class_accuracy'], ci.get('mean_per_class_accuracy'))}, "
               f"overall {md.fmt(h['overall_accuracy'])}, failure AUROC {md.fmt(h['failure_auroc'])}, "
-              f"at {md.pct(h['retained_at_70'])} retained {md.fmt(h['mpca_at_70'])} "
+              f"at {md.pct(h['retained_at_70'])} retained {md.with_interval(h['mpca_at_70'], ci.get('mpca_at_70'))} "
               f"({md.failures_kept(h['at_70'])}), "
               + (f"given the detector's verdict {md.fmt(h['verdict_mean_per_class_accuracy'])} "
                  f"({md.fmt(h['verdict_mpca_at_70'])} at {md.pct(h['verdict_retained_at_70'])}, "

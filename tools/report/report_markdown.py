@@ -32,6 +32,11 @@ def pct(x, digits: int = 1) -> str:
     return "n/a" if x is None else f"{100 * x:.{digits}f} %"
 
 
+def with_interval(value: Optional[float], interval: Optional[Sequence[float]]) -> str:
+    """A figure with its 95 % interval, where there is one."""
+    return fmt(value) + (f" [{interval[0]:.3f}, {interval[1]:.3f}]" if value is not None and interval else "")
+
+
 def failures_kept(point: Optional[dict]) -> str:
     """How many of the true failures an operating point still judges: a gate
     can raise the mean per-class accuracy by withholding the failures it is
@@ -72,9 +77,14 @@ def metrics_section(run: EvalRun, rm: dict, figs: Dict[str, str]) -> str:
     environment and per session."""
     m = rm["overall"]
     out = ["### 1. Classification metrics\n"]
+    ci = rm.get("intervals", {})
     out.append(f"Mean per-class accuracy (the paper's headline metric, the mean of the confusion diagonal over the "
-               f"classes present): **{fmt(m['mean_per_class_accuracy'])}**; overall accuracy (the reference code's "
-               f"metric): **{fmt(m['overall_accuracy'])}**, on {m['n']} samples.\n")
+               f"classes present): **{fmt(m['mean_per_class_accuracy'])}**"
+               + (f" (95 % interval {ci['mean_per_class_accuracy'][0]:.3f}–"
+                  f"{ci['mean_per_class_accuracy'][1]:.3f} over {ci['resamples']} resamples of whole frames)"
+                  if ci.get("mean_per_class_accuracy") else "")
+               + f"; overall accuracy (the reference code's metric): **{fmt(m['overall_accuracy'])}**, on {m['n']} "
+               "samples.\n")
     if m["absent"]:
         out.append(f"> Class(es) absent from the truth: {', '.join(m['absent'])}. Their accuracy is undefined "
                    f"(n/a) and they are left out of the mean per-class accuracy.\n")

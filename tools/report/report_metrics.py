@@ -67,6 +67,43 @@ def class_metrics(label: np.ndarray, predicted: np.ndarray) -> dict:
     }
 
 
+BOOTSTRAP_RESAMPLES = 1000
+
+
+def frame_bootstrap_interval(run: EvalRun, keep: Optional[np.ndarray] = None,
+                             resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0) -> Optional[List[float]]:
+    """95 % interval of the mean per-class accuracy (of the rows in `keep`,
+    all by default), resampling whole frames with replacement: the cells of a
+    frame share its image and its noise, so they are not independent draws
+    and a per-cell interval would be too narrow. None with fewer than two
+    frames."""
+    keep = np.ones(len(run.label), bool) if keep is None else keep
+    frames = np.unique(np.stack([np.unique(run.session, return_inverse=True)[1], run.utime]), axis=1,
+                       return_inverse=True)[1].reshape(-1)
+    n_frames = int(frames.max()) + 1 if len(frames) else 0
+    if n_frames < 2:
+        return None
+    pair = run.label * N_CLASSES + run.predicted
+    counts = np.zeros((n_frames, N_CLASSES * N_CLASSES))
+    np.add.at(counts, (frames[keep], pair[keep]), 1)
+    weights = np.random.default_rng(seed).multinomial(n_frames, np.full(n_frames, 1.0 / n_frames), size=resamples)
+    cm = (weights @ counts).reshape(resamples, N_CLASSES, N_CLASSES)
+    support = cm.sum(axis=2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        per_class = np.diagonal(cm, axis1=1, axis2=2) / support
+    mean = np.nanmean(np.where(support > 0, per_class, np.nan), axis=1)
+    low, high = np.nanpercentile(mean, [2.5, 97.5])
+    return [float(low), float(high)]
+
+
+def headline_intervals(run: EvalRun, sweep: dict) -> dict:
+    """Frame-bootstrap intervals of the two headline figures: unfiltered and
+    at the ≥ 70 % point (its threshold held fixed)."""
+    return {"resamples": BOOTSTRAP_RESAMPLES,
+            "mean_per_class_accuracy": frame_bootstrap_interval(run),
+            "mpca_at_70": frame_bootstrap_interval(run, run.var_predicted <= sweep["at_70"]["threshold"])}
+
+
 def grouped_metrics(run: EvalRun, key: np.ndarray, describe_sessions: bool = False) -> List[dict]:
     """class_metrics per value of a column (session, environment), sorted by
     value; with describe_sessions, each entry also names its split and
@@ -439,6 +476,7 @@ def headline(run_metrics: dict) -> Dict[str, Any]:
         "mpca_at_70": s["at_70"]["mean_per_class_accuracy"],
         "accuracy_at_70": s["at_70"]["overall_accuracy"],
         "at_70": s["at_70"],
+        "intervals": run_metrics.get("intervals") or {},
     }
 
 
