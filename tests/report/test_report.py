@@ -444,6 +444,13 @@ class ReportTest(unittest.TestCase):
         for got, want in zip(v["overall"]["per_class_accuracy"], expected):
             self.assertAlmostEqual(got, want)
         self.assertAlmostEqual(v["overall"]["mean_per_class_accuracy"], float(np.mean(expected)))
+        # the intervals over resampled frames: around the figure, and none at the 70 % point, which keeps only
+        # right predictions (their variance is the low one) whatever frames are drawn
+        ci = self.model("dense")["intervals"]
+        low, high = ci["verdict_mean_per_class_accuracy"]
+        self.assertLess(low, float(np.mean(expected)))
+        self.assertGreater(high, float(np.mean(expected)))
+        self.assertEqual(ci["verdict_mpca_at_70"], [1.0, 1.0])
         # only the verdict's pair is ever predicted
         cm = np.array(v["overall"]["confusion"])
         for t, p in ((TP, TN), (TP, FN), (FP, TN), (FP, FN), (TN, TP), (TN, FP), (FN, TP), (FN, FP)):

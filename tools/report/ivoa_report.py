@@ -164,11 +164,12 @@ def run_numbers(run: EvalRun, args: argparse.Namespace, noise: Optional[dict]) -
     """The metrics of one model, as metrics.json holds them (clustering added later)."""
     grid = query_grid(run)
     sweep = metrics.uncertainty_sweep(run)
+    verdict = metrics.given_verdict(run)
     return {
         "name": run.name, "eval_dir": run.path, "dataset": run.dataset.path if run.dataset else None,
         "detector": run.detector, "model": run.meta.get("model"), "mc_passes": run.meta.get("mc_passes"),
         "overall": metrics.class_metrics(run.label, run.predicted),
-        "intervals": metrics.headline_intervals(run, sweep),
+        "intervals": metrics.headline_intervals(run, sweep, verdict["sweep"] if verdict else None),
         "environments": metrics.grouped_metrics(run, run.environment),
         "sessions": metrics.grouped_metrics(run, run.session, describe_sessions=True),
         "distances": metrics.by_distance(run, grid.get("safety_radius"), patch_sides(run)),
@@ -177,7 +178,7 @@ def run_numbers(run: EvalRun, args: argparse.Namespace, noise: Optional[dict]) -
         "failure": metrics.failure_detection(run.label, run.predicted, run.probs),
         "sweep": sweep,
         "per_phenomenon": metrics.per_phenomenon(run),
-        "given_verdict": metrics.given_verdict(run),
+        "given_verdict": verdict,
         "by_margin": metrics.by_margin(run, evidence_margin(run, args.evidence_threshold), args.evidence_threshold,
                                        noise),
         "causes_of_failures": metrics.causes_of_failures(run),
@@ -268,10 +269,12 @@ def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
     for r in runs:
         h = metrics.headline(numbers[r.slug])
         c = numbers[r.slug]["clustering"]
-        given = (f"{md.fmt(h['verdict_mean_per_class_accuracy'])}; {md.pct(h['verdict_retained_at_70'])} → "
-                 f"{md.fmt(h['verdict_mpca_at_70'])} ({md.failures_kept(h['verdict_at_70'])})"
-                 if h["verdict_mean_per_class_accuracy"] is not None else "n/a")
         ci = h["intervals"]
+        given = (f"{md.with_interval(h['verdict_mean_per_class_accuracy'], ci.get('verdict_mean_per_class_accuracy'))}"
+                 f"; {md.pct(h['verdict_retained_at_70'])} → "
+                 f"{md.with_interval(h['verdict_mpca_at_70'], ci.get('verdict_mpca_at_70'))} "
+                 f"({md.failures_kept(h['verdict_at_70'])})"
+                 if h["verdict_mean_per_class_accuracy"] is not None else "n/a")
         rows.append([r.name, r.detector, h["samples"],
                      md.with_interval(h["mean_per_class_accuracy"], ci.get("mean_per_class_accuracy")),
                      md.fmt(h["overall_accuracy"]), md.fmt(h["failure_auroc"]),
@@ -417,8 +420,10 @@ def print_summary(runs: List[EvalRun], numbers: Dict[str, dict], warnings: List[
               f"overall {md.fmt(h['overall_accuracy'])}, failure AUROC {md.fmt(h['failure_auroc'])}, "
               f"at {md.pct(h['retained_at_70'])} retained {md.with_interval(h['mpca_at_70'], ci.get('mpca_at_70'))} "
               f"({md.failures_kept(h['at_70'])}), "
-              + (f"given the detector's verdict {md.fmt(h['verdict_mean_per_class_accuracy'])} "
-                 f"({md.fmt(h['verdict_mpca_at_70'])} at {md.pct(h['verdict_retained_at_70'])}, "
+              + (f"given the detector's verdict "
+                 f"{md.with_interval(h['verdict_mean_per_class_accuracy'], ci.get('verdict_mean_per_class_accuracy'))} "
+                 f"({md.with_interval(h['verdict_mpca_at_70'], ci.get('verdict_mpca_at_70'))} at "
+                 f"{md.pct(h['verdict_retained_at_70'])}, "
                  f"{md.failures_kept(h['verdict_at_70'])}), "
                  if h["verdict_mean_per_class_accuracy"] is not None else "")
               + (f"cluster purity {_purity_with_base(c, 'purity', 'purity_one_cluster')}"

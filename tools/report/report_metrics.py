@@ -70,20 +70,21 @@ def class_metrics(label: np.ndarray, predicted: np.ndarray) -> dict:
 BOOTSTRAP_RESAMPLES = 1000
 
 
-def frame_bootstrap_interval(run: EvalRun, keep: Optional[np.ndarray] = None,
+def frame_bootstrap_interval(run: EvalRun, keep: Optional[np.ndarray] = None, predicted: Optional[np.ndarray] = None,
                              resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0) -> Optional[List[float]]:
-    """95 % interval of the mean per-class accuracy (of the rows in `keep`,
-    all by default), resampling whole frames with replacement: the cells of a
-    frame share its image and its noise, so they are not independent draws
-    and a per-cell interval would be too narrow. None with fewer than two
-    frames."""
+    """95 % interval of the mean per-class accuracy of `predicted` (the
+    model's own by default) over the rows in `keep` (all by default),
+    resampling whole frames with replacement: the cells of a frame share its
+    image and its noise, so they are not independent draws and a per-cell
+    interval would be too narrow. None with fewer than two frames."""
     keep = np.ones(len(run.label), bool) if keep is None else keep
+    predicted = run.predicted if predicted is None else predicted
     frames = np.unique(np.stack([np.unique(run.session, return_inverse=True)[1], run.utime]), axis=1,
                        return_inverse=True)[1].reshape(-1)
     n_frames = int(frames.max()) + 1 if len(frames) else 0
     if n_frames < 2:
         return None
-    pair = run.label * N_CLASSES + run.predicted
+    pair = run.label * N_CLASSES + predicted
     counts = np.zeros((n_frames, N_CLASSES * N_CLASSES))
     np.add.at(counts, (frames[keep], pair[keep]), 1)
     weights = np.random.default_rng(seed).multinomial(n_frames, np.full(n_frames, 1.0 / n_frames), size=resamples)
@@ -96,12 +97,19 @@ def frame_bootstrap_interval(run: EvalRun, keep: Optional[np.ndarray] = None,
     return [float(low), float(high)]
 
 
-def headline_intervals(run: EvalRun, sweep: dict) -> dict:
-    """Frame-bootstrap intervals of the two headline figures: unfiltered and
-    at the ≥ 70 % point (its threshold held fixed)."""
-    return {"resamples": BOOTSTRAP_RESAMPLES,
-            "mean_per_class_accuracy": frame_bootstrap_interval(run),
-            "mpca_at_70": frame_bootstrap_interval(run, run.var_predicted <= sweep["at_70"]["threshold"])}
+def headline_intervals(run: EvalRun, sweep: dict, verdict_sweep: Optional[dict]) -> dict:
+    """Frame-bootstrap intervals of the headline figures, from the image alone
+    and given the verdict: unfiltered and at the ≥ 70 % point (its threshold
+    held fixed)."""
+    out = {"resamples": BOOTSTRAP_RESAMPLES,
+           "mean_per_class_accuracy": frame_bootstrap_interval(run),
+           "mpca_at_70": frame_bootstrap_interval(run, run.var_predicted <= sweep["at_70"]["threshold"])}
+    if run.verdict is not None and verdict_sweep is not None:
+        v = run.verdict
+        out["verdict_mean_per_class_accuracy"] = frame_bootstrap_interval(run, predicted=v.predicted)
+        out["verdict_mpca_at_70"] = frame_bootstrap_interval(
+            run, v.var_wrong <= verdict_sweep["at_70"]["threshold"], v.predicted)
+    return out
 
 
 def grouped_metrics(run: EvalRun, key: np.ndarray, describe_sessions: bool = False) -> List[dict]:
