@@ -221,9 +221,10 @@ group "robot" {
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_TRUE(contains(r.output, "camera [robot] auto_respawn stop_signal 2\n    cam --rate 9")) << r.output;
   EXPECT_TRUE(contains(r.output, "(other host) local (localhost)")) << r.output;
-  r = launch(config + " --list");
+  r = launch(config + " --list --status-channel ROBOT_B_STATUS");
   EXPECT_TRUE(contains(r.output, "    loc\n")) << r.output;
   EXPECT_FALSE(contains(r.output, "cam --rate")) << r.output;
+  EXPECT_TRUE(contains(r.output, "in every command's environment: IVOA_STATUS_CHANNEL=ROBOT_B_STATUS\n")) << r.output;
 }
 
 // ivoa-launch in the background, its stdout and stderr in `out`; its stdin

@@ -78,7 +78,7 @@ void add_options(CLI::App& app, CliOptions& o) {
                  "s (0: not at all)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
-  app.add_flag("--list", o.list, "print the commands that would run, expanded, and exit");
+  app.add_flag("--list", o.list, "print the commands that would run, expanded, and what it adds to their environment; exit");
   const char* g = "Respawn";
   auto& s = l.supervisor;
   app.add_option("--respawn-delay", s.respawn_delay_s, "first back-off, s (doubles while it keeps failing)")
@@ -105,13 +105,16 @@ std::map<std::string, std::string> builtin_variables(const std::string& config_p
   return out;
 }
 
-void print_commands(const SelectedCommands& selected) {
+void print_commands(const SelectedCommands& selected, const LauncherOptions& l) {
   for (const auto& c : selected.commands)
     std::printf("%s%s%s%s\n    %s\n", c.spec.name.c_str(),
                 c.spec.group.empty() ? "" : (" [" + c.spec.group + "]").c_str(),
                 c.spec.auto_respawn ? " auto_respawn" : "",
                 (" stop_signal " + std::to_string(c.spec.stop_signal)).c_str(), c.shell_command.c_str());
   for (const auto& o : selected.other_hosts) std::printf("(other host) %s\n", o.c_str());
+  std::printf("in every command's environment:");
+  for (const auto& [name, value] : bus_environment(l)) std::printf(" %s=%s", name.c_str(), value.c_str());
+  std::printf("\n");
 }
 
 // Loads the configuration and picks this host's commands; throws with the
@@ -190,7 +193,7 @@ int main(int argc, char** argv) {
     return ivoa::kExitUsage;
   }
   if (o.list) {
-    print_commands(selected);
+    print_commands(selected, o.launcher);
     return ivoa::kExitOk;
   }
   if (!something_to_run(config, selected, o)) return ivoa::kExitUsage;
