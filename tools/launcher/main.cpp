@@ -78,7 +78,8 @@ void add_options(CLI::App& app, CliOptions& o) {
                  "s (0: not at all)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
-  app.add_flag("--list", o.list, "print the commands that would run, expanded, and what it adds to their environment; exit");
+  app.add_flag("--list", o.list,
+               "print the commands that would run, expanded, and what it adds to their environment; exit");
   const char* g = "Respawn";
   auto& s = l.supervisor;
   app.add_option("--respawn-delay", s.respawn_delay_s, "first back-off, s (doubles while it keeps failing)")
