@@ -1174,22 +1174,23 @@ class MetricUnitTest(unittest.TestCase):
         resample of frames scores the same; where whole frames are right or wrong, the interval widens around
         the figure; kept rows only count."""
         load_tool()
-        from report_metrics import class_metrics, frame_bootstrap_interval
+        from report_metrics import class_metrics, frame_bootstrap_interval, frame_ids
         frames, label = np.repeat(np.arange(40), 4), np.tile(np.arange(4), 40)
+        run = types.SimpleNamespace(session=np.array(["s"] * 160), utime=frames * 1000)
+        ids = frame_ids(run)
+        self.assertEqual(list(ids), list(frames))
         same = np.where(label == FN, TN, label)  # FN wrong in every frame: 0.75 whatever is drawn
-        run = types.SimpleNamespace(session=np.array(["s"] * 160), utime=frames * 1000, label=label, predicted=same)
-        self.assertEqual(frame_bootstrap_interval(run), [0.75, 0.75])
-        run.predicted = np.where(frames < 10, (label + 1) % 4, label)  # frames 0-9 wholly wrong: 0.75 again
-        low, high = frame_bootstrap_interval(run)
+        self.assertEqual(frame_bootstrap_interval(label, same, ids), [0.75, 0.75])
+        predicted = np.where(frames < 10, (label + 1) % 4, label)  # frames 0-9 wholly wrong: 0.75 again
+        low, high = frame_bootstrap_interval(label, predicted, ids)
         self.assertLess(low, 0.75)
         self.assertGreater(high, 0.75)
         self.assertLess(high - low, 0.35)
-        self.assertAlmostEqual(class_metrics(run.label, run.predicted)["mean_per_class_accuracy"], 0.75)
-        self.assertEqual(frame_bootstrap_interval(run, keep=frames >= 10), [1.0, 1.0])
-        run.session = np.where(frames < 20, "a", "b")  # frames are (session, utime): 0-19 and 20-39 both count
-        run.utime = (frames % 20) * 1000
-        self.assertEqual(frame_bootstrap_interval(run, keep=frames >= 10), [1.0, 1.0])
-        self.assertEqual(frame_bootstrap_interval(run), [low, high])
+        self.assertAlmostEqual(class_metrics(label, predicted)["mean_per_class_accuracy"], 0.75)
+        self.assertEqual(frame_bootstrap_interval(label, predicted, ids, keep=frames >= 10), [1.0, 1.0])
+        # frames are (session, utime): 0-19 in session a and 20-39 in b, with the same utimes, are 40 frames
+        run = types.SimpleNamespace(session=np.where(frames < 20, "a", "b"), utime=(frames % 20) * 1000)
+        self.assertEqual(list(frame_ids(run)), list(frames))
 
     def test_clusters_that_are_only_the_predicted_fp_and_fn_are_called_so(self):
         load_tool()

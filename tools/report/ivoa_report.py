@@ -269,17 +269,12 @@ def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
     for r in runs:
         h = metrics.headline(numbers[r.slug])
         c = numbers[r.slug]["clustering"]
-        ci = h["intervals"]
-        given = (f"{md.with_interval(h['verdict_mean_per_class_accuracy'], ci.get('verdict_mean_per_class_accuracy'))}"
-                 f"; {md.pct(h['verdict_retained_at_70'])} → "
-                 f"{md.with_interval(h['verdict_mpca_at_70'], ci.get('verdict_mpca_at_70'))} "
-                 f"({md.failures_kept(h['verdict_at_70'])})"
+        given = (f"{_shown(h, 'verdict_mean_per_class_accuracy')}; {md.pct(h['verdict_retained_at_70'])} → "
+                 f"{_shown(h, 'verdict_mpca_at_70')} ({md.failures_kept(h['verdict_at_70'])})"
                  if h["verdict_mean_per_class_accuracy"] is not None else "n/a")
-        rows.append([r.name, r.detector, h["samples"],
-                     md.with_interval(h["mean_per_class_accuracy"], ci.get("mean_per_class_accuracy")),
+        rows.append([r.name, r.detector, h["samples"], _shown(h, "mean_per_class_accuracy"),
                      md.fmt(h["overall_accuracy"]), md.fmt(h["failure_auroc"]),
-                     f"{md.pct(h['retained_at_70'])} → {md.with_interval(h['mpca_at_70'], ci.get('mpca_at_70'))} "
-                     f"({md.failures_kept(h['at_70'])})",
+                     f"{md.pct(h['retained_at_70'])} → {_shown(h, 'mpca_at_70')} ({md.failures_kept(h['at_70'])})",
                      given,
                      _purity_with_base(c, "purity", "purity_one_cluster"),
                      _purity_with_base(c, "purity_by_cause", "purity_by_cause_one_cluster")])
@@ -293,6 +288,11 @@ def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
                      "≥70 % retained → mean per-class acc.", "given the detector's verdict: mean per-class acc.; "
                      "≥70 % retained →", "cluster purity by dominant phenomenon (one cluster)",
                      "cluster purity by cause (one cluster)"], rows)
+
+
+def _shown(h: dict, key: str) -> str:
+    """A headline figure with its frame-bootstrap interval, where it has one."""
+    return md.with_interval(h[key], h["intervals"].get(key))
 
 
 def _purity_with_base(c: dict, key: str, base_key: str) -> str:
@@ -414,16 +414,11 @@ def print_summary(runs: List[EvalRun], numbers: Dict[str, dict], warnings: List[
     for run in runs:
         h = metrics.headline(numbers[run.slug])
         c = numbers[run.slug]["clustering"]
-        ci = h["intervals"]
-        print(f"{run.name}: {h['samples']} samples, mean per-class accuracy "
-              f"{md.with_interval(h['mean_per_class_accuracy'], ci.get('mean_per_class_accuracy'))}, "
+        print(f"{run.name}: {h['samples']} samples, mean per-class accuracy {_shown(h, 'mean_per_class_accuracy')}, "
               f"overall {md.fmt(h['overall_accuracy'])}, failure AUROC {md.fmt(h['failure_auroc'])}, "
-              f"at {md.pct(h['retained_at_70'])} retained {md.with_interval(h['mpca_at_70'], ci.get('mpca_at_70'))} "
-              f"({md.failures_kept(h['at_70'])}), "
-              + (f"given the detector's verdict "
-                 f"{md.with_interval(h['verdict_mean_per_class_accuracy'], ci.get('verdict_mean_per_class_accuracy'))} "
-                 f"({md.with_interval(h['verdict_mpca_at_70'], ci.get('verdict_mpca_at_70'))} at "
-                 f"{md.pct(h['verdict_retained_at_70'])}, "
+              f"at {md.pct(h['retained_at_70'])} retained {_shown(h, 'mpca_at_70')} ({md.failures_kept(h['at_70'])}), "
+              + (f"given the detector's verdict {_shown(h, 'verdict_mean_per_class_accuracy')} "
+                 f"({_shown(h, 'verdict_mpca_at_70')} at {md.pct(h['verdict_retained_at_70'])}, "
                  f"{md.failures_kept(h['verdict_at_70'])}), "
                  if h["verdict_mean_per_class_accuracy"] is not None else "")
               + (f"cluster purity {_purity_with_base(c, 'purity', 'purity_one_cluster')}"

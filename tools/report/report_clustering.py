@@ -4,12 +4,13 @@ Pipeline, with the paper's choices and where the reference code differed:
 
 1. **Selection**: samples the model *predicts* FP or FN, keeping the top 50 % by
    confidence (predicted-class mean probability, median split) of the
-   predicted FP and, apart, of the predicted FN. The paper keeps "the top 50 %
-   most confident" failures; pooled (``--select confidence``), the less
-   confident class can all but vanish (JPP-C's FN in the default main job:
-   16 among 1902 selected; the dense model's FN are the more confident
-   class), and with it the cluster of misses the paper found beside the
-   reflections. At k = 2 the clusters then tend to be the two halves. The reference script kept
+   predicted FP and, apart, of the predicted FN (at k = 2 the clusters tend
+   to be those two halves, and the report says when they are). The paper
+   keeps "the top 50 % most confident" failures; pooled (``--select
+   confidence``), the less confident class can all but vanish (JPP-C's FN in
+   the default main job: 16 among 1902 selected; the dense model's FN are the
+   more confident class), and with it the cluster of misses the paper found
+   beside the reflections. The reference script kept
    var_predicted <= 0.03 instead (0.005 at HEAD); ``--select variance``
    reproduces that, and the report counts it beside the rule used.
 2. **Embedding**: the 256-d post-ReLU FC2 activation (embeddings.f32). The

@@ -38,7 +38,7 @@ def with_interval(value: Optional[float], interval: Optional[Sequence[float]]) -
 
 
 def failures_kept(point: Optional[dict]) -> str:
-    """How many of the true failures an operating point still judges: a gate
+    """What share of the true failures an operating point still judges: a gate
     can raise the mean per-class accuracy by withholding the failures it is
     meant to find."""
     if point is None:

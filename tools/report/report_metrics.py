@@ -70,21 +70,25 @@ def class_metrics(label: np.ndarray, predicted: np.ndarray) -> dict:
 BOOTSTRAP_RESAMPLES = 1000
 
 
-def frame_bootstrap_interval(run: EvalRun, keep: Optional[np.ndarray] = None, predicted: Optional[np.ndarray] = None,
-                             resamples: int = BOOTSTRAP_RESAMPLES, seed: int = 0) -> Optional[List[float]]:
-    """95 % interval of the mean per-class accuracy of `predicted` (the
-    model's own by default) over the rows in `keep` (all by default),
-    resampling whole frames with replacement: the cells of a frame share its
-    image and its noise, so they are not independent draws and a per-cell
-    interval would be too narrow. None with fewer than two frames."""
-    keep = np.ones(len(run.label), bool) if keep is None else keep
-    predicted = run.predicted if predicted is None else predicted
-    frames = np.unique(np.stack([np.unique(run.session, return_inverse=True)[1], run.utime]), axis=1,
-                       return_inverse=True)[1].reshape(-1)
+def frame_ids(run: EvalRun) -> np.ndarray:
+    """Each row's frame, numbered 0.. over the distinct (session, utime)."""
+    session = np.unique(run.session, return_inverse=True)[1]
+    return np.unique(np.stack([session, run.utime]), axis=1, return_inverse=True)[1].reshape(-1)
+
+
+def frame_bootstrap_interval(label: np.ndarray, predicted: np.ndarray, frames: np.ndarray,
+                             keep: Optional[np.ndarray] = None, resamples: int = BOOTSTRAP_RESAMPLES,
+                             seed: int = 0) -> Optional[List[float]]:
+    """95 % interval of the mean per-class accuracy of `predicted` over the
+    rows in `keep` (all by default), resampling whole frames (`frame_ids`)
+    with replacement: the cells of a frame share its image and its noise, so
+    they are not independent draws and a per-cell interval would be too
+    narrow. None with fewer than two frames."""
+    keep = np.ones(len(label), bool) if keep is None else keep
     n_frames = int(frames.max()) + 1 if len(frames) else 0
     if n_frames < 2:
         return None
-    pair = run.label * N_CLASSES + predicted
+    pair = label * N_CLASSES + predicted
     counts = np.zeros((n_frames, N_CLASSES * N_CLASSES))
     np.add.at(counts, (frames[keep], pair[keep]), 1)
     weights = np.random.default_rng(seed).multinomial(n_frames, np.full(n_frames, 1.0 / n_frames), size=resamples)
@@ -101,14 +105,16 @@ def headline_intervals(run: EvalRun, sweep: dict, verdict_sweep: Optional[dict])
     """Frame-bootstrap intervals of the headline figures, from the image alone
     and given the verdict: unfiltered and at the ≥ 70 % point (its threshold
     held fixed)."""
+    frames = frame_ids(run)
     out = {"resamples": BOOTSTRAP_RESAMPLES,
-           "mean_per_class_accuracy": frame_bootstrap_interval(run),
-           "mpca_at_70": frame_bootstrap_interval(run, run.var_predicted <= sweep["at_70"]["threshold"])}
+           "mean_per_class_accuracy": frame_bootstrap_interval(run.label, run.predicted, frames),
+           "mpca_at_70": frame_bootstrap_interval(run.label, run.predicted, frames,
+                                                  run.var_predicted <= sweep["at_70"]["threshold"])}
     if run.verdict is not None and verdict_sweep is not None:
         v = run.verdict
-        out["verdict_mean_per_class_accuracy"] = frame_bootstrap_interval(run, predicted=v.predicted)
-        out["verdict_mpca_at_70"] = frame_bootstrap_interval(
-            run, v.var_wrong <= verdict_sweep["at_70"]["threshold"], v.predicted)
+        out["verdict_mean_per_class_accuracy"] = frame_bootstrap_interval(run.label, v.predicted, frames)
+        out["verdict_mpca_at_70"] = frame_bootstrap_interval(run.label, v.predicted, frames,
+                                                             v.var_wrong <= verdict_sweep["at_70"]["threshold"])
     return out
 
 
@@ -277,10 +283,11 @@ def _accuracy_trend(label: np.ndarray, pts: List[dict], unfiltered: dict, at70: 
             if at70["mean_per_class_accuracy"] is not None and unfiltered["mean_per_class_accuracy"] is not None
             else None)
     gain_counts = gain is not None and enough_cells(at70)
-    if rho is None:
-        verdict, rises = ("undetermined (" + (f"fewer than three thresholds keep ≥ 10 % of the cells and ≥ "
-                                              f"{FEW_CELLS} of every class that has as many" if len(pts) < 3 else
-                                              "the accuracy does not change over the sweep") + ")"), None
+    if rho is None and len(pts) < 3:
+        verdict, rises = (f"undetermined (fewer than three thresholds keep ≥ 10 % of the cells and ≥ {FEW_CELLS} "
+                          "of every class that has as many)"), None
+    elif rho is None:
+        verdict, rises = "undetermined (the accuracy does not change over the sweep)", None
     elif rho <= -0.5 and (not gain_counts or gain > 0):
         verdict, rises = "yes", True
     elif rho <= -0.5:
