@@ -133,6 +133,31 @@ cmd "env" { exec = "echo channel=$IVOA_STATUS_CHANNEL url=$LCM_DEFAULT_URL"; }
   EXPECT_TRUE(contains(r.output, "--lcm-url memq://: the commands do not get it")) << r.output;
 }
 
+TEST(LaunchCli, ABraceVariableForTheBusSettingsIsWhatTheCommandsGet) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "v.pmd", R"(
+cmd "env" { exec = "ivoa-stereo-detector --status-channel ${IVOA_STATUS_CHANNEL} --lcm-url ${LCM_DEFAULT_URL}"; }
+)");
+  // --list expands the commands without opening the bus.
+  const std::string list =
+      "IVOA_STATUS_CHANNEL=FROM_ENVIRONMENT LCM_DEFAULT_URL=udpm://239.255.76.67:7669 " IVOA_LAUNCH_EXE
+      " --list --lcm-url udpm://239.255.76.67:7668?ttl=0 --status-channel ROBOT_C_STATUS ";
+  const Result r = ivoa::test::run_command(list + config);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "--status-channel ROBOT_C_STATUS --lcm-url udpm://239.255.76.67:7668?ttl=0\n"))
+      << r.output;
+
+  const Result agreeing = ivoa::test::run_command(list + "--set IVOA_STATUS_CHANNEL=ROBOT_C_STATUS " + config);
+  EXPECT_EQ(agreeing.exit_code, 0) << agreeing.output;
+  const Result contradicting =
+      ivoa::test::run_command(list + "--set LCM_DEFAULT_URL=udpm://239.255.76.67:7667 " + config);
+  EXPECT_EQ(contradicting.exit_code, 2) << contradicting.output;
+  EXPECT_TRUE(contains(contradicting.output,
+                       "--set LCM_DEFAULT_URL=udpm://239.255.76.67:7667: the launcher hands its commands "
+                       "LCM_DEFAULT_URL=udpm://239.255.76.67:7668?ttl=0 (--lcm-url); change it there"))
+      << contradicting.output;
+}
+
 TEST(LaunchCli, ScriptStartsOnlyWhatItNamesInOrder) {
   ivoa::test::TempDir dir;
   const auto config = write_file(dir, "s.pmd", R"(

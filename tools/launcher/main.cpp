@@ -47,7 +47,9 @@ void add_options(CLI::App& app, CliOptions& o) {
       ->capture_default_str();
   app.add_option("--group,-g", o.selection.groups, "only the commands in these groups (\"a/b\" for nested)");
   app.add_option("--skip", o.selection.skip, "leave out these commands or groups");
-  app.add_option("--set", o.sets, "NAME=VALUE for ${NAME} (before the environment and the file's defaults)");
+  app.add_option("--set", o.sets,
+                 "NAME=VALUE for ${NAME} (before the environment and the file's defaults; IVOA_STATUS_CHANNEL and a "
+                 "udpm:// LCM_DEFAULT_URL are --status-channel's and --lcm-url's)");
   app.add_option("--script", l.script, "run this script of the file instead of starting every command");
   app.add_option("--stop-script", l.stop_script,
                  "at the stop, run this script of the file first if it has one (the producers before the logger), "
@@ -118,6 +120,21 @@ void print_commands(const SelectedCommands& selected, const LauncherOptions& l) 
   std::printf("\n");
 }
 
+// The bus settings the commands get (bus_environment) are variables as
+// strong as --set, so that ${IVOA_STATUS_CHANNEL} in an exec string is what
+// the command gets as $IVOA_STATUS_CHANNEL. A --set that contradicts them
+// would leave the status table empty: refused, naming the flag to use.
+void add_bus_settings(std::map<std::string, std::string>& overrides, const LauncherOptions& l) {
+  for (const auto& [name, value] : bus_environment(l)) {
+    const auto set = overrides.find(name);
+    if (set != overrides.end() && set->second != value)
+      throw ConfigError("--set " + name + "=" + set->second + ": the launcher hands its commands " + name + "=" +
+                        value + " (" + (name == ivoa::kStatusChannelEnv ? "--status-channel" : "--lcm-url") +
+                        "); change it there");
+    overrides[name] = value;
+  }
+}
+
 // Loads the configuration and picks this host's commands; throws with the
 // file and line of what is wrong.
 SelectedCommands prepare(CliOptions& o, Config& config) {
@@ -125,6 +142,7 @@ SelectedCommands prepare(CliOptions& o, Config& config) {
   for (const auto& w : config.warnings) spdlog::warn("{}", w);
   std::map<std::string, std::string> overrides;
   for (const auto& s : o.sets) overrides.insert(parse_assignment(s));
+  add_bus_settings(overrides, o.launcher);
   const Variables variables(config, overrides, builtin_variables(o.config_path));
   SelectedCommands selected = select_commands(config, o.selection, variables);
   o.launcher.supervisor.environment = variables.exported();
@@ -158,10 +176,9 @@ bool something_to_run(const Config& config, const SelectedCommands& selected, co
   return true;
 }
 
-// The commands report where the launcher listens (bus_environment); says so
-// where they cannot.
-void hand_bus_settings_to_commands(LauncherOptions& l) {
-  for (const auto& [name, value] : bus_environment(l)) l.supervisor.environment[name] = value;
+// The commands get the launcher's bus settings with the variables
+// (add_bus_settings); an --lcm-url they cannot share is said so.
+void warn_of_an_lcm_url_not_handed_on(const LauncherOptions& l) {
   if (!l.lcm_url.empty() && l.lcm_url != "none" && l.lcm_url.rfind("udpm://", 0) != 0)
     spdlog::warn(
         "--lcm-url {}: the commands do not get it (they would each have a bus of their own), so their "
@@ -188,7 +205,7 @@ int main(int argc, char** argv) {
   SelectedCommands selected;
   try {
     selected = prepare(o, config);
-    hand_bus_settings_to_commands(o.launcher);
+    warn_of_an_lcm_url_not_handed_on(o.launcher);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;
