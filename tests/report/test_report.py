@@ -1272,6 +1272,22 @@ class MetricUnitTest(unittest.TestCase):
         self.assertEqual(mean, [True, True, False, False])
         self.assertEqual(overall, [True, False, False, False])
 
+    def test_sweep_points_a_few_cells_decide_are_the_ones_drawn_faint_on_both_axes(self):
+        load_tool()
+        from report_figures import sweep_series
+        curve = [{"threshold": 0.1, "retained": 1.0, "fewest_kept": 300, "mean_per_class_accuracy": 0.86},
+                 {"threshold": 0.0, "retained": 0.01, "fewest_kept": 0, "mean_per_class_accuracy": 1.0},
+                 {"threshold": 1e-5, "retained": 0.02, "fewest_kept": 3, "mean_per_class_accuracy": 0.75},
+                 {"threshold": 1e-3, "retained": 0.5, "fewest_kept": 20, "mean_per_class_accuracy": 0.99},
+                 {"threshold": 1e-9, "retained": 0.0, "fewest_kept": 0, "mean_per_class_accuracy": None}]
+        t, solid, v = sweep_series(curve, "threshold", ["mean_per_class_accuracy"])
+        self.assertEqual(t.tolist(), [1e-5, 1e-3, 0.1])  # τ = 0 has no place on the log axis
+        self.assertEqual(solid.tolist(), [False, True, True])
+        self.assertEqual(v["mean_per_class_accuracy"].tolist(), [0.75, 0.99, 0.86])
+        r, solid, _ = sweep_series(curve, "retained", ["mean_per_class_accuracy"])
+        self.assertEqual(r.tolist(), [0.01, 0.02, 0.5, 1.0])
+        self.assertEqual(solid.tolist(), [False, False, True, True])
+
     def test_phenomenon_bars_a_few_cells_decide_are_the_ones_drawn_faint(self):
         load_tool()
         from report_figures import few_cell_phenomena

@@ -102,6 +102,18 @@ def _threshold_axis(ax, sweep: dict) -> None:
                    label=f"model's run-time τ = {sweep['model_threshold']:.3g}")
 
 
+def sweep_series(curve: List[dict], x_key: str, keys: Sequence[str]):
+    """x, solid and each key's values of a sweep curve, in x order, where
+    every key has a value (and, for the log threshold axis, τ > 0); solid is
+    False where a class keeps fewer than FEW_CELLS cells: the curves go faint
+    there."""
+    pts = sorted((p for p in curve if all(p[k] is not None for k in keys)
+                  and (x_key != "threshold" or p["threshold"] > 0)), key=lambda p: p[x_key])
+    x = np.array([p[x_key] for p in pts], dtype=float)
+    solid = np.array([p.get("fewest_kept", FEW_CELLS) >= FEW_CELLS for p in pts], dtype=bool)
+    return x, solid, {k: np.array([p[k] for p in pts], dtype=float) for k in keys}
+
+
 def _positive(curve: List[dict], key: str):
     """(threshold, value) pairs of a sweep curve where the value exists and τ > 0
     (log axis)."""
@@ -110,12 +122,22 @@ def _positive(curve: List[dict], key: str):
 
 
 def plot_accuracy_vs_threshold(sweep: dict, title: str, path: str) -> str:
-    """Mean per-class and overall accuracy of the retained predictions vs τ."""
+    """Mean per-class and overall accuracy of the retained predictions vs τ;
+    faint where a class keeps fewer than FEW_CELLS cells, as in
+    plot_accuracy_vs_retained (a dip there is one or two cells)."""
     fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    faint_drawn = False
     for key, label, style in (("mean_per_class_accuracy", "mean per-class accuracy (paper's metric)", "-"),
                               ("overall_accuracy", "overall accuracy (reference code's metric)", "--")):
-        t, v = _positive(sweep["curve"], key)
-        ax.plot(t, v, style, lw=1.8, label=label)
+        t, solid, values = sweep_series(sweep["curve"], "threshold", [key])
+        if not len(t):
+            continue
+        v = values[key]
+        line, = ax.plot(t, np.where(solid, v, np.nan), style, lw=1.8, label=label)
+        if not solid.all():
+            ax.plot(t[~solid], v[~solid], ".", ms=2, alpha=0.35, color=line.get_color(),
+                    label=None if faint_drawn else f"fewer than {FEW_CELLS} cells kept in a class")
+            faint_drawn = True
     _threshold_axis(ax, sweep)
     ax.set_ylabel("accuracy of retained predictions")
     ax.set_ylim(0, 1.02)
@@ -128,7 +150,8 @@ def plot_accuracy_vs_threshold(sweep: dict, title: str, path: str) -> str:
     ax.set_title(f"{title}\naccuracy vs uncertainty threshold (lower τ = stricter filter)")
     h1, l1 = ax.get_legend_handles_labels()
     h2, l2 = ax2.get_legend_handles_labels()
-    ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="lower right")
+    # under the plot: inside, it would cover one curve or another, whichever run it shows
+    ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     return _save(fig, path)
 
 
@@ -159,12 +182,10 @@ def plot_accuracy_vs_retained(sweeps: Sequence[Tuple[str, dict]], title: str, pa
     fig, ax = plt.subplots(figsize=(7.0, 4.6))
     faint_drawn = False
     for i, (name, s) in enumerate(sweeps):
-        pts = sorted((p["retained"], p["mean_per_class_accuracy"], p["overall_accuracy"],
-                      p.get("fewest_kept", FEW_CELLS)) for p in s["curve"] if p["mean_per_class_accuracy"] is not None)
-        if not pts:
+        r, solid, values = sweep_series(s["curve"], "retained", ["mean_per_class_accuracy", "overall_accuracy"])
+        if not len(r):
             continue
-        r, mp, oa, fewest = np.array(pts).T
-        solid = fewest >= FEW_CELLS  # NaN breaks the lines where it is not
+        mp, oa = values["mean_per_class_accuracy"], values["overall_accuracy"]  # NaN breaks them where not solid
         line, = ax.plot(100 * r, np.where(solid, mp, np.nan), lw=1.8, label=f"{name}: mean per-class accuracy")
         ax.plot(100 * r, np.where(solid, oa, np.nan), "--", lw=1.2, color=line.get_color(),
                 label=f"{name}: overall accuracy")
