@@ -1,5 +1,7 @@
 // CauseFinder replays a frame exactly (its verdicts are the recorded ones)
 // and blames a mirroring floor for the obstacles JPP-C sees in it.
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "ivoa/causes/cause_finder.hpp"
@@ -179,6 +181,19 @@ TEST(CauseFinder, NamesCombinationsOfPhenomena) {
   EXPECT_EQ(describe(c), "dark stripe");
   c.replayed_state = obstacle_grid_t::STATE_OBSTACLE;
   EXPECT_EQ(describe(c), "not reproduced");
+}
+
+TEST(SessionRate, FramesSkippedInRealTimeDoNotSlowIt) {
+  const int64_t t0 = 1700000000000000;
+  std::vector<int64_t> at_4hz;
+  for (int k = 0; k <= 16; ++k)
+    if (k != 4) at_4hz.push_back(t0 + 250000 * k);  // frame 4 skipped: 16 frames over 4 s
+  EXPECT_DOUBLE_EQ(rate_from_frame_times(at_4hz), 4.0);
+  // 3 Hz stamps round to the microsecond: gaps of 333333 and 333334 us
+  std::vector<int64_t> at_3hz;
+  for (int k : {0, 1, 2, 5, 6, 7, 300}) at_3hz.push_back(t0 + std::llround(k * 1e6 / 3.0));
+  EXPECT_NEAR(rate_from_frame_times(at_3hz), 3.0, 1e-9);
+  EXPECT_EQ(rate_from_frame_times({t0}), 1.0);
 }
 
 }  // namespace

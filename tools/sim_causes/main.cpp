@@ -183,14 +183,13 @@ int64_t session_start(const SessionLog& log, const Options& opt, const std::stri
                            ": the log does not start at the session's first frame (no seq 0); give --start-utime");
 }
 
-// The driver's --rate from the log: it stamps frame k at start + k / rate,
-// so the latest frame gives the rate to a microsecond over the session's
-// span. A one-frame session needs none.
+// The driver's --rate from the times of the frames the log holds (frame 0's
+// and later ones; causes::rate_from_frame_times).
 double session_rate(const SessionLog& log, int64_t start_utime) {
-  for (auto it = log.truth.rbegin(); it != log.truth.rend(); ++it)
-    if (it->second.seq > 0 && it->first > start_utime)
-      return static_cast<double>(it->second.seq) * 1e6 / static_cast<double>(it->first - start_utime);
-  return 1.0;
+  std::vector<int64_t> times{start_utime};
+  for (const auto& [utime, truth] : log.truth)
+    if (utime > start_utime) times.push_back(utime);
+  return causes::rate_from_frame_times(times);
 }
 
 struct Tally {

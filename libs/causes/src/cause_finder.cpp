@@ -246,4 +246,17 @@ std::string describe(const CellCause& c) {
   return c.jointly ? "together: " + phenomena_names(c.tested) : "none found";
 }
 
+double rate_from_frame_times(const std::vector<int64_t>& utimes) {
+  int64_t shortest = 0;
+  for (size_t i = 1; i < utimes.size(); ++i) {
+    const int64_t gap = utimes[i] - utimes[i - 1];
+    if (gap > 0 && (shortest == 0 || gap < shortest)) shortest = gap;
+  }
+  if (shortest == 0) return 1.0;
+  double periods = 0;
+  for (size_t i = 1; i < utimes.size(); ++i)
+    periods += std::round(static_cast<double>(utimes[i] - utimes[i - 1]) / static_cast<double>(shortest));
+  return periods * 1e6 / static_cast<double>(utimes.back() - utimes.front());
+}
+
 }  // namespace ivoa::causes

@@ -42,6 +42,14 @@ struct SessionTiming {
   uint64_t noise_seed = 0;  // the driver's --noise-seed
 };
 
+// The driver's --rate from the times of its frames, frame 0's first (in
+// order, at least two; else 1 Hz, which a one-frame session does not use).
+// It stamps frame k at start + k / rate, rounded to the microsecond, but
+// in real time it skips the frames it is late for (and a logger can drop
+// some): a gap may span several periods, never less than one. So the
+// shortest gap is one period, and the span counted in periods gives the rate.
+double rate_from_frame_times(const std::vector<int64_t>& utimes);
+
 // Other settings of the same detector to try on the factual frames, e.g.
 // "full resolution" (--rect_scale 1). At most 8.
 struct DetectorVariant {
