@@ -10,11 +10,13 @@
 #include <fstream>
 #include <initializer_list>
 #include <map>
+#include <optional>
 #include <string>
 #include <thread>
 
 #include <gtest/gtest.h>
 
+#include "ivoa/core/bus.hpp"
 #include "ivoa/launcher/launcher.hpp"
 #include "test_rig.hpp"
 
@@ -110,14 +112,22 @@ TEST(BusEnvironment, CommandsGetTheHeartbeatChannelAndAUdpmUrlOnly) {
   options.lcm_url = "udpm://239.255.76.67:7668?ttl=1";
   const std::map<std::string, std::string> both{{"IVOA_STATUS_CHANNEL", "ROBOT_B_STATUS"},
                                                 {"LCM_DEFAULT_URL", "udpm://239.255.76.67:7668?ttl=1"}};
-  EXPECT_EQ(ivoa::launcher::bus_environment(options), both);
+  const auto unset = [](const std::string&) { return std::optional<std::string>(); };
+  EXPECT_EQ(ivoa::launcher::bus_environment(options, unset), both);
   // the launcher's own bus: each command would get a queue or a file of its own
-  for (const char* own : {"", "none", "memq://", "file:///tmp/run.lcmlog?mode=w"}) {
+  for (const char* own : {"none", "memq://", "file:///tmp/run.lcmlog?mode=w"}) {
     options.lcm_url = own;
-    EXPECT_EQ(ivoa::launcher::bus_environment(options),
+    EXPECT_EQ(ivoa::launcher::bus_environment(options, unset),
               (std::map<std::string, std::string>{{"IVOA_STATUS_CHANNEL", "ROBOT_B_STATUS"}}))
         << own;
   }
+  // no --lcm-url: the launcher listens where the environment says, else on the project's default
+  options.lcm_url = "";
+  EXPECT_EQ(ivoa::launcher::bus_environment(options, unset).at("LCM_DEFAULT_URL"), ivoa::kProjectDefaultUrl);
+  const auto on_7669 = [](const std::string& name) {
+    return name == "LCM_DEFAULT_URL" ? std::optional<std::string>("udpm://239.255.76.67:7669") : std::nullopt;
+  };
+  EXPECT_EQ(ivoa::launcher::bus_environment(options, on_7669).at("LCM_DEFAULT_URL"), "udpm://239.255.76.67:7669");
 }
 
 TEST(LaunchCli, CommandsGetTheLaunchersHeartbeatChannelAndKeepTheirLcmUrlForAnInProcessOne) {
@@ -135,27 +145,50 @@ cmd "env" { exec = "echo channel=$IVOA_STATUS_CHANNEL url=$LCM_DEFAULT_URL"; }
 
 TEST(LaunchCli, ABraceVariableForTheBusSettingsIsWhatTheCommandsGet) {
   ivoa::test::TempDir dir;
-  const auto config = write_file(dir, "v.pmd", R"(
-cmd "env" { exec = "ivoa-stereo-detector --status-channel ${IVOA_STATUS_CHANNEL} --lcm-url ${LCM_DEFAULT_URL}"; }
+  const auto config = write_file(dir, "v.pmd", R"(# @default SEED = 1
+# @default IVOA_STATUS_CHANNEL = ROBOT_A_STATUS
+cmd "env" { exec = "ivoa-stereo-detector --status-channel ${IVOA_STATUS_CHANNEL} --lcm-url ${LCM_DEFAULT_URL} --seed ${SEED}"; }
 )");
   // --list expands the commands without opening the bus.
   const std::string list =
       "IVOA_STATUS_CHANNEL=FROM_ENVIRONMENT LCM_DEFAULT_URL=udpm://239.255.76.67:7669 " IVOA_LAUNCH_EXE
       " --list --lcm-url udpm://239.255.76.67:7668?ttl=0 --status-channel ROBOT_C_STATUS ";
-  const Result r = ivoa::test::run_command(list + config);
+  const Result r = ivoa::test::run_command(list + "--set SEED=2 --set SEED=3 " + config);
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_TRUE(contains(r.output, "--status-channel ROBOT_C_STATUS --lcm-url udpm://239.255.76.67:7668?ttl=0\n"))
+  EXPECT_TRUE(
+      contains(r.output, "--status-channel ROBOT_C_STATUS --lcm-url udpm://239.255.76.67:7668?ttl=0 --seed 3\n"))
+      << r.output;  // and the last --set of a name wins
+  EXPECT_TRUE(contains(r.output,
+                       "v.pmd:2: the default IVOA_STATUS_CHANNEL = ROBOT_A_STATUS is not used: the launcher "
+                       "hands its commands IVOA_STATUS_CHANNEL=ROBOT_C_STATUS (--status-channel)"))
       << r.output;
 
   const Result agreeing = ivoa::test::run_command(list + "--set IVOA_STATUS_CHANNEL=ROBOT_C_STATUS " + config);
   EXPECT_EQ(agreeing.exit_code, 0) << agreeing.output;
-  const Result contradicting =
-      ivoa::test::run_command(list + "--set LCM_DEFAULT_URL=udpm://239.255.76.67:7667 " + config);
+  // each --set counts, not only the last of a name
+  const Result contradicting = ivoa::test::run_command(
+      list + "--set IVOA_STATUS_CHANNEL=PROCESS_STATUS --set IVOA_STATUS_CHANNEL=ROBOT_C_STATUS " + config);
   EXPECT_EQ(contradicting.exit_code, 2) << contradicting.output;
   EXPECT_TRUE(contains(contradicting.output,
-                       "--set LCM_DEFAULT_URL=udpm://239.255.76.67:7667: the launcher hands its commands "
-                       "LCM_DEFAULT_URL=udpm://239.255.76.67:7668?ttl=0 (--lcm-url); change it there"))
+                       "--set IVOA_STATUS_CHANNEL=PROCESS_STATUS: the launcher hands its commands "
+                       "IVOA_STATUS_CHANNEL=ROBOT_C_STATUS (--status-channel); change it there"))
       << contradicting.output;
+}
+
+TEST(LaunchCli, WithoutLcmUrlTheCommandsGetTheUrlTheLauncherListensOn) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "u.pmd", R"(
+cmd "env" { exec = "ivoa-stereo-detector --lcm-url ${LCM_DEFAULT_URL}"; }
+)");
+  const std::string list = "env -u LCM_DEFAULT_URL " IVOA_LAUNCH_EXE " --list ";
+  const Result r = ivoa::test::run_command(list + config);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, std::string("--lcm-url ") + ivoa::kProjectDefaultUrl + "\n")) << r.output;
+  EXPECT_TRUE(contains(r.output, std::string("LCM_DEFAULT_URL=") + ivoa::kProjectDefaultUrl)) << r.output;
+  // the commands would publish on 7668 while the launcher listens on 7667
+  const Result elsewhere = ivoa::test::run_command(list + "--set LCM_DEFAULT_URL=udpm://239.255.76.67:7668 " + config);
+  EXPECT_EQ(elsewhere.exit_code, 2) << elsewhere.output;
+  EXPECT_TRUE(contains(elsewhere.output, "(--lcm-url); change it there")) << elsewhere.output;
 }
 
 TEST(LaunchCli, ScriptStartsOnlyWhatItNamesInOrder) {

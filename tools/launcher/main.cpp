@@ -48,8 +48,8 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--group,-g", o.selection.groups, "only the commands in these groups (\"a/b\" for nested)");
   app.add_option("--skip", o.selection.skip, "leave out these commands or groups");
   app.add_option("--set", o.sets,
-                 "NAME=VALUE for ${NAME} (before the environment and the file's defaults; IVOA_STATUS_CHANNEL and a "
-                 "udpm:// LCM_DEFAULT_URL are --status-channel's and --lcm-url's)");
+                 "NAME=VALUE for ${NAME} (before the environment and the file's defaults; the last of a name wins; "
+                 "IVOA_STATUS_CHANNEL and a udpm:// LCM_DEFAULT_URL are --status-channel's and --lcm-url's)");
   app.add_option("--script", l.script, "run this script of the file instead of starting every command");
   app.add_option("--stop-script", l.stop_script,
                  "at the stop, run this script of the file first if it has one (the producers before the logger), "
@@ -120,19 +120,33 @@ void print_commands(const SelectedCommands& selected, const LauncherOptions& l) 
   std::printf("\n");
 }
 
-// The bus settings the commands get (bus_environment) are variables as
-// strong as --set, so that ${IVOA_STATUS_CHANNEL} in an exec string is what
-// the command gets as $IVOA_STATUS_CHANNEL. A --set that contradicts them
-// would leave the status table empty: refused, naming the flag to use.
-void add_bus_settings(std::map<std::string, std::string>& overrides, const LauncherOptions& l) {
-  for (const auto& [name, value] : bus_environment(l)) {
-    const auto set = overrides.find(name);
-    if (set != overrides.end() && set->second != value)
-      throw ConfigError("--set " + name + "=" + set->second + ": the launcher hands its commands " + name + "=" +
-                        value + " (" + (name == ivoa::kStatusChannelEnv ? "--status-channel" : "--lcm-url") +
-                        "); change it there");
+const char* flag_setting(const std::string& bus_variable) {
+  return bus_variable == ivoa::kStatusChannelEnv ? "--status-channel" : "--lcm-url";
+}
+
+// --set NAME=VALUE (the last of a name wins), and the bus settings the
+// commands get (bus_environment) as strong, so that ${IVOA_STATUS_CHANNEL}
+// in an exec string is what a command gets as $IVOA_STATUS_CHANNEL. A --set
+// or a file's default that contradicts them would leave the status table
+// empty: the one is refused, the other ignored with a warning, each naming
+// the flag to use instead.
+std::map<std::string, std::string> variable_overrides(const CliOptions& o, const Config& config) {
+  const auto bus = bus_environment(o.launcher);
+  std::map<std::string, std::string> overrides;
+  for (const auto& s : o.sets) {
+    auto [name, value] = parse_assignment(s);
+    if (const auto b = bus.find(name); b != bus.end() && b->second != value)
+      throw ConfigError("--set " + s + ": the launcher hands its commands " + name + "=" + b->second + " (" +
+                        flag_setting(name) + "); change it there");
     overrides[name] = value;
   }
+  for (const auto& [name, value] : bus) {
+    if (const auto d = config.defaults.find(name); d != config.defaults.end() && d->second.value != value)
+      spdlog::warn("{}:{}: the default {} = {} is not used: the launcher hands its commands {}={} ({})", config.path,
+                   d->second.line, name, d->second.value, name, value, flag_setting(name));
+    overrides[name] = value;
+  }
+  return overrides;
 }
 
 // Loads the configuration and picks this host's commands; throws with the
@@ -140,10 +154,7 @@ void add_bus_settings(std::map<std::string, std::string>& overrides, const Launc
 SelectedCommands prepare(CliOptions& o, Config& config) {
   config = load_config(o.config_path);
   for (const auto& w : config.warnings) spdlog::warn("{}", w);
-  std::map<std::string, std::string> overrides;
-  for (const auto& s : o.sets) overrides.insert(parse_assignment(s));
-  add_bus_settings(overrides, o.launcher);
-  const Variables variables(config, overrides, builtin_variables(o.config_path));
+  const Variables variables(config, variable_overrides(o, config), builtin_variables(o.config_path));
   SelectedCommands selected = select_commands(config, o.selection, variables);
   o.launcher.supervisor.environment = variables.exported();
   if (!o.launcher.script.empty()) flatten_script(config, o.launcher.script);

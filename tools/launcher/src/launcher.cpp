@@ -311,10 +311,14 @@ class Run {
 
 }  // namespace
 
-std::map<std::string, std::string> bus_environment(const LauncherOptions& options) {
-  std::map<std::string, std::string> environment{{kStatusChannelEnv, options.status_channel}};
-  if (options.lcm_url.rfind("udpm://", 0) == 0) environment["LCM_DEFAULT_URL"] = options.lcm_url;
-  return environment;
+std::map<std::string, std::string> bus_environment(const LauncherOptions& options,
+                                                   const EnvironmentLookup& environment) {
+  std::map<std::string, std::string> handed{{kStatusChannelEnv, options.status_channel}};
+  std::string url = options.lcm_url;
+  if (url.empty()) url = environment("LCM_DEFAULT_URL").value_or("");
+  if (url.empty()) url = kProjectDefaultUrl;  // what Bus("") listens on, less its receive buffer
+  if (url.rfind("udpm://", 0) == 0) handed["LCM_DEFAULT_URL"] = url;
+  return handed;
 }
 
 void install_launcher_signal_handlers() {

@@ -10,6 +10,7 @@
 #include "ivoa/launcher/config.hpp"
 #include "ivoa/launcher/selection.hpp"
 #include "ivoa/launcher/supervisor.hpp"
+#include "ivoa/launcher/variables.hpp"
 
 namespace ivoa::launcher {
 
@@ -38,10 +39,12 @@ struct LauncherOptions {
 // What the commands get in their environment so that they report where the
 // launcher listens (every ivoa program takes both as its defaults, a
 // command's own flags still win): IVOA_STATUS_CHANNEL = status_channel, and
-// LCM_DEFAULT_URL = lcm_url where it is a udpm:// URL. A memq:// or file://
-// URL is the launcher's alone: handed on, each command would talk to a
-// queue or a file of its own.
-std::map<std::string, std::string> bus_environment(const LauncherOptions& options);
+// LCM_DEFAULT_URL = the URL the launcher listens on where it is a udpm://
+// one (lcm_url, or if that is empty the environment's LCM_DEFAULT_URL, else
+// the project's default). A memq:// or file:// URL is the launcher's alone:
+// handed on, each command would talk to a queue or a file of its own.
+std::map<std::string, std::string> bus_environment(const LauncherOptions& options,
+                                                   const EnvironmentLookup& environment = process_environment);
 
 // SIGINT, SIGTERM and SIGHUP stop the run cleanly; a second one kills
 // every command at once. SIGPIPE is ignored.
