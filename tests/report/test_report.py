@@ -1250,14 +1250,19 @@ class MetricUnitTest(unittest.TestCase):
         load_tool()
         from report_markdown import _few_cells_note
         from report_metrics import _point
-        label = np.array([0] * 3 + [1] * 50 + [2] * 50 + [3] * 50)
-        var = np.concatenate([[0.5] * 3, np.linspace(0, 0.4, 150)])
-        p = _point(label, label.copy(), var, 0.45)  # the three TP withheld: the mean is over three classes
-        self.assertEqual(p["fewest_kept"], 0)
-        self.assertEqual(_point(label, label.copy(), var, 0.6)["fewest_kept"], 3)
-        self.assertEqual(_point(label[3:], label[3:].copy(), var[3:], 0.45)["fewest_kept"], 50)  # no TP at all
+        label = np.array([0] * 23 + [1] * 50 + [2] * 50 + [3] * 50)
+        var = np.concatenate([[0.5] * 20 + [0.1] * 3, np.linspace(0, 0.4, 150)])
+        p = _point(label, label.copy(), var, 0.45)  # 20 of the 23 TP withheld
+        self.assertEqual(p["fewest_kept"], 3)
+        self.assertEqual(_point(label, label.copy(), var, 0.05)["fewest_kept"], 0)  # every TP withheld
+        self.assertEqual(_point(label, label.copy(), var, 0.6)["fewest_kept"], 23)
+        self.assertEqual(_point(label[23:], label[23:].copy(), var[23:], 0.45)["fewest_kept"], 50)  # no TP at all
+        # a class with fewer than 20 cells in all is a handful at every threshold: it is not counted, or
+        # nothing would be judged
+        self.assertEqual(_point(label[20:], label[20:].copy(), var[20:], 0.6)["fewest_kept"], 50)
+        self.assertEqual(_point(label[4:30], label[4:30].copy(), var[4:30], 0.6)["fewest_kept"], 0)  # 19 TP, 7 TN
         ladder = [{"retained": 1.0, "fewest_kept": 3}, {"retained": 0.5, "fewest_kept": 2}]
-        self.assertIn("From ≥ 100 % retained down, some class keeps fewer than 20 cells (3 there)",
+        self.assertIn("From ≥ 100 % retained down, some class with 20 cells or more keeps fewer than 20 (3 there)",
                       _few_cells_note(ladder))
         self.assertEqual(_few_cells_note([{"retained": 1.0, "fewest_kept": 50}]), "")
 

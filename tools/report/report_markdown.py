@@ -167,8 +167,9 @@ def _few_cells_note(ladder: List[dict]) -> str:
     few = next((p for p in ladder if p.get("fewest_kept", FEW_CELLS) < FEW_CELLS), None)
     if few is None:
         return ""
-    return (f"\nFrom ≥ {pct(few['retained'], 0)} retained down, some class keeps fewer than {FEW_CELLS} cells "
-            f"({few['fewest_kept']} there): those rows, and the curves' faint part, rest on a handful of cells.\n")
+    return (f"\nFrom ≥ {pct(few['retained'], 0)} retained down, some class with {FEW_CELLS} cells or more keeps "
+            f"fewer than {FEW_CELLS} ({few['fewest_kept']} there): those rows, and the curves' faint part, rest on a "
+            "handful of cells.\n")
 
 
 def _withheld_failures(p: dict) -> str:

@@ -235,6 +235,13 @@ def _spearman(a: np.ndarray, b: np.ndarray) -> Optional[float]:
     return float(np.corrcoef(ra, rb)[0, 1])
 
 
+def _fewest_kept(kept: np.ndarray, support: np.ndarray) -> int:
+    """The fewest cells any class with FEW_CELLS or more in all keeps (0 if
+    no class has that many: nothing rests on enough cells)."""
+    counted = support >= FEW_CELLS
+    return int(kept[counted].min()) if counted.any() else 0
+
+
 def _point(label, predicted, var, tau) -> dict:
     """Metrics of the predictions kept by the gate var_predicted <= tau."""
     keep = var <= tau
@@ -248,8 +255,10 @@ def _point(label, predicted, var, tau) -> dict:
         "retained_per_class": [float(kept[c] / support_all[c]) if support_all[c] else None for c in range(N_CLASSES)],
         "kept_per_class": kept.tolist(),
         # the mean per-class accuracy leans on its smallest retained class: a handful of cells make it noise,
-        # and a class withheld whole (0 kept) leaves it a mean over the other classes
-        "fewest_kept": int(kept[support_all > 0].min()) if support_all.any() else 0,
+        # and a class withheld whole (0 kept) leaves it a mean over the other classes. Counted over the
+        # classes with FEW_CELLS or more in all: one with fewer is a handful at every threshold, and would
+        # leave no point to judge by (the per-class tables give its count)
+        "fewest_kept": _fewest_kept(kept, support_all),
         "mean_per_class_accuracy": m["mean_per_class_accuracy"],
         "overall_accuracy": m["overall_accuracy"],
         "per_class_accuracy": m["per_class_accuracy"],
@@ -264,17 +273,15 @@ def threshold_for_retained(var: np.ndarray, fraction: float) -> float:
     return float(s[k - 1])
 
 
-def _accuracy_trend(label: np.ndarray, pts: List[dict], unfiltered: dict, at70: dict) -> dict:
+def _accuracy_trend(pts: List[dict], unfiltered: dict, at70: dict) -> dict:
     """Does accuracy rise as the threshold falls? The rank correlation between
     the threshold and mean per-class accuracy over the quantile thresholds
     that keep at least 10 % of the cells and FEW_CELLS of every class that has
     as many (fewer, and a handful of cells decide the mean, or a class withheld
     whole leaves it to the others); "yes" takes -0.5 or less and a gain at the
     70 % point, where that point rests on enough cells too."""
-    support = np.bincount(label, minlength=N_CLASSES)
-
     def enough_cells(p):
-        return all(k >= FEW_CELLS for k, n in zip(p["kept_per_class"], support) if n >= FEW_CELLS)
+        return p["fewest_kept"] >= FEW_CELLS
 
     pts = [p for p in pts if p["retained"] >= 0.10 and enough_cells(p) and p["mean_per_class_accuracy"] is not None]
     thresholds = np.array([p["threshold"] for p in pts])
@@ -327,7 +334,7 @@ def gate_sweep(label: np.ndarray, predicted: np.ndarray, var: np.ndarray, model_
     table = [_point(label, predicted, var, threshold_for_retained(var, f))
              for f in (1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2)]
 
-    trend = _accuracy_trend(label, [_point(label, predicted, var, t) for t in np.unique(qs)], unfiltered, at70)
+    trend = _accuracy_trend([_point(label, predicted, var, t) for t in np.unique(qs)], unfiltered, at70)
 
     correct = label == predicted
     return {
