@@ -740,6 +740,21 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         os.remove(os.path.join(d, "predictions.csv"))
         self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "missing")
 
+    def test_a_file_that_is_not_text_is_named(self):
+        d = self.copy_eval(self.f.perfect, "binary_predictions")
+        with open(os.path.join(d, "predictions.csv"), "wb") as fh:
+            fh.write(bytes(range(128, 256)) * 10)
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv", "not UTF-8 text")
+        with open(os.path.join(d, "eval.json"), "wb") as fh:
+            fh.write(b"\xff\xfe{}")
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "eval.json", "not UTF-8 text")
+
+    def test_an_out_of_range_seed_is_a_usage_error(self):
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--seed", "-1",
+                                    "--out", os.path.join(self.root, "report_bad")])
+        self.assertEqual(code, 2, stderr)
+        self.assertIn("--seed must be in 0 .. 4294967295", stderr)
+
     def test_truncated_embeddings(self):
         d = self.copy_eval(self.f.perfect, "short_embeddings")
         path = os.path.join(d, "embeddings.f32")

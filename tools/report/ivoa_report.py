@@ -40,6 +40,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import argparse  # noqa: E402
 import datetime  # noqa: E402
 import json  # noqa: E402
+import math  # noqa: E402
 import shlex  # noqa: E402
 import shutil  # noqa: E402
 from typing import Dict, List, Optional  # noqa: E402
@@ -112,6 +113,10 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
         p.error(f"--threads must be at least 1, not {a.threads}")
     if a.max_overlays < 0:
         p.error(f"--max-overlays must be >= 0 (0 = all), not {a.max_overlays}")
+    if not 0 <= a.seed < 2**32:
+        p.error(f"--seed must be in 0 .. 4294967295 (numpy's and scikit-learn's range), not {a.seed}")
+    if not math.isfinite(a.evidence_threshold):
+        p.error(f"--evidence-threshold must be a number, not {a.evidence_threshold}")
     return a
 
 

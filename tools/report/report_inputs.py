@@ -341,6 +341,8 @@ def _read_json(path: str) -> dict:
             data = json.load(f)
     except OSError as e:
         raise InputError(f"{path}: cannot read ({e.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not UTF-8 text, so not the JSON file expected here") from None
     except json.JSONDecodeError as e:
         raise InputError(f"{path}: not valid JSON ({e})") from None
     if not isinstance(data, dict):
@@ -373,6 +375,8 @@ def _read_csv_columns(path: str, required) -> Dict[str, List[str]]:
                     cols[h].append(value)
     except OSError as e:
         raise InputError(f"{path}: cannot read ({e.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not UTF-8 text, so not the CSV file expected here") from None
     return cols
 
 
