@@ -130,6 +130,23 @@ class LabelRepeatabilityTest(unittest.TestCase):
         proc = subprocess.run([sys.executable, TOOL, self.data[0], bad], capture_output=True, text=True, timeout=60)
         self.assertEqual(proc.returncode, 3)
         self.assertIn("samples.csv: line 2", proc.stderr)
+        # a label out of range, a row cut short, no rows: named by line, no traceback
+        for name, rows, message in (("label9", "0,1000,0,9\n", "line 2: label 9, expected 0..3"),
+                                    ("cut", "0,1000,0,1\n1,1000\n", "line 3 does not have the header's 4 fields"),
+                                    ("empty", "", "samples.csv: no samples")):
+            folder = os.path.join(self.tmp.name, name, "office_s31")
+            os.makedirs(folder)
+            with open(os.path.join(folder, "samples.csv"), "w") as f:
+                f.write("sample,utime,cell,label\n" + rows)
+            proc = subprocess.run([sys.executable, TOOL, self.data[0], os.path.dirname(folder)],
+                                  capture_output=True, text=True, timeout=60)
+            self.assertEqual(proc.returncode, 3, proc.stderr)
+            self.assertIn(message, proc.stderr)
+            self.assertNotIn("Traceback", proc.stderr)
+        proc = subprocess.run([sys.executable, TOOL, *self.data, "--json", os.path.join(self.tmp.name, "no", "x.json")],
+                              capture_output=True, text=True, timeout=60)
+        self.assertEqual(proc.returncode, 4, proc.stderr)
+        self.assertIn("cannot write", proc.stderr)
 
     def test_realisations_must_be_distinct_and_of_one_detector(self):
         proc = subprocess.run([sys.executable, TOOL, self.data[0], self.data[0] + "/"], capture_output=True,

@@ -45,6 +45,7 @@ from margin_bands import MARGIN_AGREEMENT_MIN, band_name, margin_bands  # noqa: 
 LABEL_NAMES = ("TP", "TN", "FP", "FN")
 TP, FP = 0, 2  # the labels whose detector verdict is "obstacle"
 EXIT_BAD_INPUT = 3
+EXIT_CANNOT_WRITE = 4  # as the C++ tools: an output that cannot be written
 
 
 class InputError(Exception):
@@ -60,21 +61,37 @@ def read_labels(dataset: str) -> Dict[str, Dict[Tuple[int, int], int]]:
         path = os.path.join(dataset, name, "samples.csv")
         if not os.path.isfile(path):
             continue
-        with open(path, newline="") as f:
+        sessions[name] = _read_session_labels(path)
+    if not sessions:
+        raise InputError(f"{dataset}: no session folders with a samples.csv")
+    return sessions
+
+
+def _read_session_labels(path: str) -> Dict[Tuple[int, int], int]:
+    """{(utime, cell): label} of one samples.csv, each row checked."""
+    labels = {}
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
             reader = csv.DictReader(f)
             missing = {"utime", "cell", "label"} - set(reader.fieldnames or [])
             if missing:
                 raise InputError(f"{path}: missing column(s) {', '.join(sorted(missing))}")
-            labels = {}
             for row_number, row in enumerate(reader, start=2):
+                if None in row.values() or None in row:  # DictReader: too few fields, or too many
+                    raise InputError(f"{path}: line {row_number} does not have the header's "
+                                     f"{len(reader.fieldnames)} fields (a truncated or damaged file?)")
                 try:
-                    labels[(int(row["utime"]), int(row["cell"]))] = int(row["label"])
+                    label = int(row["label"])
+                    labels[(int(row["utime"]), int(row["cell"]))] = label
                 except ValueError:
                     raise InputError(f"{path}: line {row_number}: utime, cell and label must be integers") from None
-        sessions[name] = labels
-    if not sessions:
-        raise InputError(f"{dataset}: no session folders with a samples.csv")
-    return sessions
+                if not 0 <= label < len(LABEL_NAMES):
+                    raise InputError(f"{path}: line {row_number}: label {label}, expected 0..3 (TP, TN, FP, FN)")
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not UTF-8 text, so not a dataset's samples.csv") from None
+    if not labels:
+        raise InputError(f"{path}: no samples")
+    return labels
 
 
 def session_info(dataset: str, session: str) -> dict:
@@ -116,7 +133,7 @@ def read_worst_costs(dataset: str, session: str) -> Optional[Dict[Tuple[int, int
     with open(os.path.join(folder, "samples.csv"), newline="") as f:
         try:
             rows = [(int(r["sample"]), int(r["utime"]), int(r["cell"])) for r in csv.DictReader(f)]
-        except (KeyError, ValueError) as e:
+        except (KeyError, ValueError, TypeError) as e:  # TypeError: a row short of fields
             raise InputError(f"{folder}/samples.csv: evidence needs integer sample, utime and cell columns "
                              f"({type(e).__name__}: {e})") from None
     if values.size != len(rows) * size:
@@ -315,8 +332,12 @@ def main(argv=None) -> int:
         return EXIT_BAD_INPUT
     print_summary(result)
     if args.json:
-        with open(args.json, "w") as f:
-            json.dump(result, f, indent=1)
+        try:
+            with open(args.json, "w") as f:
+                json.dump(result, f, indent=1)
+        except OSError as e:
+            print(f"ivoa_label_repeatability: cannot write {args.json}: {e.strerror}", file=sys.stderr)
+            return EXIT_CANNOT_WRITE
     return 0
 
 
