@@ -2,6 +2,10 @@
 // to a handler, and file:// logs written and replayed through the same code.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <exception>
+#include <vector>
+
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/image_convert.hpp"
 #include "test_rig.hpp"
@@ -59,6 +63,34 @@ TEST(Bus, UndecodableMessagesGoToTheErrorHandler) {
   EXPECT_EQ(good, 0);
   EXPECT_NE(errors[0].find("BUS_TEST_DEPTH"), std::string::npos);
   EXPECT_NE(errors[0].find("ivoa.depth_image_t"), std::string::npos);
+}
+
+TEST(Bus, AMessageDamagedInsideIsAnErrorAndTheNextOneArrives) {
+  Bus bus("memq://");
+  std::vector<int64_t> got;
+  std::vector<std::string> errors;
+  bus.on_decode_error([&](const std::string& what) { errors.push_back(what); });
+  bus.subscribe<stereo_image_t>("BUS_TEST_DAMAGED",
+                                [&](const stereo_image_t& m, const ReceiveInfo&) { got.push_back(m.seq); });
+  stereo_image_t msg{};
+  msg.seq = 1;
+  msg.source = "left";
+  set_counts(msg);
+  std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
+  ASSERT_GT(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+  // fingerprint (8 bytes), utime, seq, then the source string's length: 0
+  // makes lcm-gen's decode throw (std::length_error) instead of failing
+  const size_t source_length_at = 24;
+  std::fill_n(bytes.begin() + source_length_at, 4, uint8_t{0});
+  stereo_image_t probe;
+  EXPECT_THROW(probe.decode(bytes.data(), 0, static_cast<int>(bytes.size())), std::exception);
+  ASSERT_TRUE(bus.publish_raw("BUS_TEST_DAMAGED", bytes.data(), bytes.size()));
+  msg.seq = 2;
+  ASSERT_TRUE(bus.publish("BUS_TEST_DAMAGED", msg));
+  ASSERT_TRUE(handle_until(bus, [&] { return got.size() == 1; }));
+  EXPECT_EQ(got, std::vector<int64_t>{2});
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("does not decode as ivoa.stereo_image_t"), std::string::npos) << errors[0];
 }
 
 TEST(Bus, LogWrittenAndReplayedThroughTheSameInterface) {

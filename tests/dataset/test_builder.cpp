@@ -19,6 +19,8 @@
 #include "ivoa/core/ground_warp.hpp"
 #include "ivoa/dataset/builder.hpp"
 #include "ivoa/dataset/patch.hpp"
+#include "ivoa/logio/log_format.hpp"
+#include "ivoa/logio/log_reader.hpp"
 #include "ivoa/monitor/depth_monitor.hpp"
 #include "ivoa/monitor/labeler.hpp"
 #include "ivoa/stereo/detector.hpp"
@@ -339,6 +341,69 @@ TEST(DatasetBuilder, TruncatedLogKeepsWhatCameBeforeAndSaysWhere) {
   EXPECT_NE(report.problems[0].find("byte "), std::string::npos) << report.problems[0];
   EXPECT_GE(report.stereo_frames, 3);
   EXPECT_GT(report.samples, 0);
+}
+
+// Overwrites `bytes` at `offset` of a file.
+void overwrite(const std::string& path, uint64_t offset, const std::vector<uint8_t>& bytes) {
+  std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+  f.seekp(static_cast<std::streamoff>(offset));
+  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+// The offsets of a log's STEREO_IMAGES events.
+std::vector<uint64_t> stereo_event_offsets(const std::string& path) {
+  std::vector<uint64_t> out;
+  logio::LogReader reader(path);
+  logio::LogEvent e;
+  while (reader.next(e))
+    if (e.channel == channels::kStereoImages) out.push_back(e.offset);
+  return out;
+}
+
+// One stereo message damaged inside (its source string's length zeroed:
+// lcm-gen's decode throws on it) and the framing of a later event broken:
+// both are skipped with a problem naming the byte, and the frames after
+// each still make the session.
+TEST(DatasetBuilder, DamageInsideAMessageOrBetweenEventsIsSkippedAndTheRestBuilt) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("damaged.lcmlog");
+  test::write_sim_log(log_path, kScene, 4, 6);
+  const std::vector<uint64_t> stereo = stereo_event_offsets(log_path);
+  ASSERT_EQ(stereo.size(), 6u);
+  const uint64_t payload = stereo[1] + logio::kEventHeaderBytes + std::string(channels::kStereoImages).size();
+  overwrite(log_path, payload + 24, {0, 0, 0, 0});  // after fingerprint, utime and seq
+  overwrite(log_path, stereo[3], {0, 0, 0, 0});     // the sync word
+  BuildOptions options;
+  options.labels = "jppc";
+  SessionBuilder builder(dir.file("data"), "damaged", options);
+  builder.add_log(log_path);
+  const BuildReport report = builder.finish();
+  EXPECT_EQ(report.bad_messages, 1);
+  EXPECT_EQ(report.stereo_frames, 4);  // frames 0, 2, 4, 5
+  const auto said = [&](const std::string& what) {
+    return std::any_of(report.problems.begin(), report.problems.end(),
+                       [&](const std::string& p) { return p.find(what) != std::string::npos; });
+  };
+  EXPECT_TRUE(said("STEREO_IMAGES at byte " + std::to_string(stereo[1]) + ": does not decode as ivoa.stereo_image_t"));
+  EXPECT_TRUE(said("byte " + std::to_string(stereo[3]) + ": "));
+  EXPECT_TRUE(said("skipped to the next good event"));
+  EXPECT_EQ(SessionReader(dir.file("data") + "/damaged").info().frames, 4);
+}
+
+// A build that ends part-way (here: destroyed before finish) does not list
+// a session that holds only part of its logs.
+TEST(DatasetBuilder, ASessionWhoseBuildDidNotFinishIsNotListed) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("s.lcmlog");
+  test::write_sim_log(log_path, kScene, 4, 3);
+  BuildOptions options;
+  options.labels = "jppc";
+  {
+    SessionBuilder builder(dir.file("data"), "unfinished", options);
+    builder.add_log(log_path);
+  }
+  build_session(dir.file("data"), "whole", log_path, options);
+  EXPECT_EQ(list_sessions(dir.file("data")), std::vector<std::string>{"whole"});
 }
 
 TEST(DatasetBuilder, LogWithoutCalibrationIsRefused) {

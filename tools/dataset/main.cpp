@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <spdlog/fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/flag_checks.hpp"
@@ -104,6 +105,9 @@ int run_build(const std::string& out, const std::string& session, const std::vec
       worst = kExitBadInput;
     } catch (const dataset::DatasetError& e) {
       spdlog::error("{}", e.what());
+      worst = kExitBadInput;
+    } catch (const std::exception& e) {  // unforeseen: this session is not registered, the next ones still built
+      spdlog::error("session {} ({}): {}; not added to the dataset", name, fmt::join(files, ", "), e.what());
       worst = kExitBadInput;
     }
   }

@@ -207,7 +207,7 @@ std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection
                                                  const std::string& log, const dataset::SessionReader& session,
                                                  size_t room) {
   const LabelledFrames frames = labelled_frames(session);
-  logio::LogReader in(log);
+  logio::LogReader in(log, {/*resync=*/true});
   logio::LogEvent e;
   int64_t index = 0;
   // The simulator publishes a frame's truth after its images: read on past
@@ -238,8 +238,9 @@ std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection
     from_log.push_back(prepare_overlay(o, model, msg, warp.get(), it->second, path));
   }
   if (const std::string why = in.not_a_log(); !why.empty()) spdlog::warn("{}: {}: no overlays from it", log, why);
-  else if (!in.clean())  // cut short or damaged: the overlays stop (or skip) there
-    spdlog::warn("{}: {}: overlays only from the frames before it", log, in.problems().front().describe());
+  else
+    for (const auto& p : in.problems())  // cut short or damaged: the frames there have no overlays
+      spdlog::warn("{}: {}: no overlays from what was not read", log, p.describe());
   return from_log;
 }
 

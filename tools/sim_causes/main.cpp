@@ -128,7 +128,7 @@ void read_event(const logio::LogEvent& e, bool want_labels, SessionLog& log) {
 }
 
 SessionLog read_log(const std::string& path, bool want_labels) {
-  logio::LogReader reader(path);
+  logio::LogReader reader(path, {/*resync=*/true});  // damage skipped, reported below
   SessionLog log;
   logio::LogEvent event;
   while (reader.next(event)) {

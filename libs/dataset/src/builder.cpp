@@ -130,7 +130,8 @@ void SessionBuilder::Impl::open_writer() {
 void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
   rig_calibration_t msg;
   if (!logio::decode(e, msg))
-    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.rig_calibration_t");
+    return bad(e.channel + " at byte " + std::to_string(e.offset) +
+               ": does not decode as ivoa.rig_calibration_t (another type, truncated or damaged)");
   std::vector<uint8_t> bytes = calibration_content(msg);
   if (bytes == calibration_bytes) return;
   try {
@@ -152,7 +153,8 @@ void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
 void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
   stereo_image_t msg;
   if (!logio::decode(e, msg))
-    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.stereo_image_t");
+    return bad(e.channel + " at byte " + std::to_string(e.offset) +
+               ": does not decode as ivoa.stereo_image_t (another type, truncated or damaged)");
   ++report.stereo_frames;
   try {
     cv::Mat left = decode_image(msg.left);
@@ -182,7 +184,8 @@ void SessionBuilder::Impl::on_depth(const logio::LogEvent& e) {
   ++label_sources;
   depth_image_t msg;
   if (!logio::decode(e, msg))
-    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.depth_image_t");
+    return bad(e.channel + " at byte " + std::to_string(e.offset) +
+               ": does not decode as ivoa.depth_image_t (another type, truncated or damaged)");
   if (!pipeline) return bad("depth frame " + std::to_string(msg.utime) + " before any calibration");
   try {
     cv::Mat depth = decode_depth(msg);
@@ -198,7 +201,8 @@ void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
   ++label_sources;
   introspection_labels_t msg;
   if (!logio::decode(e, msg))
-    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.introspection_labels_t");
+    return bad(e.channel + " at byte " + std::to_string(e.offset) +
+               ": does not decode as ivoa.introspection_labels_t (another type, truncated or damaged)");
   if (info.detector.empty()) {
     info.detector = msg.detector;
     info.grid = geometry_of(msg);
@@ -212,7 +216,8 @@ void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
 void SessionBuilder::Impl::on_truth(const logio::LogEvent& e) {
   sim_ground_truth_t msg;
   if (!logio::decode(e, msg))
-    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": not an ivoa.sim_ground_truth_t");
+    return bad(e.channel + " at byte " + std::to_string(e.offset) +
+               ": does not decode as ivoa.sim_ground_truth_t (another type, truncated or damaged)");
   if (info.scene.empty()) {
     info.scene = msg.scene;
     info.seed = msg.seed;
@@ -399,12 +404,17 @@ SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::strin
   impl_->info.labels_from = impl_->rerun() ? "rerun" : "recorded";
 }
 
-SessionBuilder::~SessionBuilder() = default;
+// Destroyed before finish() (a log that could not be read, an error part-way):
+// what was written stays unregistered.
+SessionBuilder::~SessionBuilder() {
+  if (impl_->writer) impl_->writer->abandon();
+}
 
 void SessionBuilder::add_log(const std::string& path, const ProgressCallback& progress) {
   Impl& m = *impl_;
   m.info.logs.push_back(path);
-  logio::LogReader reader(path);  // throws LogReadError for a missing file
+  // Damage is skipped to the next good event (reported in problems): what follows it is still the session's.
+  logio::LogReader reader(path, {/*resync=*/true});  // throws LogReadError for a missing file
   logio::LogEvent e;
   const auto& o = m.options;
   while (reader.next(e)) {

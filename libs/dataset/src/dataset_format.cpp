@@ -220,6 +220,12 @@ void SessionWriter::write_evidence(const std::vector<float>& evidence) {
     throw DatasetError(dir_ + "/evidence.f32: write failed (disk full?)");
 }
 
+void SessionWriter::abandon() {
+  for (std::FILE* f : {files_->patches, files_->samples, files_->evidence})
+    if (f) std::fclose(f);
+  files_->patches = files_->samples = files_->evidence = nullptr;
+}
+
 void SessionWriter::close() {
   if (!files_->patches) return;
   bool ok = std::fflush(files_->patches) == 0 && std::fflush(files_->samples) == 0;

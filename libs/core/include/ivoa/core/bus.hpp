@@ -14,6 +14,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "ivoa/core/message_counts.hpp"
+#include "ivoa/core/message_decode.hpp"
 #include "ivoa/core/process.hpp"
 
 namespace ivoa {
@@ -76,10 +77,10 @@ class Bus {
     const std::string type = std::string("ivoa.") + Msg::getTypeName();
     subscribe_raw(channel, [this, type, handler](const void* data, size_t size, const ReceiveInfo& info) {
       Msg msg;
-      if (msg.decode(data, 0, static_cast<int>(size)) < 0) {
+      if (!decode_message(msg, data, size)) {
         report_decode_error("channel " + info.channel + ": " + std::to_string(size) +
                             "-byte message does not decode as " + type +
-                            " (another type on this channel, or truncated)");
+                            " (another type on this channel, truncated or damaged)");
         return;
       }
       handler(msg, info);

@@ -102,6 +102,9 @@ class SessionWriter {
   // A TN cell of the current frame left out (SessionInfo::tn_kept < 1).
   void count_dropped_tn() { ++info_.tn_dropped; }
   void close();
+  // Closes the files without registering the session: a build that failed
+  // part-way leaves its folder unlisted rather than pass for a whole one.
+  void abandon();
   const SessionInfo& info() const { return info_; }
 
  private:

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "ivoa/core/message_decode.hpp"
+
 namespace ivoa::logio {
 struct EventHeader;
 
@@ -21,10 +23,10 @@ struct LogEvent {
 };
 
 // Decodes an event's message as an lcm-gen type; false if it is not one
-// (another fingerprint, or truncated).
+// (another fingerprint, truncated, or damaged inside).
 template <class Msg>
 bool decode(const LogEvent& event, Msg& msg) {
-  return msg.decode(event.data.data(), 0, static_cast<int>(event.data.size())) >= 0;
+  return decode_message(msg, event.data.data(), event.data.size());
 }
 
 struct LogProblem {
