@@ -312,5 +312,15 @@ TEST(LogSummary, UnknownPayloadsAreCountedButNotDecoded) {
   EXPECT_NE(channel_json(s).find("\"type\": \"unknown\""), std::string::npos);
 }
 
+TEST(LogSummary, MessagesOfAnotherTypeOnAChannelAreSaidUnderTheTable) {
+  LogSummary summary;
+  const auto stereo = encoded_stereo(0, 100);
+  summary.add("STEREO_IMAGES", 1, stereo.data(), stereo.size());
+  const auto blob = numbered_bytes(64, 3);
+  summary.add("STEREO_IMAGES", 2, blob.data(), blob.size());
+  EXPECT_NE(summary.table().find("STEREO_IMAGES: 1 of its 2 messages are not ivoa.stereo_image_t"), std::string::npos)
+      << summary.table();
+}
+
 }  // namespace
 }  // namespace ivoa::logio

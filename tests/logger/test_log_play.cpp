@@ -138,6 +138,17 @@ TEST(LogPlay, AFileThatIsNoLogIsReportedAndTheOthersPlay) {
   EXPECT_EQ(f.heartbeat.bad_input_count(), 1);
 }
 
+TEST(LogPlay, AnEmptyFileHoldsNoEventAndIsReported) {
+  test::TempDir dir;
+  const std::string empty = dir.file("empty.lcmlog"), log = dir.file("b.lcmlog");
+  std::ofstream{empty};
+  write_log(log, {{"CAM", 1}});
+  PlayFixture f;
+  const PlayCounts counts = f.play({empty, log});
+  EXPECT_EQ(counts.not_logs, 1);  // exit code 3, as --help says
+  EXPECT_EQ(counts.published, 1);
+}
+
 TEST(LogPlay, EventsAreDueAtTheirLogTimeOverTheSpeed) {
   EXPECT_DOUBLE_EQ(due_ms(1'500'000, 1'000'000, 1.0), 500.0);
   EXPECT_DOUBLE_EQ(due_ms(1'500'000, 1'000'000, 2.0), 250.0);

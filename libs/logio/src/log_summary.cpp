@@ -68,6 +68,10 @@ std::string LogSummary::table() const {
                   seq(s.last_seq).c_str(), seq(s.missing_seq).c_str(), regressions.c_str());
     out += line;
   }
+  for (const auto& [name, s] : channels_)  // one type per channel: a reader of the first skips these
+    if (s.other_fingerprints > 0)
+      out += name + ": " + std::to_string(s.other_fingerprints) + " of its " + std::to_string(s.count) +
+             " messages are not " + s.type + " (another type, or damaged before the fingerprint)\n";
   return out;
 }
 

@@ -103,6 +103,9 @@ void LogPlayer::report_problems(const logio::LogReader& reader) {
   if (const std::string not_a_log = reader.not_a_log(); !not_a_log.empty()) {
     ++counts_.not_logs;
     spdlog::error("{}: {}", reader.path(), not_a_log);
+  } else if (reader.size() == 0) {  // an empty log is a log, but there is nothing to play in it
+    ++counts_.not_logs;
+    spdlog::error("{}: an empty file: no event to play", reader.path());
   }
 }
 
