@@ -21,6 +21,7 @@
 #include <thread>
 
 #include <CLI/CLI.hpp>
+#include <spdlog/fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include "ivoa/causes/cause_finder.hpp"
@@ -153,6 +154,11 @@ SessionLog read_log(const std::string& path, bool want_labels) {
 // The labelled cells of a dataset session (e.g. the dense detector's labels,
 // made offline by ivoa-dataset), one labels message per frame.
 void labels_from_dataset(const std::string& root, const std::string& session, SessionLog& log) {
+  if (const auto sessions = dataset::list_sessions(root);
+      std::find(sessions.begin(), sessions.end(), session) == sessions.end())
+    throw std::runtime_error(fmt::format("dataset {} has no session {} (named after the log); it has: {}", root,
+                                         session,
+                                         sessions.empty() ? "none" : fmt::format("{}", fmt::join(sessions, ", "))));
   const dataset::SessionReader reader(root + "/" + session);
   const dataset::SessionInfo& info = reader.info();
   for (const dataset::SampleRecord& s : reader.samples()) {
