@@ -129,6 +129,28 @@ TEST(DatasetFormat, PatchScaleAndSidesRoundTripAndOldSessionsReadAsFixed) {
   EXPECT_EQ(old.samples()[0].patch_side, old.info().patch_size);
 }
 
+TEST(DatasetFormat, ANonsensePatchSizeInSessionJsonIsNamedThere) {
+  test::TempDir dir;
+  { SessionWriter w(dir.path().string(), info("bad")); }
+  const std::string path = dir.path().string() + "/bad/session.json";
+  std::string json;
+  {
+    std::ifstream j(path);
+    json.assign(std::istreambuf_iterator<char>(j), {});
+  }
+  const size_t key = json.find("  \"patch_size\": ");  // the session's, before the grid's
+  ASSERT_NE(key, std::string::npos);
+  json.replace(key, json.find(',', key) - key, "  \"patch_size\": -5");
+  std::ofstream(path) << json;
+  try {
+    SessionReader reader(dir.path().string() + "/bad");
+    FAIL() << "read a session with patch_size -5";
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("session.json: patch_size must be > 0, not -5"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(DatasetFormat, TwoViewPatchesRoundTripStacked) {
   test::TempDir dir;
   SessionInfo i = info("two");

@@ -80,6 +80,7 @@ SessionInfo parse_session_json(const std::string& path) {
   i.environment = get<std::string>(root, "environment", path);
   i.rig_name = get<std::string>(root, "rig_name", path);
   i.patch_size = get<int>(root, "patch_size", path);
+  if (i.patch_size <= 0) throw DatasetError(path + ": patch_size must be > 0, not " + std::to_string(i.patch_size));
   i.views = root["views"] ? get<int>(root, "views", path) : 1;  // datasets written before views existed
   if (i.views != 1 && i.views != 2) throw DatasetError(path + ": views must be 1 or 2, not " + std::to_string(i.views));
   i.patch_scale = root["patch_scale"] ? get<double>(root, "patch_scale", path) : 0.0;  // written before scaling existed
@@ -91,6 +92,7 @@ SessionInfo parse_session_json(const std::string& path) {
   i.tn_dropped = root["tn_dropped"] ? get<int64_t>(root, "tn_dropped", path) : 0;
   i.frames = get<int64_t>(root, "frames", path);
   i.samples = get<int64_t>(root, "samples", path);
+  if (i.frames < 0 || i.samples < 0) throw DatasetError(path + ": frames and samples must be >= 0");
   const YAML::Node counts = root["class_counts"];
   for (int c = 0; c < kNumClasses; ++c) i.class_counts[c] = get<int64_t>(counts, kLabelNames[c], path);
   const YAML::Node g = root["grid"];
