@@ -685,6 +685,24 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         self.assertTrue(all("noise_agreement" not in b for b in g["bands"]))
         self.assertIn("were not used: measured for detector 'dense'", read_text(os.path.join(out, "report.md")))
 
+    def test_inputs_that_contradict_themselves_are_named(self):
+        """A prediction that is not its row's most probable class, an eval.json
+        sample count predictions.csv does not have, a noise agreement outside 0..1."""
+        def not_the_most_probable(lines):
+            row = lines[4]
+            top = max(range(4), key=lambda c: float(row[lines[0].index(("p_tp", "p_tn", "p_fp", "p_fn")[c])]))
+            set_cell(lines, 5, "predicted", str((top + 1) % 4))
+        d = self.eval_with_predictions("not_argmax", not_the_most_probable)
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data], "predictions.csv: line 5: predicted",
+                              "is not the most probable class")
+        d = self.eval_with_meta("too_many", lambda m: dict(m, samples=9999))
+        self.assert_bad_input(["--eval", d, "--dataset", self.f.data2], "eval.json: says 9999 samples",
+                              "predictions.csv has")
+        bands = [{"low": None, "high": -0.3, "n": 40, "verdict_agreement": 7.5}]
+        self.assert_bad_input(["--eval", self.f.perfect, "--dataset", self.f.data, "--repeatability",
+                               self.write_repeatability("noise_over.json", bands=bands)],
+                              "noise_over.json: evidence.bands[0]: verdict_agreement 7.5")
+
     def test_bad_noise_repeatability_is_named(self):
         self.assert_bad_input(["--eval", self.f.perfect, "--dataset", self.f.data, "--repeatability",
                                self.write_repeatability("noise_thr.json", threshold=0.5)],
@@ -1154,6 +1172,28 @@ class DetectorSettingsTest(FabricatedInputsCase):
                                     "--out", os.path.join(self.root, "report_bad")])
         self.assertEqual(code, 3, stderr)
         self.assertIn("variants_bad.csv: line 2: 8 right and 5 wrong of 10 cells", stderr)
+
+
+class CauseAndSettingsRowsTest(FabricatedInputsCase):
+    """Rows of --causes and --variants that cannot be true are named."""
+    prefix = "ivoa_report_rows_"
+
+    def test_a_cause_outside_the_phenomena_tested_is_refused(self):
+        causes = os.path.join(self.root, "causes_untested.csv")
+        write_causes(causes, self.f.sessions, cause_of={FP: 16, FN: 0})  # 16 (repetitive) is not in tested 11
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--causes", causes,
+                                    "--out", os.path.join(self.root, "report_bad")])
+        self.assertEqual(code, 3, stderr)
+        self.assertIn("causes_untested.csv: line 2: causes 16 is not a set of the phenomena tested there (11)", stderr)
+
+    def test_a_settings_row_given_twice_is_refused(self):
+        variants = os.path.join(self.root, "variants_twice.csv")
+        write_variants(variants, [("jppc", "stricter", "TN", 100, 100, 0), ("jppc", "stricter", "TN", 100, 100, 0)])
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--variants", variants,
+                                    "--out", os.path.join(self.root, "report_bad")])
+        self.assertEqual(code, 3, stderr)
+        self.assertIn("variants_twice.csv: line 3: session s1, jppc variant 'stricter', label TN again (first on "
+                      "line 2)", stderr)
 
 
 class MetricUnitTest(unittest.TestCase):

@@ -184,7 +184,11 @@ class DatasetSession:
         got, want = os.path.getsize(p), self.size * size * 4
         if got != want:
             raise InputError(f"{p}: {got} bytes, expected {self.size} samples x {size} float32 = {want}")
-        self._evidence = np.fromfile(p, dtype="<f4").reshape(self.size, size)
+        evidence = np.fromfile(p, dtype="<f4").reshape(self.size, size)
+        bad = np.flatnonzero(np.isinf(evidence).any(axis=1))  # NaN is "not observed"; an infinity is damage
+        if len(bad):
+            raise InputError(f"{p}: sample {bad[0]} holds an infinite value ({len(bad)} such samples)")
+        self._evidence = evidence
         return self._evidence
 
 
@@ -417,9 +421,13 @@ def load_eval(path: str) -> EvalRun:
     max_var = max_variance(meta["mc_passes"])
     probs = np.stack([_checked(pred_path, cols, c, 0, 1) for c in PROBABILITY_COLUMNS], axis=1)
     _check_probabilities_sum(pred_path, probs)
+    _check_predicted_is_most_probable(pred_path, predicted, probs)
     coords = {c: _checked(pred_path, cols, c, -np.inf, np.inf) for c in ("x", "y", "u", "v")}
     session, sample = np.array(cols["session"]), _numeric(pred_path, cols, "sample", int)
     _check_unique_samples(pred_path, session, sample)
+    if _is_integer(meta.get("samples")) and meta["samples"] != n:
+        raise InputError(f"{meta_path}: says {meta['samples']} samples, {pred_path} has {n} rows "
+                         "(a file cut short, or the two from different runs?)")
     embeddings = _load_embeddings(os.path.join(path, "embeddings.f32"), n)
 
     overlay_dir = os.path.join(path, "overlays")
@@ -484,6 +492,18 @@ def _check_probabilities_sum(path: str, probs: np.ndarray) -> None:
     if len(bad):
         raise InputError(f"{path}: line {_line(bad[0])}: {' + '.join(PROBABILITY_COLUMNS)} = {total[bad[0]]:.6g}, "
                          f"expected 1 (columns swapped, or not probabilities?)")
+
+
+def _check_predicted_is_most_probable(path: str, predicted: np.ndarray, probs: np.ndarray) -> None:
+    """ivoa-eval predicts the class of the largest mean probability (written to
+    5 decimals, hence the slack): another one means shifted or edited columns."""
+    chosen = probs[np.arange(len(predicted)), predicted]
+    bad = np.flatnonzero(chosen < probs.max(axis=1) - 1e-4)
+    if len(bad):
+        r = bad[0]
+        top = int(np.argmax(probs[r]))
+        raise InputError(f"{path}: line {_line(r)}: predicted {predicted[r]} ({LABEL_NAMES[predicted[r]]}, "
+                         f"p {chosen[r]:.5f}) is not the most probable class ({LABEL_NAMES[top]}, p {probs[r, top]:.5f})")
 
 
 def _check_unique_samples(path: str, session: np.ndarray, sample: np.ndarray) -> None:
@@ -728,6 +748,12 @@ def load_causes(path: str) -> Causes:
     utime, cell = _numeric(path, cols, "utime", int), _numeric(path, cols, "cell", int)
     stereo, replayed = _numeric(path, cols, "stereo_state", int), _numeric(path, cols, "replayed_state", int)
     bits = _numeric(path, cols, "causes", int)
+    if "tested" in cols:  # a cause is one of the phenomena re-rendered away
+        tested = _numeric(path, cols, "tested", int)
+        bad = np.flatnonzero((bits < 0) | (tested < 0) | ((bits & ~tested) != 0))
+        if len(bad):
+            raise InputError(f"{path}: line {_line(bad[0])}: causes {bits[bad[0]]} is not a set of the phenomena "
+                             f"tested there ({tested[bad[0]]})")
     bits = np.where((bits == 0) & (_numeric(path, cols, "jointly", int) != 0), ONLY_TOGETHER, bits)
     rows = {}
     for i, (session, detector, label) in enumerate(zip(cols["session"], cols["detector"], cols["label"])):
@@ -758,7 +784,13 @@ def load_variants(path: str) -> Dict[tuple, Dict[str, int]]:
     cols = _read_csv_columns(path, VARIANT_COLUMNS)
     counts = {k: _numeric(path, cols, k, int) for k in ("cells", "right", "wrong")}
     out: Dict[tuple, Dict[str, int]] = {}
-    for i, (detector, variant, label) in enumerate(zip(cols["detector"], cols["variant"], cols["label"])):
+    first_line: Dict[tuple, int] = {}
+    for i, (session, detector, variant, label) in enumerate(zip(cols["session"], cols["detector"], cols["variant"],
+                                                                 cols["label"])):
+        if (session, detector, variant, label) in first_line:  # summed twice, it would double the session
+            raise InputError(f"{path}: line {_line(i)}: session {session}, {detector} variant '{variant}', label "
+                             f"{label} again (first on line {first_line[(session, detector, variant, label)]})")
+        first_line[(session, detector, variant, label)] = _line(i)
         if label not in LABEL_NAMES:
             raise InputError(f"{path}: line {_line(i)}: label '{label}' (expected one of {', '.join(LABEL_NAMES)})")
         n, right, wrong = (int(counts[k][i]) for k in ("cells", "right", "wrong"))
@@ -788,6 +820,10 @@ def load_repeatability(path: str, threshold: float) -> dict:
                              f"{threshold:g} (--evidence-threshold)")
         bands = [{"low": b["low"], "high": b["high"], "n": int(b["n"]),
                   "verdict_agreement": float(b["verdict_agreement"])} for b in e["bands"]]
+        for i, b in enumerate(bands):
+            if not (0 <= b["verdict_agreement"] <= 1 and b["n"] >= 0):
+                raise InputError(f"{path}: evidence.bands[{i}]: verdict_agreement {b['verdict_agreement']:g} and n "
+                                 f"{b['n']}, expected a fraction 0..1 of n >= 0 cells")
         return {"path": path, "detector": str(data.get("detector", "")), "realisations": len(data["datasets"]),
                 "sessions": [str(s) for s in data["session_names"]], "cells": int(e["cells"]),
                 "worst_shift_median": float(e["worst_shift_median"]), "worst_shift_p90": float(e["worst_shift_p90"]),
