@@ -252,6 +252,16 @@ TEST(ModelFile, BadFilesAreRefusedWithTheReason) {
     b.save_to(dir.file("mismatch.pt"));
   }
   expect_refusal(dir.file("mismatch.pt"), "do not fit architecture 'alexnet'");
+  // A few bytes flipped in the weights: LibTorch would load them as other numbers.
+  std::string bytes;
+  {
+    std::ifstream in(slide, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  for (size_t k = bytes.size() / 2; k < bytes.size() / 2 + 16; ++k) bytes[k] = static_cast<char>(~bytes[k]);
+  std::ofstream(dir.file("flipped.pt"), std::ios::binary) << bytes;
+  expect_refusal(dir.file("flipped.pt"), "the model file is damaged");
+  EXPECT_NO_THROW(IntrospectionModel::load(slide));
 }
 
 // The main job evaluates the shipped model on datasets it builds: they must

@@ -284,6 +284,7 @@ std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& 
   if (config.mc_passes < 1) throw ModelError("mc_passes must be >= 1");
   if (config.mean_filter < 1 || config.mean_filter % 2 == 0) throw ModelError("mean_filter must be odd and >= 1");
   torch::set_num_threads(std::max(config.threads, 1));
+  if (std::filesystem::exists(path)) check_model_archive(path);  // native and scripted files alike
   std::string json;
   bool native = false;
   try {

@@ -4,9 +4,11 @@
 #include <fstream>
 #include <functional>
 #include <sstream>
+#include <vector>
 #include <cstring>
 
 #include <torch/script.h>
+#include <unzip.h>
 #include <yaml-cpp/yaml.h>
 
 #include "ivoa/core/atomic_files.hpp"
@@ -36,6 +38,33 @@ std::string from_bytes(const torch::Tensor& t) {
 }
 
 }  // namespace
+
+// Reads every entry of a model file (a zip archive) through minizip, which
+// checks each one's CRC-32: LibTorch's reader does not (PyTorch builds
+// miniz without those checks), so a damaged weight would load as another
+// number and the model would predict nonsense without a word. A file that
+// is no zip archive is left to LibTorch, which says what it is not.
+void check_model_archive(const std::string& path) {
+  const unzFile zip = unzOpen64(path.c_str());
+  if (!zip) return;
+  std::vector<char> buffer(1 << 16);
+  std::string damaged;
+  int rc = unzGoToFirstFile(zip);
+  for (; rc == UNZ_OK && damaged.empty(); rc = unzGoToNextFile(zip)) {
+    char name[512] = {0};
+    unzGetCurrentFileInfo64(zip, nullptr, name, sizeof(name) - 1, nullptr, 0, nullptr, 0);
+    int read = unzOpenCurrentFile(zip);
+    while (read >= 0 && (read = unzReadCurrentFile(zip, buffer.data(), static_cast<unsigned>(buffer.size()))) > 0) {
+    }
+    const int closed = unzCloseCurrentFile(zip);
+    if (read < 0 || closed != UNZ_OK)
+      damaged = std::string(name) + (closed == UNZ_CRCERROR ? " fails its CRC-32 check" : " cannot be read");
+  }
+  unzClose(zip);
+  if (damaged.empty() && rc != UNZ_END_OF_LIST_OF_FILE) damaged = "its list of entries cannot be read";
+  if (!damaged.empty())
+    throw ModelError(path + ": " + damaged + ": the model file is damaged (copy or download it again)");
+}
 
 std::string info_to_json(const ModelInfo& i) {
   std::ostringstream o;
@@ -118,6 +147,7 @@ bool read_metadata(const std::string& path, std::string& json) {
 
 NativeModel load_native_model(const std::string& path) {
   if (!std::filesystem::exists(path)) throw ModelError(path + ": no such model file");
+  check_model_archive(path);
   std::string json;
   try {
     if (!read_metadata(path, json))

@@ -29,6 +29,10 @@ struct NativeModel {
   ModelInfo info;
 };
 // Throws ModelError for a missing, unreadable or incompatible file.
+// Throws ModelError naming the entry if the file is a zip archive with an
+// entry that fails its CRC-32 (LibTorch's reader does not check them).
+void check_model_archive(const std::string& path);
+
 NativeModel load_native_model(const std::string& path);
 // The metadata of any model file (native or scripted), if it has one.
 bool read_metadata(const std::string& path, std::string& json);
