@@ -33,6 +33,19 @@ TEST(DisparityIo, PfmRoundTripKeepsValuesAndMarksUnknown) {
   EXPECT_EQ(loaded.at<float>(2, 3), 6.5f);
 }
 
+TEST(DisparityIo, APfmHeaderLargerThanItsDataIsRefusedBeforeAllocating) {
+  test::TempDir dir;
+  std::ofstream(dir.file("huge.pfm"), std::ios::binary) << "Pf\n99999999 99999999\n-1.0\n" << std::string(64, '\0');
+  try {
+    read_pfm(dir.file("huge.pfm"));
+    FAIL() << "read a 99999999x99999999 PFM of 64 bytes";
+  } catch (const DisparityFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("huge.pfm: its header says 99999999x99999999 but the file holds 64 bytes"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(DisparityIo, PngValuesAreDividedAndZeroIsUnknown) {
   test::TempDir dir;
   cv::Mat png(2, 2, CV_16U, cv::Scalar(0));

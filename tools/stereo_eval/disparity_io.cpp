@@ -85,8 +85,15 @@ cv::Mat read_pfm(const std::string& path) {
     throw DisparityFileError(path + ": not a PFM file (expected 'Pf'/'PF', size and scale)");
   in.get();  // the single whitespace after the header
   const int channels = magic == "PF" ? 3 : 1;
-  cv::Mat raw(height, width, CV_32FC(channels));
   const size_t row_bytes = static_cast<size_t>(width) * static_cast<size_t>(channels) * sizeof(float);
+  // The header's size against what the file holds, before allocating it (a damaged header can ask for petabytes).
+  const auto header_end = static_cast<uint64_t>(in.tellg());
+  const uint64_t file_bytes = std::filesystem::file_size(path);
+  const uint64_t data_bytes = file_bytes > header_end ? file_bytes - header_end : 0;
+  if (static_cast<double>(row_bytes) * height > static_cast<double>(data_bytes))
+    throw DisparityFileError(path + ": its header says " + std::to_string(width) + "x" + std::to_string(height) +
+                             " but the file holds " + std::to_string(data_bytes) + " bytes of data (truncated?)");
+  cv::Mat raw(height, width, CV_32FC(channels));
   // PFM stores the bottom row first.
   for (int v = height - 1; v >= 0; --v) {
     in.read(reinterpret_cast<char*>(raw.ptr(v)), static_cast<std::streamsize>(row_bytes));

@@ -32,6 +32,10 @@ cv::Mat load_gray(const std::string& path, double scale) {
   cv::Mat out;  // the size rule of scale_disparity, so image and truth agree
   const cv::Size size(static_cast<int>(std::lround(image.cols * scale)),
                       static_cast<int>(std::lround(image.rows * scale)));
+  if (size.width < 1 || size.height < 1)
+    throw ivoa::stereo_eval::DisparityFileError("--scale " + fmt::format("{:g}", scale) + " shrinks " + path + " (" +
+                                                std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                                                ") to nothing");
   cv::resize(image, out, size, 0, 0, cv::INTER_AREA);
   return out;
 }
