@@ -1186,6 +1186,30 @@ class CauseAndSettingsRowsTest(FabricatedInputsCase):
         self.assertEqual(code, 3, stderr)
         self.assertIn("causes_untested.csv: line 2: causes 16 is not a set of the phenomena tested there (11)", stderr)
 
+    def test_a_causes_file_without_rows_is_said_so(self):
+        causes = os.path.join(self.root, "causes_empty.csv")
+        write_causes(causes, [])
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--causes", causes,
+                                    "--out", os.path.join(self.root, "report_empty_causes"), "--tsne-iterations", "250"])
+        self.assertEqual(code, 0, stderr)
+        self.assertIn("the causes given hold no rows", stderr)
+
+    def test_a_dataset_value_that_is_not_an_integer_is_named_by_line(self):
+        d = os.path.join(self.root, "data_not_int")
+        shutil.copytree(self.f.data, d)
+        session = sorted(n for n in os.listdir(d) if os.path.isdir(os.path.join(d, n)))[0]
+        path = os.path.join(d, session, "samples.csv")
+        lines = read_text(path).splitlines()
+        fields = lines[3].split(",")
+        fields[lines[0].split(",").index("label")] = "x"
+        lines[3] = ",".join(fields)
+        with open(path, "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", d, "--out",
+                                    os.path.join(self.root, "report_bad")])
+        self.assertEqual(code, 3, stderr)
+        self.assertIn("samples.csv: line 4, column 'label': 'x' is not an integer", stderr)
+
     def test_a_settings_row_given_twice_is_refused(self):
         variants = os.path.join(self.root, "variants_twice.csv")
         write_variants(variants, [("jppc", "stricter", "TN", 100, 100, 0), ("jppc", "stricter", "TN", 100, 100, 0)])

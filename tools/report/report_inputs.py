@@ -218,15 +218,8 @@ class Dataset:
         patch_size = int(info.get("patch_size", self.patch_size))
         samples_path = os.path.join(d, "samples.csv")
         cols = _read_csv_columns(samples_path, ("sample", "utime", "cell", "label"))
-        try:
-            sample = np.array([int(s) for s in cols["sample"]], dtype=np.int64)
-            utime = np.array([int(s) for s in cols["utime"]], dtype=np.int64)
-            cell = np.array([int(s) for s in cols["cell"]], dtype=np.int64)
-            label = np.array([int(s) for s in cols["label"]], dtype=np.int64)
-            side = (np.array([int(s) for s in cols["patch_side"]], dtype=np.int64)
-                    if "patch_side" in cols else None)
-        except ValueError as e:
-            raise InputError(f"{samples_path}: a non-integer value in sample/utime/cell/label/patch_side ({e})") from None
+        sample, utime, cell, label = (_numeric(samples_path, cols, c, int) for c in ("sample", "utime", "cell", "label"))
+        side = _numeric(samples_path, cols, "patch_side", int) if "patch_side" in cols else None
         if len(sample) and not np.array_equal(sample, np.arange(len(sample))):
             raise InputError(f"{samples_path}: column 'sample' must equal the row number (0, 1, 2, ...)")
         return DatasetSession(name, d, patch_size, info, utime, cell, label, side)
@@ -394,7 +387,8 @@ def _numeric(path: str, cols: Dict[str, List[str]], name: str, dtype):
             try:
                 dtype(x)
             except ValueError:
-                raise InputError(f"{path}: line {_line(i)}, column '{name}': '{x}' is not a number") from None
+                what = "an integer" if dtype is int else "a number"
+                raise InputError(f"{path}: line {_line(i)}, column '{name}': '{x}' is not {what}") from None
         raise
 
 
@@ -842,6 +836,8 @@ def attach_causes(run: EvalRun, all_causes: List[Causes]) -> List[str]:
     matching = [c for c in all_causes if detector in c.detectors]
     if not matching:
         about = sorted(set().union(*(c.detectors for c in all_causes)))
+        if not about:
+            return [f"{run.name}: the causes given hold no rows (no FP or FN cell in their logs): no causes for it"]
         return [f"{run.name}: the causes given explain failures of {', '.join(about)}, this model's labels are "
                 f"about '{detector}': no causes for it"]
     causes = matching[0]
