@@ -274,6 +274,12 @@ TEST(DatasetFormat, AColumnThatIsNotANumberIsNamed) {
       << what;
 }
 
+TEST(DatasetFormat, ARowWithMoreFieldsThanTheHeaderIsNamed) {
+  test::TempDir dir;
+  const std::string what = reading_error_after(dir, [](std::string row) { return row + ",7"; });
+  EXPECT_NE(what.find("samples.csv line 3: 17 fields, the header has 16"), std::string::npos) << what;
+}
+
 TEST(DatasetFormat, EvidenceRoundTripsPerSampleAndOldSessionsHaveNone) {
   test::TempDir dir;
   SessionInfo with = info("ev");

@@ -124,12 +124,14 @@ void check_finite(const SampleRecord& s, const std::string& where) {
 
 // `columns`: 15 (before patch_side was recorded) or 16.
 SampleRecord parse_sample_row(const std::string& line, int columns, const std::string& where) {
+  // sscanf stops at its last field: one more in the row would pass unseen
+  if (const auto fields = std::count(line.begin(), line.end(), ',') + 1; fields != columns)
+    throw DatasetError(where + ": " + std::to_string(fields) + " fields, the header has " + std::to_string(columns));
   SampleRecord s;
   long long sample = 0, frame = 0, utime = 0, depth_utime = 0;
   int n = std::sscanf(line.c_str(), "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%f,%f,%f,%f,%d,%d,%d,%d", &sample, &frame, &utime,
                       &depth_utime, &s.cell, &s.label, &s.stereo_state, &s.depth_state, &s.x, &s.y, &s.u, &s.v,
                       &s.phenomena, &s.phenomenon, &s.surface, &s.patch_side);
-  if (n > columns) throw DatasetError(where + ": more columns than the header's " + std::to_string(columns));
   if (n < columns) {
     const int bad = std::max(n, 0);
     throw DatasetError(where + ": column " + sample_column(bad) + " (" + std::to_string(bad + 1) + " of " +
