@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -82,6 +83,29 @@ TEST(CommonOptions, ConfigFileSetsFlagsAndRefusesKeysThatNameNone) {
   EXPECT_EQ(parse(add_common_options, {"--config", typo.c_str()}, options), kExitUsage);
   EXPECT_EQ(testing::internal::GetCapturedStderr(),
             "--config " + typo + ": 'log-levle' is not an option of this program (see --help)\n");
+}
+
+TEST(CommonOptions, ABadValueFromAConfigFileNamesTheFile) {
+  test::TempDir dir;
+  const std::string bad = dir.file("bad.ini");
+  std::ofstream(bad) << "steps = many\n";
+  const auto parse_steps = [&](std::vector<const char*> args) {
+    CLI::App app;
+    CommonOptions options;
+    add_offline_options(app, options);
+    int steps = 1;
+    app.add_option("--steps", steps)->check(positive_number());
+    args.insert(args.begin(), "tool");
+    testing::internal::CaptureStderr();
+    const int code = parse_command_line(app, static_cast<int>(args.size()), const_cast<char**>(args.data()));
+    return std::pair{code, testing::internal::GetCapturedStderr()};
+  };
+  const auto [code, said] = parse_steps({"--config", bad.c_str()});
+  EXPECT_EQ(code, kExitUsage);
+  EXPECT_EQ(said, "--config " + bad + ": --steps: must be a number, not 'many'\n");
+  const auto [flag_code, flag_said] = parse_steps({"--config", bad.c_str(), "--steps", "0"});
+  EXPECT_EQ(flag_code, kExitUsage);
+  EXPECT_EQ(flag_said.find("--config"), std::string::npos) << "the bad value is the command line's: " << flag_said;
 }
 
 // What a check says of `text` ("" if it passes).

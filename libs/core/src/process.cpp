@@ -1,5 +1,6 @@
 #include "ivoa/core/process.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 
@@ -52,6 +53,21 @@ void explain_config_error(const CLI::App& app, const CLI::ConfigError& e) {
   else std::cerr << "--config " << file << ": " << what << "\n";
 }
 
+// A bad value from a --config file: CLI11 names the option ("--mc-passes:
+// must be a number"), not where the value came from. Names the file when the
+// option is not on the command line.
+void explain_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
+  const CLI::Option* config = app.get_config_ptr();
+  const std::string what = e.what();
+  const std::string option = what.substr(0, what.find(':'));
+  const bool on_command_line =
+      std::any_of(argv + 1, argv + argc, [&](const char* a) { return std::string(a).rfind(option, 0) == 0; });
+  if (config && !config->results().empty() && option.rfind("--", 0) == 0 && !on_command_line &&
+      (dynamic_cast<const CLI::ValidationError*>(&e) || dynamic_cast<const CLI::ConversionError*>(&e)))
+    std::cerr << "--config " << config->results().back() << ": " << what << "\n";
+  else app.exit(e);
+}
+
 }  // namespace
 
 int parse_command_line(CLI::App& app, int argc, char** argv) {
@@ -61,8 +77,9 @@ int parse_command_line(CLI::App& app, int argc, char** argv) {
     explain_config_error(app, e);
     return kExitUsage;
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? kExitOk : kExitUsage;
+    if (e.get_exit_code() == 0) return app.exit(e) == 0 ? kExitOk : kExitUsage;  // --help
+    explain_parse_error(app, e, argc, argv);
+    return kExitUsage;
   }
   return -1;
 }
