@@ -88,13 +88,14 @@ TEST(CommonOptions, ConfigFileSetsFlagsAndRefusesKeysThatNameNone) {
 TEST(CommonOptions, ABadValueFromAConfigFileNamesTheFile) {
   test::TempDir dir;
   const std::string bad = dir.file("bad.ini");
-  std::ofstream(bad) << "steps = many\n";
+  std::ofstream(bad) << "steps = many\nseed = abc\n";
   const auto parse_steps = [&](std::vector<const char*> args) {
     CLI::App app;
     CommonOptions options;
     add_offline_options(app, options);
-    int steps = 1;
-    app.add_option("--steps", steps)->check(positive_number());
+    int steps = 1, seed = 0;
+    app.add_option("-s,--steps", steps)->check(positive_number());
+    app.add_option("--seed", seed);  // no check: CLI11's own conversion error
     args.insert(args.begin(), "tool");
     testing::internal::CaptureStderr();
     const int code = parse_command_line(app, static_cast<int>(args.size()), const_cast<char**>(args.data()));
@@ -103,9 +104,15 @@ TEST(CommonOptions, ABadValueFromAConfigFileNamesTheFile) {
   const auto [code, said] = parse_steps({"--config", bad.c_str()});
   EXPECT_EQ(code, kExitUsage);
   EXPECT_EQ(said, "--config " + bad + ": --steps: must be a number, not 'many'\n");
-  const auto [flag_code, flag_said] = parse_steps({"--config", bad.c_str(), "--steps", "0"});
-  EXPECT_EQ(flag_code, kExitUsage);
-  EXPECT_EQ(flag_said.find("--config"), std::string::npos) << "the bad value is the command line's: " << flag_said;
+  for (const char* given : {"--steps", "-s"}) {  // the bad value is the command line's
+    const auto [flag_code, flag_said] = parse_steps({"--config", bad.c_str(), given, "0", "--seed", "1"});
+    EXPECT_EQ(flag_code, kExitUsage);
+    EXPECT_EQ(flag_said.find("--config"), std::string::npos) << given << ": " << flag_said;
+  }
+  const auto [seed_code, seed_said] = parse_steps({"--config", bad.c_str(), "--steps", "2"});
+  EXPECT_EQ(seed_code, kExitUsage);
+  EXPECT_EQ(seed_said.rfind("--config " + bad + ": ", 0), 0u) << seed_said;
+  EXPECT_NE(seed_said.find("--seed"), std::string::npos) << seed_said;
 }
 
 // What a check says of `text` ("" if it passes).

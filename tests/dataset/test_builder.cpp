@@ -404,6 +404,20 @@ TEST(DatasetBuilder, ASessionWhoseBuildDidNotFinishIsNotListed) {
   }
   build_session(dir.file("data"), "whole", log_path, options);
   EXPECT_EQ(list_sessions(dir.file("data")), std::vector<std::string>{"whole"});
+  // A rebuild of "whole" that does not finish leaves the session built before as it was.
+  const size_t samples = SessionReader(dir.file("data") + "/whole").size();
+  const std::string longer = dir.file("longer.lcmlog");
+  test::write_sim_log(longer, kScene, 5, 4);
+  {
+    SessionBuilder rebuild(dir.file("data"), "whole", options);
+    rebuild.add_log(longer);
+  }
+  EXPECT_EQ(SessionReader(dir.file("data") + "/whole").size(), samples);
+  EXPECT_EQ(list_sessions(dir.file("data")), std::vector<std::string>{"whole"});
+  EXPECT_FALSE(std::filesystem::exists(dir.file("data") + "/.whole.partial"));
+  // and one that finishes replaces it
+  build_session(dir.file("data"), "whole", longer, options);
+  EXPECT_NE(SessionReader(dir.file("data") + "/whole").size(), samples);
 }
 
 TEST(DatasetBuilder, LogWithoutCalibrationIsRefused) {

@@ -147,6 +147,7 @@ TEST(LogPlay, AnEmptyFileHoldsNoEventAndIsReported) {
   const PlayCounts counts = f.play({empty, log});
   EXPECT_EQ(counts.not_logs, 1);  // exit code 3, as --help says
   EXPECT_EQ(counts.published, 1);
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 1);  // and in the status table
 }
 
 TEST(LogPlay, EventsAreDueAtTheirLogTimeOverTheSpeed) {

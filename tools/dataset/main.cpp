@@ -107,7 +107,7 @@ int run_build(const std::string& out, const std::string& session, const std::vec
       spdlog::error("{}", e.what());
       worst = kExitBadInput;
     } catch (const std::exception& e) {  // unforeseen: this session is not registered, the next ones still built
-      spdlog::error("session {} ({}): {}; not added to the dataset", name, fmt::join(files, ", "), e.what());
+      spdlog::error("session {} ({}): {}; the dataset is left as it was", name, fmt::join(files, ", "), e.what());
       worst = kExitBadInput;
     }
   }

@@ -58,6 +58,8 @@ def read_labels(dataset: str) -> Dict[str, Dict[Tuple[int, int], int]]:
         raise InputError(f"{dataset}: dataset folder not found")
     sessions = {}
     for name in sorted(os.listdir(dataset)):
+        if name.startswith("."):  # .NAME.partial: a session ivoa-dataset is building, or was killed building
+            continue
         path = os.path.join(dataset, name, "samples.csv")
         if not os.path.isfile(path):
             continue

@@ -53,17 +53,59 @@ void explain_config_error(const CLI::App& app, const CLI::ConfigError& e) {
   else std::cerr << "--config " << file << ": " << what << "\n";
 }
 
+// The option a CLI11 error is about: "NAME: why" or "Could not convert: NAME = value".
+std::string option_in_error(const std::string& what) {
+  const std::string convert = "Could not convert: ";
+  if (what.rfind(convert, 0) == 0) return what.substr(convert.size(), what.find(" = ") - convert.size());
+  return what.substr(0, what.find(':'));
+}
+
+// The option by that name in the app or a subcommand the command line chose.
+const CLI::Option* find_option(const CLI::App& app, const std::string& name) {
+  if (const CLI::Option* o = app.get_option_no_throw(name)) return o;
+  for (const CLI::App* sub : app.get_subcommands())
+    if (const CLI::Option* o = find_option(*sub, name)) return o;
+  return nullptr;
+}
+
+// True if the command line gives the option by any of its names.
+bool on_command_line(const CLI::Option& option, int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    for (const auto& l : option.get_lnames())
+      if (a == "--" + l || a.rfind("--" + l + "=", 0) == 0) return true;
+    for (const auto& s : option.get_snames())
+      if (a.rfind("-" + s, 0) == 0 && a.rfind("--", 0) != 0) return true;
+  }
+  return false;
+}
+
+// True if the configuration file has a line "NAME = ..." for one of the option's long names.
+bool config_sets(const std::string& file, const CLI::Option& option) {
+  std::ifstream in(file);
+  std::string line;
+  while (std::getline(in, line)) {
+    const size_t start = line.find_first_not_of(" \t");
+    if (start == std::string::npos) continue;
+    for (const auto& l : option.get_lnames())
+      if (line.compare(start, l.size(), l) == 0) {
+        const size_t next = line.find_first_not_of(" \t", start + l.size());
+        if (next != std::string::npos && line[next] == '=') return true;
+      }
+  }
+  return false;
+}
+
 // A bad value from a --config file: CLI11 names the option ("--mc-passes:
-// must be a number"), not where the value came from. Names the file when the
-// option is not on the command line.
+// must be a number"), not where the value came from. Names the file when
+// the file sets the option and the command line does not (a positional one
+// is left as it is: its value may have come from either).
 void explain_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
   const CLI::Option* config = app.get_config_ptr();
   const std::string what = e.what();
-  const std::string option = what.substr(0, what.find(':'));
-  const bool on_command_line =
-      std::any_of(argv + 1, argv + argc, [&](const char* a) { return std::string(a).rfind(option, 0) == 0; });
-  if (config && !config->results().empty() && option.rfind("--", 0) == 0 && !on_command_line &&
-      (dynamic_cast<const CLI::ValidationError*>(&e) || dynamic_cast<const CLI::ConversionError*>(&e)))
+  const CLI::Option* option = find_option(app, option_in_error(what));
+  if (config && !config->results().empty() && option && !option->get_positional() &&
+      !on_command_line(*option, argc, argv) && config_sets(config->results().back(), *option))
     std::cerr << "--config " << config->results().back() << ": " << what << "\n";
   else app.exit(e);
 }

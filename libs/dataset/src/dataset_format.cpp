@@ -160,17 +160,19 @@ struct SessionWriter::Files {
 
 SessionWriter::SessionWriter(const std::string& dataset_root, SessionInfo info)
     : dir_((fs::path(dataset_root) / info.session).string()),
+      work_dir_((fs::path(dataset_root) / ("." + info.session + ".partial")).string()),
       info_(std::move(info)),
       files_(std::make_unique<Files>()) {
   const std::string& name = info_.session;  // "..": the session's files would land beside the dataset
   if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos)
     throw DatasetError("session name '" + name + "' must be a folder name (not empty, '.' or '..', no '/')");
   std::error_code ec;
-  fs::create_directories(dir_, ec);
-  if (ec) throw DatasetError(dir_ + ": cannot create session folder: " + ec.message());
-  files_->patches = std::fopen((dir_ + "/patches.bin").c_str(), "wb");
-  files_->samples = std::fopen((dir_ + "/samples.csv").c_str(), "w");
-  if (info_.evidence_size > 0) files_->evidence = std::fopen((dir_ + "/evidence.f32").c_str(), "wb");
+  fs::remove_all(work_dir_, ec);  // left by a build that was killed
+  fs::create_directories(work_dir_, ec);
+  if (ec) throw DatasetError(work_dir_ + ": cannot create the session's folder: " + ec.message());
+  files_->patches = std::fopen((work_dir_ + "/patches.bin").c_str(), "wb");
+  files_->samples = std::fopen((work_dir_ + "/samples.csv").c_str(), "w");
+  if (info_.evidence_size > 0) files_->evidence = std::fopen((work_dir_ + "/evidence.f32").c_str(), "wb");
   if (!files_->patches || !files_->samples || (info_.evidence_size > 0 && !files_->evidence))
     throw DatasetError(dir_ + ": cannot write session files");
   std::fprintf(files_->samples, "%s\n", kSamplesHeader);
@@ -228,6 +230,21 @@ void SessionWriter::abandon() {
   for (std::FILE* f : {files_->patches, files_->samples, files_->evidence})
     if (f) std::fclose(f);
   files_->patches = files_->samples = files_->evidence = nullptr;
+  std::error_code ec;
+  fs::remove_all(work_dir_, ec);  // nothing there once close() has put the session in place
+}
+
+// The finished session takes the place of any folder of that name: moved
+// aside, the new one renamed in, the old one removed.
+void SessionWriter::replace_session_folder() {
+  const std::string aside = work_dir_.substr(0, work_dir_.size() - std::string(".partial").size()) + ".replaced";
+  std::error_code ec;
+  fs::remove_all(aside, ec);
+  if (fs::exists(dir_)) fs::rename(dir_, aside, ec);
+  if (!ec) fs::rename(work_dir_, dir_, ec);
+  if (ec)
+    throw DatasetError(dir_ + ": cannot put the built session in place (" + ec.message() + "); it is in " + work_dir_);
+  fs::remove_all(aside, ec);
 }
 
 void SessionWriter::close() {
@@ -239,14 +256,16 @@ void SessionWriter::close() {
   files_->patches = files_->samples = files_->evidence = nullptr;
   if (!ok) throw DatasetError(dir_ + ": write failed (disk full?)");
   info_.frames = static_cast<int64_t>(frames_.size());
-  std::ofstream frames(dir_ + "/frames.csv");
+  std::ofstream frames(work_dir_ + "/frames.csv");
   frames << "frame,utime,depth_utime,cells_labelled,samples\n";
   for (size_t k = 0; k < frames_.size(); ++k)
     frames << k << "," << frames_[k].utime << "," << frames_[k].depth_utime << "," << frames_[k].cells_labelled << ","
            << frames_[k].samples << "\n";
-  std::ofstream json(dir_ + "/session.json");
+  std::ofstream json(work_dir_ + "/session.json");
   json << session_json(info_);
   if (!frames.flush() || !json.flush()) throw DatasetError(dir_ + ": write failed (disk full?)");
+  frames.close(), json.close();
+  replace_session_folder();
   register_session(fs::path(dir_).parent_path().string(), info_.session, info_.patch_size);
 }
 

@@ -71,7 +71,7 @@ std::string LogSummary::table() const {
   for (const auto& [name, s] : channels_)  // one type per channel: a reader of the first skips these
     if (s.other_fingerprints > 0)
       out += name + ": " + std::to_string(s.other_fingerprints) + " of its " + std::to_string(s.count) +
-             " messages are not " + s.type + " (another type, or damaged before the fingerprint)\n";
+             " messages are of another type than its first (" + s.type + "), or damaged before the fingerprint\n";
   return out;
 }
 

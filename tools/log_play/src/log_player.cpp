@@ -105,7 +105,7 @@ void LogPlayer::report_problems(const logio::LogReader& reader) {
     spdlog::error("{}: {}", reader.path(), not_a_log);
   } else if (reader.size() == 0) {  // an empty log is a log, but there is nothing to play in it
     ++counts_.not_logs;
-    spdlog::error("{}: an empty file: no event to play", reader.path());
+    heartbeat_.bad_input(reader.path() + ": an empty file: no event to play");
   }
 }
 

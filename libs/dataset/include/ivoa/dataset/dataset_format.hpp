@@ -102,15 +102,18 @@ class SessionWriter {
   // A TN cell of the current frame left out (SessionInfo::tn_kept < 1).
   void count_dropped_tn() { ++info_.tn_dropped; }
   void close();
-  // Closes the files without registering the session: a build that failed
-  // part-way leaves its folder unlisted rather than pass for a whole one.
+  // Closes and removes what was written without registering it: a build
+  // that failed part-way leaves the dataset as it was (a session of that
+  // name built before stays whole).
   void abandon();
   const SessionInfo& info() const { return info_; }
 
  private:
   struct Files;
   void write_evidence(const std::vector<float>& evidence);
-  std::string dir_;
+  void replace_session_folder();
+  std::string dir_;       // the session's folder
+  std::string work_dir_;  // written here, renamed to dir_ by close(): a failed rebuild keeps the old session
   SessionInfo info_;
   std::unique_ptr<Files> files_;
   std::vector<FrameRecord> frames_;
