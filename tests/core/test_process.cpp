@@ -125,6 +125,9 @@ TEST(FlagChecks, SayWhatANumericFlagMustBeInAFewWords) {
   EXPECT_EQ(verdict(positive_number(), "-3"), "must be > 0, not -3");
   EXPECT_EQ(verdict(positive_number(), "many"), "must be a number, not 'many'");
   EXPECT_EQ(verdict(positive_number(), "nan"), "must be a number, not 'nan'");
+  EXPECT_EQ(verdict(finite_number(), "-2.5"), "");
+  EXPECT_EQ(verdict(finite_number(), "nan"), "must be a number, not 'nan'");
+  EXPECT_EQ(verdict(finite_number(), "inf"), "must be finite, not inf");
   EXPECT_EQ(verdict(non_negative_number(), "0"), "");
   EXPECT_EQ(verdict(non_negative_number(), "-0.1"), "must be >= 0, not -0.1");
   EXPECT_EQ(verdict(odd_positive_integer(), "1"), "");

@@ -17,6 +17,16 @@ std::string check_number(const std::string& text, Ok ok, const char* must) {
 
 }  // namespace
 
+const CLI::Validator& finite_number() {
+  static const CLI::Validator check(
+      [](std::string& text) {
+        return check_number(
+            text, [](double v) { return std::isfinite(v); }, "must be finite");
+      },
+      "NUMBER");
+  return check;
+}
+
 const CLI::Validator& positive_number() {
   static const CLI::Validator check(
       [](std::string& text) {

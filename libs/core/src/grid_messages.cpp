@@ -8,10 +8,22 @@ namespace ivoa {
 
 void add_query_grid_options(CLI::App& app, QueryGridConfig& c) {
   auto* g = "Query grid (robot frame, metres)";
-  app.add_option("--grid-x-min", c.x_min, "nearest grid row ahead of the robot, m")->capture_default_str()->group(g);
-  app.add_option("--grid-x-max", c.x_max, "farthest grid row, m")->capture_default_str()->group(g);
-  app.add_option("--grid-y-min", c.y_min, "rightmost grid column, m")->capture_default_str()->group(g);
-  app.add_option("--grid-y-max", c.y_max, "leftmost grid column, m")->capture_default_str()->group(g);
+  app.add_option("--grid-x-min", c.x_min, "nearest grid row ahead of the robot, m")
+      ->check(finite_number())
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--grid-x-max", c.x_max, "farthest grid row, m")
+      ->check(finite_number())
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--grid-y-min", c.y_min, "rightmost grid column, m")
+      ->check(finite_number())
+      ->capture_default_str()
+      ->group(g);
+  app.add_option("--grid-y-max", c.y_max, "leftmost grid column, m")
+      ->check(finite_number())
+      ->capture_default_str()
+      ->group(g);
   app.add_option("--grid-spacing", c.spacing, "distance between grid points, m")
       ->capture_default_str()
       ->check(positive_number())

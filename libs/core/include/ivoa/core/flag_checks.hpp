@@ -6,6 +6,8 @@
 
 namespace ivoa {
 
+// A finite number (help: NUMBER): not nan or inf.
+const CLI::Validator& finite_number();
 // A number > 0 (help: POSITIVE).
 const CLI::Validator& positive_number();
 // A number >= 0 (help: NONNEGATIVE).
