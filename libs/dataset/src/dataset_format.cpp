@@ -235,15 +235,21 @@ void SessionWriter::abandon() {
 }
 
 // The finished session takes the place of any folder of that name: moved
-// aside, the new one renamed in, the old one removed.
+// aside, the new one renamed in (the old one back if that fails), the old
+// one removed.
 void SessionWriter::replace_session_folder() {
-  const std::string aside = work_dir_.substr(0, work_dir_.size() - std::string(".partial").size()) + ".replaced";
+  const std::string aside = (fs::path(dir_).parent_path() / ("." + info_.session + ".replaced")).string();
   std::error_code ec;
   fs::remove_all(aside, ec);
-  if (fs::exists(dir_)) fs::rename(dir_, aside, ec);
-  if (!ec) fs::rename(work_dir_, dir_, ec);
-  if (ec)
+  const bool had_one = fs::exists(dir_);
+  if (had_one) fs::rename(dir_, aside, ec);
+  if (ec) throw DatasetError(dir_ + ": cannot move the session built before aside (" + ec.message() + ")");
+  fs::rename(work_dir_, dir_, ec);
+  if (ec) {
+    std::error_code restored;
+    if (had_one) fs::rename(aside, dir_, restored);
     throw DatasetError(dir_ + ": cannot put the built session in place (" + ec.message() + "); it is in " + work_dir_);
+  }
   fs::remove_all(aside, ec);
 }
 
