@@ -120,7 +120,7 @@ void print_commands(const SelectedCommands& selected, const LauncherOptions& l) 
   std::printf("\n");
 }
 
-const char* flag_setting(const std::string& bus_variable) {
+const char* flag_that_sets(const std::string& bus_variable) {
   return bus_variable == ivoa::kStatusChannelEnv ? "--status-channel" : "--lcm-url";
 }
 
@@ -137,13 +137,13 @@ std::map<std::string, std::string> variable_overrides(const CliOptions& o, const
     auto [name, value] = parse_assignment(s);
     if (const auto b = bus.find(name); b != bus.end() && b->second != value)
       throw ConfigError("--set " + s + ": the launcher hands its commands " + name + "=" + b->second + " (" +
-                        flag_setting(name) + "); change it there");
+                        flag_that_sets(name) + "); change it there");
     overrides[name] = value;
   }
   for (const auto& [name, value] : bus) {
     if (const auto d = config.defaults.find(name); d != config.defaults.end() && d->second.value != value)
       spdlog::warn("{}:{}: the default {} = {} is not used: the launcher hands its commands {}={} ({})", config.path,
-                   d->second.line, name, d->second.value, name, value, flag_setting(name));
+                   d->second.line, name, d->second.value, name, value, flag_that_sets(name));
     overrides[name] = value;
   }
   return overrides;
