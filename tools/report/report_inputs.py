@@ -781,10 +781,11 @@ def load_variants(path: str) -> Dict[tuple, Dict[str, int]]:
     first_line: Dict[tuple, int] = {}
     for i, (session, detector, variant, label) in enumerate(zip(cols["session"], cols["detector"], cols["variant"],
                                                                  cols["label"])):
-        if (session, detector, variant, label) in first_line:  # summed twice, it would double the session
+        row = (session, detector, variant, label)
+        if row in first_line:  # summed twice, it would double the session's cells
             raise InputError(f"{path}: line {_line(i)}: session {session}, {detector} variant '{variant}', label "
-                             f"{label} again (first on line {first_line[(session, detector, variant, label)]})")
-        first_line[(session, detector, variant, label)] = _line(i)
+                             f"{label} again (first on line {first_line[row]})")
+        first_line[row] = _line(i)
         if label not in LABEL_NAMES:
             raise InputError(f"{path}: line {_line(i)}: label '{label}' (expected one of {', '.join(LABEL_NAMES)})")
         n, right, wrong = (int(counts[k][i]) for k in ("cells", "right", "wrong"))
