@@ -114,13 +114,6 @@ def sweep_series(curve: List[dict], x_key: str, keys: Sequence[str]):
     return x, solid, {k: np.array([p[k] for p in pts], dtype=float) for k in keys}
 
 
-def _positive(curve: List[dict], key: str):
-    """(threshold, value) pairs of a sweep curve where the value exists and τ > 0
-    (log axis)."""
-    pts = [(p["threshold"], p[key]) for p in curve if p[key] is not None and p["threshold"] > 0]
-    return np.array(pts).T if pts else (np.array([]), np.array([]))
-
-
 def plot_accuracy_vs_threshold(sweep: dict, title: str, path: str) -> str:
     """Mean per-class and overall accuracy of the retained predictions vs τ;
     faint where a class keeps fewer than FEW_CELLS cells, as in
@@ -143,8 +136,8 @@ def plot_accuracy_vs_threshold(sweep: dict, title: str, path: str) -> str:
     ax.set_ylim(0, 1.02)
     ax.grid(alpha=0.3, which="both")
     ax2 = ax.twinx()  # how much data each accuracy is computed on
-    t, v = _positive(sweep["curve"], "retained")
-    ax2.plot(t, 100 * v, color="grey", lw=1, alpha=0.7, label="retained samples (%, right axis)")
+    t, _, v = sweep_series(sweep["curve"], "threshold", ["retained"])
+    ax2.plot(t, 100 * v["retained"], color="grey", lw=1, alpha=0.7, label="retained samples (%, right axis)")
     ax2.set_ylim(0, 102)
     ax2.set_ylabel("retained samples (%)", color="grey")
     ax.set_title(f"{title}\naccuracy vs uncertainty threshold (lower τ = stricter filter)")
@@ -158,8 +151,8 @@ def plot_accuracy_vs_threshold(sweep: dict, title: str, path: str) -> str:
 def plot_retained_vs_threshold(sweep: dict, title: str, path: str) -> str:
     """Fraction of samples kept by the gate vs τ, overall and per true class."""
     fig, ax = plt.subplots(figsize=(7.5, 4.6))
-    t, v = _positive(sweep["curve"], "retained")
-    ax.plot(t, 100 * v, "k-", lw=2.2, label="all samples")
+    t, _, v = sweep_series(sweep["curve"], "threshold", ["retained"])
+    ax.plot(t, 100 * v["retained"], "k-", lw=2.2, label="all samples")
     for c in range(4):
         pts = [(p["threshold"], p["retained_per_class"][c]) for p in sweep["curve"]
                if p["retained_per_class"][c] is not None and p["threshold"] > 0]

@@ -1,5 +1,7 @@
 #include "ivoa/core/grid_messages.hpp"
 
+#include <tuple>
+
 #include <CLI/CLI.hpp>
 
 #include "ivoa/core/flag_checks.hpp"
@@ -8,22 +10,13 @@ namespace ivoa {
 
 void add_query_grid_options(CLI::App& app, QueryGridConfig& c) {
   auto* g = "Query grid (robot frame, metres)";
-  app.add_option("--grid-x-min", c.x_min, "nearest grid row ahead of the robot, m")
-      ->check(finite_number())
-      ->capture_default_str()
-      ->group(g);
-  app.add_option("--grid-x-max", c.x_max, "farthest grid row, m")
-      ->check(finite_number())
-      ->capture_default_str()
-      ->group(g);
-  app.add_option("--grid-y-min", c.y_min, "rightmost grid column, m")
-      ->check(finite_number())
-      ->capture_default_str()
-      ->group(g);
-  app.add_option("--grid-y-max", c.y_max, "leftmost grid column, m")
-      ->check(finite_number())
-      ->capture_default_str()
-      ->group(g);
+  const std::tuple<const char*, double*, const char*> bounds[] = {
+      {"--grid-x-min", &c.x_min, "nearest grid row ahead of the robot, m"},
+      {"--grid-x-max", &c.x_max, "farthest grid row, m"},
+      {"--grid-y-min", &c.y_min, "rightmost grid column, m"},
+      {"--grid-y-max", &c.y_max, "leftmost grid column, m"}};
+  for (const auto& [name, value, help] : bounds)
+    app.add_option(name, *value, help)->check(finite_number())->capture_default_str()->group(g);
   app.add_option("--grid-spacing", c.spacing, "distance between grid points, m")
       ->capture_default_str()
       ->check(positive_number())

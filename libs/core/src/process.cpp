@@ -40,13 +40,18 @@ void add_offline_options(CLI::App& app, CommonOptions& options) {
 
 namespace {
 
+// The --config file given, or "".
+std::string config_file(const CLI::App& app) {
+  const CLI::Option* config = app.get_config_ptr();
+  return config && !config->results().empty() ? config->results().back() : std::string();
+}
+
 // CLI11 says "INI was not able to parse KEY" of a --config key that names no
 // option; say which file and what to check.
 void explain_config_error(const CLI::App& app, const CLI::ConfigError& e) {
   const std::string prefix = "INI was not able to parse ";
   const std::string what = e.what();
-  const CLI::Option* config = app.get_config_ptr();
-  const std::string file = config && !config->results().empty() ? config->results().back() : std::string();
+  const std::string file = config_file(app);
   if (what.rfind(prefix, 0) == 0)
     std::cerr << "--config " << file << ": '" << what.substr(prefix.size())
               << "' is not an option of this program (see --help)\n";
@@ -80,18 +85,13 @@ bool on_command_line(const CLI::Option& option, int argc, char** argv) {
   return false;
 }
 
-// True if the configuration file has a line "NAME = ..." for one of the option's long names.
-bool config_sets(const std::string& file, const CLI::Option& option) {
-  std::ifstream in(file);
-  std::string line;
-  while (std::getline(in, line)) {
-    const size_t start = line.find_first_not_of(" \t");
-    if (start == std::string::npos) continue;
-    for (const auto& l : option.get_lnames())
-      if (line.compare(start, l.size(), l) == 0) {
-        const size_t next = line.find_first_not_of(" \t", start + l.size());
-        if (next != std::string::npos && line[next] == '=') return true;
-      }
+// True if the configuration file, read as CLI11 reads it, sets the option by one of its long names.
+bool config_sets(const CLI::App& app, const std::string& file, const CLI::Option& option) {
+  try {
+    for (const CLI::ConfigItem& item : app.get_config_formatter()->from_file(file))
+      for (const auto& name : option.get_lnames())
+        if (item.name == name) return true;
+  } catch (const CLI::Error&) {
   }
   return false;
 }
@@ -101,12 +101,11 @@ bool config_sets(const std::string& file, const CLI::Option& option) {
 // the file sets the option and the command line does not (a positional one
 // is left as it is: its value may have come from either).
 void explain_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
-  const CLI::Option* config = app.get_config_ptr();
-  const std::string what = e.what();
+  const std::string file = config_file(app), what = e.what();
   const CLI::Option* option = find_option(app, option_in_error(what));
-  if (config && !config->results().empty() && option && !option->get_positional() &&
-      !on_command_line(*option, argc, argv) && config_sets(config->results().back(), *option))
-    std::cerr << "--config " << config->results().back() << ": " << what << "\n";
+  if (!file.empty() && option && !option->get_positional() && !on_command_line(*option, argc, argv) &&
+      config_sets(app, file, *option))
+    std::cerr << "--config " << file << ": " << what << "\n";
   else app.exit(e);
 }
 
