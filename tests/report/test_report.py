@@ -592,6 +592,32 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
             json.dump(meta, fh)
         return d
 
+    def test_a_model_has_one_colour_in_its_own_figures_and_the_comparison(self):
+        tool = load_tool()
+        from unittest import mock
+        drawn = []  # (figure, title, [(name, colour)])
+
+        def recorder(figure):
+            real = getattr(tool.figures, figure)
+            return lambda curves, title, path: (drawn.append((figure, title, [(c[0], c[2]) for c in curves])),
+                                                real(curves, title, path))[1]
+        out = os.path.join(self.root, "report_colours")
+        with mock.patch.object(tool.figures, "plot_roc", recorder("plot_roc")), \
+                mock.patch.object(tool.figures, "plot_accuracy_vs_retained", recorder("plot_accuracy_vs_retained")):
+            code, _, stderr = run_main(["--eval", self.f.degenerate, "--eval", self.f.known, "--dataset",
+                                        self.f.data2, "--dataset", self.f.data, "--out", out])
+        self.assertEqual(code, 0, stderr)
+        for figure in ("plot_roc", "plot_accuracy_vs_retained"):
+            together = [dict(curves) for f, title, curves in drawn if f == figure and title == "all models"]
+            self.assertEqual(len(together), 1, drawn)
+            self.assertEqual(len(set(together[0].values())), 2, together)  # two models, two colours
+            for name, colour in together[0].items():
+                # the model's own curve comes first (then the verdict head's, where there is one)
+                own = [curves[0][1] for f, title, curves in drawn if f == figure and title == name]
+                self.assertTrue(own, f"{figure}: no figure of {name} alone")
+                self.assertEqual(set(own), {colour}, f"{figure}: {name}")
+                self.assertNotIn(colour, tool.figures.CLASS_COLOURS)  # a model is not read as a class
+
     def test_degenerate_inputs_are_reported(self):
         out = os.path.join(self.root, "report_degenerate")
         code, stdout, stderr = run_main(["--eval", self.f.degenerate, "--dataset", self.f.data2, "--out", out])

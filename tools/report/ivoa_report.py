@@ -144,14 +144,15 @@ def load_inputs(args: argparse.Namespace):
     return runs, settings, noise, warnings
 
 
-def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out_dir: str,
+def analyse_run(run: EvalRun, args: argparse.Namespace, opt: ClusterOptions, out_dir: str, colour: str,
                 noise: Optional[dict] = None):
-    """All numbers and figures for one model. Returns (numbers for metrics.json,
-    figure paths relative to the report, clustering result, overlay paths)."""
+    """All numbers and figures for one model, drawn in its colour. Returns
+    (numbers for metrics.json, figure paths relative to the report,
+    clustering result, overlay paths)."""
     d = os.path.join(out_dir, run.slug)
     os.makedirs(d, exist_ok=True)
     rm = run_numbers(run, args, noise)
-    figs = run_figures(run, rm, d)
+    figs = run_figures(run, rm, d, colour)
     res = cluster_failures(run, opt)
     if res.ok:
         figs["scatter"] = figures.plot_cluster_scatter(run, res, run.name, os.path.join(d, "clusters_tsne.png"))
@@ -190,8 +191,8 @@ def run_numbers(run: EvalRun, args: argparse.Namespace, noise: Optional[dict]) -
     }
 
 
-def run_figures(run: EvalRun, rm: dict, d: str) -> Dict[str, str]:
-    """The figures of one model's numbers, written into d: {name: path}."""
+def run_figures(run: EvalRun, rm: dict, d: str, colour: str) -> Dict[str, str]:
+    """The figures of one model's numbers, in its colour, written into d: {name: path}."""
     figs = {
         "confusion": figures.plot_confusion(rm["overall"], run.name, os.path.join(d, "confusion.png")),
         "sessions": figures.plot_group_bars(rm["sessions"], f"{run.name}: accuracy per session", "session",
@@ -200,21 +201,23 @@ def run_figures(run: EvalRun, rm: dict, d: str) -> Dict[str, str]:
                                              "query point ahead of the robot (x)",
                                              os.path.join(d, "accuracy_by_distance.png")),
         "accuracy_vs_threshold": figures.plot_accuracy_vs_threshold(
-            rm["sweep"], run.name, os.path.join(d, "accuracy_vs_threshold.png")),
+            rm["sweep"], run.name, os.path.join(d, "accuracy_vs_threshold.png"), colour),
         "retained_vs_threshold": figures.plot_retained_vs_threshold(
             rm["sweep"], run.name, os.path.join(d, "retained_vs_threshold.png")),
         "accuracy_vs_retained": figures.plot_accuracy_vs_retained(
-            [(run.name, rm["sweep"])], run.name, os.path.join(d, "accuracy_vs_retained.png")),
+            [(run.name, rm["sweep"], colour)], run.name, os.path.join(d, "accuracy_vs_retained.png")),
     }
     if rm["given_verdict"] is not None:
         figs["verdict_accuracy_vs_retained"] = figures.plot_accuracy_vs_retained(
-            [("image alone", rm["sweep"]), ("given the detector's verdict", rm["given_verdict"]["sweep"])],
+            [("image alone", rm["sweep"], colour),
+             ("given the detector's verdict", rm["given_verdict"]["sweep"], figures.GIVEN_VERDICT_COLOUR)],
             run.name, os.path.join(d, "verdict_accuracy_vs_retained.png"))
     if rm["by_margin"] and rm["by_margin"]["ok"]:
         figs["margin_bands"] = figures.plot_margin_bands(rm["by_margin"], run.name,
                                                          os.path.join(d, "accuracy_by_margin.png"))
     if rm["failure"]["roc"]:
-        figs["roc"] = figures.plot_roc([(run.name, rm["failure"])], run.name, os.path.join(d, "failure_roc.png"))
+        figs["roc"] = figures.plot_roc([(run.name, rm["failure"], colour)], run.name,
+                                       os.path.join(d, "failure_roc.png"))
     return figs
 
 
@@ -252,14 +255,15 @@ def compare(runs: List[EvalRun], numbers: Dict[str, dict], out_dir: str) -> str:
     """The comparison section (two or more models): figures and Markdown."""
     d = os.path.join(out_dir, "comparison")
     names = [r.name for r in runs]
+    colours = [figures.model_colour(i) for i in range(len(runs))]
     figs = {
         "phenomena": figures.plot_phenomenon_comparison(
             names, [numbers[r.slug]["per_phenomenon"] for r in runs], os.path.join(d, "phenomena_fn_fp.png"),
-            "all models"),
-        "roc": figures.plot_roc([(r.name, numbers[r.slug]["failure"]) for r in runs], "all models",
-                                os.path.join(d, "failure_roc.png")),
+            "all models", colours),
+        "roc": figures.plot_roc([(r.name, numbers[r.slug]["failure"], c) for r, c in zip(runs, colours)],
+                                "all models", os.path.join(d, "failure_roc.png")),
         "accuracy_vs_retained": figures.plot_accuracy_vs_retained(
-            [(r.name, numbers[r.slug]["sweep"]) for r in runs], "all models",
+            [(r.name, numbers[r.slug]["sweep"], c) for r, c in zip(runs, colours)], "all models",
             os.path.join(d, "accuracy_vs_retained.png")),
     }
     rel = {k: os.path.relpath(v, out_dir) for k, v in figs.items()}
@@ -379,8 +383,8 @@ def write_report(args: argparse.Namespace, argv: List[str], runs: List[EvalRun],
                          tsne_iterations=args.tsne_iterations, seed=args.seed, threads=max(1, args.threads))
     numbers: Dict[str, dict] = {}
     sections = []
-    for run in runs:
-        rm, figs, res, overlays = analyse_run(run, args, opt, out_dir, noise)
+    for i, run in enumerate(runs):
+        rm, figs, res, overlays = analyse_run(run, args, opt, out_dir, figures.model_colour(i), noise)
         numbers[run.slug] = rm
         sections.append("\n".join([
             f"## Model: {run.name}\n",

@@ -2,7 +2,9 @@
 
 Every figure has a title naming the model, labelled axes with units, and a
 legend where more than one thing is drawn; class colours are the same
-everywhere (TP green, TN blue, FP orange, FN red) so figures read together.
+everywhere (TP green, TN blue, FP orange, FN red), and so is each model's
+colour (model_colour: its place among the report's models, in hues that are
+not the classes'), so figures read together.
 """
 
 from __future__ import annotations
@@ -30,8 +32,17 @@ PHENOMENON_COLOURS = {0: "#9e9e9e", 1: "#1f77b4", 2: "#2ca02c", 4: "#e6b800", 8:
 # Sets of causes (reflection+glare): colours none of the single phenomena use.
 SET_COLOURS = ("#d62728", "#bcbd22", "#ff9896", "#98df8a", "#c49c94", "#f7b6d2", "#393b79", "#9edae5", "#ad494a",
                "#637939")
+# A model's lines and bars, by its place in the report: no TP green, TN blue,
+# FP orange or FN red, so a model is never read as a class.
+MODEL_COLOURS = ("#6a3d9a", "#a6611a", "#018571", "#c51b7d", "#4d4d4d", "#8c8c00", "#2c3e94", "#b2182b")
+GIVEN_VERDICT_COLOUR = "#777777"   # the verdict head's curve beside its model's own
 CLUSTER_CMAP = "Dark2"
 DPI = 110
+
+
+def model_colour(index: int) -> str:
+    """The colour of the report's index-th model in every figure."""
+    return MODEL_COLOURS[index % len(MODEL_COLOURS)]
 
 
 def _save(fig, path: str) -> str:
@@ -68,13 +79,13 @@ def plot_confusion(metrics: dict, title: str, path: str) -> str:
     return _save(fig, path)
 
 
-def plot_roc(curves: Sequence[Tuple[str, dict]], title: str, path: str) -> str:
+def plot_roc(curves: Sequence[Tuple[str, dict, str]], title: str, path: str) -> str:
     """ROC of failure detection (true FP/FN vs TP/TN) scored by P(FP)+P(FN),
-    one curve per model."""
+    one curve per (model name, failure numbers, colour)."""
     fig, ax = plt.subplots(figsize=(5.2, 5.0))
-    for name, f in curves:
+    for name, f, colour in curves:
         if f.get("roc"):
-            ax.plot(f["roc"]["fpr"], f["roc"]["tpr"], lw=1.8, label=f"{name}: AUROC {f['auroc']:.3f}")
+            ax.plot(f["roc"]["fpr"], f["roc"]["tpr"], lw=1.8, color=colour, label=f"{name}: AUROC {f['auroc']:.3f}")
     ax.plot([0, 1], [0, 1], "k--", lw=0.8, label="chance")
     ax.set_xlim(0, 1)
     ax.set_ylim(0, 1.01)
@@ -114,10 +125,11 @@ def sweep_series(curve: List[dict], x_key: str, keys: Sequence[str]):
     return x, solid, {k: np.array([p[k] for p in pts], dtype=float) for k in keys}
 
 
-def plot_accuracy_vs_threshold(sweep: dict, title: str, path: str) -> str:
-    """Mean per-class and overall accuracy of the retained predictions vs τ;
-    faint where a class keeps fewer than FEW_CELLS cells, as in
-    plot_accuracy_vs_retained (a dip there is one or two cells)."""
+def plot_accuracy_vs_threshold(sweep: dict, title: str, path: str, colour: str) -> str:
+    """Mean per-class (solid) and overall (dashed) accuracy of the retained
+    predictions vs τ, in the model's colour; faint where a class keeps fewer
+    than FEW_CELLS cells, as in plot_accuracy_vs_retained (a dip there is one
+    or two cells)."""
     fig, ax = plt.subplots(figsize=(7.5, 4.6))
     faint_drawn = False
     for key, label, style in (("mean_per_class_accuracy", "mean per-class accuracy (paper's metric)", "-"),
@@ -126,9 +138,9 @@ def plot_accuracy_vs_threshold(sweep: dict, title: str, path: str) -> str:
         if not len(t):
             continue
         v = values[key]
-        line, = ax.plot(t, np.where(solid, v, np.nan), style, lw=1.8, label=label)
+        ax.plot(t, np.where(solid, v, np.nan), style, lw=1.8 if style == "-" else 1.2, color=colour, label=label)
         if not solid.all():
-            ax.plot(t[~solid], v[~solid], ".", ms=2, alpha=0.35, color=line.get_color(),
+            ax.plot(t[~solid], v[~solid], ".", ms=2, alpha=0.35, color=colour,
                     label=None if faint_drawn else f"fewer than {FEW_CELLS} cells kept in a class")
             faint_drawn = True
     _threshold_axis(ax, sweep)
@@ -168,27 +180,28 @@ def plot_retained_vs_threshold(sweep: dict, title: str, path: str) -> str:
     return _save(fig, path)
 
 
-def plot_accuracy_vs_retained(sweeps: Sequence[Tuple[str, dict]], title: str, path: str) -> str:
-    """Mean per-class accuracy vs retained fraction (one line per model), with
-    the paper's claim (> 96 % at 70 % retained) marked. Where a class keeps
-    fewer than FEW_CELLS cells the lines go faint: one or two cells decide there."""
+def plot_accuracy_vs_retained(sweeps: Sequence[Tuple[str, dict, str]], title: str, path: str) -> str:
+    """Mean per-class accuracy vs retained fraction, one line per (name, sweep,
+    colour), with the paper's claim (> 96 % at 70 % retained) marked. Where a
+    class keeps fewer than FEW_CELLS cells the lines go faint: one or two
+    cells decide there."""
     fig, ax = plt.subplots(figsize=(7.0, 4.6))
     faint_drawn = False
-    for i, (name, s) in enumerate(sweeps):
+    for name, s, colour in sweeps:
         r, solid, values = sweep_series(s["curve"], "retained", ["mean_per_class_accuracy", "overall_accuracy"])
         if not len(r):
             continue
         mp, oa = values["mean_per_class_accuracy"], values["overall_accuracy"]  # NaN breaks them where not solid
-        line, = ax.plot(100 * r, np.where(solid, mp, np.nan), lw=1.8, label=f"{name}: mean per-class accuracy")
-        ax.plot(100 * r, np.where(solid, oa, np.nan), "--", lw=1.2, color=line.get_color(),
+        ax.plot(100 * r, np.where(solid, mp, np.nan), lw=1.8, color=colour, label=f"{name}: mean per-class accuracy")
+        ax.plot(100 * r, np.where(solid, oa, np.nan), "--", lw=1.2, color=colour,
                 label=f"{name}: overall accuracy")
         if not solid.all():
-            ax.plot(100 * r[~solid], mp[~solid], ".", ms=2, alpha=0.35, color=line.get_color(),
+            ax.plot(100 * r[~solid], mp[~solid], ".", ms=2, alpha=0.35, color=colour,
                     label=None if faint_drawn else f"fewer than {FEW_CELLS} cells kept in a class")
             faint_drawn = True
         a70 = s["at_70"]
         if a70["mean_per_class_accuracy"] is not None:
-            ax.plot(100 * a70["retained"], a70["mean_per_class_accuracy"], "o", color=line.get_color())
+            ax.plot(100 * a70["retained"], a70["mean_per_class_accuracy"], "o", color=colour)
     ax.axvline(70, color="k", ls=":", lw=1)
     ax.plot([70], [0.96], "k*", ms=10, label="paper (from the image alone): > 96 % at 70 % retained")
     ax.set_xlim(102, 0)  # stricter filtering to the right
@@ -350,7 +363,7 @@ def plot_mosaic(run: EvalRun, res, cluster: int, title: str, path: str) -> str:
 
 
 def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dict]], path: str,
-                               title: str) -> str:
+                               title: str, colours: Sequence[str]) -> str:
     """Two panels (predicted FN on top, predicted FP below): for each phenomenon,
     the fraction of its samples each model predicts as that failure (bars, one
     colour per model), with the detector's true rate from the labels as a black
@@ -363,7 +376,7 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
     # room under each group for "(n = 2549 / 1234 / 2549)" at fontsize 8 (about 0.07 in a character)
     fig, axes = plt.subplots(2, 1, figsize=(max(6.5, 0.6 * len(codes) * max(n_models, 2) + 3.0), 7.0), sharex=True)
     for ax, panel in zip(axes, (("pred_fn", "true_fn", "FN"), ("pred_fp", "true_fp", "FP"))):
-        _phenomenon_panel(ax, names, per_phen, codes, *panel)
+        _phenomenon_panel(ax, names, per_phen, codes, colours, *panel)
     counts = [" / ".join(str(next((e["n"] for e in en if e["phenomenon"] == c), 0)) for en in per_phen) for c in codes]
     axes[1].set_xticks(x, [f"{phenomenon_name(c)}\n(n = {n})" for c, n in zip(codes, counts)], fontsize=8)
     axes[1].set_xlabel("phenomenon under the patch centre (sample count per model, in legend order)")
@@ -372,12 +385,11 @@ def plot_phenomenon_comparison(names: Sequence[str], per_phen: Sequence[List[dic
     return _save(fig, path)
 
 
-def _phenomenon_panel(ax, names: Sequence[str], per_phen: Sequence[List[dict]], codes: List[int], key: str,
-                      truth: str, kind: str) -> None:
+def _phenomenon_panel(ax, names: Sequence[str], per_phen: Sequence[List[dict]], codes: List[int],
+                      colours: Sequence[str], key: str, truth: str, kind: str) -> None:
     """One panel of plot_phenomenon_comparison: each model's bars for `key`
-    (pred_fn or pred_fp) with its true rate (`truth`) as ticks."""
+    (pred_fn or pred_fp), in its colour, with its true rate (`truth`) as ticks."""
     width = 0.8 / len(names)
-    colours = _category_colours(len(names))
     faint_by_model = [few_cell_phenomena(entries, codes) for entries in per_phen]
     for i, (entries, faint) in enumerate(zip(per_phen, faint_by_model)):
         by = {e["phenomenon"]: e for e in entries}
