@@ -15,6 +15,7 @@ Run: python3 tests/report/test_label_repeatability.py [--tool tools/report/ivoa_
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -133,7 +134,7 @@ class LabelRepeatabilityTest(unittest.TestCase):
         # a label out of range, a row cut short, no rows: named by line, no traceback
         for name, rows, message in (("label9", "0,1000,0,9\n", "line 2: label 9, expected 0..3"),
                                     ("cut", "0,1000,0,1\n1,1000\n", "line 3 does not have the header's 4 fields"),
-                                    ("empty", "", "samples.csv: no samples")):
+                                    ("empty", "", "empty: no samples in any session (office_s31)")):
             folder = os.path.join(self.tmp.name, name, "office_s31")
             os.makedirs(folder)
             with open(os.path.join(folder, "samples.csv"), "w") as f:
@@ -147,6 +148,30 @@ class LabelRepeatabilityTest(unittest.TestCase):
                               capture_output=True, text=True, timeout=60)
         self.assertEqual(proc.returncode, 4, proc.stderr)
         self.assertIn("cannot write", proc.stderr)
+
+    def test_a_session_without_samples_adds_no_cells_and_is_not_refused(self):
+        # ivoa-dataset writes (and lists) a session where no frame gave a sample
+        root = os.path.join(self.tmp.name, "with_empty")
+        shutil.copytree(self.data[1], root)
+        os.makedirs(os.path.join(root, "home_s31"))
+        with open(os.path.join(root, "home_s31", "samples.csv"), "w") as f:
+            f.write("sample,frame,utime,depth_utime,cell,label\n")
+        shutil.copytree(os.path.join(root, "home_s31"), os.path.join(self.tmp.name, "with_empty_too", "home_s31"))
+        shutil.copytree(os.path.join(self.data[0], "office_s31"),
+                        os.path.join(self.tmp.name, "with_empty_too", "office_s31"))
+        proc = subprocess.run([sys.executable, TOOL, os.path.join(self.tmp.name, "with_empty_too"), root],
+                              capture_output=True, text=True, timeout=60)
+        self.assertEqual(proc.returncode, 0, proc.stderr)
+        self.assertIn(f"2 realisations, 2 sessions, {sum(g[0] for g in GROUPS)} cells labelled in all", proc.stdout)
+        # sessions in common, but none with a cell every dataset labelled
+        only_empty = os.path.join(self.tmp.name, "only_empty_in_common")
+        shutil.copytree(os.path.join(root, "home_s31"), os.path.join(only_empty, "home_s31"))
+        os.makedirs(os.path.join(only_empty, "lab_s31"))
+        with open(os.path.join(only_empty, "lab_s31", "samples.csv"), "w") as f:
+            f.write("sample,frame,utime,depth_utime,cell,label\n0,0,1000,1004,0,1\n")
+        proc = subprocess.run([sys.executable, TOOL, only_empty, root], capture_output=True, text=True, timeout=60)
+        self.assertEqual(proc.returncode, 3, proc.stderr)
+        self.assertIn("no cell is labelled in every dataset (sessions in common: home_s31)", proc.stderr)
 
     def test_realisations_must_be_distinct_and_of_one_detector(self):
         proc = subprocess.run([sys.executable, TOOL, self.data[0], self.data[0] + "/"], capture_output=True,

@@ -53,7 +53,9 @@ class InputError(Exception):
 
 
 def read_labels(dataset: str) -> Dict[str, Dict[Tuple[int, int], int]]:
-    """session -> {(utime, cell): label} for every session folder of a dataset."""
+    """session -> {(utime, cell): label} for every session folder of a dataset.
+    A session without samples is kept, empty (ivoa-dataset writes one where
+    no frame gave a sample); a dataset with no sample at all is refused."""
     if not os.path.isdir(dataset):
         raise InputError(f"{dataset}: dataset folder not found")
     sessions = {}
@@ -66,6 +68,8 @@ def read_labels(dataset: str) -> Dict[str, Dict[Tuple[int, int], int]]:
         sessions[name] = _read_session_labels(path)
     if not sessions:
         raise InputError(f"{dataset}: no session folders with a samples.csv")
+    if not any(sessions.values()):
+        raise InputError(f"{dataset}: no samples in any session ({', '.join(sessions)})")
     return sessions
 
 
@@ -91,8 +95,6 @@ def _read_session_labels(path: str) -> Dict[Tuple[int, int], int]:
                     raise InputError(f"{path}: line {row_number}: label {label}, expected 0..3 (TP, TN, FP, FN)")
     except UnicodeDecodeError:
         raise InputError(f"{path}: not UTF-8 text, so not a dataset's samples.csv") from None
-    if not labels:
-        raise InputError(f"{path}: no samples")
     return labels
 
 
@@ -176,6 +178,8 @@ def common_cells(realisations: List[Dict[str, Dict[Tuple[int, int], int]]]) -> T
         shared = set.intersection(*cells)
         partial += len(set.union(*cells)) - len(shared)
         keys += [(name, k) for k in sorted(shared)]
+    if not keys:
+        raise InputError(f"no cell is labelled in every dataset (sessions in common: {', '.join(names)})")
     return keys, partial, names
 
 
