@@ -1350,6 +1350,12 @@ class MetricUnitTest(unittest.TestCase):
         run = types.SimpleNamespace(label=y, predicted=np.where(wrong, (y + 1) % 4, y), var_predicted=var,
                                     model_threshold=None)
         self.assertEqual(uncertainty_sweep(run)["verdict"], "yes")
+        # no class with 20 cells: nothing to judge by, and said so
+        y = np.repeat(np.arange(4), 10)
+        var = rng.uniform(0.001, 0.1, 40)
+        run = types.SimpleNamespace(label=y, predicted=np.where(rng.random(40) < 0.2, (y + 1) % 4, y),
+                                    var_predicted=var, model_threshold=None)
+        self.assertEqual(uncertainty_sweep(run)["verdict"], "undetermined (no class has 20 cells: too few to judge)")
 
     def test_sweep_points_say_how_few_cells_the_smallest_class_keeps(self):
         load_tool()
@@ -1365,10 +1371,13 @@ class MetricUnitTest(unittest.TestCase):
         # a class with fewer than 20 cells in all is a handful at every threshold: it is not counted, or
         # nothing would be judged
         self.assertEqual(_point(label[20:], label[20:].copy(), var[20:], 0.6)["fewest_kept"], 50)
-        self.assertEqual(_point(label[4:30], label[4:30].copy(), var[4:30], 0.6)["fewest_kept"], 0)  # 19 TP, 7 TN
-        ladder = [{"retained": 1.0, "fewest_kept": 3}, {"retained": 0.5, "fewest_kept": 2}]
-        self.assertIn("From ≥ 100 % retained down, some class with 20 cells or more keeps fewer than 20 (3 there)",
+        # no class has 20: the smallest present counts, a handful everywhere (19 TP, 7 TN)
+        self.assertEqual(_point(label[4:30], label[4:30].copy(), var[4:30], 0.6)["fewest_kept"], 7)
+        ladder = [{"retained": 1.0, "fewest_kept": 30}, {"retained": 0.5, "fewest_kept": 3}]
+        self.assertIn("From ≥ 50 % retained down, some class with 20 cells or more keeps fewer than 20 (3 there)",
                       _few_cells_note(ladder))
+        self.assertIn("No class has 20 cells here (the smallest present has 7)",
+                      _few_cells_note([{"retained": 1.0, "fewest_kept": 7}, {"retained": 0.5, "fewest_kept": 2}]))
         self.assertEqual(_few_cells_note([{"retained": 1.0, "fewest_kept": 50}]), "")
 
     def test_bars_a_few_cells_decide_are_the_ones_drawn_faint(self):

@@ -167,6 +167,9 @@ def _few_cells_note(ladder: List[dict]) -> str:
     few = next((p for p in ladder if p.get("fewest_kept", FEW_CELLS) < FEW_CELLS), None)
     if few is None:
         return ""
+    if few["retained"] >= 1.0:  # kept == support there: no class has FEW_CELLS at all
+        return (f"\nNo class has {FEW_CELLS} cells here (the smallest present has {few['fewest_kept']}): every row, "
+                "and the whole of the curves, rest on a handful of cells.\n")
     return (f"\nFrom ≥ {pct(few['retained'], 0)} retained down, some class with {FEW_CELLS} cells or more keeps "
             f"fewer than {FEW_CELLS} ({few['fewest_kept']} there): those rows, and the curves' faint part, rest on a "
             "handful of cells.\n")

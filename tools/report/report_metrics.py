@@ -236,9 +236,12 @@ def _spearman(a: np.ndarray, b: np.ndarray) -> Optional[float]:
 
 
 def _fewest_kept(kept: np.ndarray, support: np.ndarray) -> int:
-    """The fewest cells any class with FEW_CELLS or more in all keeps (0 if
-    no class has that many: nothing rests on enough cells)."""
+    """The fewest cells any class with FEW_CELLS or more in all keeps; where
+    no class has that many, the fewest any class present keeps (under
+    FEW_CELLS at every threshold: nothing rests on enough cells)."""
     counted = support >= FEW_CELLS
+    if not counted.any():
+        counted = support > 0
     return int(kept[counted].min()) if counted.any() else 0
 
 
@@ -290,7 +293,9 @@ def _accuracy_trend(pts: List[dict], unfiltered: dict, at70: dict) -> dict:
             if at70["mean_per_class_accuracy"] is not None and unfiltered["mean_per_class_accuracy"] is not None
             else None)
     gain_counts = gain is not None and enough_cells(at70)
-    if rho is None and len(pts) < 3:
+    if not enough_cells(unfiltered):  # only where no class has FEW_CELLS in all
+        verdict, rises = f"undetermined (no class has {FEW_CELLS} cells: too few to judge)", None
+    elif rho is None and len(pts) < 3:
         verdict, rises = (f"undetermined (fewer than three thresholds keep ≥ 10 % of the cells and ≥ {FEW_CELLS} "
                           "of every class that has as many)"), None
     elif rho is None:
