@@ -188,7 +188,7 @@ bool something_to_run(const Config& config, const SelectedCommands& selected, co
 }
 
 // The commands get the launcher's bus settings with the variables
-// (add_bus_settings); an --lcm-url they cannot share is said so.
+// (variable_overrides); an --lcm-url they cannot share is said so.
 void warn_of_an_lcm_url_not_handed_on(const LauncherOptions& l) {
   if (!l.lcm_url.empty() && l.lcm_url != "none" && l.lcm_url.rfind("udpm://", 0) != 0)
     spdlog::warn(

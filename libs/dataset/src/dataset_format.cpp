@@ -230,25 +230,30 @@ void SessionWriter::abandon() {
   for (std::FILE* f : {files_->patches, files_->samples, files_->evidence})
     if (f) std::fclose(f);
   files_->patches = files_->samples = files_->evidence = nullptr;
+  if (keep_work_dir_) return;
   std::error_code ec;
   fs::remove_all(work_dir_, ec);  // nothing there once close() has put the session in place
 }
 
 // The finished session takes the place of any folder of that name: moved
-// aside, the new one renamed in (the old one back if that fails), the old
-// one removed.
+// aside to .NAME.replaced, the new one renamed in (the old one back if that
+// fails), the old one removed. Where a step fails, the error says where
+// both sessions are.
 void SessionWriter::replace_session_folder() {
   const std::string aside = (fs::path(dir_).parent_path() / ("." + info_.session + ".replaced")).string();
   std::error_code ec;
-  fs::remove_all(aside, ec);
+  fs::remove_all(aside, ec);  // left by a build killed between the renames below
+  if (ec) throw DatasetError(aside + ": cannot remove what an earlier build left (" + ec.message() + ")");
   const bool had_one = fs::exists(dir_);
   if (had_one) fs::rename(dir_, aside, ec);
   if (ec) throw DatasetError(dir_ + ": cannot move the session built before aside (" + ec.message() + ")");
   fs::rename(work_dir_, dir_, ec);
   if (ec) {
+    keep_work_dir_ = true;
     std::error_code restored;
     if (had_one) fs::rename(aside, dir_, restored);
-    throw DatasetError(dir_ + ": cannot put the built session in place (" + ec.message() + "); it is in " + work_dir_);
+    throw DatasetError(dir_ + ": cannot put the built session in place (" + ec.message() + "); it is in " +
+                       work_dir_ + (restored ? ", and the one built before is in " + aside : ""));
   }
   fs::remove_all(aside, ec);
 }

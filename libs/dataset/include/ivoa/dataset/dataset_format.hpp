@@ -104,7 +104,8 @@ class SessionWriter {
   void close();
   // Closes and removes what was written without registering it: a build
   // that failed part-way leaves the dataset as it was (a session of that
-  // name built before stays whole).
+  // name built before stays whole). A session close() built whole but could
+  // not put in place stays where its error says.
   void abandon();
   const SessionInfo& info() const { return info_; }
 
@@ -114,6 +115,7 @@ class SessionWriter {
   void replace_session_folder();
   std::string dir_;       // the session's folder
   std::string work_dir_;  // written here, renamed to dir_ by close(): a failed rebuild keeps the old session
+  bool keep_work_dir_ = false;  // built whole, not put in place: the user is told where it is
   SessionInfo info_;
   std::unique_ptr<Files> files_;
   std::vector<FrameRecord> frames_;
