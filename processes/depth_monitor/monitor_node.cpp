@@ -70,7 +70,7 @@ void MonitorNode::on_depth(const depth_image_t& msg) {
       return;
     }
     publish(pipeline_->add_depth(msg.utime, std::move(depth)));
-  } catch (const ImageError& e) {
+  } catch (const std::exception& e) {  // ImageError; LabelError of the stereo frame it completes; OpenCV's
     heartbeat_.bad_input(where + ": " + e.what());
   }
 }
@@ -81,7 +81,7 @@ void MonitorNode::on_stereo(const obstacle_grid_t& msg) {
   if (!has_calibration(where)) return;
   try {
     publish(pipeline_->add_stereo(msg));
-  } catch (const monitor::LabelError& e) {
+  } catch (const std::exception& e) {  // LabelError: a grid it cannot label; OpenCV's
     heartbeat_.bad_input(where + ": " + e.what());
   }
 }

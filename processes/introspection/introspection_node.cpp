@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/footprint_patch.hpp"
+#include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/core/time.hpp"
@@ -223,6 +224,10 @@ void IntrospectionNode::on_calibration(const rig_calibration_t& msg) {
 }
 
 void IntrospectionNode::on_grid(obstacle_grid_t grid) {
+  if (const std::string why = grid_content_error(grid); !why.empty()) {
+    heartbeat_.bad_input(options_.grid_channel + " utime " + std::to_string(grid.utime) + ": " + why);
+    return;
+  }
   const std::string& own = model_->info().detector;
   if (!grid.detector.empty() && !own.empty() && grid.detector != own) {
     if (!std::exchange(warned_other_detector_, true))
@@ -236,19 +241,27 @@ void IntrospectionNode::on_grid(obstacle_grid_t grid) {
   grids_.put(grid);
 }
 
+// A calibration the warp cannot be built for (OpenCV refuses it, or its
+// maps do not fit in memory) is bad input; the warp built before stays.
 void IntrospectionNode::update_warp() {
   std::optional<RigCalibration> rig;
   {
     std::lock_guard<std::mutex> lock(calibration_mutex_);
     rig = std::exchange(new_rig_, std::nullopt);
   }
-  if (rig) warp_ = std::make_unique<GroundWarp>(*rig);  // outside the lock: 0.4 s for 960x600 on a slow core
+  if (!rig) return;
+  try {
+    warp_ = std::make_unique<GroundWarp>(*rig);  // outside the lock: 0.4 s for 960x600 on a slow core
+  } catch (const std::exception& e) {
+    heartbeat_.bad_input(options_.calibration_channel + ": cannot use calibration '" + rig->rig_name +
+                         "': " + e.what() + (warp_ ? " (the one before stays)" : ""));
+  }
 }
 
 cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& where, cv::Mat& left) {
   try {
     left = decode_image(frame.msg.left);
-  } catch (const ImageError& e) {
+  } catch (const std::exception& e) {  // ImageError, or OpenCV's
     heartbeat_.bad_input(where + ": left image: " + e.what());
     return {};
   }
@@ -259,10 +272,17 @@ cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& wh
     return {};
   }
   calibration_wait_->end();
+  cv::Mat right;
   try {
-    return warp_->stack(left, decode_image(frame.msg.right));
+    right = decode_image(frame.msg.right);
   } catch (const std::exception& e) {
     heartbeat_.bad_input(where + ": right image: " + e.what());
+    return {};
+  }
+  try {
+    return warp_->stack(left, right);
+  } catch (const std::exception& e) {  // ImageError: sizes the calibration does not have
+    heartbeat_.bad_input(where + ": " + e.what());
     return {};
   }
 }

@@ -19,6 +19,15 @@ std::string frame_name(const std::string& channel, const stereo_image_t& msg) {
   return channel + " seq " + std::to_string(msg.seq) + " (utime " + std::to_string(msg.utime) + ")";
 }
 
+// decode_image, its error saying which camera's image it was.
+cv::Mat decode_side(const image_t& image, const char* side) {
+  try {
+    return decode_image(image);
+  } catch (const std::exception& e) {
+    throw ImageError(std::string(side) + " image: " + e.what());
+  }
+}
+
 }  // namespace
 
 StereoDetectorNode::StereoDetectorNode(Bus& bus, Heartbeat& heartbeat, StereoDetectorOptions options)
@@ -76,6 +85,9 @@ void StereoDetectorNode::on_calibration(const rig_calibration_t& msg) {
   ++calibration_version_;
 }
 
+// A calibration the detector cannot be built for (OpenCV cannot rectify
+// it, or its maps do not fit in memory) is bad input, and the detector
+// built before keeps running: as for a calibration that fails validation.
 bool StereoDetectorNode::update_detector() {
   std::optional<RigCalibration> rig;
   {
@@ -86,12 +98,14 @@ bool StereoDetectorNode::update_detector() {
   }
   if (!rig) return false;
   try {
-    detector_ = stereo::make_detector(options_.model, *rig, options_.detector);
-    grid_ = std::make_unique<QueryGrid>(options_.grid, CameraModel(rig->left, rig->left_to_robot));
-  } catch (const std::exception& e) {  // e.g. a calibration OpenCV cannot rectify
-    detector_.reset();
-    heartbeat_.bad_input(std::string("cannot use calibration '") + rig->rig_name + "': " + e.what());
-    return false;
+    auto detector = stereo::make_detector(options_.model, *rig, options_.detector);
+    auto grid = std::make_unique<QueryGrid>(options_.grid, CameraModel(rig->left, rig->left_to_robot));
+    detector_ = std::move(detector);
+    grid_ = std::move(grid);
+  } catch (const std::exception& e) {
+    heartbeat_.bad_input(std::string("cannot use calibration '") + rig->rig_name + "': " + e.what() +
+                         (detector_ ? " (the one before stays)" : ""));
+    return detector_ != nullptr;
   }
   heartbeat_.add_to_counter(kCalibrationsApplied, 1);
   heartbeat_.set_state("running");
@@ -129,14 +143,11 @@ void StereoDetectorNode::process(const Frame& frame) {
     // Colour, as the offline dataset tool passes it. The detectors convert to
     // gray first themselves, so gray input would give the same verdicts
     // (test: Detectors.GrayAndColourInputGiveTheSameVerdicts).
-    const cv::Mat left = decode_image(frame.msg.left);
-    const cv::Mat right = decode_image(frame.msg.right);
+    const cv::Mat left = decode_side(frame.msg.left, "left");
+    const cv::Mat right = decode_side(frame.msg.right, "right");
     detector_->set_frame(left, right);
     detector_->evaluate(*grid_, out);
-  } catch (const ImageError& e) {
-    heartbeat_.bad_input(name + ": " + e.what());
-    return;
-  } catch (const stereo::FrameError& e) {
+  } catch (const std::exception& e) {  // ImageError, stereo::FrameError, or OpenCV's on a frame it cannot take
     heartbeat_.bad_input(name + ": " + e.what());
     return;
   }

@@ -1,5 +1,6 @@
 #include <cmath>
 #include <fstream>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -85,6 +86,23 @@ TEST(Calibration, InvalidValuesAreRejected) {
   rig_calibration_t msg = to_message(test::make_test_rig(), 0);
   msg.left.width = 0;
   EXPECT_THROW(from_message(msg), CalibrationError);
+}
+
+// Such a camera would pass every other check, then hold a detector busy for
+// seconds building maps that do not fit in memory, and OpenCV would refuse it.
+TEST(Calibration, ImagesTooLargeForOpenCVsRemapAreRejected) {
+  rig_calibration_t msg = to_message(test::make_test_rig(), 0);
+  msg.right.width = 60000;
+  try {
+    from_message(msg);
+    FAIL() << "accepted a 60000 px wide right camera";
+  } catch (const CalibrationError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("right camera image size 60000x600"), std::string::npos) << what;
+    EXPECT_NE(what.find("is not under 32767 px a side"), std::string::npos) << what;
+  }
+  msg.right.width = 32766;
+  EXPECT_NO_THROW(from_message(msg));
 }
 
 TEST(Calibration, OpticalAxesMapToTheRobotFrame) {

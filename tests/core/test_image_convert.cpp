@@ -85,6 +85,19 @@ TEST(ImageConvert, BadImagesSayWhatIsWrong) {
   msg = encode_image(test_pattern(), image_t::PIXEL_FORMAT_JPEG, 0);
   for (size_t i = 10; i < msg.data.size(); ++i) msg.data[i] = 0;
   EXPECT_THROW(decode_image(msg), ImageError);
+  // width * 3 wraps round int32 to 1: no longer passes for a 16-byte row (OpenCV aborted on it)
+  msg = encode_image(test_pattern(), image_t::PIXEL_FORMAT_BGR, 0);
+  msg.width = 715'827'883;
+  msg.height = 2;
+  msg.row_stride = 16;
+  msg.data.assign(64, 0);
+  msg.size = 64;
+  try {
+    decode_image(msg);
+    FAIL();
+  } catch (const ImageError& e) {
+    EXPECT_NE(std::string(e.what()).find("row_stride 16 is smaller than width * 3"), std::string::npos) << e.what();
+  }
 }
 
 TEST(ImageConvert, DepthRoundTripsLittleEndian) {

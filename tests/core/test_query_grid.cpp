@@ -1,3 +1,8 @@
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
 #include <gtest/gtest.h>
 
 #include "ivoa/core/grid_messages.hpp"
@@ -60,6 +65,38 @@ TEST(QueryGrid, MessageCarriesGeometryAndMismatchIsExplained) {
   other = QueryGridConfig{};
   other.safety_radius = 0.2;
   EXPECT_NE(geometry_mismatch(msg, QueryGrid(other, geo.left)).find("safety radius"), std::string::npos);
+  // the header right, the cells elsewhere: the labels would be of other ground points
+  obstacle_grid_t moved = msg;
+  for (float& x : moved.x) x += 0.01f;
+  EXPECT_EQ(geometry_mismatch(moved, grid).rfind("cell 0 is at (", 0), 0u) << geometry_mismatch(moved, grid);
+  moved = msg;
+  moved.x[3] += 5e-5f;  // a last bit rounded otherwise on another machine
+  EXPECT_EQ(geometry_mismatch(moved, grid), "");
+}
+
+TEST(QueryGrid, ReceivedCellsThatCannotBeUsedAreNamed) {
+  const QueryGrid grid(QueryGridConfig{}, RigGeometry(test::make_test_rig()).left);
+  const obstacle_grid_t good = make_obstacle_grid(grid, "test", 99);
+  EXPECT_EQ(grid_content_error(good), "");
+  obstacle_grid_t msg = good;
+  msg.state[7] = 42;
+  EXPECT_EQ(grid_content_error(msg), "cell 7: state 42 is none of FREE 0, OBSTACLE 1, UNKNOWN 2");
+  msg = good;
+  msg.u.pop_back();
+  EXPECT_EQ(grid_content_error(msg),
+            "u has " + std::to_string(good.num_cells - 1) + " entries, num_cells is " + std::to_string(good.num_cells));
+  msg = good;
+  const size_t seen =
+      static_cast<size_t>(std::find(good.in_image.begin(), good.in_image.end(), 1) - good.in_image.begin());
+  ASSERT_LT(seen, good.in_image.size());
+  msg.u[seen] = std::nanf("");
+  EXPECT_EQ(grid_content_error(msg).rfind("cell " + std::to_string(seen) + ": in_image, but its pixel (nan", 0), 0u);
+  msg = good;
+  msg.in_image[seen] = 0;  // a cell out of view may have no pixel (behind the camera)
+  msg.u[seen] = std::nanf("");
+  EXPECT_EQ(grid_content_error(msg), "");
+  msg.y[0] = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(grid_content_error(msg), "cell 0: position is not finite");
 }
 
 TEST(QueryGrid, RejectsEmptyConfig) {

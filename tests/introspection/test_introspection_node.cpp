@@ -105,6 +105,21 @@ TEST(IntrospectionNode, TwoViewModelWaitsForTheCalibrationThenRuns) {
   EXPECT_EQ(out[0].cols, (rig.left.width - 100) / 20 + 1);
   EXPECT_EQ(heartbeat.counter(kFramesWithoutCalibration), 1);
   EXPECT_EQ(heartbeat.bad_input_count(), 0) << "a frame before the calibration is not bad input";
+
+  // A left image of another size than the calibration's: named as such (it was an OpenCV
+  // assertion blamed on the right image), skipped, and the next frame runs.
+  stereo_image_t smaller = stereo_frame(rig, 3000);
+  cv::Mat small(rig.left.height / 2, rig.left.width / 2, CV_8UC3, cv::Scalar::all(90));
+  smaller.left = encode_image(small, image_t::PIXEL_FORMAT_BGR, 3000);
+  bus.publish(channels::kStereoImages, smaller);
+  ASSERT_TRUE(wait_for([&] { return heartbeat.bad_input_count() == 1; }));
+  const std::string sizes = "left image " + std::to_string(small.cols) + "x" + std::to_string(small.rows) +
+                            " and right " + std::to_string(rig.right.width) + "x" + std::to_string(rig.right.height);
+  EXPECT_NE(heartbeat.snapshot().last_error.find(sizes), std::string::npos) << heartbeat.snapshot().last_error;
+  stereo_image_t next = stereo_frame(rig, 4000);
+  bus.publish(channels::kStereoImages, next);
+  ASSERT_TRUE(wait_for([&] { return out.size() == 2; }));
+  EXPECT_EQ(out[1].utime, 4000);
 }
 
 // A burst of frames while the network is busy: the mailbox keeps only the
@@ -307,6 +322,23 @@ TEST(IntrospectionNode, QueryCellsAreGivenTheVerdictsOfTheirOwnFrame) {
   }
   EXPECT_EQ(heartbeat.counter("grids_other_detector"), 1);
   EXPECT_EQ(heartbeat.counter("grids_missing"), 1) << "the frame's grid came";
+
+  // A grid with a cell in view but no pixel: bad input, not predictions at NaN; the last good grid's
+  // geometry serves its frame.
+  grid.utime = 5000;
+  grid.detector = "jppc";
+  const size_t seen =
+      static_cast<size_t>(std::find(grid.in_image.begin(), grid.in_image.end(), 1) - grid.in_image.begin());
+  grid.u[seen] = std::nanf("");
+  bus.publish(channels::kObstaclesStereo, grid);
+  bus.handle(5);
+  EXPECT_EQ(heartbeat.bad_input_count(), 1);
+  EXPECT_NE(heartbeat.snapshot().last_error.find("in_image, but its pixel (nan"), std::string::npos);
+  stereo_image_t fifth = stereo_frame(rig, 5000);
+  bus.publish(channels::kStereoImages, fifth);
+  ASSERT_TRUE(wait_for([&] { return out.size() == 4; }));
+  for (float u : out[3].query_u) EXPECT_TRUE(std::isfinite(u));
+  EXPECT_EQ(heartbeat.counter("grids_missing"), 2);
 }
 
 TEST(RecentGrids, FindsTheFrameOrStopsWaitingOnceANewerOneIsIn) {

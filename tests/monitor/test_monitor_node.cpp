@@ -137,6 +137,25 @@ TEST(MonitorNode, BadInputIsCountedSkippedAndSurvived) {
   f.drain();
   EXPECT_EQ(f.heartbeat.bad_input_count(), 5);
 
+  // The header of the configured grid, its cells 1 cm further on: refused on arrival (the labelling,
+  // once its depth frame came, aborted the process)
+  obstacle_grid_t moved = make_obstacle_grid(f.grid, "jppc", 6'000);
+  for (float& x : moved.x) x += 0.01f;
+  f.bus.publish(channels::kObstaclesStereo, moved);
+  f.drain();
+  f.send_depth(6'000, ground);
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 6);
+  EXPECT_NE(f.heartbeat.snapshot().last_error.find("cell 0 is at"), std::string::npos);
+
+  obstacle_grid_t bad_state = make_obstacle_grid(f.grid, "jppc", 7'000);
+  bad_state.state[4] = 42;  // was labelled as an obstacle
+  f.bus.publish(channels::kObstaclesStereo, bad_state);
+  f.drain();
+  f.send_depth(7'000, ground);
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 7);
+  EXPECT_NE(f.heartbeat.snapshot().last_error.find("state 42"), std::string::npos);
+  EXPECT_TRUE(f.labels.empty());
+
   // ...and it still works.
   f.send_depth(100'000, ground);
   f.send_stereo(100'000, 0);

@@ -156,6 +156,11 @@ TEST(ViewerFigure, UndrawableIntrospectionIsNamed) {
   h = introspection(1);
   h.stride = 0;
   EXPECT_EQ(check_introspection(h), "heatmap geometry 10x16, stride 0, patch 20 is not drawable");
+  h = introspection(1);
+  h.patch_size = 100'000;  // OpenCV aborted the viewer drawing it
+  EXPECT_EQ(check_introspection(h).rfind("heatmap of 10x16 patches of 100000 px every ", 0), 0u)
+      << check_introspection(h);
+  EXPECT_NE(check_introspection(h).find("more than its "), std::string::npos);
 }
 
 }  // namespace

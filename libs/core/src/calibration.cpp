@@ -1,6 +1,7 @@
 #include "ivoa/core/calibration.hpp"
 
 #include <cctype>
+#include <climits>
 #include <cmath>
 
 #include <opencv2/core.hpp>
@@ -25,6 +26,10 @@ void validate_rotation(const Eigen::Matrix3d& R, const std::string& where, const
 void validate_camera(const CameraIntrinsics& cam, const std::string& where, const std::string& key) {
   check(cam.width > 0 && cam.height > 0, where,
         key + " image size must be positive, got " + std::to_string(cam.width) + "x" + std::to_string(cam.height));
+  // cv::remap, which rectifies and warps every image, takes images under SHRT_MAX a side
+  check(cam.width < SHRT_MAX && cam.height < SHRT_MAX, where,
+        key + " image size " + std::to_string(cam.width) + "x" + std::to_string(cam.height) + " is not under " +
+            std::to_string(SHRT_MAX) + " px a side (OpenCV's remap)");
   check(cam.K.allFinite() && cam.K(0, 0) > 0 && cam.K(1, 1) > 0, where,
         key + " focal lengths must be positive and finite");
   check(cam.K(2, 0) == 0 && cam.K(2, 1) == 0 && cam.K(2, 2) == 1, where, key + " last row must be [0 0 1]");

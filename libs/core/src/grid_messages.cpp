@@ -1,5 +1,6 @@
 #include "ivoa/core/grid_messages.hpp"
 
+#include <cmath>
 #include <tuple>
 
 #include <CLI/CLI.hpp>
@@ -61,6 +62,30 @@ obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& det
   msg.num_cells = static_cast<int32_t>(n);
   msg.compute_ms = 0;
   return msg;
+}
+
+std::string grid_content_error(const obstacle_grid_t& msg) {
+  const size_t n = static_cast<size_t>(std::max(msg.num_cells, 0));
+  for (const auto& [name, size] : {std::pair<const char*, size_t>{"state", msg.state.size()},
+                                   {"x", msg.x.size()},
+                                   {"y", msg.y.size()},
+                                   {"u", msg.u.size()},
+                                   {"v", msg.v.size()},
+                                   {"in_image", msg.in_image.size()}})
+    if (size != n)
+      return std::string(name) + " has " + std::to_string(size) + " entries, num_cells is " +
+             std::to_string(msg.num_cells);
+  for (size_t i = 0; i < n; ++i) {
+    const auto where = [i] { return "cell " + std::to_string(i) + ": "; };
+    const int8_t s = msg.state[i];
+    if (s != obstacle_grid_t::STATE_FREE && s != obstacle_grid_t::STATE_OBSTACLE && s != obstacle_grid_t::STATE_UNKNOWN)
+      return where() + "state " + std::to_string(s) + " is none of FREE 0, OBSTACLE 1, UNKNOWN 2";
+    if (!std::isfinite(msg.x[i]) || !std::isfinite(msg.y[i])) return where() + "position is not finite";
+    if (msg.in_image[i] && !(std::isfinite(msg.u[i]) && std::isfinite(msg.v[i])))
+      return where() + "in_image, but its pixel (" + std::to_string(msg.u[i]) + ", " + std::to_string(msg.v[i]) +
+             ") is not finite";
+  }
+  return "";
 }
 
 }  // namespace ivoa

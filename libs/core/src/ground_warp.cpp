@@ -3,6 +3,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ivoa/core/camera_model.hpp"
+#include "ivoa/core/image_convert.hpp"
 
 namespace ivoa {
 
@@ -32,6 +33,12 @@ cv::Mat GroundWarp::warp(const cv::Mat& right_bgr) const {
 }
 
 cv::Mat GroundWarp::stack(const cv::Mat& left_bgr, const cv::Mat& right_bgr) const {
+  const auto text = [](cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); };
+  if (left_bgr.type() != CV_8UC3 || right_bgr.type() != CV_8UC3 || left_bgr.size() != map_x_.size() ||
+      right_bgr.size() != right_size_)
+    throw ImageError("left image " + text(left_bgr.size()) + " and right " + text(right_bgr.size()) +
+                     " (8-bit BGR expected), the calibration's are " + text(map_x_.size()) + " and " +
+                     text(right_size_));
   cv::Mat out;
   cv::vconcat(left_bgr, warp(right_bgr), out);
   return out;

@@ -19,7 +19,8 @@ void require(bool ok, const std::string& what) {
 cv::Mat wrap_raw(const image_t& msg, int type, int bytes_per_pixel) {
   require(msg.width > 0 && msg.height > 0,
           "image has non-positive size " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
-  require(msg.row_stride >= msg.width * bytes_per_pixel,
+  // int64: a width near INT_MAX times 3 must not wrap round to pass
+  require(static_cast<int64_t>(msg.row_stride) >= static_cast<int64_t>(msg.width) * bytes_per_pixel,
           "row_stride " + std::to_string(msg.row_stride) + " is smaller than width * " +
               std::to_string(bytes_per_pixel) + " for " + pixelformat_name(msg.pixelformat));
   const size_t needed = static_cast<size_t>(msg.row_stride) * static_cast<size_t>(msg.height);

@@ -63,7 +63,7 @@ cv::Mat blend_heatmap(const cv::Mat& left, const HeatmapGrid& grid, const cv::Ma
   cv::resize(colour, up, inner.size(), 0, 0, cv::INTER_LINEAR);
   cv::Mat full(left.size(), CV_8UC3, cv::Scalar(0, 0, 0));
   const cv::Rect visible = inner & cv::Rect(0, 0, left.cols, left.rows);
-  up(cv::Rect(visible.tl() - inner.tl(), visible.size())).copyTo(full(visible));
+  if (!visible.empty()) up(cv::Rect(visible.tl() - inner.tl(), visible.size())).copyTo(full(visible));
   cv::Mat out;
   cv::addWeighted(left, 0.45, full, 0.55, 0, out);
   draw_caption(out, 0, kCaptionHeight, title);

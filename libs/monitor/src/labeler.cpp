@@ -1,6 +1,10 @@
 #include "ivoa/monitor/labeler.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <string>
+
+#include "ivoa/core/grid_messages.hpp"
 
 namespace ivoa::monitor {
 
@@ -15,14 +19,19 @@ int8_t label_for(int8_t stereo_state, int8_t depth_state) {
 }
 
 introspection_labels_t label_frame(const obstacle_grid_t& stereo, const obstacle_grid_t& depth) {
-  const bool same = stereo.num_x == depth.num_x && stereo.num_y == depth.num_y &&
-                    stereo.state.size() == depth.state.size() && stereo.x == depth.x && stereo.y == depth.y &&
-                    stereo.safety_radius == depth.safety_radius;
-  if (!same)
+  const auto near = [](const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(),
+                                              [](float p, float q) { return std::abs(p - q) <= kSameCellPositionM; });
+  };
+  const bool same_shape = stereo.num_x == depth.num_x && stereo.num_y == depth.num_y &&
+                          stereo.state.size() == depth.state.size() && stereo.safety_radius == depth.safety_radius;
+  if (!same_shape)
     throw LabelError("stereo grid (" + stereo.detector + ", " + std::to_string(stereo.num_x) + "x" +
                      std::to_string(stereo.num_y) + ", r=" + std::to_string(stereo.safety_radius) +
                      ") and depth grid (" + std::to_string(depth.num_x) + "x" + std::to_string(depth.num_y) +
                      ", r=" + std::to_string(depth.safety_radius) + ") have different geometry");
+  if (!near(stereo.x, depth.x) || !near(stereo.y, depth.y))
+    throw LabelError("stereo grid (" + stereo.detector + ") and depth grid put their cells at different positions");
   introspection_labels_t out;
   out.utime = stereo.utime;
   out.depth_utime = depth.depth_utime;

@@ -21,6 +21,8 @@ std::vector<PipelineOutcome> LabelingPipeline::add_depth(int64_t utime, cv::Mat 
 }
 
 std::vector<PipelineOutcome> LabelingPipeline::add_stereo(obstacle_grid_t stereo_grid) {
+  if (const std::string why = grid_content_error(stereo_grid); !why.empty())
+    throw LabelError("stereo grid from '" + stereo_grid.detector + "': " + why);
   if (const std::string why = geometry_mismatch(stereo_grid, grid_); !why.empty())
     throw LabelError("stereo grid from '" + stereo_grid.detector + "' does not match the configured grid: " + why);
   const int64_t utime = stereo_grid.utime;

@@ -127,6 +127,14 @@ std::string check_introspection(const introspection_t& h) {
   if (static_cast<int64_t>(h.rows) * h.cols != h.num_cells)
     return "heatmap " + std::to_string(h.rows) + "x" + std::to_string(h.cols) + " but " + std::to_string(h.num_cells) +
            " cells";
+  // The model's patches lie inside the image: a heatmap reaching past it is not of this image.
+  const int64_t width = int64_t{h.cols - 1} * h.stride + h.patch_size;
+  const int64_t height = int64_t{h.rows - 1} * h.stride + h.patch_size;
+  if (width > h.image_width || height > h.image_height)
+    return "heatmap of " + std::to_string(h.rows) + "x" + std::to_string(h.cols) + " patches of " +
+           std::to_string(h.patch_size) + " px every " + std::to_string(h.stride) + " px covers " +
+           std::to_string(width) + "x" + std::to_string(height) + " px, more than its " +
+           std::to_string(h.image_width) + "x" + std::to_string(h.image_height) + " image";
   return "";
 }
 

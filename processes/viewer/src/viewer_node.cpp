@@ -114,12 +114,19 @@ void ViewerNode::draw(const FrameSet& frame) {
   cv::Mat left;
   try {
     left = decode_image(*frame.left);
-  } catch (const ImageError& e) {
+  } catch (const std::exception& e) {  // ImageError, or OpenCV's
     heartbeat_.bad_input(options_.stereo_channel + " utime " + std::to_string(frame.utime) +
                          ": left image: " + e.what());
     return;
   }
-  const cv::Mat figure = draw_frame_figure(left, frame, options_.figure);
+  cv::Mat figure;
+  try {
+    figure = draw_frame_figure(left, frame, options_.figure);
+  } catch (const std::exception& e) {  // what check_introspection did not foresee: the frame is skipped, not the run
+    heartbeat_.bad_input(options_.stereo_channel + " utime " + std::to_string(frame.utime) +
+                         ": cannot draw: " + e.what());
+    return;
+  }
   try {
     writer_.write(figure, frame.utime, monotonic_ms());
   } catch (const OutputError& e) {

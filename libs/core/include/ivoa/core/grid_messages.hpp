@@ -20,6 +20,15 @@ void add_query_grid_options(CLI::App& app, QueryGridConfig& config);
 // An obstacle grid for `grid` with every cell UNKNOWN.
 obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& detector, int64_t utime);
 
+// Empty if a received grid's cells can be used, otherwise the first thing
+// wrong: arrays not num_cells long, a state none of STATE_*, a position that
+// is not finite, or a cell in_image whose pixel is not.
+std::string grid_content_error(const obstacle_grid_t& msg);
+
+// Cell positions are floats made from the same doubles on every machine,
+// but a compiler may round a last bit differently: 0.1 mm is "the same".
+constexpr double kSameCellPositionM = 1e-4;
+
 // Copies the geometry fields shared by obstacle_grid_t and introspection_labels_t.
 template <class Msg>
 void set_geometry(Msg& msg, const QueryGridConfig& c, int num_x, int num_y) {
@@ -62,6 +71,15 @@ std::string geometry_mismatch(const Msg& msg, const QueryGrid& grid) {
   if (!near(msg.safety_radius, c.safety_radius))
     return "safety radius " + std::to_string(msg.safety_radius) + " m, configured " + std::to_string(c.safety_radius) +
            " m";
+  if (msg.x.size() != grid.cells().size() || msg.y.size() != grid.cells().size())
+    return "the cell positions are " + std::to_string(msg.x.size()) + " and " + std::to_string(msg.y.size()) +
+           " long, the grid has " + std::to_string(grid.size()) + " cells";
+  for (size_t i = 0; i < grid.cells().size(); ++i) {
+    const QueryCell& cell = grid.cells()[i];
+    if (!(std::abs(msg.x[i] - cell.x) <= kSameCellPositionM && std::abs(msg.y[i] - cell.y) <= kSameCellPositionM))
+      return "cell " + std::to_string(i) + " is at (" + std::to_string(msg.x[i]) + ", " + std::to_string(msg.y[i]) +
+             ") m, the configured grid's at (" + std::to_string(cell.x) + ", " + std::to_string(cell.y) + ") m";
+  }
   return "";
 }
 

@@ -21,7 +21,8 @@ class GroundWarp {
   // ground point the right camera does not see are black.
   cv::Mat warp(const cv::Mat& right_bgr) const;
   // A two-view model's input: the left image with the warped right one
-  // stacked below it (2 x height rows).
+  // stacked below it (2 x height rows). ImageError, naming the sizes, for
+  // images of other sizes than the calibration's.
   cv::Mat stack(const cv::Mat& left_bgr, const cv::Mat& right_bgr) const;
   // Where the right image is sampled for left pixel (u, v).
   cv::Point2f source(int u, int v) const { return {map_x_.at<float>(v, u), map_y_.at<float>(v, u)}; }
