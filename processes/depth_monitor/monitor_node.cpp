@@ -111,6 +111,18 @@ void MonitorNode::update_counters() {
   heartbeat_.set_counter("depth_duplicates", c.duplicate_depth);
   heartbeat_.set_counter("depth_late", c.late_depth);
   heartbeat_.set_counter("cells_labelled", labelled_cells_);
+  heartbeat_.set_counter("clock_restarts", c.depth_clock.restarts + c.stereo_clock.restarts);
+  report_clock_events(c.depth_clock, depth_clock_seen_, options_.depth_channel);
+  report_clock_events(c.stereo_clock, stereo_clock_seen_, options_.stereo_channel);
+}
+
+// A frame whose utime jumped alone is bad input; a stream whose clock went
+// back and stayed (a log played again) is said once, and followed.
+void MonitorNode::report_clock_events(const monitor::ClockCounters& now, monitor::ClockCounters& seen,
+                                      const std::string& channel) {
+  if (now.outliers > seen.outliers) heartbeat_.bad_input(channel + ": " + pipeline_->last_clock_event());
+  if (now.restarts > seen.restarts) spdlog::warn("{}: {}", channel, pipeline_->last_clock_event());
+  seen = now;
 }
 
 void MonitorNode::flush() {

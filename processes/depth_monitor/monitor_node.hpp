@@ -40,6 +40,7 @@ class MonitorNode {
   bool has_calibration(const std::string& where);
   void publish(std::vector<monitor::PipelineOutcome> outcomes);
   void update_counters();
+  void report_clock_events(const monitor::ClockCounters& now, monitor::ClockCounters& seen, const std::string& channel);
 
   Bus& bus_;
   Heartbeat& heartbeat_;
@@ -49,6 +50,7 @@ class MonitorNode {
   std::vector<uint8_t> calibration_bytes_;  // the calibration the pipeline was built for
   std::unique_ptr<monitor::LabelingPipeline> pipeline_;
   int64_t unmatched_ = 0, labelled_cells_ = 0;
+  monitor::ClockCounters depth_clock_seen_, stereo_clock_seen_;  // what update_counters last reported
 };
 
 }  // namespace ivoa

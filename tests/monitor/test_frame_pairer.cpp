@@ -100,5 +100,72 @@ TEST(FramePairer, LateDepthFramesAreCounted) {
   EXPECT_EQ(p.counters().late_depth, 1);
 }
 
+// A 30 Hz pair of streams, depth 2 ms after stereo, from utime `start` for `n` frames.
+void feed(Pairer& p, Results& out, int64_t start, int n) {
+  for (int i = 0; i < n; ++i) {
+    const int64_t t = start + i * 33'333;
+    append(out, p.add_depth(t + 2'000, "d" + std::to_string(t + 2'000)));
+    append(out, p.add_stereo(t, "s" + std::to_string(t)));
+  }
+}
+
+size_t paired(const Results& out) {
+  size_t n = 0;
+  for (const auto& r : out) n += r.depth_utime.has_value();
+  return n;
+}
+
+TEST(FramePairer, OneDepthFrameFarInTheFutureIsIgnoredNotTheEndOfThePairing) {
+  Pairer p;
+  Results out;
+  feed(p, out, 1'000'000, 10);
+  append(out, p.add_depth(2'000'000'000'000'000, "wrong clock"));
+  feed(p, out, 1'333'330, 10);
+  append(out, p.flush());
+  EXPECT_EQ(out.size(), 20u);
+  EXPECT_EQ(paired(out), 20u);
+  EXPECT_EQ(p.counters().depth_clock.outliers, 1);
+  EXPECT_NE(p.last_clock_event().find("depth frame at utime 2000000000000000 is +1999999998.6 s from its stream's"),
+            std::string::npos)
+      << p.last_clock_event();
+  // one far in the past is as harmless
+  append(out, p.add_stereo(5, "wrong clock"));
+  feed(p, out, 1'666'660, 3);
+  append(out, p.flush());
+  EXPECT_EQ(paired(out), 23u);
+  EXPECT_EQ(p.counters().stereo_clock.outliers, 1);
+}
+
+TEST(FramePairer, AGapInBothStreamsIsFollowed) {
+  Pairer p;
+  Results out;
+  feed(p, out, 1'000'000, 5);
+  feed(p, out, 9'000'000, 5);  // 8 s later, e.g. the recording paused
+  append(out, p.flush());
+  EXPECT_EQ(paired(out), 10u);
+  EXPECT_EQ(p.counters().depth_clock.outliers + p.counters().stereo_clock.outliers, 0);
+  EXPECT_EQ(p.counters().depth_clock.restarts + p.counters().stereo_clock.restarts, 0);
+}
+
+TEST(FramePairer, ALogPlayedAgainIsPairedAgain) {
+  Pairer p;
+  Results out;
+  feed(p, out, 1'000'000, 60);
+  // The detector lags: the second play's depth frames start before the first play's last grids.
+  for (int i = 0; i < 3; ++i) append(out, p.add_depth(1'002'000 + i * 33'333, "again"));
+  for (int i = 57; i < 60; ++i) append(out, p.add_stereo(1'000'000 + i * 33'333 + 1, "late grid"));
+  for (int i = 0; i < 60; ++i) {
+    const int64_t t = 1'000'000 + i * 33'333;
+    if (i >= 3) append(out, p.add_depth(t + 2'000, "again"));
+    append(out, p.add_stereo(t, "again"));
+  }
+  append(out, p.flush());
+  EXPECT_EQ(out.size(), 123u);
+  EXPECT_EQ(paired(out), 123u);
+  EXPECT_EQ(p.counters().depth_clock.restarts, 1);
+  EXPECT_EQ(p.counters().stereo_clock.restarts, 1);
+  EXPECT_EQ(p.counters().duplicate_stereo + p.counters().duplicate_depth + p.counters().late_depth, 0);
+}
+
 }  // namespace
 }  // namespace ivoa::monitor

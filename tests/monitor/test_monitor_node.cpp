@@ -162,6 +162,23 @@ TEST(MonitorNode, BadInputIsCountedSkippedAndSurvived) {
   EXPECT_EQ(f.labels.size(), 1u);
 }
 
+// lcm-logplayer run twice into a running monitor: the second play's utimes
+// go back to the first's; it used to be ignored as late and duplicate frames.
+TEST(MonitorNode, ALogPlayedAgainIsLabelledAgain) {
+  NodeFixture f;
+  const cv::Mat ground = test::render_depth(f.rig, {});
+  f.send_calibration();
+  for (int play = 0; play < 2; ++play)
+    for (int i = 0; i < 40; ++i) {  // 1.3 s at 30 Hz
+      const int64_t t = 1'000'000 + i * 33'333;
+      f.send_depth(t, ground);
+      f.send_stereo(t, 0);
+    }
+  EXPECT_EQ(f.labels.size(), 80u);
+  EXPECT_EQ(f.heartbeat.counter("clock_restarts"), 2);  // depth and stereo
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 0);
+}
+
 TEST(MonitorNode, UnmatchedStereoFramesAreCountedNotLabelled) {
   NodeFixture f;
   f.send_calibration();

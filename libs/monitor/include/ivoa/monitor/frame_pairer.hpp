@@ -8,12 +8,20 @@
 //
 // Assumes each stream arrives in order of its own utimes (one publisher per
 // stream); a depth frame older than one already used is counted as late.
+// A frame whose utime jumps more than time_jump_us from its stream's is held
+// until the stream's next frame: if that one follows it, the stream's clock
+// moved (a gap; or, going back, a log played again, whose frames are then
+// paired only with the other stream's frames after its own restart); if not,
+// the one frame was wrong and is ignored, so it cannot stop the pairing.
 #include <cstdint>
-#include <deque>
 #include <map>
 #include <optional>
 #include <set>
+#include <string>
+#include <utility>
 #include <vector>
+
+#include "ivoa/monitor/stream_clock.hpp"
 
 namespace ivoa::monitor {
 
@@ -22,15 +30,17 @@ struct PairingConfig {
   // Keep depth frames this long (stream time). Bounds memory on the robot:
   // 640x480 16-bit depth at 30 Hz is 37 MB for 2 s, 184 MB for 10 s.
   int64_t depth_history_us = 2'000'000;
-  int64_t max_wait_us = 500'000;  // decide a pending stereo frame once stereo time moves this far past it
+  int64_t max_wait_us = 500'000;     // decide a pending stereo frame once stereo time moves this far past it
+  int64_t time_jump_us = 1'000'000;  // a utime this far from its stream's newest, either way, is a jump
 };
 
 struct PairingCounters {
   int64_t paired = 0;
-  int64_t unmatched_stereo = 0;  // no depth frame within tolerance
-  int64_t duplicate_stereo = 0;  // same utime as an earlier stereo frame: ignored
-  int64_t duplicate_depth = 0;   // same utime as a buffered depth frame: ignored
-  int64_t late_depth = 0;        // older than a depth frame already used: ignored
+  int64_t unmatched_stereo = 0;             // no depth frame within tolerance
+  int64_t duplicate_stereo = 0;             // same utime as an earlier stereo frame: ignored
+  int64_t duplicate_depth = 0;              // same utime as a buffered depth frame: ignored
+  int64_t late_depth = 0;                   // older than a depth frame already used: ignored
+  ClockCounters depth_clock, stereo_clock;  // jumps: outliers ignored, restarts followed
 };
 
 template <class Depth, class Stereo>
@@ -43,63 +53,85 @@ class FramePairer {
     const Depth* depth = nullptr;        // valid until the next add_* / flush call
   };
 
-  explicit FramePairer(PairingConfig config = {}) : config_(config) {}
+  explicit FramePairer(PairingConfig config = {})
+      : config_(config), depth_clock_("depth", config.time_jump_us), stereo_clock_("stereo", config.time_jump_us) {}
 
   std::vector<Result> add_depth(int64_t utime, Depth depth) {
-    if (depth_.count(utime)) {
-      ++counters_.duplicate_depth;
-    } else if (last_used_depth_ && utime < *last_used_depth_) {
-      ++counters_.late_depth;
-    } else {
-      depth_.emplace(utime, std::move(depth));
-      newest_depth_ = std::max(newest_depth_.value_or(utime), utime);
+    for (auto& [t, d, epoch] : depth_clock_.admit(utime, std::move(depth), counters_.depth_clock, clock_event_)) {
+      if (depth_.count({epoch, t})) {
+        ++counters_.duplicate_depth;
+      } else if (last_used_depth_.count(epoch) && t < last_used_depth_[epoch]) {
+        ++counters_.late_depth;
+      } else {
+        depth_.emplace(Key{epoch, t}, std::move(d));
+        raise(newest_depth_, epoch, t);
+      }
     }
     return decide(false);
   }
 
   std::vector<Result> add_stereo(int64_t utime, Stereo stereo) {
-    if (seen_stereo_.count(utime)) {
-      ++counters_.duplicate_stereo;
-      return decide(false);
+    for (auto& [t, s, epoch] : stereo_clock_.admit(utime, std::move(stereo), counters_.stereo_clock, clock_event_)) {
+      if (!seen_stereo_.insert({epoch, t}).second) {
+        ++counters_.duplicate_stereo;
+        continue;
+      }
+      while (seen_stereo_.size() > 256) seen_stereo_.erase(seen_stereo_.begin());
+      pending_.emplace(Key{epoch, t}, std::move(s));
+      raise(newest_stereo_, epoch, t);
     }
-    seen_stereo_.insert(utime);
-    while (seen_stereo_.size() > 256) seen_stereo_.erase(seen_stereo_.begin());
-    pending_.emplace(utime, std::move(stereo));
-    newest_stereo_ = std::max(newest_stereo_.value_or(utime), utime);
     return decide(false);
   }
 
   // Decides every pending stereo frame with what has arrived (end of a log).
-  std::vector<Result> flush() { return decide(true); }
+  // A frame still held for its jump has nothing after it to confirm it: ignored.
+  std::vector<Result> flush() {
+    depth_clock_.drop_held(counters_.depth_clock, clock_event_);
+    stereo_clock_.drop_held(counters_.stereo_clock, clock_event_);
+    return decide(true);
+  }
 
   const PairingCounters& counters() const { return counters_; }
   size_t pending() const { return pending_.size(); }
+  // The last outlier ignored or restart followed (see StreamClock), in a sentence.
+  const std::string& last_clock_event() const { return clock_event_; }
 
  private:
+  using Key = std::pair<int, int64_t>;  // (the stream's restarts so far, utime)
+
+  static void raise(std::map<int, int64_t>& newest, int epoch, int64_t t) {
+    auto [it, added] = newest.emplace(epoch, t);
+    if (!added && t > it->second) it->second = t;
+  }
+
   std::vector<Result> decide(bool final) {
     // Prune first: results point into depth_ until the next call.
     prune_depth();
     std::vector<Result> out;
     while (!pending_.empty()) {
       auto it = pending_.begin();
-      const int64_t t = it->first;
-      const bool depth_caught_up = newest_depth_ && *newest_depth_ >= t;
-      const bool waited_too_long = newest_stereo_ && *newest_stereo_ - t > config_.max_wait_us;
+      const auto [epoch, t] = it->first;
+      // Frames of an earlier restart wait for nothing more: their streams have moved on.
+      const bool depth_caught_up =
+          depth_clock_.epoch() > epoch || (newest_depth_.count(epoch) && newest_depth_[epoch] >= t);
+      const bool waited_too_long = stereo_clock_.epoch() > epoch || newest_stereo_[epoch] - t > config_.max_wait_us;
       if (!final && !depth_caught_up && !waited_too_long) break;
-      out.push_back(match(t, std::move(it->second)));
+      out.push_back(match(epoch, t, std::move(it->second)));
       pending_.erase(it);
     }
     return out;
   }
 
-  Result match(int64_t t, Stereo stereo) {
+  Result match(int epoch, int64_t t, Stereo stereo) {
     Result r{t, std::move(stereo), std::nullopt, nullptr};
     const Depth* best = nullptr;
     int64_t best_utime = 0, best_dt = 0;
-    for (const auto& [du, d] : depth_) {
+    for (auto it = depth_.lower_bound({epoch, t - config_.tolerance_us});
+         it != depth_.end() && it->first.first == epoch && it->first.second <= t + config_.tolerance_us; ++it) {
+      const int64_t du = it->first.second;
       const int64_t dt = du > t ? du - t : t - du;
-      if (dt <= config_.tolerance_us && (!best || dt < best_dt)) {
-        best = &d;
+      if (!best || dt < best_dt) {
+        best = &it->second;
         best_utime = du;
         best_dt = dt;
       }
@@ -107,7 +139,7 @@ class FramePairer {
     if (best) {
       r.depth_utime = best_utime;
       r.depth = best;
-      last_used_depth_ = std::max(last_used_depth_.value_or(best_utime), best_utime);
+      raise(last_used_depth_, epoch, best_utime);
       ++counters_.paired;
     } else {
       ++counters_.unmatched_stereo;
@@ -115,18 +147,34 @@ class FramePairer {
     return r;
   }
 
+  // Within a restart, the depth frames of the last depth_history_us (at least
+  // one); of an earlier restart, none once no stereo frame of it can come.
   void prune_depth() {
-    if (!newest_depth_) return;
-    while (depth_.size() > 1 && depth_.begin()->first < *newest_depth_ - config_.depth_history_us)
-      depth_.erase(depth_.begin());
+    for (auto it = depth_.begin(); it != depth_.end();) {
+      const auto [epoch, t] = it->first;
+      const bool stereo_moved_on = epoch < stereo_clock_.epoch() && !has_pending(epoch);
+      const auto next = std::next(it);
+      const bool newest_of_its_restart = next == depth_.end() || next->first.first != epoch;
+      if (stereo_moved_on || (!newest_of_its_restart && t < newest_depth_[epoch] - config_.depth_history_us))
+        it = depth_.erase(it);
+      else it = next;
+    }
+  }
+
+  bool has_pending(int epoch) const {
+    const auto it = pending_.lower_bound({epoch, INT64_MIN});
+    return it != pending_.end() && it->first.first == epoch;
   }
 
   PairingConfig config_;
   PairingCounters counters_;
-  std::map<int64_t, Depth> depth_;
-  std::map<int64_t, Stereo> pending_;
-  std::set<int64_t> seen_stereo_;
-  std::optional<int64_t> newest_depth_, newest_stereo_, last_used_depth_;
+  StreamClock<Depth> depth_clock_;
+  StreamClock<Stereo> stereo_clock_;
+  std::map<Key, Depth> depth_;
+  std::map<Key, Stereo> pending_;
+  std::set<Key> seen_stereo_;
+  std::map<int, int64_t> newest_depth_, newest_stereo_, last_used_depth_;  // per restart
+  std::string clock_event_;
 };
 
 }  // namespace ivoa::monitor

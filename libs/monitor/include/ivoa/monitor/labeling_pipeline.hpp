@@ -40,6 +40,7 @@ class LabelingPipeline {
 
   const QueryGrid& grid() const { return grid_; }
   const PairingCounters& counters() const { return pairer_.counters(); }
+  const std::string& last_clock_event() const { return pairer_.last_clock_event(); }
 
  private:
   std::vector<PipelineOutcome> finish(std::vector<FramePairer<cv::Mat, obstacle_grid_t>::Result> results);

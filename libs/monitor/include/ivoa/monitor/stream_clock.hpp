@@ -1,0 +1,97 @@
+#pragma once
+// Follows one stream's utimes for FramePairer. A frame whose utime is more
+// than a jump away from the stream's newest is held back until the next
+// frame: if that one follows it (within a jump of it, not of the newest),
+// the clock moved and both are taken, a move back counting as a restart (a
+// log played again, a sensor's clock reset) that starts a new epoch; if not,
+// the held frame is ignored as an outlier. One wrong utime then cannot move
+// the stream's time away from every frame after it.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ivoa::monitor {
+
+struct ClockCounters {
+  int64_t outliers = 0;  // one frame far from its stream's time, not followed by the next: ignored
+  int64_t restarts = 0;  // the stream's time went back more than a jump and stayed: followed
+};
+
+template <class Frame>
+class StreamClock {
+ public:
+  struct Admitted {
+    int64_t utime;
+    Frame frame;
+    int epoch;  // restarts before it
+  };
+
+  StreamClock(const char* stream, int64_t jump_us) : stream_(stream), jump_us_(jump_us) {}
+
+  // The frames to take now, in order: none while this one is held for its
+  // jump, the held one and this one once this one follows it. `event` gets
+  // a sentence when a held frame is ignored or a restart followed.
+  std::vector<Admitted> admit(int64_t utime, Frame frame, ClockCounters& counters, std::string& event) {
+    std::vector<Admitted> out;
+    if (held_) {
+      if (near(utime, held_->first) && !near(utime, *newest_)) take_held(counters, event, out);
+      else drop_held(counters, event);
+    }
+    if (newest_ && !near(utime, *newest_)) {
+      held_.emplace(utime, std::move(frame));
+      return out;
+    }
+    take(utime, std::move(frame), out);
+    return out;
+  }
+
+  // A held frame nothing came after (the end of a log): ignored.
+  void drop_held(ClockCounters& counters, std::string& event) {
+    if (!held_) return;
+    ++counters.outliers;
+    event = stream_ + " frame at utime " + std::to_string(held_->first) + " is " + seconds(held_->first - *newest_) +
+            " from its stream's time (utime " + std::to_string(*newest_) +
+            ") and the next frame did not follow it: " + "ignored";
+    held_.reset();
+  }
+
+  int epoch() const { return epoch_; }
+
+ private:
+  bool near(int64_t a, int64_t b) const { return (a > b ? a - b : b - a) <= jump_us_; }
+
+  static std::string seconds(int64_t us) {
+    const std::string s = std::to_string(static_cast<double>(us) / 1e6);
+    return (us >= 0 ? "+" : "") + s.substr(0, s.find('.') + 2) + " s";
+  }
+
+  void take_held(ClockCounters& counters, std::string& event, std::vector<Admitted>& out) {
+    auto [utime, frame] = std::move(*held_);
+    held_.reset();
+    if (utime < *newest_) {
+      ++epoch_;
+      ++counters.restarts;
+      event = stream_ + " stream's time went back " + seconds(utime - *newest_) + " (utime " +
+              std::to_string(*newest_) + " to " + std::to_string(utime) +
+              ") and stayed: a log played again? Its frames are paired with the other stream's after its own "
+              "restart";
+      newest_ = utime;
+    }
+    take(utime, std::move(frame), out);
+  }
+
+  void take(int64_t utime, Frame frame, std::vector<Admitted>& out) {
+    if (!newest_ || utime > *newest_) newest_ = utime;
+    out.push_back({utime, std::move(frame), epoch_});
+  }
+
+  std::string stream_;
+  int64_t jump_us_;
+  int epoch_ = 0;
+  std::optional<int64_t> newest_;
+  std::optional<std::pair<int64_t, Frame>> held_;
+};
+
+}  // namespace ivoa::monitor
