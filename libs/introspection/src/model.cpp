@@ -291,7 +291,7 @@ std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& 
     native = read_metadata(path, json) && info_from_json(json, path).architecture != "scripted";
   } catch (const c10::Error&) {
   }
-  if (native) return std::make_unique<NativeIntrospectionModel>(load_native_model(path), config);
+  if (native) return std::make_unique<NativeIntrospectionModel>(load_checked_native_model(path), config);
   if (!std::filesystem::exists(path)) throw ModelError(path + ": no such model file");
   return load_scripted(path, config);
 }

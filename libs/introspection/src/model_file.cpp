@@ -148,6 +148,10 @@ bool read_metadata(const std::string& path, std::string& json) {
 NativeModel load_native_model(const std::string& path) {
   if (!std::filesystem::exists(path)) throw ModelError(path + ": no such model file");
   check_model_archive(path);
+  return load_checked_native_model(path);
+}
+
+NativeModel load_checked_native_model(const std::string& path) {
   std::string json;
   try {
     if (!read_metadata(path, json))

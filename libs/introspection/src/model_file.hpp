@@ -34,6 +34,9 @@ struct NativeModel {
 void check_model_archive(const std::string& path);
 
 NativeModel load_native_model(const std::string& path);
+// load_native_model of a file check_model_archive has just passed, so that
+// its CRCs are not checked a second time.
+NativeModel load_checked_native_model(const std::string& path);
 // The metadata of any model file (native or scripted), if it has one.
 bool read_metadata(const std::string& path, std::string& json);
 
