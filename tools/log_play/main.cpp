@@ -43,8 +43,10 @@ int main(int argc, char** argv) {
     const auto& c = player.counts();
     heartbeat.set_state(whole ? "finished" : "stopped");
     heartbeat.publish_now();
-    spdlog::info("{}: {} of {} files, {} events published, {} of other channels, {} damaged stretches skipped",
-                 whole ? "finished" : "stopped", c.files_done, logs.size(), c.published, c.filtered_out, c.damaged);
+    spdlog::info("{}: {} of {} files{}, {} events published, {} of other channels, {} damaged stretches skipped",
+                 whole ? "finished" : "stopped", c.files_done, logs.size(),
+                 c.not_logs > 0 ? fmt::format(" ({} of them no LCM log: nothing played from it)", c.not_logs) : "",
+                 c.published, c.filtered_out, c.damaged);
     if (c.publish_failures > 0) return ivoa::kExitFailure;
     return c.not_logs > 0 ? ivoa::kExitBadInput : ivoa::kExitOk;
   } catch (const ivoa::logio::LogReadError& e) {
