@@ -252,8 +252,8 @@ void SessionWriter::replace_session_folder() {
     keep_work_dir_ = true;
     std::error_code restored;
     if (had_one) fs::rename(aside, dir_, restored);
-    throw DatasetError(dir_ + ": cannot put the built session in place (" + ec.message() + "); it is in " +
-                       work_dir_ + (restored ? ", and the one built before is in " + aside : ""));
+    throw DatasetError(dir_ + ": cannot put the built session in place (" + ec.message() + "); it is in " + work_dir_ +
+                       (restored ? ", and the one built before is in " + aside : ""));
   }
   fs::remove_all(aside, ec);
 }

@@ -113,8 +113,8 @@ class SessionWriter {
   struct Files;
   void write_evidence(const std::vector<float>& evidence);
   void replace_session_folder();
-  std::string dir_;       // the session's folder
-  std::string work_dir_;  // written here, renamed to dir_ by close(): a failed rebuild keeps the old session
+  std::string dir_;             // the session's folder
+  std::string work_dir_;        // written here, renamed to dir_ by close(): a failed rebuild keeps the old session
   bool keep_work_dir_ = false;  // built whole, not put in place: the user is told where it is
   SessionInfo info_;
   std::unique_ptr<Files> files_;
