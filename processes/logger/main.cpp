@@ -1,6 +1,6 @@
 // ivoa-logger: records LCM traffic into standard LCM log files (replay them
 // with lcm-logplayer, browse them with lcm-spy). Unlike lcm-logger 1.3.1 it
-// writes out everything it received before exiting on SIGINT/SIGTERM,
+// writes out everything it received before exiting on SIGINT, SIGTERM or SIGHUP,
 // counts what it could not keep if the disk is too slow, and on a write
 // error leaves a readable file and exits with code 4.
 #include <unistd.h>
@@ -269,7 +269,7 @@ bool fill_recorder_options(LoggerFlags& f) {
 int main(int argc, char** argv) {
   CLI::App app{
       "Record LCM channels into standard LCM log files (replay: lcm-logplayer; browse: lcm-spy).\n"
-      "On SIGINT/SIGTERM everything received is written before exiting. Exit codes: 0 ok, 1 LCM failure,\n"
+      "On SIGINT, SIGTERM or SIGHUP everything received is written before exiting. Exit codes: 0 ok, 1 LCM failure,\n"
       "2 bad flags, 4 cannot write the log (the file written so far stays readable)."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);

@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <initializer_list>
 
 namespace ivoa {
 namespace {
@@ -20,8 +21,9 @@ void install_stop_handlers() {
   struct sigaction action {};
   action.sa_handler = on_stop_signal;
   sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  // SIGHUP too: a process run by hand whose terminal or ssh session closes
+  // must drain and close what it records, not die with it queued.
+  for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaction(s, &action, nullptr);
   // A reader that goes away (e.g. `| head`) must not kill a process mid-write.
   std::signal(SIGPIPE, SIG_IGN);
 }

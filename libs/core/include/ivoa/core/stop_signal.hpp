@@ -1,6 +1,7 @@
 #pragma once
-// Clean shutdown on SIGINT/SIGTERM: handlers only set a flag that every
-// loop polls, so each process finishes its current message and exits.
+// Clean shutdown on SIGINT, SIGTERM and SIGHUP: handlers only set a flag
+// that every loop polls, so each process finishes its current message and
+// exits (the logger after writing what it has queued).
 
 namespace ivoa {
 
