@@ -21,6 +21,9 @@
 
 namespace {
 
+// 2100-01-01 in us since the epoch: later starts would overflow the utimes of long sessions.
+constexpr int64_t kLastStartUtime = 4'102'444'800'000'000;
+
 const std::map<std::string, int32_t> kPixelFormats = {
     {"bgr", ivoa::image_t::PIXEL_FORMAT_BGR},
     {"rgb", ivoa::image_t::PIXEL_FORMAT_RGB},
@@ -57,7 +60,11 @@ void add_session_options(CLI::App& app, CommandLine& cl) {
                  "sensor noise realisation: 0 keys the noise by frame alone; another value, same session with other "
                  "noise")
       ->capture_default_str();
-  app.add_option("--rate", config.rate_hz, "frames per second")->capture_default_str()->check(ivoa::positive_number());
+  // A frame every 100 s at the slowest: the trajectory is integrated up to each frame's time.
+  app.add_option("--rate", config.rate_hz, "frames per second (0.01 to 1000)")
+      ->capture_default_str()
+      ->check(ivoa::finite_number())  // CLI::Range lets NaN through
+      ->check(CLI::Range(0.01, 1000.0));
   auto* realtime = app.add_flag("--realtime", config.realtime, "pace frames by the wall clock (default)");
   app.add_flag("--as-fast-as-possible", cl.fast, "render frames back to back (session time stays frame / rate)")
       ->excludes(realtime);
@@ -69,7 +76,7 @@ void add_session_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--start-utime", config.start_utime,
                  "utime of frame 0, us since epoch (default: now); frame k is "
                  "at start + k / rate, so sessions are reproducible")
-      ->check(ivoa::non_negative_number());  // negative is the struct's "now"
+      ->check(CLI::Range(int64_t{0}, kLastStartUtime));  // negative is the struct's "now"
   app.add_option("--rig", cl.rig_file, "render with this rig calibration file instead of the built-in rig");
   app.add_option("--save-rig", cl.save_rig, "write the rig calibration (OpenCV YAML) to this file and go on");
 }
@@ -79,8 +86,10 @@ void add_output_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--pixel-format", cl.pixel_format, "published pixel format")
       ->capture_default_str()
       ->check(CLI::IsMember(pixel_format_names()));
-  app.add_option("--depth-offset-ms", config.depth_offset_ms, "depth image utime minus stereo utime")
-      ->capture_default_str();
+  app.add_option("--depth-offset-ms", config.depth_offset_ms, "depth image utime minus stereo utime (-1000 to 1000)")
+      ->capture_default_str()
+      ->check(ivoa::finite_number())
+      ->check(CLI::Range(-1000.0, 1000.0));
   app.add_option("--calibration-period", config.calibration_period_s,
                  "seconds between RIG_CALIBRATION messages (0: with every frame)")
       ->capture_default_str()

@@ -195,9 +195,11 @@ struct AravisCamera::Impl {
     }
     const guint payload = arv_camera_get_payload(camera, &error);
     if (error != nullptr) throw CameraError(name() + ": cannot read the payload size: " + take_error(error));
-    for (int i = 0; i < config.buffers; ++i) arv_stream_push_buffer(stream, arv_buffer_new_allocate(payload));
+    // The handler first: buffers the stream thread hands back before it
+    // emits signals would otherwise wait in the output queue unannounced.
     new_buffer_handler = g_signal_connect(stream, "new-buffer", G_CALLBACK(&Impl::on_new_buffer), this);
     arv_stream_set_emit_signals(stream, TRUE);
+    for (int i = 0; i < config.buffers; ++i) arv_stream_push_buffer(stream, arv_buffer_new_allocate(payload));
   }
 
   void start_acquisition() {
@@ -216,13 +218,17 @@ struct AravisCamera::Impl {
   }
 
   // Called on the stream's thread. Aravis allows pop/push from other threads.
+  // Drains the output queue, not one buffer a signal: a buffer queued with
+  // no signal behind it (Aravis 0.8 hands back unfilled ones as the stream
+  // starts) would otherwise delay every later frame of this camera by one,
+  // and a few of them leave no frame pairable with the other camera's.
   static void on_new_buffer(ArvStream* stream, gpointer self_ptr) {
     auto* self = static_cast<Impl*>(self_ptr);
-    ArvBuffer* buffer = arv_stream_try_pop_buffer(stream);
-    if (buffer == nullptr) return;
-    FrameResult result = buffer_to_frame(buffer, self->side);
-    arv_stream_push_buffer(stream, buffer);
-    if (self->on_frame) self->on_frame(std::move(result));
+    while (ArvBuffer* buffer = arv_stream_try_pop_buffer(stream)) {
+      FrameResult result = buffer_to_frame(buffer, self->side);
+      arv_stream_push_buffer(stream, buffer);
+      if (self->on_frame) self->on_frame(std::move(result));
+    }
   }
 
   static void on_control_lost(ArvDevice*, gpointer self_ptr) { static_cast<Impl*>(self_ptr)->control_lost = true; }
