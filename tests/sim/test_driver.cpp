@@ -128,6 +128,11 @@ TEST(SimDriver, ExecutableRunsAndFailsCleanly) {
   EXPECT_EQ(WEXITSTATUS(std::system((driver + " --rate -1 --log-level off 2>/dev/null").c_str())), 2);
   // A negative start time used to mean "now" without a word.
   EXPECT_EQ(WEXITSTATUS(std::system((driver + " --start-utime -5 --log-level off 2>/dev/null").c_str())), 2);
+  // A rate that put frame 1 ages away hung it (or crashed it); NaN, infinite or huge values made nonsense utimes.
+  for (const char* flags : {"--rate 1e-9", "--rate inf", "--rate nan", "--depth-offset-ms nan",
+                            "--depth-offset-ms 1e30", "--start-utime 9223372036854775000"})
+    EXPECT_EQ(WEXITSTATUS(std::system((driver + " " + flags + " --frames 1 --log-level off 2>/dev/null").c_str())), 2)
+        << flags;
 }
 
 }  // namespace
