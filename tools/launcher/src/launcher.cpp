@@ -188,6 +188,9 @@ class Run {
       monitor_ = std::make_unique<HeartbeatMonitor>(*bus_, options_.status_channel, supervisor_);
       own_heartbeat_ = std::make_unique<Heartbeat>(*bus_, "launcher", options_.status_channel);
       own_heartbeat_->set_state("running");
+      // What is not a heartbeat on the status channel is counted, its warnings rate-limited, as every
+      // process does (it was a warning a message).
+      bus_->on_decode_error([this](const std::string& what) { own_heartbeat_->bad_input(what); });
     } catch (const BusError& e) {
       spdlog::warn("no LCM ({}): running without heartbeats", e.what());
       monitor_.reset();
