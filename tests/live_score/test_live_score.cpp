@@ -1,5 +1,6 @@
 #include "live_score.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -127,6 +128,39 @@ TEST(LiveScorer, CountsVerdictsThatAreMissingOrNotTheLabelsOwn) {
   EXPECT_EQ(s.verdict_unknown, 1);
   EXPECT_EQ(s.verdict_disagrees, 1);
   EXPECT_EQ(s.given_verdict.all.counts[kFP][kFN], 1);
+}
+
+// They used to be scored: a class of 7 went nowhere, NaN positions all fell
+// on one cell, and a NaN time made the percentiles NaN.
+TEST(LiveScorer, MessagesWithValuesItCannotScoreAreLeftOutAndSaidWhy) {
+  LiveScorer scorer;
+  const std::vector<Cell> cells = {{1.0f, 0.0f, kTN, kFree}, {1.25f, 0.0f, kFP, kObstacle}};
+  EXPECT_EQ(scorer.add(labels_message(5, cells)), "");
+  EXPECT_EQ(scorer.add(prediction_message(5, {{1.0f, 0.0f, 7, 1, kFree, kTN, 1}})),
+            "query 0: class 7 is none of the four");
+  EXPECT_EQ(scorer.add(prediction_message(5, {{std::nanf(""), 0.0f, kTN, 1, kFree, kTN, 1}})),
+            "query 0: position is not finite");
+  EXPECT_EQ(scorer.add(prediction_message(5, {{1.0f, 0.0f, kTN, 1, kFree, 9, 1}})),
+            "query 0: class given the verdict 9 is none of the four");
+  EXPECT_EQ(scorer.add(prediction_message(5, {}, std::nan(""))).rfind("compute_ms nan", 0), 0u);
+  EXPECT_EQ(scorer.add(prediction_message(5, {}, -1e9)).rfind("compute_ms -1000000000", 0), 0u);
+  introspection_labels_t bad_label = labels_message(6, cells);
+  bad_label.label[1] = 5;
+  EXPECT_EQ(scorer.add(bad_label), "cell 1: label 5 is no class");
+  obstacle_grid_t grid{};
+  grid.utime = 5;
+  grid.num_cells = 1;
+  grid.state = {42};
+  grid.x = {1.0f};
+  grid.y = {0.0f};
+  grid.u = {10.0f};
+  grid.v = {10.0f};
+  grid.in_image = {1};
+  EXPECT_EQ(scorer.add(grid), "cell 0: state 42 is none of FREE 0, OBSTACLE 1, UNKNOWN 2");
+  const LiveScore s = scorer.finish();
+  EXPECT_EQ(s.predicted_frames, 0);  // none of the predictions was taken
+  EXPECT_EQ(s.labelled_frames, 1);
+  EXPECT_EQ(s.compute.frames, 0);
 }
 
 TEST(LiveScorer, CellsOfAFramePredictedBeforeAnyGridCountApart) {

@@ -2,12 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <utility>
+
+#include "ivoa/core/grid_messages.hpp"
 
 namespace ivoa::tools {
 namespace {
 
 bool is_class(int c) { return c >= 0 && c < LabelConfusion::kLabels; }
+bool is_class_or_none(int c) { return is_class(c) || c == introspection_labels_t::LABEL_NONE; }
+
+std::string cell_text(int i) { return "cell " + std::to_string(i) + ": "; }
 
 // Labels and queries come from grids of the same geometry: a cell is the
 // same cell when its position agrees to the millimetre.
@@ -15,16 +21,31 @@ std::pair<long, long> cell_key(float x, float y) { return {std::lround(x * 1000.
 
 }  // namespace
 
-void LiveScorer::add(const introspection_labels_t& m) {
+std::string LiveScorer::add(const introspection_labels_t& m) {
+  for (int i = 0; i < m.num_cells; ++i) {
+    if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i])) return cell_text(i) + "position is not finite";
+    if (!is_class_or_none(m.label[i])) return cell_text(i) + "label " + std::to_string(m.label[i]) + " is no class";
+  }
   detectors_.insert(m.detector);
   repeated_messages_ += labels_.count(m.utime);
   auto& cells = labels_[m.utime];
   cells.clear();  // a repeated frame counts once, with its latest labels
   for (int i = 0; i < m.num_cells; ++i)
     if (is_class(m.label[i])) cells.push_back({m.x[i], m.y[i], m.label[i], m.stereo_state[i]});
+  return "";
 }
 
-void LiveScorer::add(const introspection_t& m) {
+std::string LiveScorer::add(const introspection_t& m) {
+  if (!(std::isfinite(m.compute_ms) && m.compute_ms >= 0))
+    return "compute_ms " + std::to_string(m.compute_ms) + " is no duration";
+  for (int i = 0; i < m.num_queries; ++i) {
+    const std::string query = "query " + std::to_string(i) + ": ";
+    if (!std::isfinite(m.query_x[i]) || !std::isfinite(m.query_y[i])) return query + "position is not finite";
+    if (!is_class(m.query_class[i]))
+      return query + "class " + std::to_string(m.query_class[i]) + " is none of the four";
+    if (!is_class_or_none(m.query_verdict_class[i]))
+      return query + "class given the verdict " + std::to_string(m.query_verdict_class[i]) + " is none of the four";
+  }
   models_.insert(m.model_id);
   repeated_messages_ += predictions_.count(m.utime);
   compute_ms_[m.utime] = m.compute_ms;
@@ -33,13 +54,16 @@ void LiveScorer::add(const introspection_t& m) {
   for (int i = 0; i < m.num_queries; ++i)
     queries.push_back({m.query_x[i], m.query_y[i], m.query_class[i], m.query_announced[i], m.query_verdict[i],
                        m.query_verdict_class[i], m.query_verdict_announced[i]});
+  return "";
 }
 
-void LiveScorer::add(const obstacle_grid_t& m) {
+std::string LiveScorer::add(const obstacle_grid_t& m) {
+  if (std::string why = grid_content_error(m); !why.empty()) return why;
   auto& outside = outside_view_[m.utime];
   outside.clear();
   for (int i = 0; i < m.num_cells; ++i)
     if (!m.in_image[i]) outside.insert(cell_key(m.x[i], m.y[i]));
+  return "";
 }
 
 void LiveScorer::score_frame(int64_t utime, const std::vector<LabelledCell>& cells, const std::vector<Query>& queries,

@@ -51,11 +51,14 @@ struct LiveScore {
 };
 
 // Collects both message kinds in any order; finish() matches and scores them.
+// Each add() takes the message and returns "", or leaves it out and says
+// why: a position that is not finite, a class or label none of the four, a
+// compute time that is not a duration.
 class LiveScorer {
  public:
-  void add(const introspection_labels_t& labels);
-  void add(const introspection_t& prediction);
-  void add(const obstacle_grid_t& detector_grid);  // the stereo detector's, for in_image
+  std::string add(const introspection_labels_t& labels);
+  std::string add(const introspection_t& prediction);
+  std::string add(const obstacle_grid_t& detector_grid);  // the stereo detector's, for in_image
   LiveScore finish() const;
 
  private:

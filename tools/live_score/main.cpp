@@ -23,21 +23,25 @@ using namespace ivoa;
 using tools::LiveScore;
 
 struct ReadCounts {
-  int64_t undecodable = 0;  // events on the two channels that are not their type
+  int64_t undecodable = 0;  // events on the scored channels that are not their type
+  int64_t malformed = 0;    // of their type, with values the scorer cannot use
   int64_t damaged_files = 0;
 };
 
-// Decodes the event as Msg for the scorer; one that does not decode is
-// counted and skipped.
+// Decodes the event as Msg for the scorer; one that does not decode, or
+// that the scorer leaves out, is counted and skipped.
 template <class Msg>
 void feed(const std::string& path, const logio::LogEvent& e, tools::LiveScorer& scorer, ReadCounts& counts) {
   Msg m;
-  if (logio::decode(e, m)) {
-    scorer.add(m);
+  if (!logio::decode(e, m)) {
+    ++counts.undecodable;
+    spdlog::warn("{}: byte {}: a {} event that does not decode as its type, skipped", path, e.offset, e.channel);
     return;
   }
-  ++counts.undecodable;
-  spdlog::warn("{}: byte {}: a {} event that does not decode as its type, skipped", path, e.offset, e.channel);
+  if (const std::string why = scorer.add(m); !why.empty()) {
+    ++counts.malformed;
+    spdlog::warn("{}: byte {}: {} utime {}: {}, skipped", path, e.offset, e.channel, m.utime, why);
+  }
 }
 
 // Feeds every INTROSPECTION, INTROSPECTION_LABELS and OBSTACLES_STEREO
@@ -188,9 +192,12 @@ bool score_logs(const ScoreCommandLine& cl, LiveScore& s, ReadCounts& counts) {
 // Prints the score and writes the JSON; the exit code.
 int report(const ScoreCommandLine& cl, const LiveScore& s, const ReadCounts& counts) {
   print_score(s);
-  if (counts.undecodable || counts.damaged_files)
-    std::printf("skipped: %lld undecodable messages; %lld damaged file(s) (warnings above)\n",
-                static_cast<long long>(counts.undecodable), static_cast<long long>(counts.damaged_files));
+  if (counts.undecodable || counts.malformed || counts.damaged_files)
+    std::printf(
+        "skipped: %lld undecodable messages; %lld with values that cannot be scored; %lld damaged file(s) "
+        "(warnings above)\n",
+        static_cast<long long>(counts.undecodable), static_cast<long long>(counts.malformed),
+        static_cast<long long>(counts.damaged_files));
   if (!write_text_file(cl.json_path, score_json(s))) return kExitIoError;
   if (s.scored_frames == 0) {
     spdlog::error("{}: no frame has both INTROSPECTION and INTROSPECTION_LABELS (their utimes never match)", cl.logs());
