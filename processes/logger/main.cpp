@@ -63,6 +63,7 @@ class StatusReporter {
     heartbeat_.set_counter("queue_bytes", s.queue_bytes);
     heartbeat_.set_counter("peak_queue_bytes", s.peak_queue_bytes);
     heartbeat_.set_counter("files", s.files);
+    heartbeat_.set_counter("deleted", s.deleted);
     heartbeat_.set_counter("unwritten", s.unwritten);
     heartbeat_.set_state(state);
   }
@@ -85,9 +86,12 @@ int report_end(const Recorder& recorder, double seconds) {
   spdlog::info("received {}, written {}, dropped {}; {:.1f} MB in {:.1f} s ({:.1f} MB/s), queue peak {:.1f} MB; {}",
                s.received, s.written, s.dropped, mb(s.bytes_written), seconds,
                seconds > 0 ? mb(s.bytes_written) / seconds : 0.0, mb(s.peak_queue_bytes), files);
+  if (s.deleted > 0) spdlog::error("LOST {} messages written to a log file deleted while recording", s.deleted);
   if (s.failed) {
-    spdlog::error("{}; {} messages received were not written. The log ends with the last whole event and is readable.",
-                  s.error, s.unwritten);
+    const bool a_log_is_left = !recorder.files().empty() && std::filesystem::exists(recorder.files().back());
+    spdlog::error(
+        "{}; {} messages received were not written. {}", s.error, s.unwritten,
+        a_log_is_left ? "The log ends with the last whole event and is readable." : "No log file of this run is left.");
     return ivoa::kExitIoError;
   }
   if (s.dropped > 0)

@@ -1,6 +1,7 @@
 #include "ivoa/logio/log_writer.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <sys/uio.h>
 #include <unistd.h>
 
@@ -99,6 +100,11 @@ void LogWriter::write_back(uint64_t upto) {
     dropped_ = written_back_;
   }
   written_back_ = upto;
+}
+
+bool LogWriter::deleted() const {
+  struct stat st {};
+  return fd_ >= 0 && fstat(fd_, &st) == 0 && st.st_nlink == 0;
 }
 
 void LogWriter::close() {

@@ -143,6 +143,7 @@ RecorderStatus Recorder::status() const {
   s.dropped_bytes = counters_.dropped_bytes.load();
   s.bytes_written = counters_.bytes_written.load();
   s.files = counters_.files.load();
+  s.deleted = counters_.deleted.load();
   s.queue_depth = static_cast<int64_t>(queue_.depth());
   s.queue_bytes = static_cast<int64_t>(queue_.bytes());
   s.peak_queue_bytes = static_cast<int64_t>(queue_.peak_bytes());

@@ -32,7 +32,8 @@ void write_channels(std::ostringstream& out, const logio::LogSummary& summary) {
 void write_session(std::ostringstream& out, const SessionCounters& n) {
   out << "  \"session\": {\"received\": " << n.received << ", \"written\": " << n.written
       << ", \"dropped\": " << n.dropped << ", \"dropped_bytes\": " << n.dropped_bytes
-      << ", \"bytes_written\": " << n.bytes_written << ", \"files\": " << n.files << "},\n";
+      << ", \"bytes_written\": " << n.bytes_written << ", \"files\": " << n.files << ", \"deleted\": " << n.deleted
+      << "},\n";
 }
 
 void write_message_types(std::ostringstream& out) {

@@ -37,11 +37,13 @@ void SplitLog::open_part(int part, int64_t timestamp) {
     write_to_current(calibration_->channel, timestamp, calibration_->data);
   }
   opening_bytes_ = writer_->bytes();
+  opening_events_ = summary_.events();
   update_sidecar(false, "");
   spdlog::info("logging to {}", writer_->path());
 }
 
 void SplitLog::write(const RecordedEvent& event) {
+  replace_if_deleted(event.timestamp);
   const uint64_t event_bytes = logio::kEventHeaderBytes + event.bytes();
   const bool full = options_.split_bytes > 0 && writer_->bytes() > opening_bytes_ &&
                     writer_->bytes() + event_bytes > options_.split_bytes;
@@ -52,6 +54,24 @@ void SplitLog::write(const RecordedEvent& event) {
   write_to_current(event.channel, event.timestamp, event.data);
   if (!options_.calibration_channel.empty() && event.channel == options_.calibration_channel) calibration_ = event;
   if (monotonic_ms() - sidecar_written_ms_ >= options_.sidecar_refresh_s * 1000.0) update_sidecar(false, "");
+}
+
+// A file deleted while written (by hand, a clean-up script) keeps taking
+// events that vanish with it at close; before each event (an fstat, about
+// a microsecond) the logger looks, and starts a file of that name again: the
+// loss is said and counted, and what comes after is kept. Where the folder
+// is gone too, that is a write error.
+void SplitLog::replace_if_deleted(int64_t timestamp) {
+  if (!writer_->deleted()) return;
+  const int64_t lost = summary_.events() - opening_events_;
+  counters_.deleted.fetch_add(lost);
+  spdlog::error(
+      "{} was deleted while recording: its {} messages are lost; recording goes on in a new file of that name",
+      writer_->path(), lost);
+  writer_.reset();
+  files_.pop_back();
+  counters_.files.fetch_sub(1);
+  open_part(static_cast<int>(files_.size()), timestamp);
 }
 
 void SplitLog::write_to_current(const std::string& channel, int64_t timestamp, const std::vector<uint8_t>& data) {

@@ -43,6 +43,9 @@ class LogWriter {
   int64_t events() const { return events_; }
   uint64_t bytes() const { return bytes_; }  // of whole events
   bool is_open() const { return fd_ >= 0; }
+  // The open file has no name on disk any more (deleted while written):
+  // what it holds goes when it is closed.
+  bool deleted() const;
 
  private:
   [[noreturn]] void fail(const std::string& what, int error);

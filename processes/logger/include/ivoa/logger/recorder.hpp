@@ -33,6 +33,7 @@ struct RecorderOptions {
 
 struct RecorderStatus {
   int64_t received = 0, written = 0, dropped = 0, dropped_bytes = 0, bytes_written = 0, files = 0;
+  int64_t deleted = 0;  // written, then deleted with their file while recording
   int64_t queue_depth = 0, queue_bytes = 0, peak_queue_bytes = 0;
   int64_t unwritten = 0;  // received but neither written nor dropped: queued, or lost to a write error
   bool calibration_seen = false;

@@ -14,6 +14,7 @@ struct SessionCounters {
   std::atomic<int64_t> dropped_bytes{0};
   std::atomic<int64_t> bytes_written{0};  // payload and channel bytes, calibration copies included
   std::atomic<int64_t> files{0};          // log files opened
+  std::atomic<int64_t> deleted{0};        // of the written, in a file deleted while recording: gone with it
 };
 
 }  // namespace ivoa::logger

@@ -52,6 +52,7 @@ class SplitLog {
 
  private:
   void open_part(int part, int64_t timestamp);
+  void replace_if_deleted(int64_t timestamp);
   void write_to_current(const std::string& channel, int64_t timestamp, const std::vector<uint8_t>& data);
   void update_sidecar(bool complete, const std::string& error);
 
@@ -61,6 +62,7 @@ class SplitLog {
   logio::LogSummary summary_;  // of the current file
   std::vector<std::string> files_;
   uint64_t opening_bytes_ = 0;  // what the file held before its first new event
+  int64_t opening_events_ = 0;  // ... in events (the calibration copy)
   double sidecar_written_ms_ = 0;
   bool starts_with_calibration_ = false;
   std::optional<RecordedEvent> calibration_;  // the newest one written
