@@ -147,7 +147,11 @@ int drive(const ivoa::sim::SimDriverConfig& config, const ivoa::sim::SimulatorCo
   const int64_t frames = driver->run();
   heartbeat.set_state("stopped");
   heartbeat.publish_now();
-  spdlog::info("published {} frames{}", frames, ivoa::stop_requested() ? " (stopped by signal)" : "");
+  // Frames --realtime skipped because rendering fell behind are part of the session: said here too.
+  const int64_t skipped = heartbeat.snapshot().dropped;
+  spdlog::info("published {} frames{}{}", frames,
+               skipped > 0 ? fmt::format(", skipped {} that rendering was late for (--realtime)", skipped) : "",
+               ivoa::stop_requested() ? " (stopped by signal)" : "");
   return ivoa::kExitOk;
 }
 

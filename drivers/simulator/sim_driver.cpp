@@ -1,6 +1,7 @@
 #include "sim_driver.hpp"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <thread>
@@ -98,6 +99,17 @@ void SimDriver::publish_frame(int64_t index) {
   }
 }
 
+namespace {
+
+// How many frames k (k * period < duration) a session of this duration has.
+int64_t frames_in(double duration_s, double period_s) {
+  int64_t n = static_cast<int64_t>(std::ceil(duration_s / period_s));
+  while (n > 0 && static_cast<double>(n - 1) * period_s >= duration_s) --n;  // float rounding at the edge
+  return n;
+}
+
+}  // namespace
+
 int64_t SimDriver::run() {
   if (heartbeat_) heartbeat_->set_state("running");
   const auto wall_start = std::chrono::steady_clock::now();
@@ -112,7 +124,9 @@ int64_t SimDriver::run() {
       const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
       const auto due_index = static_cast<int64_t>(std::floor(elapsed_s / period_s));
       if (due_index > index) {
-        if (heartbeat_) heartbeat_->count_dropped(due_index - index);
+        // Counted as skipped: the frames of the session it will not publish (none past its --duration).
+        const int64_t session_end = config_.duration_s > 0 ? frames_in(config_.duration_s, period_s) : due_index;
+        if (heartbeat_) heartbeat_->count_dropped(std::max<int64_t>(std::min(due_index, session_end) - index, 0));
         index = due_index;
         if (config_.duration_s > 0 && static_cast<double>(index) * period_s >= config_.duration_s) break;
       }
