@@ -1,7 +1,7 @@
 #include "sim_driver.hpp"
 
-#include <chrono>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <thread>

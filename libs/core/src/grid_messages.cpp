@@ -1,7 +1,9 @@
 #include "ivoa/core/grid_messages.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <tuple>
+#include <utility>
 
 #include <CLI/CLI.hpp>
 

@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include <fmt/format.h>
+
 namespace ivoa::monitor {
 
 struct ClockCounters {
@@ -51,9 +53,10 @@ class StreamClock {
   void drop_held(ClockCounters& counters, std::string& event) {
     if (!held_) return;
     ++counters.outliers;
-    event = stream_ + " frame at utime " + std::to_string(held_->first) + " is " + seconds(held_->first - *newest_) +
-            " from its stream's time (utime " + std::to_string(*newest_) +
-            ") and the next frame did not follow it: " + "ignored";
+    event = fmt::format(
+        "{} frame at utime {} is {} from its stream's time (utime {}) and the next frame did not "
+        "follow it: ignored",
+        stream_, held_->first, seconds(held_->first - *newest_), *newest_);
     held_.reset();
   }
 
@@ -62,6 +65,7 @@ class StreamClock {
  private:
   bool near(int64_t a, int64_t b) const { return (a > b ? a - b : b - a) <= jump_us_; }
 
+  // Signed seconds, cut (not rounded) to a tenth.
   static std::string seconds(int64_t us) {
     const std::string s = std::to_string(static_cast<double>(us) / 1e6);
     return (us >= 0 ? "+" : "") + s.substr(0, s.find('.') + 2) + " s";
@@ -73,10 +77,10 @@ class StreamClock {
     if (utime < *newest_) {
       ++epoch_;
       ++counters.restarts;
-      event = stream_ + " stream's time went back " + seconds(utime - *newest_) + " (utime " +
-              std::to_string(*newest_) + " to " + std::to_string(utime) +
-              ") and stayed: a log played again? Its frames are paired with the other stream's after its own "
-              "restart";
+      event = fmt::format(
+          "{} stream's time went back {} (utime {} to {}) and stayed: a log played again? Its "
+          "frames are paired with the other stream's after its own restart",
+          stream_, seconds(utime - *newest_), *newest_, utime);
       newest_ = utime;
     }
     take(utime, std::move(frame), out);
