@@ -5,6 +5,7 @@
 # PROCESS_STATUS; so does one whose environment's IVOA_STATUS_CHANNEL names
 # one (ivoa-launch sets it for its commands). No network: the processes write to a log (file://...?mode=w).
 set -euo pipefail
+shopt -s inherit_errexit
 B=${IVOA_BUILD_DIR:?}
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
@@ -38,7 +39,11 @@ heartbeat_channels() {
     cat "$OUT/$1.out" >&2
     exit 1
   fi
-  "$B/bin/ivoa-log-check" --json "$OUT/$1.json" "$log" >/dev/null
+  if ! "$B/bin/ivoa-log-check" --json "$OUT/$1.json" "$log" >"$OUT/$1.check" 2>&1; then
+    echo "FAIL: ivoa-log-check could not read the log $1 wrote:" >&2
+    cat "$OUT/$1.check" "$OUT/$1.out" >&2
+    exit 1
+  fi
   python3 -c 'import json, sys
 channels = json.load(open(sys.argv[1]))["channels"]
 print(" ".join(sorted(c for c, v in channels.items() if v["type"] == "ivoa.process_status_t")))' "$OUT/$1.json"
@@ -50,6 +55,7 @@ expect_heartbeats_on() {
   channels=$(heartbeat_channels "${@:2}" --status-channel "$1")
   if [ "$channels" != "$1" ]; then
     echo "FAIL: $2 --status-channel $1 sent heartbeats to: '$channels'" >&2
+    cat "$OUT/$2.out" "$OUT/$2.check" >&2
     exit 1
   fi
 }
@@ -62,6 +68,8 @@ expect_heartbeats_on ROBOT_B_STATUS ivoa-sim-driver --rate 2
 channels=$(heartbeat_channels ivoa-log-play --status-channel ROBOT_C_STATUS "$OUT/ivoa-depth-monitor.lcmlog")
 if [ "$channels" != "ROBOT_B_STATUS ROBOT_C_STATUS" ]; then
   echo "FAIL: ivoa-log-play --status-channel ROBOT_C_STATUS: heartbeats on '$channels'" >&2
+  cat "$OUT/ivoa-log-play.out" "$OUT/ivoa-log-play.check" >&2  # what it said it played, what the log holds
+  ls -l "$OUT" >&2
   exit 1
 fi
 # $IVOA_STATUS_CHANNEL (what ivoa-launch hands its commands) replaces the
