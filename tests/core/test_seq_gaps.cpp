@@ -1,3 +1,5 @@
+#include <cstdint>
+
 #include <gtest/gtest.h>
 
 #include "ivoa/core/seq_gaps.hpp"
@@ -13,6 +15,42 @@ TEST(SeqGaps, CountsTheNumbersSkippedAndStartsAgainWhenSeqGoesBack) {
   EXPECT_EQ(gaps.add(12), 0) << "a repeat is not a gap";
   EXPECT_EQ(gaps.add(0), 0) << "the publisher restarted";
   EXPECT_EQ(gaps.add(2), 1);
+}
+
+TEST(SeqGaps, AFarJumpCountsOnceTheNextFrameFollowsIt) {
+  SeqGaps gaps;
+  gaps.add(100);
+  EXPECT_EQ(gaps.add(5100), 0) << "held: is it the publisher's numbering or one damaged seq?";
+  EXPECT_EQ(gaps.add(5102), 4999 + 1) << "the numbering jumped: 101..5099, and 5101";
+  EXPECT_EQ(gaps.add(5103), 0);
+}
+
+TEST(SeqGaps, OneWrongSeqIsForgotten) {
+  SeqGaps gaps;
+  gaps.add(100);
+  for (const int64_t wrong : {INT64_MAX, INT64_MIN, int64_t{-5000}, int64_t{1'000'000}}) {
+    EXPECT_EQ(gaps.add(wrong), 0) << wrong;
+    EXPECT_EQ(gaps.add(101), 0) << "after " << wrong << ": the next frame continues from 100";
+    gaps.add(100);  // (back to 100: a small step back restarts the count there)
+  }
+  EXPECT_EQ(gaps.add(INT64_MAX), 0);
+  EXPECT_EQ(gaps.add(103), 2) << "a gap right after the wrong seq still counts";
+}
+
+TEST(SeqGaps, AFarStepBackThatContinuesIsARestart) {
+  SeqGaps gaps;
+  gaps.add(90'000);
+  EXPECT_EQ(gaps.add(0), 0);
+  EXPECT_EQ(gaps.add(1), 0) << "the publisher restarted from 0: nothing missed";
+  EXPECT_EQ(gaps.add(4), 2);
+}
+
+TEST(SeqGaps, ExtremeSeqsDoNotOverflow) {
+  SeqGaps gaps;
+  gaps.add(INT64_MAX - 1);
+  EXPECT_EQ(gaps.add(INT64_MAX), 0);
+  gaps.add(INT64_MIN);
+  EXPECT_EQ(gaps.add(INT64_MIN + 3), 2) << "held, followed: a restart from the lowest seq, 2 missed after it";
 }
 
 }  // namespace

@@ -25,10 +25,7 @@ void TrafficStats::add(const std::string& channel, const void* data, size_t size
   if (s.type == "unknown" || !utime) return;
   if (s.count > 1 && *utime < s.last_utime) ++s.utime_regressions;
   s.last_utime = *utime;
-  if (const auto seq = payload_seq(s.type, data, size)) {
-    if (s.last_seq >= 0 && *seq > s.last_seq + 1) s.seq_gaps += *seq - s.last_seq - 1;
-    s.last_seq = *seq;
-  }
+  if (const auto seq = payload_seq(s.type, data, size)) s.seq_gaps += s.seq_counter.add(*seq);
 }
 
 std::string TrafficStats::table() const {

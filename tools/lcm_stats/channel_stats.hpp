@@ -6,6 +6,8 @@
 #include <map>
 #include <string>
 
+#include "ivoa/core/seq_gaps.hpp"
+
 namespace ivoa::tools {
 
 struct ChannelStats {
@@ -16,7 +18,7 @@ struct ChannelStats {
   int64_t last_recv_utime = 0;
   int64_t last_utime = 0;         // message utime
   int64_t utime_regressions = 0;  // message utime went backwards
-  int64_t last_seq = -1;
+  SeqGaps seq_counter;
   int64_t seq_gaps = 0;  // messages missing according to seq
 
   double rate_hz() const;

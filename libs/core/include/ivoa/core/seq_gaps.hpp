@@ -3,6 +3,7 @@
 // channel's seq. A udpm subscriber that stalls (a slow frame, SIGSTOP, a
 // busy core) loses datagrams once its kernel socket buffer fills, and
 // nothing else would count them.
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 
@@ -13,16 +14,50 @@ inline constexpr const char* kFramesMissed = "frames_missed";
 
 class SeqGaps {
  public:
-  // How many frames are missing just before this one: 0 for the first, and
-  // 0 when seq goes back (the publisher restarted; counting starts again).
+  // A seq this far from the last, either way, is held until the next frame
+  // says whether the publisher's numbering really jumped (about 30 s at
+  // 30 Hz): one damaged seq must not add billions to the count.
+  static constexpr uint64_t kHoldBeyond = 1000;
+
+  // How many frames are newly known to be missing: 0 for the first; 0 when
+  // seq goes back (the publisher restarted; counting starts again); for a
+  // far jump, 0 until the next frame follows it (then the jump's gap
+  // counts) or does not (then the jumped seq was wrong and is forgotten).
   int64_t add(int64_t seq) {
-    const int64_t missing = last_ && seq > *last_ + 1 ? seq - *last_ - 1 : 0;
-    last_ = seq;
-    return missing;
+    if (!last_) {
+      last_ = seq;
+      return 0;
+    }
+    int64_t missing = 0;
+    if (holding_) {
+      holding_ = false;
+      const int64_t held = held_;
+      if (seq > held && distance(seq, held) <= kHoldBeyond) missing = step(held);  // it followed: a real jump
+    }
+    if (distance(seq, *last_) > kHoldBeyond) {
+      holding_ = true;
+      held_ = seq;
+      return missing;
+    }
+    return missing + step(seq);
   }
 
  private:
+  static uint64_t distance(int64_t a, int64_t b) {
+    return a > b ? static_cast<uint64_t>(a) - static_cast<uint64_t>(b)
+                 : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
+  }
+
+  int64_t step(int64_t seq) {
+    const uint64_t missing = seq > *last_ ? distance(seq, *last_) - 1 : 0;
+    last_ = seq;
+    return static_cast<int64_t>(std::min<uint64_t>(missing, INT64_MAX));
+  }
+
   std::optional<int64_t> last_;
+  // (a flag, not std::optional: GCC 12 warns of a maybe-uninitialized read)
+  bool holding_ = false;
+  int64_t held_ = 0;
 };
 
 }  // namespace ivoa
