@@ -2,7 +2,11 @@
 // the split files of one session (run.lcmlog.00 .01 ...) as one stream.
 //   ivoa-log-play logs/record-20261202-212245.lcmlog.[0-9][0-9]
 //   ivoa-log-play --speed 0.5 -c '^(STEREO_IMAGES|DEPTH_IMAGE|RIG_CALIBRATION)$' session.lcmlog
+#include <sys/stat.h>
+
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -15,11 +19,32 @@
 #include "ivoa/log_play/log_player.hpp"
 #include "ivoa/logio/log_reader.hpp"
 
+namespace {
+
+// The log a file://PATH?mode=w URL would write, if it already exists as one
+// of the logs to play: opening it for writing would empty it before a byte
+// of it is read.
+std::string output_among_inputs(const std::string& url, const std::vector<std::string>& logs) {
+  if (url.rfind("file://", 0) != 0 || url.find("mode=w") == std::string::npos) return {};
+  const std::string out = url.substr(7, url.find('?') - 7);
+  struct stat o {};
+  if (::stat(out.c_str(), &o) != 0) return {};
+  for (const auto& log : logs) {
+    struct stat i {};
+    if (::stat(log.c_str(), &i) == 0 && i.st_dev == o.st_dev && i.st_ino == o.st_ino) return log;
+  }
+  return {};
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{
       "Play LCM logs into LCM at the recorded pace; several files (the split files of one session, in order) "
       "play as one stream. Damaged stretches are skipped and reported. Exit codes: 0 played (or stopped), "
-      "1 LCM failure, 2 bad flags, 3 a log cannot be opened (nothing played) or holds no event (the others played)."};
+      "1 LCM failure or a message LCM refused, 2 bad flags (an output log that is one of the logs to play among "
+      "them), 3 a log cannot be opened (nothing played) or holds no event (the others played), 4 a file:// output "
+      "that cannot be written."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
   ivoa::add_status_channel_option(app, common.status_channel);
@@ -35,6 +60,11 @@ int main(int argc, char** argv) {
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("log_play", common.log_level);
   ivoa::install_stop_handlers();
+  if (const std::string same = output_among_inputs(common.lcm_url, logs); !same.empty()) {
+    spdlog::error("--lcm-url {} would write over {}, one of the logs to play: name another output file", common.lcm_url,
+                  same);
+    return ivoa::kExitUsage;
+  }
   try {
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "log_play", common.status_channel);
@@ -43,10 +73,12 @@ int main(int argc, char** argv) {
     const auto& c = player.counts();
     heartbeat.set_state(whole ? "finished" : "stopped");
     heartbeat.publish_now();
-    spdlog::info("{}: {} of {} files{}, {} events published, {} of other channels, {} damaged stretches skipped",
+    spdlog::info("{}: {} of {} files{}, {} events published{}, {} of other channels, {} damaged stretches skipped",
                  whole ? "finished" : "stopped", c.files_done, logs.size(),
                  c.not_logs > 0 ? fmt::format(" ({} of them no LCM log: nothing played from it)", c.not_logs) : "",
-                 c.published, c.filtered_out, c.damaged);
+                 c.published,
+                 c.publish_failures > 0 ? fmt::format(" ({} refused by LCM: not published)", c.publish_failures) : "",
+                 c.filtered_out, c.damaged);
     if (c.publish_failures > 0) return ivoa::kExitFailure;
     return c.not_logs > 0 ? ivoa::kExitBadInput : ivoa::kExitOk;
   } catch (const ivoa::logio::LogReadError& e) {

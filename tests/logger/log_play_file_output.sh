@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# ivoa-log-play into a log (file://PATH?mode=w): it refuses to write over
+# one of the logs it is to play (opening it would empty it), leaving that
+# log as it was; into another file it plays every event; an output LCM
+# cannot publish to (a file:// URL without mode=w) is named in its summary.
+set -euo pipefail
+shopt -s inherit_errexit
+B=${IVOA_BUILD_DIR:?}
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+"$B/bin/ivoa-sim-driver" --frames 2 --as-fast-as-possible --lcm-url "file://$out/in.lcmlog?mode=w" --log-level warn
+before=$(md5sum <"$out/in.lcmlog")
+
+code=0
+(cd "$out" && "$B/bin/ivoa-log-play" -s 0 --lcm-url "file://$out/./in.lcmlog?mode=w" in.lcmlog) >"$out/same.txt" 2>&1 || code=$?
+[ "$code" = 2 ] || { cat "$out/same.txt"; echo "FAIL: writing over the input exited $code, expected 2" >&2; exit 1; }
+grep -q "would write over in.lcmlog, one of the logs to play" "$out/same.txt" || { cat "$out/same.txt"; exit 1; }
+[ "$(md5sum <"$out/in.lcmlog")" = "$before" ] || { echo "FAIL: the input log changed" >&2; exit 1; }
+
+"$B/bin/ivoa-log-play" -s 0 --lcm-url "file://$out/copy.lcmlog?mode=w" "$out/in.lcmlog" >"$out/copy.txt" 2>&1
+"$B/bin/ivoa-log-check" --json "$out/in.json" "$out/in.lcmlog" >/dev/null
+"$B/bin/ivoa-log-check" --json "$out/copy.json" "$out/copy.lcmlog" >/dev/null
+python3 - "$out/in.json" "$out/copy.json" <<'PY'
+import json, sys
+played, copied = (json.load(open(p))["channels"] for p in sys.argv[1:])
+for channel, c in played.items():
+    if channel == "PROCESS_STATUS":
+        continue  # the player's own heartbeats are added
+    assert copied[channel]["count"] == c["count"], (channel, c["count"], copied[channel]["count"])
+PY
+
+code=0
+"$B/bin/ivoa-log-play" -s 0 --lcm-url "file://$out/copy.lcmlog" "$out/in.lcmlog" >"$out/read_only.txt" 2>&1 || code=$?
+[ "$code" = 1 ] || { cat "$out/read_only.txt"; echo "FAIL: an output LCM refused exited $code, expected 1" >&2; exit 1; }
+grep -q "refused by LCM: not published" "$out/read_only.txt" || { cat "$out/read_only.txt"; exit 1; }
+echo "OK: the input log kept, a copy played, refusals named"
