@@ -192,6 +192,25 @@ TEST(DatasetFormat, TruncatedPatchStoreIsReported) {
   }
 }
 
+// Predictions name the session from session.json, the report finds it by folder.
+TEST(DatasetFormat, ARenamedSessionFolderIsNamed) {
+  test::TempDir dir;
+  {
+    SessionWriter w(dir.path().string(), info("s2"));
+    w.add_frame(1, 1, 1);
+    w.add_sample(SampleRecord{}, numbered_patch(1));
+  }
+  EXPECT_NO_THROW(SessionReader((dir.path() / "s2").string() + "/"));
+  std::filesystem::rename(dir.path() / "s2", dir.path() / "renamed");
+  try {
+    SessionReader r((dir.path() / "renamed").string());
+    FAIL();
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("names the session 's2' but its folder is 'renamed'"), std::string::npos)
+        << e.what();
+  }
+}
+
 // A row cut from samples.csv together with its patch leaves the store
 // consistent, but session.json would still claim the old counts.
 TEST(DatasetFormat, IndexThatDisagreesWithSessionJsonIsReported) {
@@ -325,7 +344,7 @@ TEST(DatasetFormat, EvidenceRoundTripsPerSampleAndOldSessionsHaveNone) {
 TEST(DatasetFormat, SessionNameThatIsNotAFolderOfItsOwnIsRefused) {
   test::TempDir dir;
   const std::string root = (dir.path() / "data").string();
-  for (const std::string name : {"", ".", "..", "a/b"}) {
+  for (const std::string name : {"", ".", "..", "a/b", ".a.partial"}) {
     try {
       SessionWriter w(root, info(name));
       FAIL() << "accepted session name '" << name << "'";
@@ -336,6 +355,20 @@ TEST(DatasetFormat, SessionNameThatIsNotAFolderOfItsOwnIsRefused) {
   }
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "patches.bin"));
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "data" / "patches.bin"));
+}
+
+// "--session dataset.json" moved the dataset's index aside and deleted it.
+TEST(DatasetFormat, SessionNameOfAFileInTheDatasetIsRefusedAndTheFileKept) {
+  test::TempDir dir;
+  std::ofstream(dir.file("dataset.json")) << "{}";
+  try {
+    SessionWriter w(dir.path().string(), info("dataset.json"));
+    FAIL() << "accepted the name of the dataset's index";
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("dataset.json is a file, not a session folder"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(test::read_file(dir.file("dataset.json")), "{}");
 }
 
 TEST(DatasetFormat, RejectsWrongPatchesAndLabels) {
@@ -382,6 +415,14 @@ TEST(DatasetFormat, SplitFileBySessionRejectsOverlap) {
     EXPECT_NE(std::string(e.what()).find("'b'"), std::string::npos) << e.what();
   }
   EXPECT_THROW(load_split(dir.file("missing.yaml")), DatasetError);
+  // YAML keeps the last of a repeated key: the first list would be lost unseen
+  std::ofstream(dir.file("twice.yaml")) << "test: [a]\ntest: [b]\n";
+  try {
+    load_split(dir.file("twice.yaml"));
+    FAIL();
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("split 'test' is given twice"), std::string::npos) << e.what();
+  }
 }
 
 // What a split file names must be there: the split in the file, its sessions

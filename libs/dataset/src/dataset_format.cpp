@@ -164,9 +164,13 @@ SessionWriter::SessionWriter(const std::string& dataset_root, SessionInfo info)
       info_(std::move(info)),
       files_(std::make_unique<Files>()) {
   const std::string& name = info_.session;  // "..": the session's files would land beside the dataset
-  if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos)
-    throw DatasetError("session name '" + name + "' must be a folder name (not empty, '.' or '..', no '/')");
+  if (name.empty() || name[0] == '.' || name.find('/') != std::string::npos)
+    throw DatasetError("session name '" + name +
+                       "' must be a folder name (not empty, no '/', not starting with '.': the builder's own folders "
+                       "do)");
   std::error_code ec;
+  if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
+    throw DatasetError("session name '" + name + "': " + dir_ + " is a file, not a session folder; name another");
   fs::remove_all(work_dir_, ec);  // left by a build that was killed
   fs::create_directories(work_dir_, ec);
   if (ec) throw DatasetError(work_dir_ + ": cannot create the session's folder: " + ec.message());
@@ -282,11 +286,20 @@ void SessionWriter::close() {
 
 SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir) {
   info_ = parse_session_json(dir_ + "/session.json");
+  // Splits and predictions name sessions by folder; a renamed folder would
+  // be evaluated under one name and looked up under the other.
+  fs::path folder = fs::path(dir_).lexically_normal();
+  if (folder.filename().empty()) folder = folder.parent_path();
+  if (folder.filename() != info_.session && folder.filename() != ".")
+    throw DatasetError(dir_ + "/session.json: names the session '" + info_.session + "' but its folder is '" +
+                       folder.filename().string() + "': rename the folder back, or build the session again");
   std::ifstream in(dir_ + "/samples.csv");
   if (!in) throw DatasetError(dir_ + "/samples.csv: cannot open");
   std::string line;
   std::getline(in, line);
   const bool has_side = line == kSamplesHeader;
+  if (!line.empty() && line.back() == '\r')
+    throw DatasetError(dir_ + "/samples.csv: Windows line ends (CR LF); the builder writes LF only");
   if (!has_side && line != kSamplesHeaderV1)
     throw DatasetError(dir_ + "/samples.csv: unexpected header '" + line + "' (expected '" + kSamplesHeader + "')");
   size_t row = 1;
@@ -432,6 +445,7 @@ std::map<std::string, std::vector<std::string>> load_split(const std::string& pa
   std::map<std::string, std::string> owner;
   for (const auto& kv : root) {
     const std::string name = kv.first.as<std::string>();
+    if (splits.count(name)) throw DatasetError(path + ": split '" + name + "' is given twice");
     std::vector<std::string> sessions;
     try {
       sessions = kv.second.as<std::vector<std::string>>();
