@@ -2,6 +2,7 @@
 // with the reason; full-frame heatmaps agree with patch-by-patch inference.
 #include <cstdio>
 #include <fstream>
+#include <limits>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -262,6 +263,24 @@ TEST(ModelFile, BadFilesAreRefusedWithTheReason) {
   std::ofstream(dir.file("flipped.pt"), std::ios::binary) << bytes;
   expect_refusal(dir.file("flipped.pt"), "the model file is damaged");
   EXPECT_NO_THROW(IntrospectionModel::load(slide));
+  // What a diverged training would leave: NaN weights, a gate that is no number.
+  {
+    auto net = make_network("slidenet", 0.5);
+    ModelInfo info;
+    info.architecture = "slidenet";
+    info.input_size = input_size_of("slidenet");
+    info.detector = "jppc";
+    {
+      torch::NoGradGuard no_grad;
+      net->parameters().front().fill_(std::numeric_limits<float>::quiet_NaN());
+    }
+    save_model(*net, info, dir.file("nan_weights.pt"));
+    expect_refusal(dir.file("nan_weights.pt"), "holds NaN or infinite weights");
+    net = make_network("slidenet", 0.5);
+    info.uncertainty_threshold = std::numeric_limits<double>::quiet_NaN();
+    save_model(*net, info, dir.file("nan_gate.pt"));
+    expect_refusal(dir.file("nan_gate.pt"), "nan_gate.pt: ");
+  }
 }
 
 // The main job evaluates the shipped model on datasets it builds: they must

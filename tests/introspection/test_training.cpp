@@ -164,6 +164,32 @@ TEST(Training, KeepLastWritesTheFinalStepsModelWhateverItsValidation) {
   EXPECT_NE(summary.find("\"best_step\": \"20\""), std::string::npos) << summary;
 }
 
+// A loss that is no number would leave NaN weights and gates, reported as a success.
+TEST(Training, ADivergedTrainingStopsAndSaysSo) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 30);
+  c.learning_rate = 1e12;
+  try {
+    train_model(c);
+    FAIL() << "trained at lr 1e12 without a word";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("training diverged (try a lower --lr"), std::string::npos) << e.what();
+  }
+}
+
+// A validation of one sample scores 0 or 1: a run must leave a model either way.
+TEST(Training, AValidationThatScoresNothingStillLeavesAModel) {
+  for (const uint64_t seed : {1, 2, 3, 4, 5, 6, 7, 8}) {
+    test::TempDir dir;
+    TrainConfig c = tiny_run(dir, 5, 1);
+    c.max_val_samples = 1;
+    c.seed = seed;
+    const TrainReport r = train_model(c);
+    EXPECT_EQ(r.best_step, 1) << "seed " << seed;
+    EXPECT_TRUE(std::filesystem::exists(c.output)) << "seed " << seed;
+  }
+}
+
 // Why resuming `c` from its checkpoint, to `steps`, was refused; "" if it resumed.
 std::string resume_refusal(TrainConfig c, int64_t steps) {
   c.resume = true;

@@ -84,9 +84,9 @@ void add_model_options(CLI::App& app, TrainCommandLine& cl) {
       ->check(CLI::IsMember({"slidenet", "alexnet"}));
   app.add_option("--init", c.init, "start from this model (fine-tuning)")->check(CLI::ExistingFile);
   app.add_flag("--resume", c.resume, "continue from OUT.checkpoint.* if present");
-  app.add_option("--dropout", c.dropout, "dropout before FC1 and FC2")
+  app.add_option("--dropout", c.dropout, "dropout before FC1 and FC2 (> 0: the MC-dropout passes need it)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 0.99));
+      ->check(CLI::Range(0.01, 0.99));
   app.add_option("--fn-weight", c.fn_weight, "FN share of class-balanced sampling (reference: 0.1 outdoors)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());

@@ -5,6 +5,7 @@
 #include <functional>
 #include <sstream>
 #include <vector>
+#include <cmath>
 #include <cstring>
 
 #include <torch/script.h>
@@ -101,8 +102,10 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
       i.std[static_cast<size_t>(c)] = n["std"][c].as<float>();
     }
     i.classes = n["classes"].as<std::vector<std::string>>();
-    i.uncertainty_threshold = n["uncertainty_threshold"].as<double>(0.01);
-    i.verdict_uncertainty_threshold = n["verdict_uncertainty_threshold"].as<double>(-1.0);  // older models: none
+    // Absent in older models (a default, none); present, it must read as a number.
+    if (n["uncertainty_threshold"]) i.uncertainty_threshold = n["uncertainty_threshold"].as<double>();
+    i.verdict_uncertainty_threshold =
+        n["verdict_uncertainty_threshold"] ? n["verdict_uncertainty_threshold"].as<double>() : -1.0;
     if (n["training"]) {
       YAML::Emitter e;
       e << YAML::Flow << YAML::DoubleQuoted << n["training"];
@@ -117,6 +120,8 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
     throw ModelError(where + ": patch_size, stride, input_size must be positive and dropout in (0, 1)");
   if (i.views != 1 && i.views != 2) throw ModelError(where + ": views must be 1 or 2, not " + std::to_string(i.views));
   if (!(i.patch_scale >= 0)) throw ModelError(where + ": patch_scale must be >= 0");
+  if (!std::isfinite(i.uncertainty_threshold) || !std::isfinite(i.verdict_uncertainty_threshold))
+    throw ModelError(where + ": its uncertainty gates are not numbers (a training that diverged?)");
   return i;
 }
 
@@ -177,6 +182,9 @@ NativeModel load_checked_native_model(const std::string& path) {
     throw ModelError(path + ": parameters do not fit architecture '" + m.info.architecture +
                      "': " + std::string(e.what_without_backtrace()).substr(0, 300));
   }
+  for (const auto& p : m.net->named_parameters())
+    if (!torch::isfinite(p.value()).all().item<bool>())
+      throw ModelError(path + ": parameter " + p.key() + " holds NaN or infinite weights (a training that diverged?)");
   m.info.id = std::filesystem::path(path).filename().string() + "#" + file_hash(path);
   m.net->eval();
   return m;

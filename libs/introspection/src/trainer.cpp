@@ -1,6 +1,7 @@
 #include "ivoa/introspection/training.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -397,7 +398,11 @@ int64_t load_checkpoint(const std::string& checkpoint, EvidenceTask* evidence, d
   int64_t step = 0;
   std::string saved_kind = "sgd";
   std::ifstream step_file(checkpoint + ".step");
-  if (!(step_file >> step >> report.best_val_mean_class_accuracy >> report.best_step))
+  if (!step_file)
+    throw std::runtime_error("cannot resume " + checkpoint + ": " + checkpoint + ".step cannot be opened (remove " +
+                             checkpoint + ".* to start over)");
+  if (!(step_file >> step >> report.best_val_mean_class_accuracy >> report.best_step) || step < 0 ||
+      report.best_step < 0 || report.best_step > step)
     throw std::runtime_error("cannot resume " + checkpoint + ": " + checkpoint +
                              ".step is not 'step best_val best_step [optimizer]' (remove " + checkpoint +
                              ".* to start over)");
@@ -502,6 +507,15 @@ StepResult train_step(Learner& l, const TrainConfig& c, const SplitData& train, 
   return {loss.item<double>(), logits.argmax(1).eq(labels).to(torch::kFloat).mean().item<double>(), evidence_loss};
 }
 
+// A loss that is not finite poisons every weight from then on: stop, and
+// say what is left (settings, not the data, are the likely cause).
+[[noreturn]] void throw_diverged(const TrainConfig& c, const TrainReport& report, int64_t step, double loss) {
+  throw std::invalid_argument(fmt::format(
+      "step {}: the training loss is {}: training diverged (try a lower --lr than {}); {}", step, loss, c.learning_rate,
+      report.best_step > 0 ? fmt::format("{} holds the model kept at step {}", c.output, report.best_step)
+                           : std::string("no model was written")));
+}
+
 // What the progress callback sees after a step: the running means, the rate.
 void update_status(TrainStatus& status, const RunningMeans& means, const TrainConfig& c, int64_t step,
                    bool has_evidence, double patches_per_s) {
@@ -592,7 +606,9 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   const double loop_start = monotonic_ms();
   for (int64_t step = first_step; step < c.steps; ++step) {
     const std::vector<SampleRef> batch = sampler.batch(c.batch_size);
-    means.add(train_step(learner, c, train, batch, make_batch, step, device));
+    const StepResult result = train_step(learner, c, train, batch, make_batch, step, device);
+    if (!std::isfinite(result.loss)) throw_diverged(c, report, step + 1, result.loss);
+    means.add(result);
     update_status(
         status, means, c, step, static_cast<bool>(learner.evidence),
         static_cast<double>((step + 1 - first_step) * c.batch_size) / ((monotonic_ms() - loop_start) / 1000.0));
@@ -601,7 +617,8 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     if ((step + 1) % c.validate_every == 0 || last) {
       const ValOutputs v = run_validation(*learner.net, val, val_refs, info, device, 1, generator);
       status.val_mean_class_accuracy = v.confusion.mean_per_class();
-      const bool better = status.val_mean_class_accuracy > report.best_val_mean_class_accuracy;
+      // The first validation is kept whatever it scores: a run must leave a model.
+      const bool better = report.best_step == 0 || status.val_mean_class_accuracy > report.best_val_mean_class_accuracy;
       if (c.keep_last ? last : better) {
         record_kept(report, v.confusion, step + 1);
         info.training_summary = training_summary(c, train, val, report, step + 1);
