@@ -50,6 +50,11 @@ TEST(StereoOptions, QueryGridThatCannotBeBuiltIsAUsageError) {
   EXPECT_EQ(parse({"--safety-radius", "-0.1"}).code, kExitUsage);
   EXPECT_EQ(parse({"--grid-x-min", "3", "--grid-x-max", "1"}).code, kExitUsage);
   EXPECT_EQ(parse({"--grid-y-max", "-2"}).code, kExitUsage);
+  // Grids no robot needs that would fill memory (a patch per cell per frame in a dataset).
+  EXPECT_EQ(parse({"--grid-spacing", "0.001"}).code, kExitUsage);
+  EXPECT_EQ(parse({"--grid-x-max", "1000"}).code, kExitUsage);
+  EXPECT_EQ(parse({"--safety-radius", "50"}).code, kExitUsage);
+  EXPECT_EQ(parse({"--grid-spacing", "0.03"}).code, -1) << "84 x 101 cells: allowed";
   const Parsed one_row = parse({"--grid-x-min", "1", "--grid-x-max", "1"});
   ASSERT_EQ(one_row.code, -1);
   EXPECT_EQ(one_row.grid.x_min, 1.0);

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
 #include "ivoa/core/flag_checks.hpp"
 
@@ -37,6 +38,16 @@ void add_query_grid_options(CLI::App& app, QueryGridConfig& c) {
   app.parse_complete_callback([&c] {
     if (!(c.x_min <= c.x_max)) throw CLI::ValidationError("--grid-x-min", "must be <= --grid-x-max");
     if (!(c.y_min <= c.y_max)) throw CLI::ValidationError("--grid-y-min", "must be <= --grid-y-max");
+    // Every cell costs a patch per frame in a dataset and a check in each detector.
+    const double cells =
+        (std::floor((c.x_max - c.x_min) / c.spacing) + 1) * (std::floor((c.y_max - c.y_min) / c.spacing) + 1);
+    if (cells > kMaxQueryCells)
+      throw CLI::ValidationError(
+          "--grid-spacing",
+          fmt::format("{} m over the grid's bounds makes {:.0f} cells; at most {}", c.spacing, cells, kMaxQueryCells));
+    if (c.safety_radius > kMaxSafetyRadiusM)
+      throw CLI::ValidationError("--safety-radius", fmt::format("{} m: at most {} m (a robot's footprint)",
+                                                                c.safety_radius, kMaxSafetyRadiusM));
   });
 }
 

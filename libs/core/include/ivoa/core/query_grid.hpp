@@ -11,6 +11,10 @@
 
 namespace ivoa {
 
+// What the command-line options accept (defaults: 143 cells, 0.1 m).
+inline constexpr double kMaxQueryCells = 10000;
+inline constexpr double kMaxSafetyRadiusM = 1.0;
+
 struct QueryGridConfig {
   double x_min = 0.5;           // metres ahead of the robot origin
   double x_max = 3.0;           // metres
