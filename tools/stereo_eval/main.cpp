@@ -104,11 +104,17 @@ Pair load_pair(const CommandLine& cl) {
 }
 
 // Sizes SGBM's search to the truth unless --sgbm_num_disparities was given.
+// Throws if the truth cannot be the pair's.
 void fit_sgbm_range(const CLI::App& app, const Pair& p, CommandLine& cl) {
   double max_disparity = 0;
   cv::Mat finite = p.truth.clone();
   cv::patchNaNs(finite, 0);
   cv::minMaxLoc(finite, nullptr, &max_disparity);
+  if (max_disparity >= p.left.cols)  // SGBM would search (and allocate for) a range wider than the image
+    throw std::runtime_error(fmt::format(
+        "{}: the largest ground-truth disparity is {:.0f} px after --gt-divisor {}, wider than the {} px image: is "
+        "the divisor right (KITTI's 16-bit PNG: 256)?",
+        cl.gt_path, max_disparity, cl.gt_divisor, p.left.cols));
   if (app.count("--sgbm_num_disparities") == 0) cl.sgbm.num_disparities = round_up_16(max_disparity + 8);
   spdlog::info("{}x{} pair at scale {}, ground truth {:.1f}% known, max disparity {:.1f} px", p.left.cols, p.left.rows,
                cl.scale, 100.0 * cv::countNonZero(finite > 0) / static_cast<double>(finite.total()), max_disparity);
@@ -157,11 +163,11 @@ int main(int argc, char** argv) {
   Pair pair;
   try {
     pair = load_pair(cl);
+    fit_sgbm_range(app, pair, cl);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitBadInput;
   }
-  fit_sgbm_range(app, pair, cl);
   std::vector<ivoa::stereo_eval::ModelScore> scores;
   cv::Mat overlay;
   try {
@@ -169,6 +175,9 @@ int main(int argc, char** argv) {
   } catch (const std::invalid_argument& e) {  // matcher settings the pair cannot take
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;
+  } catch (const cv::Exception& e) {  // OpenCV refusing the settings or out of memory: said, not aborted
+    spdlog::error("scoring failed: {}", e.what());
+    return ivoa::kExitFailure;
   }
   return write_outputs(cl, scores, overlay);
 }
