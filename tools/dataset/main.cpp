@@ -73,6 +73,9 @@ int build_session(const std::string& out, const std::string& session, const std:
   if (r.patches_outside > 0)
     std::printf("%-28s %lld labelled cells skipped: their patch leaves the image\n", "",
                 static_cast<long long>(r.patches_outside));
+  if (r.frames_repeated > 0)
+    std::printf("%-28s %lld frames already stored skipped (a log given twice, or frames recorded twice)\n", "",
+                static_cast<long long>(r.frames_repeated));
   if (r.samples == 0 && r.patches_outside > 0)
     spdlog::warn("{}: no samples: every labelled cell's patch leaves the image (a smaller --patch-size?)", session);
   if (r.evidence_mismatches > 0)

@@ -4,6 +4,7 @@
 #include <deque>
 #include <limits>
 #include <map>
+#include <set>
 #include <optional>
 #include <utility>
 
@@ -76,6 +77,7 @@ struct SessionBuilder::Impl {
   bool evidence_warned = false;
   std::map<int64_t, Truth> truths;           // utime -> simulator truth
   std::deque<introspection_labels_t> ready;  // labels waiting for their frame's truth
+  std::set<int64_t> stored_frames;           // utimes: a frame's samples are stored once
   int64_t label_sources = 0;  // messages the labels come from: recorded labels, or depth to re-label with
 
   bool rerun() const { return options.labels != kRecordedLabels; }
@@ -278,6 +280,10 @@ std::vector<std::pair<size_t, cv::Mat>> SessionBuilder::Impl::labelled_patches(c
 }
 
 void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
+  if (stored_frames.count(labels.utime)) {
+    ++report.frames_repeated;
+    return;
+  }
   const auto image = left_images.find(labels.utime);
   if (image == left_images.end()) {
     return bad("labels for frame " + std::to_string(labels.utime) + " whose stereo images are not in the log");
@@ -288,6 +294,7 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
   int32_t labelled = 0;
   for (int8_t l : labels.label) labelled += l != introspection_labels_t::LABEL_NONE;
   const int64_t frame = writer->add_frame(labels.utime, labels.depth_utime, labelled);
+  stored_frames.insert(labels.utime);
   int64_t samples = 0;
   const std::vector<int> sides = patch_sides(labels, image->second);
   for (const auto& [i, patch] : labelled_patches(labels, image->second, sides)) {

@@ -63,6 +63,7 @@ struct BuildReport {
   int64_t samples = 0;
   int64_t tn_dropped = 0;             // TN cells left out (keep_tn < 1)
   int64_t patches_outside = 0;        // labelled cells skipped: their patch leaves the image
+  int64_t frames_repeated = 0;        // labels of a frame already stored (a log given twice): skipped
   int64_t bad_messages = 0;           // undecodable or inconsistent, skipped
   int64_t evidence_mismatches = 0;    // samples whose re-run verdict differs from the label's (NaN evidence)
   std::vector<std::string> problems;  // log damage (with byte offsets) and bad messages
