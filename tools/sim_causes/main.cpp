@@ -10,6 +10,7 @@
 //
 //   ivoa-sim-causes --out causes.csv out/main-job-default/logs/*_s31.lcmlog
 #include <algorithm>
+#include <set>
 #include <array>
 #include <atomic>
 #include <cstdio>
@@ -104,6 +105,8 @@ struct SessionLog {
   std::vector<std::vector<int32_t>> cell_ids;
   int32_t pixelformat = -1;
   int64_t bad_messages = 0;
+  std::set<int64_t> labelled_utimes;
+  int64_t repeated_labels = 0;  // a frame's labels again (a log given twice): skipped
 };
 
 void read_event(const logio::LogEvent& e, bool want_labels, SessionLog& log) {
@@ -117,7 +120,10 @@ void read_event(const logio::LogEvent& e, bool want_labels, SessionLog& log) {
       log.truth[msg.utime] = {msg.scene, msg.seed, msg.seq, {msg.robot_x, msg.robot_y, msg.robot_yaw}};
   } else if (e.channel == channels::kIntrospectionLabels && want_labels) {
     Labels msg;
-    if ((ok = logio::decode(e, msg))) log.labels.push_back(std::move(msg));
+    if ((ok = logio::decode(e, msg))) {
+      if (!log.labelled_utimes.insert(msg.utime).second) ++log.repeated_labels;
+      else log.labels.push_back(std::move(msg));
+    }
   } else if (e.channel == channels::kStereoImages && log.pixelformat < 0) {
     stereo_image_t msg;
     if ((ok = logio::decode(e, msg))) log.pixelformat = msg.left.pixelformat;
@@ -142,6 +148,9 @@ SessionLog read_log(const std::string& path, bool want_labels) {
   }
   if (const std::string why = reader.not_a_log(); !why.empty()) throw std::runtime_error(path + ": " + why);
   for (const auto& p : reader.problems()) spdlog::warn("{}: byte {}: {}", path, p.offset, p.what);
+  if (log.repeated_labels > 0)
+    spdlog::warn("{}: {} frames' labels came again (a log given twice?): each frame explained once", path,
+                 log.repeated_labels);
   if (!log.rig) throw std::runtime_error(path + ": no " + std::string(channels::kRigCalibration) + " message");
   if (log.truth.empty())
     throw std::runtime_error(path + ": no " + std::string(channels::kSimGroundTruth) +
@@ -182,7 +191,17 @@ void labels_from_dataset(const std::string& root, const std::string& session, Se
 }
 
 int64_t session_start(const SessionLog& log, const Options& opt, const std::string& path) {
-  if (opt.start_utime >= 0) return opt.start_utime;
+  if (opt.start_utime >= 0) {
+    // The frames are re-rendered from frame 0 on: frame 0 must be near them.
+    const int64_t first = log.truth.begin()->first, last = log.truth.rbegin()->first;
+    constexpr int64_t kOneDayUs = 86'400'000'000;
+    if (opt.start_utime > first || last - opt.start_utime > kOneDayUs)
+      throw std::runtime_error(fmt::format(
+          "{}: --start-utime {} is not the session's first frame: the log's frames run from utime {} to {} (the "
+          "driver's --start-utime, or leave it out when the log holds frame 0)",
+          path, opt.start_utime, first, last));
+    return opt.start_utime;
+  }
   for (const auto& [utime, t] : log.truth)
     if (t.seq == 0) return utime;
   throw std::runtime_error(path +
@@ -273,14 +292,18 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
   }
   const TruthFrame& first = log.truth.begin()->second;
   const std::string scene_file = opt.scene_file.empty() ? opt.scene_dir + "/" + first.scene + ".yaml" : opt.scene_file;
+  sim::SceneSpec scene = sim::load_scene_spec(scene_file);
+  if (scene.name != first.scene)
+    throw std::runtime_error(
+        fmt::format("{}: the log's scene is '{}', {} is '{}'", path, first.scene, scene_file, scene.name));
   causes::SessionTiming timing = opt.timing;
   timing.start_utime = session_start(log, opt, path);
   if (timing.rate_hz == 0) {
     timing.rate_hz = session_rate(log, timing.start_utime);
     spdlog::info("{}: recorded at {:.6g} Hz", session, timing.rate_hz);
   }
-  causes::CauseFinder finder(sim::load_scene_spec(scene_file), static_cast<uint64_t>(first.seed), *log.rig, timing,
-                             log.labels.front().detector, opt.detector, opt.variants);
+  causes::CauseFinder finder(scene, static_cast<uint64_t>(first.seed), *log.rig, timing, log.labels.front().detector,
+                             opt.detector, opt.variants);
   out.tally.unexplained_fixed.resize(opt.variants.size());
   Progress progress(session + " (" + causes::phenomena_names(finder.testable()) + ")",
                     static_cast<double>(log.labels.size()), "frames", 20.0);
@@ -447,8 +470,26 @@ bool open_outputs(const Options& opt, std::ofstream& csv, std::ofstream& variant
   return true;
 }
 
+// Two logs of one session name would give its rows twice (and a variants
+// file the report refuses): said before any work.
+bool sessions_named_once(const std::vector<std::string>& logs) {
+  std::map<std::string, std::string> log_of;
+  for (const auto& log : logs) {
+    const auto [it, added] = log_of.emplace(logio::session_name_of(log), log);
+    if (!added) {
+      spdlog::error(
+          "{} and {} are both session {}: give each session's log once (split files: join them first, "
+          "cat NAME.lcmlog.[0-9][0-9] > NAME.lcmlog)",
+          it->second, log, it->first);
+      return false;
+    }
+  }
+  return true;
+}
+
 int explain(const CommandLine& cl) {
   const Options& opt = cl.opt;
+  if (!sessions_named_once(cl.logs)) return kExitUsage;
   std::ofstream csv, variants_csv;
   if (!open_outputs(opt, csv, variants_csv)) return kExitIoError;
   Tally tally;

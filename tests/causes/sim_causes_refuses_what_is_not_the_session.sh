@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# ivoa-sim-causes refuses, by name and before rendering anything, what
+# would explain a session wrongly: its log given twice (every row twice),
+# a scene file of another scene (every frame skipped, an empty CSV, exit
+# 0), a --start-utime far from the log's frames (it stepped the trajectory
+# billions of frames and hung).
+set -euo pipefail
+shopt -s inherit_errexit
+B=${IVOA_BUILD_DIR:?}; S=${IVOA_SOURCE_DIR:?}
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+"$B/bin/ivoa-sim-driver" --scene "$S/libs/sim/scenes/indoor_office.yaml" --frames 1 --as-fast-as-possible \
+  --log-level warn --lcm-url "file://$out/office_s5.lcmlog?mode=w"
+"$B/bin/ivoa-dataset" build --labels jppc --out "$out/data" "$out/office_s5.lcmlog" >/dev/null  # its failures
+
+# expect CODE TEXT ARGS...: ivoa-sim-causes ARGS exits CODE (in 60 s) saying TEXT.
+expect() {
+  local code=0
+  timeout 60 "$B/bin/ivoa-sim-causes" --no-variants --dataset data --out "$out/c.csv" "${@:3}" >"$out/said.txt" 2>&1 || code=$?
+  if [ "$code" != "$1" ] || ! grep -qF -- "$2" "$out/said.txt"; then
+    cat "$out/said.txt"
+    echo "FAIL: ivoa-sim-causes ${*:3}: exit $code (expected $1), expected to say: $2" >&2
+    exit 1
+  fi
+}
+cd "$out"
+expect 2 "office_s5.lcmlog and ./office_s5.lcmlog are both session office_s5" office_s5.lcmlog ./office_s5.lcmlog
+expect 3 "the log's scene is 'indoor_office', $S/libs/sim/scenes/home.yaml is 'home'" \
+  --scene "$S/libs/sim/scenes/home.yaml" office_s5.lcmlog
+expect 3 "--start-utime 5 is not the session's first frame" --start-utime 5 office_s5.lcmlog
+echo "OK: a log given twice, another scene and a wrong start refused by name"
