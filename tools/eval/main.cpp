@@ -1,6 +1,8 @@
 // ivoa-eval: a model's MC-dropout predictions and FC2 embeddings on dataset
 // sessions, and per-frame overlay figures from logs (see README.md).
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -333,7 +335,8 @@ double write_predictions(const Options& o, const SessionList& sessions, introspe
   const std::string csv_path = o.out + "/predictions.csv", emb_path = o.out + "/embeddings.f32";
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> csv(std::fopen(csv_path.c_str(), "w"), &std::fclose);
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> emb(std::fopen(emb_path.c_str(), "wb"), &std::fclose);
-  if (!csv || !emb) throw OutputError((!csv ? csv_path : emb_path) + ": cannot open for writing");
+  if (!csv || !emb)
+    throw OutputError((!csv ? csv_path : emb_path) + ": cannot open for writing: " + std::strerror(errno));
   std::fprintf(csv.get(), "%s\n", kHeader);
   Progress progress("evaluating (T = " + std::to_string(o.inference.mc_passes) + ")", total, "samples");
   double done = 0;
@@ -367,7 +370,7 @@ void write_eval_json(const Options& o, const introspection::IntrospectionModel& 
        << evaluated << "], \"metadata\": {\"detector\": " << json_quote(info.detector)
        << ", \"architecture\": " << json_quote(info.architecture)
        << ", \"training\": " << (info.training_summary.empty() ? "{}" : info.training_summary) << "}}\n";
-  if (!json.flush()) throw OutputError(path + ": cannot write");
+  if (!json.flush()) throw OutputError(path + ": cannot write: " + std::strerror(errno));
 }
 
 void add_options(CLI::App& app, Options& o) {

@@ -10,14 +10,16 @@
 //
 //   ivoa-sim-causes --out causes.csv out/main-job-default/logs/*_s31.lcmlog
 #include <algorithm>
-#include <set>
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -456,14 +458,14 @@ void parse_variants(CommandLine& cl) {
 bool open_outputs(const Options& opt, std::ofstream& csv, std::ofstream& variants_csv) {
   csv.open(opt.out);
   if (!csv) {
-    spdlog::error("cannot write {}", opt.out);
+    spdlog::error("cannot write {}: {}", opt.out, std::strerror(errno));
     return false;
   }
   csv << "session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause,fixed_by\n";
   if (opt.variants_out.empty()) return true;
   variants_csv.open(opt.variants_out);
   if (!variants_csv) {
-    spdlog::error("cannot write {}", opt.variants_out);
+    spdlog::error("cannot write {}: {}", opt.variants_out, std::strerror(errno));
     return false;
   }
   variants_csv << "session,detector,variant,label,cells,right,wrong\n";

@@ -1,6 +1,8 @@
 #include "ivoa/core/process.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 
@@ -155,10 +157,11 @@ int run_until_stopped(Bus& bus, Heartbeat* heartbeat, const std::function<void()
 
 bool write_text_file(const std::string& path, const std::string& text) {
   if (path.empty()) return true;
+  errno = 0;
   std::ofstream out(path);
   // Flushed here: a full disk fails the flush, not the buffered <<.
   if (out << text << std::flush) return true;
-  spdlog::error("cannot write {}", path);
+  spdlog::error("cannot write {}{}", path, errno != 0 ? std::string(": ") + std::strerror(errno) : "");
   return false;
 }
 
