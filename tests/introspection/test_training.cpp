@@ -424,6 +424,17 @@ TEST(Training, MakesTheModelsFolderOrSaysItCannot) {
   } catch (const TrainOutputError& e) {
     EXPECT_NE(std::string(e.what()).find("split.yaml/m.pt: cannot create its folder"), std::string::npos) << e.what();
   }
+
+  c.output = "/proc/m.pt";  // a folder no file can be made in: said before the training, not after
+  bool trained = false;
+  try {
+    train_model(c, [&](const TrainStatus&) { trained = true; });
+    FAIL();
+  } catch (const TrainOutputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/proc/m.pt: cannot write there"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(trained);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("models/today/m.pt.writable")));
 }
 
 // Validating on the training split would keep the model that fits it best

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <deque>
 #include <limits>
+#include <filesystem>
 #include <map>
 #include <set>
 #include <optional>
@@ -407,6 +408,7 @@ SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::strin
     throw std::invalid_argument("keep_tn must be in (0, 1], not " + std::to_string(impl_->options.keep_tn));
   if (impl_->options.views != 1 && impl_->options.views != 2)
     throw std::invalid_argument("views must be 1 or 2, not " + std::to_string(impl_->options.views));
+  list_sessions(dataset_root);  // a damaged index is found now, not once the session is built
   impl_->info.session = session;
   impl_->info.labels_from = impl_->rerun() ? "rerun" : "recorded";
 }
@@ -419,7 +421,7 @@ SessionBuilder::~SessionBuilder() {
 
 void SessionBuilder::add_log(const std::string& path, const ProgressCallback& progress) {
   Impl& m = *impl_;
-  m.info.logs.push_back(path);
+  m.info.logs.push_back(std::filesystem::absolute(path).lexically_normal().string());  // found again from any folder
   // Damage is skipped to the next good event (reported in problems): what follows it is still the session's.
   logio::LogReader reader(path, {/*resync=*/true});  // throws LogReadError for a missing file
   logio::LogEvent e;

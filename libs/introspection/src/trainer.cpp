@@ -1,7 +1,9 @@
 #include "ivoa/introspection/training.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -365,6 +367,12 @@ void make_output_folder(const std::string& output) {
   std::error_code error;
   if (!folder.empty()) std::filesystem::create_directories(folder, error);
   if (error) throw TrainOutputError(output + ": cannot create its folder (" + error.message() + ")");
+  // Found now, not after the training: a file can be made beside it (as every save does).
+  const std::string probe = output + ".writable";
+  errno = 0;
+  if (!std::ofstream(probe))
+    throw TrainOutputError(output + ": cannot write there (" + std::string(std::strerror(errno)) + ")");
+  std::filesystem::remove(probe, error);
 }
 
 // Whole or not at all: a write that fails (a full disk) keeps the last model.
