@@ -293,6 +293,21 @@ TEST(DatasetFormat, AColumnThatIsNotANumberIsNamed) {
       << what;
 }
 
+// sscanf read "16abc" as 16, and took any sample number or frame.
+TEST(DatasetFormat, TrailingJunkAWrongSampleNumberAndAFrameOutsideTheSessionAreNamed) {
+  const std::pair<std::function<std::string(std::string)>, std::string> cases[] = {
+      {[](std::string row) { return with_column(row, 4, "16abc"); },
+       "column cell (5 of 16) is missing or not a number"},
+      {[](std::string row) { return with_column(row, 0, "999"); }, "sample 999 where sample 1 is due"},
+      {[](std::string row) { return with_column(row, 1, "7"); }, "frame 7, but the session has"},
+      {[](std::string row) { return with_column(row, 1, "-1"); }, "frame -1, but the session has"}};
+  for (const auto& [edit, expected] : cases) {
+    test::TempDir dir;
+    const std::string what = reading_error_after(dir, edit);
+    EXPECT_NE(what.find("samples.csv line 3: " + expected), std::string::npos) << what;
+  }
+}
+
 TEST(DatasetFormat, ARowWithMoreFieldsThanTheHeaderIsNamed) {
   test::TempDir dir;
   const std::string what = reading_error_after(dir, [](std::string row) { return row + ",7"; });

@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <climits>
+#include <charconv>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -15,6 +17,8 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <string_view>
+#include <vector>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -122,24 +126,65 @@ void check_finite(const SampleRecord& s, const std::string& where) {
     if (!std::isfinite(value)) throw DatasetError(where + ": column " + name + " is " + std::to_string(value));
 }
 
+// Whole-field numbers: "16abc" or "" is not a number (sscanf took "16").
+bool parse_field(std::string_view field, long long& out) {
+  const auto [end, error] = std::from_chars(field.data(), field.data() + field.size(), out);
+  return error == std::errc() && end == field.data() + field.size();
+}
+bool parse_field(std::string_view field, int& out) {
+  long long wide = 0;
+  if (!parse_field(field, wide) || wide < INT_MIN || wide > INT_MAX) return false;
+  out = static_cast<int>(wide);
+  return true;
+}
+bool parse_field(std::string_view field, float& out) {
+  const std::string text(field);
+  char* end = nullptr;
+  out = std::strtof(text.c_str(), &end);
+  return !text.empty() && end == text.c_str() + text.size();
+}
+
 // `columns`: 15 (before patch_side was recorded) or 16.
-SampleRecord parse_sample_row(const std::string& line, int columns, const std::string& where) {
-  // sscanf stops at its last field: one more in the row would pass unseen
-  if (const auto fields = std::count(line.begin(), line.end(), ',') + 1; fields != columns)
-    throw DatasetError(where + ": " + std::to_string(fields) + " fields, the header has " + std::to_string(columns));
+// `index`: the row's place among the samples (0-based), its sample number.
+SampleRecord parse_sample_row(const std::string& line, int columns, int64_t index, const std::string& where) {
+  std::vector<std::string_view> fields;
+  for (size_t start = 0;;) {
+    const size_t comma = line.find(',', start);
+    fields.emplace_back(line.data() + start, (comma == std::string::npos ? line.size() : comma) - start);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (static_cast<int>(fields.size()) != columns)
+    throw DatasetError(where + ": " + std::to_string(fields.size()) + " fields, the header has " +
+                       std::to_string(columns));
   SampleRecord s;
   long long sample = 0, frame = 0, utime = 0, depth_utime = 0;
-  int n = std::sscanf(line.c_str(), "%lld,%lld,%lld,%lld,%d,%d,%d,%d,%f,%f,%f,%f,%d,%d,%d,%d", &sample, &frame, &utime,
-                      &depth_utime, &s.cell, &s.label, &s.stereo_state, &s.depth_state, &s.x, &s.y, &s.u, &s.v,
-                      &s.phenomena, &s.phenomenon, &s.surface, &s.patch_side);
-  if (n < columns) {
-    const int bad = std::max(n, 0);
-    throw DatasetError(where + ": column " + sample_column(bad) + " (" + std::to_string(bad + 1) + " of " +
-                       std::to_string(columns) + ") is missing or not a number in '" + line + "'");
-  }
+  const bool ok[] = {parse_field(fields[0], sample),
+                     parse_field(fields[1], frame),
+                     parse_field(fields[2], utime),
+                     parse_field(fields[3], depth_utime),
+                     parse_field(fields[4], s.cell),
+                     parse_field(fields[5], s.label),
+                     parse_field(fields[6], s.stereo_state),
+                     parse_field(fields[7], s.depth_state),
+                     parse_field(fields[8], s.x),
+                     parse_field(fields[9], s.y),
+                     parse_field(fields[10], s.u),
+                     parse_field(fields[11], s.v),
+                     parse_field(fields[12], s.phenomena),
+                     parse_field(fields[13], s.phenomenon),
+                     parse_field(fields[14], s.surface),
+                     columns < 16 || parse_field(fields[15], s.patch_side)};
+  for (int k = 0; k < columns; ++k)
+    if (!ok[k])
+      throw DatasetError(where + ": column " + sample_column(k) + " (" + std::to_string(k + 1) + " of " +
+                         std::to_string(columns) + ") is missing or not a number in '" + line + "'");
   check_finite(s, where);
   if (s.label < 0 || s.label >= kNumClasses)
     throw DatasetError(where + ": label " + std::to_string(s.label) + " out of range");
+  if (sample != index)
+    throw DatasetError(where + ": sample " + std::to_string(sample) + " where sample " + std::to_string(index) +
+                       " is due (rows reordered, cut or added?)");
   s.frame = frame;
   s.utime = utime;
   s.depth_utime = depth_utime;
@@ -306,7 +351,11 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
   while (std::getline(in, line)) {
     ++row;
     if (line.empty()) continue;
-    SampleRecord s = parse_sample_row(line, has_side ? 16 : 15, dir_ + "/samples.csv line " + std::to_string(row));
+    const std::string where = dir_ + "/samples.csv line " + std::to_string(row);
+    SampleRecord s = parse_sample_row(line, has_side ? 16 : 15, static_cast<int64_t>(samples_.size()), where);
+    if (s.frame < 0 || s.frame >= info_.frames)
+      throw DatasetError(where + ": frame " + std::to_string(s.frame) + ", but the session has " +
+                         std::to_string(info_.frames) + " frames (session.json)");
     if (!has_side) s.patch_side = info_.patch_size;
     samples_.push_back(s);
   }
