@@ -43,6 +43,11 @@ TEST(StereoOptions, FlagsUseJppNames) {
   EXPECT_EQ(p.detector.dense.sgbm.num_disparities, 128);
   EXPECT_EQ(p.detector.dense.min_ground_points, 20);
   EXPECT_EQ(parse({"--sgbm_mode", "fast"}).code, kExitUsage);
+  // What OpenCV's StereoSGBM would refuse at every frame is refused at the start.
+  EXPECT_EQ(parse({"--sgbm_block_size", "4"}).code, kExitUsage);
+  EXPECT_EQ(parse({"--sgbm_num_disparities", "17"}).code, kExitUsage);
+  EXPECT_EQ(parse({"--sgbm_num_disparities", "0"}).code, kExitUsage);
+  EXPECT_EQ(parse({"--sgbm_block_size", "7", "--sgbm_num_disparities", "64"}).code, -1);
 }
 
 TEST(StereoOptions, QueryGridThatCannotBeBuiltIsAUsageError) {

@@ -1,6 +1,7 @@
 // ivoa-stereo-eval: scores the point checks of the stereo perception models
 // (JPP-C's CP predicate, SGBM disparity) against ground-truth disparity on
 // a rectified pair, e.g. Middlebury "Aloe" from Debian's opencv-doc.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -178,6 +179,13 @@ int main(int argc, char** argv) {
   } catch (const cv::Exception& e) {  // OpenCV refusing the settings or out of memory: said, not aborted
     spdlog::error("scoring failed: {}", e.what());
     return ivoa::kExitFailure;
+  }
+  const bool none_scored = std::all_of(scores.begin(), scores.end(),
+                                       [](const auto& s) { return s.textured.pixels + s.untextured.pixels == 0; });
+  if (none_scored) {
+    spdlog::error("no pixel scored: --stride {} over the {}x{} pair leaves none with known ground truth",
+                  cl.scoring.stride, pair.left.cols, pair.left.rows);
+    return ivoa::kExitBadInput;
   }
   return write_outputs(cl, scores, overlay);
 }

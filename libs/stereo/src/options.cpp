@@ -1,5 +1,8 @@
 #include "ivoa/stereo/options.hpp"
 
+#include <cstdlib>
+#include <string>
+
 #include <CLI/CLI.hpp>
 
 #include "ivoa/stereo/config.hpp"
@@ -51,8 +54,21 @@ void add_sgbm_matcher_options(CLI::App& app, SgbmConfig& c) {
   };
   add("--sgbm_mode", c.mode, "3way (fastest), sgbm, hh")->check(CLI::IsMember({"3way", "sgbm", "hh"}));
   add("--sgbm_min_disparity", c.min_disparity, "pixels");
-  add("--sgbm_num_disparities", c.num_disparities, "disparity search range, pixels, multiple of 16");
-  add("--sgbm_block_size", c.block_size, "matching block side, pixels, odd");
+  // OpenCV's StereoSGBM refuses others (an exception per frame, not a usage error).
+  add("--sgbm_num_disparities", c.num_disparities, "disparity search range, pixels, multiple of 16")
+      ->check(CLI::Validator(
+          [](const std::string& v) {
+            const int n = std::atoi(v.c_str());
+            return n > 0 && n % 16 == 0 ? std::string() : "must be a positive multiple of 16, not " + v;
+          },
+          "", "multiple of 16"));
+  add("--sgbm_block_size", c.block_size, "matching block side, pixels, odd")
+      ->check(CLI::Validator(
+          [](const std::string& v) {
+            const int n = std::atoi(v.c_str());
+            return n > 0 && n % 2 == 1 ? std::string() : "must be a positive odd number, not " + v;
+          },
+          "", "odd"));
   add("--sgbm_p1", c.p1, "small-change penalty (0: 8*block^2)");
   add("--sgbm_p2", c.p2, "large-change penalty (0: 32*block^2)");
   add("--sgbm_uniqueness_ratio", c.uniqueness_ratio, "percent margin of the best cost");
