@@ -72,7 +72,9 @@ void print_file(const FileResult& r) {
   }
   std::printf("%s: %lld events, %.1f MB, first channel %s, %s\n", r.path.c_str(), static_cast<long long>(r.events),
               static_cast<double>(r.size) / 1e6, r.first_channel.empty() ? "-" : r.first_channel.c_str(),
-              r.problems.empty() ? "intact" : "DAMAGED");
+              !r.problems.empty() ? "DAMAGED"
+              : r.events == 0     ? "intact but empty (nothing recorded; ivoa-log-play refuses it)"
+                                  : "intact");
   for (size_t i = 0; i < r.problems.size(); ++i)
     std::printf("  %s; the %lld events before it are intact\n", r.problems[i].describe().c_str(),
                 static_cast<long long>(r.events_before_problem[i]));
