@@ -69,7 +69,9 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--device", config.device, "cpu or cuda")
       ->capture_default_str()
       ->check(CLI::IsMember({"cpu", "cuda"}));
-  app.add_option("--seed", config.seed, "dropout masks (0 = from the clock)")->capture_default_str();
+  app.add_option("--seed", config.seed, "dropout masks (0 = from the clock)")
+      ->capture_default_str()
+      ->check(ivoa::non_negative_number());
   app.add_option("--warm-up", cl.warm_up,
                  "before listening, run the model once on a blank frame of this size (WxH, the camera's), so the "
                  "first real frame is not delayed by LibTorch's set-up; none: skip")

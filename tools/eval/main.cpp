@@ -397,7 +397,9 @@ void add_options(CLI::App& app, Options& o) {
       ->capture_default_str()
       ->check(positive_number());
   app.add_option("--threads", o.inference.threads, "LibTorch threads")->capture_default_str()->check(positive_number());
-  app.add_option("--seed", o.inference.seed, "dropout masks")->capture_default_str();
+  app.add_option("--seed", o.inference.seed, "dropout masks (0: from the clock, a new draw each run)")
+      ->capture_default_str()
+      ->check(non_negative_number());
 }
 
 // The figures of an earlier run into the same --out would pass for this
