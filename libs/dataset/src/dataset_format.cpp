@@ -67,10 +67,17 @@ T get(const YAML::Node& node, const std::string& key, const std::string& where) 
   }
 }
 
+// A YAML (JSON) file read whole; a folder in its place is named as one
+// (the stream's error was "basic_filebuf::underflow ... Is a directory").
+YAML::Node load_yaml_file(const std::string& path) {
+  if (fs::is_directory(path)) throw DatasetError(path + ": is a folder, not a file");
+  return YAML::LoadFile(path);
+}
+
 SessionInfo parse_session_json(const std::string& path) {
   YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
+    root = load_yaml_file(path);
   } catch (const YAML::Exception& e) {
     throw DatasetError(path + ": cannot read session metadata: " + e.what());
   }
@@ -437,7 +444,7 @@ std::vector<std::string> list_sessions(const std::string& dataset_root) {
   const std::string path = dataset_root + "/dataset.json";
   if (!fs::exists(path)) return {};
   try {
-    return YAML::LoadFile(path)["sessions"].as<std::vector<std::string>>();
+    return load_yaml_file(path)["sessions"].as<std::vector<std::string>>();
   } catch (const YAML::Exception& e) {
     throw DatasetError(path + ": " + e.what());
   }
@@ -485,7 +492,7 @@ void register_session(const std::string& dataset_root, const std::string& sessio
 std::map<std::string, std::vector<std::string>> load_split(const std::string& path) {
   YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
+    root = load_yaml_file(path);
   } catch (const YAML::Exception& e) {
     throw DatasetError(path + ": cannot read split file: " + e.what());
   }
