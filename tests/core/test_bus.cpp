@@ -160,8 +160,29 @@ TEST(Bus, MissingLogToReplayIsBadInputNamingTheFile) {
     Bus bus("file:///nonexistent/bus_test/out.lcmlog?mode=w");
     FAIL();
   } catch (const BusError& e) {
-    EXPECT_NE(std::string(e.what()).find("cannot write the log"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("its folder /nonexistent/bus_test does not exist"), std::string::npos)
+        << e.what();
     EXPECT_EQ(e.exit_code(), kExitIoError);
+  }
+  try {
+    Bus bus("file:///tmp?mode=w");
+    FAIL();
+  } catch (const BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("'/tmp' is a folder, not a log file"), std::string::npos) << e.what();
+  }
+}
+
+// A group that is no multicast address is a usage error, not a routing one.
+TEST(Bus, AGroupThatIsNoMulticastAddressIsNamed) {
+  for (const char* group : {"999.1.1.1", "10.0.0.1"}) {
+    try {
+      Bus bus(std::string("udpm://") + group + ":7667?ttl=0");
+      FAIL() << group;
+    } catch (const BusError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("'") + group + "' is not a multicast group"), std::string::npos)
+          << e.what();
+      EXPECT_EQ(e.exit_code(), kExitUsage);
+    }
   }
 }
 

@@ -1,5 +1,8 @@
 #include "ivoa/core/bus.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+
 #include <cstdlib>
 #include <filesystem>
 
@@ -21,6 +24,14 @@ std::string default_lcm_url() {
 namespace {
 
 // Why LCM would not start on `url`, as far as can be told from outside it.
+std::string why_not_writable(const std::string& path) {
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  if (std::filesystem::is_directory(path)) return "'" + path + "' is a folder, not a log file";
+  if (!folder.empty() && !std::filesystem::is_directory(folder))
+    return "cannot write the log '" + path + "': its folder " + folder.string() + " does not exist";
+  return "cannot write the log '" + path + "' (may this user write in its folder?)";
+}
+
 BusError cannot_start(const std::string& url) {
   const std::string what = "cannot start LCM on '" + url + "'";
   if (url.rfind("file://", 0) == 0) {
@@ -30,10 +41,16 @@ BusError cannot_start(const std::string& url) {
     if (reading && !std::filesystem::exists(path))
       return BusError(what + ": the log '" + path + "' does not exist", kExitBadInput);
     if (reading) return BusError(what + ": cannot read the log '" + path + "'", kExitBadInput);
-    return BusError(what + ": cannot write the log '" + path + "' (does its folder exist?)", kExitIoError);
+    return BusError(what + ": " + why_not_writable(path), kExitIoError);
   }
-  if (url.rfind("udpm://", 0) == 0)
+  if (url.rfind("udpm://", 0) == 0) {
+    const std::string rest = url.substr(7);
+    const std::string group = rest.substr(0, rest.find_first_of(":?"));
+    in_addr address{};
+    if (!group.empty() && (::inet_aton(group.c_str(), &address) == 0 || !IN_MULTICAST(ntohl(address.s_addr))))
+      return BusError(what + ": '" + group + "' is not a multicast group (224.0.0.0 to 239.255.255.255)", kExitUsage);
     return BusError(what + ": is there a multicast route? e.g. ip route add 224.0.0.0/4 dev lo");
+  }
   return BusError(
       what + " (LCM URLs: udpm://GROUP:PORT?ttl=0, file://LOG?speed=1 to replay, file://LOG?mode=w, memq://)",
       kExitUsage);
