@@ -36,6 +36,20 @@ TEST(DatasetInfo, ListsSessionsWithTheirSplitDetectorAndClassCounts) {
   EXPECT_EQ(dataset_info(dir.file("data")).exit_code, kExitOk) << "the folder may also be given bare";
 }
 
+// One damaged session is named; the others are still listed and counted.
+TEST(DatasetInfo, AnUnreadableSessionIsNamedAndTheOthersListed) {
+  test::TempDir dir;
+  test::SyntheticSession s;
+  s.per_class = 2;
+  for (const char* name : {"a", "b", "c"}) test::write_synthetic_session(dir.file("data"), name, s);
+  std::ofstream(dir.file("data") + "/b/samples.csv") << "cut";
+  const auto r = dataset_info(dir.file("data"));
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "UNREADABLE: " + dir.file("data") + "/b/samples.csv")) << r.output;
+  EXPECT_TRUE(contains(r.output, "total: TP 4  TN 4  FP 4  FN 4 (1 of 3 sessions unreadable, not counted)"))
+      << r.output;
+}
+
 TEST(DatasetInfo, FolderWithoutADatasetIsBadInput) {
   test::TempDir dir;
   const auto r = dataset_info(dir.path().string());

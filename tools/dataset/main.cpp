@@ -131,9 +131,17 @@ int run_info(const std::string& root, const std::string& split_path) {
     return kExitBadInput;
   }
   std::array<int64_t, dataset::kNumClasses> total{};
+  int broken = 0;  // listed and counted; the others are still shown
   for (const auto& name : sessions) {
-    const dataset::SessionReader r(root + "/" + name);
-    const auto& i = r.info();
+    std::optional<dataset::SessionReader> r;
+    try {
+      r.emplace(root + "/" + name);
+    } catch (const dataset::DatasetError& e) {
+      std::printf("%-28s UNREADABLE: %s\n", name.c_str(), e.what());
+      ++broken;
+      continue;
+    }
+    const auto& i = r->info();
     std::printf("%-28s %-6s %-8s %-8s frames %5lld samples %7lld  %s\n", name.c_str(),
                 split_of.count(name) ? split_of[name].c_str() : "-", i.environment.c_str(), i.detector.c_str(),
                 static_cast<long long>(i.frames), static_cast<long long>(i.samples),
@@ -145,11 +153,13 @@ int run_info(const std::string& root, const std::string& split_path) {
     for (int k = 0; k < dataset::kNumClasses; ++k)
       total[static_cast<size_t>(k)] += i.class_counts[static_cast<size_t>(k)];
   }
-  std::printf("total: %s\n", class_counts(total).c_str());
+  std::printf(
+      "total: %s%s\n", class_counts(total).c_str(),
+      broken > 0 ? fmt::format(" ({} of {} sessions unreadable, not counted)", broken, sessions.size()).c_str() : "");
   for (const auto& [session, split] : split_of)
     if (!fs::exists(root + "/" + session + "/session.json"))
       spdlog::warn("split '{}' names session '{}', which is not in {}", split, session, root);
-  return kExitOk;
+  return broken > 0 ? kExitBadInput : kExitOk;
 }
 
 // What "build" takes: --keep-tn as a fraction in (0, 1].
