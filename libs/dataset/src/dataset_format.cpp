@@ -71,6 +71,7 @@ T get(const YAML::Node& node, const std::string& key, const std::string& where) 
 // (the stream's error was "basic_filebuf::underflow ... Is a directory").
 YAML::Node load_yaml_file(const std::string& path) {
   if (fs::is_directory(path)) throw DatasetError(path + ": is a folder, not a file");
+  if (!fs::exists(path)) throw DatasetError(path + ": no such file");
   return YAML::LoadFile(path);
 }
 
