@@ -141,6 +141,10 @@ int drive(const ivoa::sim::SimDriverConfig& config, const ivoa::sim::SimulatorCo
   } catch (const std::runtime_error& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitIoError;
+  } catch (const std::exception& e) {
+    // length_error, bad_alloc: a scene that validates but is too large to build.
+    spdlog::error("{}: cannot build the scene (seed {}): {}", config.scene_file, config.seed, e.what());
+    return ivoa::kExitBadInput;
   }
   spdlog::info("scene {} seed {} at {} Hz ({}), start utime {}, publishing on {}", config.scene_file, config.seed,
                config.rate_hz, config.realtime ? "real time" : "as fast as possible", driver->start_utime(), bus.url());

@@ -128,6 +128,32 @@ TEST(SimSceneSpec, ValidationErrorsGiveTheLine) {
       << error_of(empty);
 }
 
+// Values that would crash or exhaust the simulator are refused by name:
+// NaN and infinities pass any comparison, an empty wall palette divided by
+// zero, a huge texture scale or position ran out of memory.
+TEST(SimSceneSpec, RefusesWhatCannotBeBuilt) {
+  const auto expect_error = [](const std::string& yaml, const std::string& message) {
+    EXPECT_NE(error_of(yaml).find(message), std::string::npos) << yaml << " -> " << error_of(yaml);
+  };
+  expect_error("layout: {width: [.nan, 5]}\n", "test.yaml:1: layout.width[0]: expected a finite number, got '.nan'");
+  expect_error("lighting: {ambient: .inf}\n", "lighting.ambient: expected a finite number");
+  expect_error("materials:\n  - {name: m, color: [0.5, .nan, 0.5]}\n", "materials[0].color[1]: expected a finite");
+  expect_error("start: [0, 0, .nan]\n", "start[2]: expected a finite number");
+  expect_error("layout: {type: room}\nwalls: {materials: []}\n",
+               "walls.materials: needs at least one material: a room, corridor or office");
+  expect_error("materials:\n  - {name: m, scale: 1e9}\n", "test.yaml:2: materials[0].scale: must be in [0.0001, 100]");
+  expect_error("materials:\n  - {name: m, emission: -5}\n", "materials[0].emission: must be in [0, 10000]");
+  expect_error("elements:\n  - {type: box, position: [1e12, 0]}\n",
+               "elements[0].position: coordinates must lie within 1000 m");
+  expect_error("elements:\n  - {type: box, position: [1, 0], size: [1, 1, 1e6]}\n", "sizes must be in [0, 100] m");
+  expect_error("lighting: {sun_irradiance: -10}\n",
+               "lighting.sun_irradiance: range [-10, -10] must lie in [0, 100000]");
+  expect_error("name: x\nobstacles: {count: 3, count: 4}\n", "test.yaml:2: obstacles.count: given twice");
+  expect_error("name: x\n? [a, b]\n: 3\n", "a key must be a plain name");
+  // Outdoor scenes and bare layouts have no wall palette and need none.
+  EXPECT_EQ(error_of("layout: {type: none}\nwalls: {materials: []}\n"), "");
+}
+
 // The format example in the scenes README is a valid scene.
 TEST(SimSceneSpec, ReadmeExampleParses) {
   std::ifstream in(std::string(IVOA_SIM_SCENES_DIR) + "/README.md");

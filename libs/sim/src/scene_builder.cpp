@@ -89,6 +89,8 @@ uint16_t SceneBuilder::material(const std::string& name) {
 
 std::string SceneBuilder::pick(const std::vector<std::string>& palette,
                                const std::function<bool(const Material&)>& has_property, double p) {
+  // validate() keeps every palette the builder draws from non-empty.
+  if (palette.empty()) throw std::logic_error("SceneBuilder::pick: no material to draw from");
   std::vector<std::string> with, without;
   for (const auto& n : palette) (has_property(resolve(n)) ? with : without).push_back(n);
   const bool want = rng_.chance(p);

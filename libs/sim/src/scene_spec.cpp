@@ -1,5 +1,6 @@
 #include "ivoa/sim/scene_spec.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -11,6 +12,18 @@ namespace ivoa::sim {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+// Scene coordinates (element positions) lie within this many metres of the origin.
+constexpr double kMaxCoordinateM = 1000;
+// Element sizes, material scales: no furniture or texture is larger.
+constexpr double kMaxSizeM = 100;
+// Emitted radiance of a lamp or panel (the shipped lights: 50-120).
+constexpr double kMaxEmission = 10000;
+
+std::string number_text(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
 
 // A YAML node that knows where it is (file and key path) so every error
 // names both.
@@ -38,27 +51,41 @@ class Reader {
   bool is_map() const { return node_.IsMap(); }
   const std::string& path() const { return path_; }
 
+  // Every key is one of `keys`, a plain name, and given once (YAML would
+  // silently keep the first of two).
   void allow(std::initializer_list<const char*> keys) const {
     if (!node_.IsMap()) fail("expected a mapping");
-    std::set<std::string> ok(keys.begin(), keys.end());
+    std::set<std::string> ok(keys.begin(), keys.end()), seen;
     for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
+      if (!kv.first.IsScalar()) Reader(kv.first, path_, file_).fail("a key must be a plain name");
+      const std::string key = kv.first.Scalar();
+      const std::string key_path = path_.empty() ? key : path_ + "." + key;
+      if (!seen.insert(key).second) Reader(kv.first, key_path, file_).fail("given twice");
       if (!ok.count(key)) {
         std::string list;
         for (const auto& k : ok) list += (list.empty() ? "" : ", ") + k;
-        Reader(kv.first, path_.empty() ? key : path_ + "." + key, file_)
-            .fail("unknown key (expected one of: " + list + ")");
+        Reader(kv.first, key_path, file_).fail("unknown key (expected one of: " + list + ")");
       }
     }
   }
 
+  // NaN and infinities (.nan, .inf) would pass every range check below.
   double number() const {
     if (!node_.IsScalar()) fail("expected a number");
+    double v = 0;
     try {
-      return node_.as<double>();
+      v = node_.as<double>();
     } catch (const YAML::Exception&) {
       fail("expected a number, got '" + node_.Scalar() + "'");
     }
+    if (!std::isfinite(v)) fail("expected a finite number, got '" + node_.Scalar() + "'");
+    return v;
+  }
+  // A number in [lo, hi].
+  double number_in(double lo, double hi) const {
+    const double v = number();
+    if (v < lo || v > hi) fail("must be in [" + number_text(lo) + ", " + number_text(hi) + "], got " + number_text(v));
+    return v;
   }
   double probability() const {
     const double p = number();
@@ -92,6 +119,13 @@ class Reader {
   Eigen::Vector2d vec2() const {
     const auto v = numbers(2);
     return {v[0], v[1]};
+  }
+  // [x, y] in metres, within the scene's extent.
+  Eigen::Vector2d position() const {
+    const Eigen::Vector2d p = vec2();
+    if (p.cwiseAbs().maxCoeff() > kMaxCoordinateM)
+      fail("coordinates must lie within " + number_text(kMaxCoordinateM) + " m of the origin");
+    return p;
   }
   std::vector<std::string> strings() const {
     if (node_.IsScalar()) return {string()};
@@ -160,16 +194,13 @@ Material parse_material(const Reader& r, const std::vector<Material>& earlier) {
   }
   if (r.has("color")) m.color = parse_color(r["color"]);
   if (r.has("color2")) m.color2 = parse_color(r["color2"]);
-  maybe(r, "contrast", m.contrast, &Reader::number);
-  maybe(r, "scale", m.scale, &Reader::number);
-  maybe(r, "reflectance", m.reflectance, &Reader::number);
-  maybe(r, "roughness", m.roughness, &Reader::number);
-  maybe(r, "wetness", m.wetness, &Reader::number);
-  maybe(r, "ir_albedo", m.ir_albedo, &Reader::number);
-  maybe(r, "emission", m.emission, &Reader::number);
-  if (m.scale <= 0) r["scale"].fail("must be > 0");
-  if (m.contrast < 0 || m.contrast > 1) r["contrast"].fail("must be in [0, 1]");
-  if (m.reflectance < 0 || m.reflectance > 1) r["reflectance"].fail("must be in [0, 1]");
+  if (r.has("contrast")) m.contrast = r["contrast"].number_in(0, 1);
+  if (r.has("scale")) m.scale = r["scale"].number_in(1e-4, kMaxSizeM);
+  if (r.has("reflectance")) m.reflectance = r["reflectance"].number_in(0, 1);
+  if (r.has("roughness")) m.roughness = r["roughness"].number_in(0, M_PI / 2);
+  if (r.has("wetness")) m.wetness = r["wetness"].number_in(0, 1);
+  if (r.has("ir_albedo")) m.ir_albedo = r["ir_albedo"].number_in(-1, 1);
+  if (r.has("emission")) m.emission = r["emission"].number_in(0, kMaxEmission);
   return m;
 }
 
@@ -221,12 +252,12 @@ void parse_placement(const Reader& r, ElementSpec& e) {
   const bool linear = e.type == ElementSpec::Type::kWall || e.type == ElementSpec::Type::kCurb;
   if (linear) {
     if (!r.has("from") || !r.has("to")) r.fail(std::string(ElementSpec::type_name(e.type)) + " needs from and to");
-    e.position = r["from"].vec2();
-    e.end = r["to"].vec2();
+    e.position = r["from"].position();
+    e.end = r["to"].position();
     if ((e.end - e.position).norm() < 1e-3) r["to"].fail("from and to coincide");
   } else {
     if (!r.has("position")) r.fail(std::string(ElementSpec::type_name(e.type)) + " needs a position");
-    e.position = r["position"].vec2();
+    e.position = r["position"].position();
   }
 }
 
@@ -248,7 +279,7 @@ void parse_size(const Reader& r, Eigen::Vector3d& size) {
   if (r.has("width")) size.y() = r["width"].number();
   if (r.has("thickness")) size.y() = r["thickness"].number();
   for (int i = 0; i < 3; ++i)
-    if (size[i] < 0) r["size"].fail("sizes must be >= 0");
+    if (size[i] < 0 || size[i] > kMaxSizeM) r.fail("sizes must be in [0, " + number_text(kMaxSizeM) + "] m");
 }
 
 std::vector<ElementSpec::Door> parse_doors(const Reader& d) {
@@ -257,9 +288,9 @@ std::vector<ElementSpec::Door> parse_doors(const Reader& d) {
     const Reader dr = d.at(i);
     dr.allow({"offset", "width", "height", "material", "open"});
     ElementSpec::Door door;
-    maybe(dr, "offset", door.offset, &Reader::number);
-    maybe(dr, "width", door.width, &Reader::number);
-    maybe(dr, "height", door.height, &Reader::number);
+    if (dr.has("offset")) door.offset = dr["offset"].number_in(0, 2 * kMaxCoordinateM);
+    if (dr.has("width")) door.width = dr["width"].number_in(0, kMaxSizeM);
+    if (dr.has("height")) door.height = dr["height"].number_in(0, kMaxSizeM);
     maybe(dr, "material", door.material, &Reader::string);
     maybe(dr, "open", door.open, &Reader::boolean);
     doors.push_back(door);
@@ -277,9 +308,9 @@ ElementSpec parse_element(const Reader& r) {
   parse_placement(r, e);
   parse_size(r, e.size);
   if (r.has("yaw_deg")) e.yaw = r["yaw_deg"].number() * kDeg;
-  maybe(r, "elevation", e.elevation, &Reader::number);
-  maybe(r, "depth", e.depth, &Reader::number);
-  maybe(r, "intensity", e.intensity, &Reader::number);
+  if (r.has("elevation")) e.elevation = r["elevation"].number_in(0, kMaxSizeM);
+  if (r.has("depth")) e.depth = r["depth"].number_in(0, kMaxSizeM);
+  if (r.has("intensity")) e.intensity = r["intensity"].number_in(0, kMaxEmission);
   maybe(r, "material", e.material, &Reader::string);
   if (r.has("shape")) {
     e.shape = r["shape"].string();
@@ -288,7 +319,7 @@ ElementSpec parse_element(const Reader& r) {
   if (r.has("baseboard")) {
     const Reader b = r["baseboard"];
     b.allow({"height", "material"});
-    e.baseboard_height = b.has("height") ? b["height"].number() : 0.1;
+    e.baseboard_height = b.has("height") ? b["height"].number_in(0, kMaxSizeM) : 0.1;
     e.baseboard_material = b.has("material") ? b["material"].string() : "baseboard_black";
   }
   if (r.has("doors")) e.doors = parse_doors(r["doors"]);
@@ -351,8 +382,8 @@ void parse_obstacles(const Reader& r, ObstacleSpec& out) {
   maybe(r, "count", out.count, &Reader::range);
   if (r.has("kinds")) parse_kinds(r["kinds"], out.kinds);
   maybe(r, "materials", out.materials, &Reader::strings);
-  maybe(r, "color_jitter", out.color_jitter, &Reader::number);
-  maybe(r, "min_gap", out.min_gap, &Reader::number);
+  if (r.has("color_jitter")) out.color_jitter = r["color_jitter"].number_in(0, 1);
+  if (r.has("min_gap")) out.min_gap = r["min_gap"].number_in(0, 50);
   maybe(r, "box_size", out.box_size, &Reader::range);
   maybe(r, "box_height", out.box_height, &Reader::range);
 }
@@ -378,7 +409,7 @@ void parse_lighting(const Reader& r, LightingSpec& out) {
   maybe(r, "overcast_probability", out.overcast_probability, &Reader::probability);
   maybe(r, "low_light_factor", out.low_light_factor, &Reader::range);
   maybe(r, "night", out.night, &Reader::boolean);
-  maybe(r, "max_exposure_scale", out.max_exposure_scale, &Reader::number);
+  if (r.has("max_exposure_scale")) out.max_exposure_scale = r["max_exposure_scale"].number_in(0.01, 100);
 }
 
 void parse_phenomena(const Reader& r, PhenomenaSpec& out) {
@@ -426,6 +457,8 @@ SceneSpec parse(const YAML::Node& root, const std::string& file) {
   }
   if (r.has("start")) {
     const auto v = r["start"].numbers(3);
+    if (std::max(std::abs(v[0]), std::abs(v[1])) > kMaxCoordinateM)
+      r["start"].fail("coordinates must lie within " + number_text(kMaxCoordinateM) + " m of the origin");
     s.start = Pose2D{v[0], v[1], v[2] * kDeg};
   }
   return s;
@@ -443,12 +476,6 @@ struct InvalidKey {
   std::string key;
   std::string what;
 };
-
-std::string number_text(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
-}
 
 void check_range(const std::string& key, const Range& r, double lo, double hi) {
   if (r.min > r.max || r.min < lo || r.max > hi)
@@ -481,6 +508,13 @@ void check_surfaces(const SceneSpec& spec) {
   check_materials(spec, "floor.patch_materials", spec.floor.patch_materials);
   check_range("floor.patch_count", spec.floor.patch_count, 0, 1000);
   check_range("floor.patch_size", spec.floor.patch_size, 0.05, 100);
+  // Rooms, corridors and offices draw every wall from this list.
+  const LayoutType walled[] = {LayoutType::kRoom, LayoutType::kCorridor, LayoutType::kOffice};
+  const bool needs_walls = std::find(std::begin(walled), std::end(walled), spec.layout.type) != std::end(walled);
+  if (needs_walls && spec.walls.materials.empty())
+    throw InvalidKey{"walls.materials",
+                     "needs at least one material: a room, corridor or office layout draws its "
+                     "walls from it"};
   check_materials(spec, "walls.materials", spec.walls.materials);
   check_materials(spec, "walls.baseboard_materials", spec.walls.baseboard_materials);
   check_materials(spec, "walls.door_materials", spec.walls.door_materials);
@@ -498,10 +532,18 @@ void check_contents(const SceneSpec& spec) {
   check_range("pits.count", spec.pits.count, 0, 100);
   check_range("pits.size", spec.pits.size, 0.05, 20);
   check_range("pits.depth", spec.pits.depth, 0.02, 20);
-  check_range("lighting.sun_elevation_deg", spec.lighting.sun_elevation_deg, 1, 90);
-  check_range("lighting.low_light_factor", spec.lighting.low_light_factor, 1e-4, 1);
-  check_range("lighting.light_spacing", spec.lighting.light_spacing, 0.5, 50);
   check_range("phenomena.wet_patches", spec.phenomena.wet_patches, 0, 1000);
+}
+
+void check_lighting(const LightingSpec& l) {
+  check_range("lighting.ambient", l.ambient, 0, 10);
+  check_range("lighting.sun_elevation_deg", l.sun_elevation_deg, 1, 90);
+  check_range("lighting.low_light_factor", l.low_light_factor, 1e-4, 1);
+  check_range("lighting.light_spacing", l.light_spacing, 0.5, 50);
+  check_range("lighting.light_emission", l.light_emission, 0, kMaxEmission);
+  check_range("lighting.sun_azimuth_deg", l.sun_azimuth_deg, -360, 360);
+  check_range("lighting.sun_irradiance", l.sun_irradiance, 0, 1e5);
+  check_range("lighting.sky_irradiance", l.sky_irradiance, 0, 1e5);
 }
 
 void check_elements(const SceneSpec& spec) {
@@ -520,6 +562,7 @@ void check_spec(const SceneSpec& spec) {
   check_layout(spec.layout);
   check_surfaces(spec);
   check_contents(spec);
+  check_lighting(spec.lighting);
   check_elements(spec);
 }
 
