@@ -39,6 +39,7 @@ constexpr double kFinalHandleMs = 500;
 constexpr double kStatusPeriodMs = 100;  // recorder totals -> heartbeat counters
 constexpr double kDrainReportMs = 2000;
 constexpr int kMaxLogSuffix = 999;  // --increment: FILE-1 ... FILE-999
+constexpr double kMaxMb = 1e9;      // sizes and rates in MB: a petabyte (bytes fit in 64 bits)
 
 std::string hostname() {
   char buf[256] = {0};
@@ -79,8 +80,10 @@ void handle_what_lcm_already_has(ivoa::Bus& bus) {
     if (bus.handle(0) <= 0) break;
 }
 
-int report_end(const Recorder& recorder, double seconds) {
+// `filter`: the --channels and --exclude regexes, named when nothing matched.
+int report_end(const Recorder& recorder, double seconds, const std::string& filter) {
   const RecorderStatus s = recorder.status();
+  if (s.received == 0) spdlog::warn("nothing was recorded: no message arrived on a channel matching {}", filter);
   std::string files;
   for (const auto& f : recorder.files()) files += (files.empty() ? "" : ", ") + f;
   spdlog::info("received {}, written {}, dropped {}; {:.1f} MB in {:.1f} s ({:.1f} MB/s), queue peak {:.1f} MB; {}",
@@ -122,8 +125,10 @@ int receive(ivoa::Bus& bus, Recorder& recorder, StatusReporter& reporter, ivoa::
   return ivoa::kExitOk;
 }
 
-// Waits while the writer empties the queue, keeping heartbeat and log informed.
-void drain(const Recorder& recorder, StatusReporter& reporter, ivoa::Heartbeat& heartbeat) {
+// Waits while the writer empties the queue, at full speed (--max-write-mb-s
+// no longer holds), keeping heartbeat and log informed.
+void drain(Recorder& recorder, StatusReporter& reporter, ivoa::Heartbeat& heartbeat) {
+  recorder.lift_write_cap();
   RecorderStatus s = recorder.status();
   spdlog::info("stopping: writing the {} queued messages ({:.1f} MB) to disk", s.queue_depth, mb(s.queue_bytes));
   double next_report_ms = ivoa::monotonic_ms() + kDrainReportMs;
@@ -163,6 +168,8 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
     return e.exit_code();
   }
   options.log.identity.lcm_url = bus->url();
+  const std::string filter = "--channels '" + options.channels + "'" +
+                             (options.exclude.empty() ? "" : " and not --exclude '" + options.exclude + "'");
   int code = ivoa::kExitOk;
   const std::unique_ptr<Recorder> recorder = start_recorder(std::move(options), code);
   if (!recorder) return code;
@@ -181,7 +188,7 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
     drain(*recorder, reporter, heartbeat);
   }
   recorder->finish();
-  const int end_code = report_end(*recorder, (ivoa::monotonic_ms() - start_ms) / 1000.0);
+  const int end_code = report_end(*recorder, (ivoa::monotonic_ms() - start_ms) / 1000.0, filter);
   const RecorderStatus s = recorder->status();
   reporter.update(s, end_code == ivoa::kExitOk ? "stopped" : "error: " + s.error);
   heartbeat.publish_now();
@@ -205,8 +212,9 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
                  "but not those matching this regex (the default skips the probe every LCM process sends at start)")
       ->capture_default_str();
   app.add_option("--split-mb", f.split_mb,
-                 "start a new numbered file (FILE.00, FILE.01, ...) before one passes this size")
-      ->check(ivoa::non_negative_number());
+                 "start a new numbered file (FILE.00, FILE.01, ...) before one passes this size; 0 = never, else at "
+                 "least 1")
+      ->check(ivoa::non_negative_number() & CLI::Range(0.0, kMaxMb));
   app.add_option("--calibration-channel", f.options.log.calibration_channel,
                  "always recorded, and copied to the start of every split file so each is self-contained "
                  "(empty: none)")
@@ -215,9 +223,11 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
                  "memory for messages waiting for the disk; beyond it new ones are "
                  "dropped and counted")
       ->capture_default_str()
-      ->check(ivoa::positive_number());
-  app.add_option("--max-write-mb-s", f.max_write_mb_s, "cap the disk write rate (0 = none)")
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::positive_number() & CLI::Range(0.0, kMaxMb));
+  app.add_option("--max-write-mb-s", f.max_write_mb_s,
+                 "cap the disk write rate while recording (0 = none; a stop "
+                 "writes the queue out at full speed)")
+      ->check(ivoa::non_negative_number() & CLI::Range(0.0, kMaxMb));
   ivoa::add_socket_buffer_option(app, f.socket_buffer_mb);
   auto* force = app.add_flag("-f,--force", f.force, "overwrite existing files");
   app.add_flag("-i,--increment", f.increment,
@@ -256,6 +266,11 @@ bool fill_recorder_options(LoggerFlags& f) {
   o.log.path = ivoa::expand_time_pattern(f.file);
   if (o.log.path.empty()) {
     spdlog::error("the file name pattern '{}' expands to nothing", f.file);
+    return false;
+  }
+  if (f.split_mb > 0 && f.split_mb < 1) {
+    // A split file must hold the calibration and at least one stereo frame.
+    spdlog::error("--split-mb: must be 0 (one file) or at least 1, not {}", f.split_mb);
     return false;
   }
   o.log.split_bytes = static_cast<uint64_t>(f.split_mb * 1e6);

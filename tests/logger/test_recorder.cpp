@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <future>
 #include <thread>
 
 #include "ivoa/core/calibration.hpp"
@@ -183,6 +184,22 @@ TEST(Recorder, FinishWritesOutEverythingQueued) {
   EXPECT_EQ(s.written, 20);
   EXPECT_EQ(s.queue_depth, 0);
   EXPECT_EQ(read_back(dir.file("rec.lcmlog")).events.size(), 20u);
+}
+
+// A stop does not wait for the write cap: at 1 kB/s the 5 MB queued here
+// would take over an hour.
+TEST(Recorder, FinishLiftsTheWriteCap) {
+  test::TempDir dir;
+  RecorderOptions o = options_in(dir);
+  o.max_write_bytes_per_s = 1000;
+  Recorder recorder(o);
+  const auto blob = numbered_bytes(1'000'000, 3);
+  for (int i = 0; i < 5; ++i) offer(recorder, "BLOB", blob);
+  auto finished = std::async(std::launch::async, [&] { return recorder.finish(); });
+  ASSERT_EQ(finished.wait_for(std::chrono::seconds(120)), std::future_status::ready)
+      << "finish() still throttled to 1 kB/s";
+  EXPECT_TRUE(finished.get());
+  EXPECT_EQ(recorder.status().written, 5);
 }
 
 TEST(Recorder, MessagesRefusedByAFullQueueAreCounted) {

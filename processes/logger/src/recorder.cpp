@@ -1,5 +1,6 @@
 #include "ivoa/logger/recorder.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 #include <spdlog/spdlog.h>
@@ -84,13 +85,16 @@ void Recorder::fail(const std::string& error) {
   }
 }
 
-// Keeps the average write rate under the cap by sleeping after writes.
+// Keeps the average write rate under the cap by sleeping after writes, in
+// short naps so that lift_write_cap() takes effect at once.
 void Recorder::throttle(double start_ms) {
   if (options_.max_write_bytes_per_s <= 0) return;
   const double due_ms =
       start_ms + static_cast<double>(counters_.bytes_written.load()) / options_.max_write_bytes_per_s * 1000.0;
-  const double wait_ms = due_ms - monotonic_ms();
-  if (wait_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(wait_ms));
+  constexpr double kNapMs = 50;
+  for (double wait_ms = due_ms - monotonic_ms(); wait_ms > 0 && !write_cap_lifted_.load();
+       wait_ms = due_ms - monotonic_ms())
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(std::min(wait_ms, kNapMs)));
 }
 
 std::string Recorder::check_health() {
@@ -127,6 +131,7 @@ std::string Recorder::check_health() {
 bool Recorder::finish() {
   if (!finished_) {
     finished_ = true;
+    lift_write_cap();
     queue_.close();
     writer_.join();
   }

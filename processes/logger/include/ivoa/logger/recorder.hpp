@@ -60,8 +60,14 @@ class Recorder {
   // state for the heartbeat.
   std::string check_health();
 
-  // Takes no more messages, writes out all queued ones, closes the log.
-  // Returns true if every message received is on disk. Idempotent.
+  // From now on writes as fast as the disk allows: the write cap spares a
+  // shared disk while recording, but must not hold up a stop (at 1 kB/s a
+  // 100 MB backlog would take a day).
+  void lift_write_cap() { write_cap_lifted_.store(true); }
+
+  // Takes no more messages, writes out all queued ones (the cap lifted),
+  // closes the log. Returns true if every message received is on disk.
+  // Idempotent.
   bool finish();
 
   bool failed() const { return failed_.load(); }
@@ -80,6 +86,7 @@ class Recorder {
   EventQueue queue_;
   std::atomic<bool> failed_{false};
   std::atomic<bool> calibration_seen_{false};
+  std::atomic<bool> write_cap_lifted_{false};
   std::atomic<double> first_data_ms_{-1};  // the first message other than a heartbeat
   mutable std::mutex error_mutex_;
   std::string error_;
