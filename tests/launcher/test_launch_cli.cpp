@@ -267,6 +267,27 @@ TEST(LaunchCli, ConfigurationErrorsNameFileAndLineAndExitTwo) {
   EXPECT_TRUE(contains(r.output, "no group \"nope\"")) << r.output;
 }
 
+// What would only fail after the run (an output path that cannot be
+// written), or silently (a --set of a name the file does not use), is said
+// before anything starts.
+TEST(LaunchCli, OutputPathsAndSetsAreCheckedBeforeTheRun) {
+  ivoa::test::TempDir dir;
+  const auto config = write_file(dir, "o.pmd", "# @default RATE = 5\ncmd \"a\" { exec = \"echo ${RATE}\"; }\n");
+  const auto file = write_file(dir, "plain_file", "x");
+  Result r = launch(config + " --output-dir " + file + " --duration 30");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(contains(r.output, "--output-dir " + file + ": cannot create the folder")) << r.output;
+  EXPECT_FALSE(contains(r.output, "[a] 5")) << "the command ran: " << r.output;
+  r = launch(config + " --status-file " + dir.file("missing/status.json") + " --duration 30");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(contains(r.output, "missing/status.json: cannot write: No such file or directory")) << r.output;
+  r = launch(config + " --duration 1e30");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  r = launch(config + " --set RATES=9 --duration 0.2");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(contains(r.output, "--set RATES=9: " + config + " has no ${RATES} (its variables: RATE)")) << r.output;
+}
+
 TEST(LaunchCli, ListShowsTheCommandsForTheHostExpanded) {
   ivoa::test::TempDir dir;
   const auto config = write_file(dir, "l.pmd", R"(# @default RATE = 5

@@ -78,6 +78,29 @@ TEST(LauncherVariables, UnsetCyclicAndMalformedVariablesAreErrors) {
   EXPECT_THROW(v.expand("${1A}", "w"), ConfigError);
 }
 
+// Defaults that double each other would fill the memory before the depth
+// limit is reached.
+TEST(LauncherVariables, AnExpansionThatExplodesIsAnError) {
+  std::string text;
+  for (char c = 'A'; c < 'M'; ++c)  // 3^12 copies of ten bytes: 5 MB
+    text += std::string("# @default ") + c + " = ${" + char(c + 1) + "}${" + char(c + 1) + "}${" + char(c + 1) + "}\n";
+  text += "# @default M = 0123456789\ncmd \"x\" { exec = \"x ${A}\"; }\n";
+  const Config c = parse_config(text, "v.pmd");
+  try {
+    make_variables(c).expand("${A}", "v.pmd:14");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("expands to more than 1 MB"), std::string::npos) << e.what();
+  }
+}
+
+TEST(LauncherVariables, KnowsTheVariablesAConfigurationUses) {
+  const Config c = parse_config(kConfig, "v.pmd");
+  const std::set<std::string> expected = {"IVOA_BIN", "IVOA_CONFIG_DIR", "LOG_DIR", "MODEL",
+                                          "SCENE",    "SCENE_NAME",      "SEED"};
+  EXPECT_EQ(variables_of(c), expected);
+}
+
 TEST(LauncherVariables, ExportedValuesAreResolvedAndSkipTheUnchangedEnvironment) {
   const Config c = parse_config(kConfig, "v.pmd");
   const auto exported = make_variables(c, {{"SEED", "5"}}, {{"LOG_DIR", "logs"}}).exported();

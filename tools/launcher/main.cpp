@@ -40,6 +40,9 @@ struct CliOptions {
   LauncherOptions launcher;
 };
 
+// Times in seconds up to a year: beyond, std::chrono's nanoseconds overflow.
+const CLI::Range kSeconds(0.0, 365 * 86400.0);
+
 void add_options(CLI::App& app, CliOptions& o) {
   auto& l = o.launcher;
   app.add_option("file", o.config_path, "procman configuration (.pmd)")->required()->check(CLI::ExistingFile);
@@ -56,18 +59,18 @@ void add_options(CLI::App& app, CliOptions& o) {
                  "then stop what still runs; \"\" = stop everything at once")
       ->capture_default_str();
   app.add_option("--duration", l.duration_s, "stop everything after this many seconds (0: no limit)")
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::non_negative_number() & kSeconds);
   app.add_flag("--once", l.once, "stop everything once every command without auto_respawn has ended");
   app.add_option("--until", l.until, "stop everything once these commands have ended");
   app.add_option("--grace", l.grace_s, "seconds the others keep running after --once/--until holds")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::non_negative_number() & kSeconds);
   app.add_option("--status-file", l.status_file,
                  "write the final status here (JSON if it ends in .json, else the table)");
   app.add_option("--status-every", l.status_every_s,
                  "print the table every S seconds when not on a terminal (0: at the end only)")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::non_negative_number() & kSeconds);
   app.add_flag("--plain", o.plain, "on a terminal too: prefixed lines and a periodic table instead of a live table");
   app.add_option("--output-dir", l.output_dir, "also append each command's output to DIR/NAME.log");
   app.add_option("--status-channel", l.status_channel,
@@ -79,7 +82,7 @@ void add_options(CLI::App& app, CliOptions& o) {
                  "a script's wait \"running\" on an ivoa program waits for its first heartbeat at most this long, "
                  "s (0: not at all)")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::non_negative_number() & kSeconds);
   app.add_flag("--list", o.list,
                "print the commands that would run, expanded, and what it adds to their environment; exit");
   const char* g = "Respawn";
@@ -87,15 +90,15 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--respawn-delay", s.respawn_delay_s, "first back-off, s (doubles while it keeps failing)")
       ->capture_default_str()
       ->group(g)
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::non_negative_number() & kSeconds);
   app.add_option("--respawn-max-delay", s.respawn_max_delay_s, "longest back-off, s")
       ->capture_default_str()
       ->group(g)
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::non_negative_number() & kSeconds);
   app.add_option("--healthy-after", s.healthy_after_s, "a run this long resets the back-off, s")
       ->capture_default_str()
       ->group(g)
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::non_negative_number() & kSeconds);
 }
 
 // IVOA_BIN: where ivoa-launch itself is (build/bin: every executable);
@@ -132,12 +135,16 @@ const char* flag_that_sets(const std::string& bus_variable) {
 // the flag to use instead.
 std::map<std::string, std::string> variable_overrides(const CliOptions& o, const Config& config) {
   const auto bus = bus_environment(o.launcher);
+  const std::set<std::string> used = variables_of(config);
   std::map<std::string, std::string> overrides;
   for (const auto& s : o.sets) {
     auto [name, value] = parse_assignment(s);
     if (const auto b = bus.find(name); b != bus.end() && b->second != value)
       throw ConfigError("--set " + s + ": the launcher hands its commands " + name + "=" + b->second + " (" +
                         flag_that_sets(name) + "); change it there");
+    if (!bus.count(name) && !config.defaults.count(name) && !used.count(name))
+      spdlog::warn("--set {}: {} has no ${{{}}} (its variables: {}); it only reaches the commands' environment", s,
+                   config.path, name, fmt::join(used, ", "));
     overrides[name] = value;
   }
   for (const auto& [name, value] : bus) {
@@ -167,6 +174,20 @@ SelectedCommands prepare(CliOptions& o, Config& config) {
     if (!selected_here) throw ConfigError(config.path + ": --until " + name + ": no such command runs here");
   }
   return selected;
+}
+
+// --output-dir and --status-file are written during and after the run:
+// a path that cannot be is found out before anything starts.
+void check_output_paths(const LauncherOptions& l) {
+  if (!l.output_dir.empty()) {
+    std::error_code error;
+    fs::create_directories(l.output_dir, error);
+    if (error || !fs::is_directory(l.output_dir))
+      throw ConfigError("--output-dir " + l.output_dir + ": cannot create the folder" +
+                        (error ? ": " + error.message() : " (a file of that name exists)"));
+  }
+  if (const std::string why = ivoa::why_cannot_write(l.status_file); !why.empty())
+    throw ConfigError("--status-file " + l.status_file + ": cannot write: " + why);
 }
 
 // False (with the hosts the configuration has) if nothing runs on this host.
@@ -217,6 +238,7 @@ int main(int argc, char** argv) {
   try {
     selected = prepare(o, config);
     warn_of_an_lcm_url_not_handed_on(o.launcher);
+    if (!o.list) check_output_paths(o.launcher);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 
@@ -163,6 +164,19 @@ bool write_text_file(const std::string& path, const std::string& text) {
   if (out << text << std::flush) return true;
   spdlog::error("cannot write {}{}", path, errno != 0 ? std::string(": ") + std::strerror(errno) : "");
   return false;
+}
+
+std::string why_cannot_write(const std::string& path) {
+  if (path.empty()) return "";
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) return "is a folder";
+  const bool existed = std::filesystem::exists(path, error);
+  errno = 0;
+  std::ofstream probe(path, std::ios::app);
+  if (!probe) return errno != 0 ? std::strerror(errno) : "cannot be opened";
+  probe.close();
+  if (!existed) std::filesystem::remove(path, error);
+  return "";
 }
 
 bool write_ready_file(const std::string& path) { return write_text_file(path, "ready\n"); }

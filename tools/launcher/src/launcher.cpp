@@ -3,10 +3,13 @@
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <deque>
 #include <filesystem>
 #include <fstream>
@@ -37,6 +40,13 @@ extern "C" void on_launcher_stop_signal(int sig) {
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
+// A command's name as a file name in --output-dir: a '/' would reach into
+// (or, with "..", out of) other folders.
+std::string file_name_for(std::string command_name) {
+  std::replace(command_name.begin(), command_name.end(), '/', '_');
+  return command_name;
+}
+
 // Where command output goes: "[name] line" on stdout (or, while a live
 // table is drawn, the last lines under it), and optionally one file per command.
 class OutputPrinter {
@@ -44,7 +54,11 @@ class OutputPrinter {
   OutputPrinter(const LauncherOptions& options, const std::vector<std::string>& names) : redraw_(options.redraw) {
     if (options.output_dir.empty()) return;
     std::filesystem::create_directories(options.output_dir);
-    for (const auto& n : names) files_[n].open(options.output_dir + "/" + n + ".log", std::ios::app);
+    for (const auto& n : names) {
+      const std::string path = options.output_dir + "/" + file_name_for(n) + ".log";
+      files_[n].open(path, std::ios::app);
+      if (!files_[n]) spdlog::warn("[{}] cannot write its output to {}: {}", n, path, std::strerror(errno));
+    }
   }
 
   void line(const std::string& name, const std::string& text) {

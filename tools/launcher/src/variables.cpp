@@ -9,6 +9,9 @@ namespace {
 
 // Deep enough for defaults built on defaults; a cycle stops here.
 constexpr int kMaxDepth = 16;
+// An exec string is one argument of sh -c: Linux takes at most 128 kB.
+// Defaults that repeat each other stop here, not when memory runs out.
+constexpr size_t kMaxExpandedBytes = 1 << 20;
 
 bool valid_name(const std::string& name) {
   if (name.empty() || !(std::isalpha(static_cast<unsigned char>(name[0])) || name[0] == '_')) return false;
@@ -62,6 +65,9 @@ std::string Variables::expand_depth(const std::string& text, const std::string& 
       throw ConfigError(where + ": variable ${" + name + "} is not set (use --set " + name +
                         "=VALUE, export it, or add '# @default " + name + " = VALUE' to the file)");
     out += expandable ? expand_depth(*v, where + " (in ${" + name + "})", depth + 1) : *v;
+    if (out.size() > kMaxExpandedBytes)
+      throw ConfigError(where + ": expands to more than " + std::to_string(kMaxExpandedBytes >> 20) +
+                        " MB (variables that repeat each other?)");
     i = close;
   }
   return out;
@@ -76,6 +82,23 @@ std::optional<std::string> Variables::value(const std::string& name) const {
   const auto v = raw_value(name, expandable);
   if (!v || !expandable) return v;
   return expand(*v, "${" + name + "}");
+}
+
+std::set<std::string> variables_of(const Config& config) {
+  std::set<std::string> names;
+  const auto add_used = [&](const std::string& text) {
+    for (size_t open = text.find("${"); open != std::string::npos; open = text.find("${", open + 2)) {
+      const size_t close = text.find('}', open + 2);
+      if (close == std::string::npos) return;
+      names.insert(text.substr(open + 2, close - open - 2));
+    }
+  };
+  for (const auto& c : config.commands) add_used(c.exec);
+  for (const auto& [name, d] : config.defaults) {
+    names.insert(name);
+    add_used(d.value);
+  }
+  return names;
 }
 
 std::map<std::string, std::string> Variables::exported() const {

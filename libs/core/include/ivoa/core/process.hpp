@@ -57,6 +57,12 @@ int parse_command_line(CLI::App& app, int argc, char** argv);
 // --json. False, with an error naming the file logged, if it cannot be written.
 bool write_text_file(const std::string& path, const std::string& text);
 
+// Why `path` could not be written ("is a folder", "No such file or
+// directory"), or "" if it can (or is empty). Probes by opening it to
+// append, leaving no file behind that was not there: outputs written only
+// at the end of a long run are checked at its start.
+std::string why_cannot_write(const std::string& path);
+
 // --ready-file: creates `path` (nothing if empty) to tell a waiting script
 // that this process has subscribed or is serving (write_text_file).
 bool write_ready_file(const std::string& path);

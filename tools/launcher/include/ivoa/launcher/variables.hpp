@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 
 #include "ivoa/launcher/config.hpp"
@@ -42,6 +43,10 @@ class Variables {
   std::map<std::string, std::string> overrides_, defaults_, builtins_;
   EnvironmentLookup environment_;
 };
+
+// The variables a configuration knows: those it gives a default and those
+// its exec strings and defaults use as ${NAME}.
+std::set<std::string> variables_of(const Config& config);
 
 // "NAME=VALUE" -> {NAME, VALUE}; throws std::invalid_argument otherwise.
 std::pair<std::string, std::string> parse_assignment(const std::string& text);
