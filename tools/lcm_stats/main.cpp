@@ -21,12 +21,24 @@
 
 namespace {
 
+int64_t count_on(const ivoa::tools::TrafficStats& stats, const std::string& channel) {
+  const auto it = stats.channels().find(channel);
+  return it == stats.channels().end() ? 0 : it->second.count;
+}
+
 bool expectations_met(const ivoa::tools::TrafficStats& stats, const std::map<std::string, int64_t>& expect) {
-  for (const auto& [channel, n] : expect) {
-    const auto it = stats.channels().find(channel);
-    if (it == stats.channels().end() || it->second.count < n) return false;
-  }
+  for (const auto& [channel, n] : expect)
+    if (count_on(stats, channel) < n) return false;
   return true;
+}
+
+// "CAMERA 3 of 10, DEPTH 0 of 5": the channels short of their count.
+std::string shortfall(const ivoa::tools::TrafficStats& stats, const std::map<std::string, int64_t>& expect) {
+  std::string out;
+  for (const auto& [channel, n] : expect)
+    if (const int64_t got = count_on(stats, channel); got < n)
+      out += (out.empty() ? "" : ", ") + channel + " " + std::to_string(got) + " of " + std::to_string(n);
+  return out;
 }
 
 struct Watch {
@@ -72,7 +84,10 @@ int watch(const std::string& lcm_url, const Watch& w) {
   std::printf("%s", stats.table().c_str());
   if (!ivoa::write_text_file(w.json_path, stats.json())) return ivoa::kExitIoError;
   if (!met) {
-    spdlog::error("expected message counts did not arrive");
+    spdlog::error(
+        "expected message counts did not arrive: {} (a channel --channels '{}' does not match is never "
+        "counted)",
+        shortfall(stats, w.expect), w.channels);
     return ivoa::kExitFailure;
   }
   return ivoa::kExitOk;
@@ -95,7 +110,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
   app.add_option("--json", w.json_path, "write the final statistics as JSON to this file");
-  app.add_option("--expect", expect_args, "CHANNEL=N: exit 0 as soon as every channel has N messages, 1 on timeout")
+  app.add_option("--expect", expect_args,
+                 "CHANNEL=N (N >= 1): exit 0 as soon as every channel has N messages, 1 on timeout")
       ->delimiter(',');
   app.add_option("--ready-file", w.ready_file, "create this file once subscribed (lets scripts start publishers)");
   app.add_flag("--list-types", list_types, "print every ivoa message type and its fingerprint, then exit");
@@ -106,6 +122,15 @@ int main(int argc, char** argv) {
   } catch (const std::invalid_argument& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;
+  }
+  for (const auto& [channel, n] : w.expect)
+    if (n == 0) {
+      spdlog::error("--expect {}=0: expect at least one message", channel);
+      return ivoa::kExitUsage;
+    }
+  if (const std::string why = ivoa::why_cannot_write(w.json_path); !why.empty()) {
+    spdlog::error("--json {}: cannot write: {}", w.json_path, why);
+    return ivoa::kExitIoError;
   }
   if (list_types) {
     for (const auto& t : ivoa::message_types())
