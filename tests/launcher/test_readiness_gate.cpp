@@ -115,5 +115,24 @@ TEST(ScriptRunnerReadiness, AWaitForRunningHoldsTheNextStepUntilTheCommandIsRead
   for (int i = 0; i < 100 && supervisor.busy(); ++i) supervisor.step(50);
 }
 
+// A wait that does not hold is said once, with the states it waits on.
+TEST(ScriptRunnerReadiness, AWaitThatDoesNotHoldIsSaidOnce) {
+  const auto quiet = [](const std::string&, const std::string&) {};
+  std::vector<std::string> events;
+  Supervisor supervisor({command("consumer", "sleep 30")}, SupervisorOptions{}, quiet, quiet);
+  ScriptStep start_consumer{StepAction::kStart, TargetKind::kCommand, "consumer", "running", 0, 7};
+  ScriptRunner script(
+      {start_consumer}, supervisor,
+      [&](const std::string& who, const std::string& event) { events.push_back(who + ": " + event); },
+      [](const std::string&) { return false; }, std::chrono::milliseconds(0));
+  script.advance();
+  script.advance();
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0], "script: line 7: still waiting after 0 s for \"consumer\" to be running (consumer running)");
+  EXPECT_FALSE(script.done());
+  supervisor.kill_all();
+  for (int i = 0; i < 100 && supervisor.busy(); ++i) supervisor.step(50);
+}
+
 }  // namespace
 }  // namespace ivoa::launcher

@@ -3,8 +3,12 @@
 namespace ivoa::launcher {
 
 ScriptRunner::ScriptRunner(std::vector<ScriptStep> steps, Supervisor& supervisor, EventHandler on_event,
-                           ReadyCheck ready)
-    : steps_(std::move(steps)), supervisor_(supervisor), on_event_(std::move(on_event)), ready_(std::move(ready)) {}
+                           ReadyCheck ready, std::chrono::milliseconds say_waiting_after)
+    : steps_(std::move(steps)),
+      supervisor_(supervisor),
+      on_event_(std::move(on_event)),
+      ready_(std::move(ready)),
+      say_waiting_after_(say_waiting_after) {}
 
 std::vector<std::string> ScriptRunner::targets(const ScriptStep& step) const {
   std::vector<std::string> out;
@@ -35,6 +39,19 @@ void ScriptRunner::apply(const ScriptStep& step, const std::vector<std::string>&
   }
 }
 
+void ScriptRunner::say_still_waiting(const ScriptStep& step, const std::vector<std::string>& names) {
+  if (said_waiting_ || Clock::now() - wait_started_ < say_waiting_after_) return;
+  said_waiting_ = true;
+  std::string states;
+  for (const auto& name : names)
+    states += (states.empty() ? "" : ", ") + name + " " + to_string(supervisor_.status(name).state);
+  const auto waited = std::chrono::duration_cast<std::chrono::seconds>(Clock::now() - wait_started_).count();
+  on_event_("script", "line " + std::to_string(step.line) + ": still waiting after " + std::to_string(waited) +
+                          " s for " +
+                          (step.target_kind == TargetKind::kEverything ? "everything" : "\"" + step.target + "\"") +
+                          " to be " + step.wait_status + " (" + states + ")");
+}
+
 void ScriptRunner::advance() {
   while (next_ < steps_.size()) {
     const ScriptStep& step = steps_[next_];
@@ -52,8 +69,13 @@ void ScriptRunner::advance() {
                                   "\" has no command selected here (another --host's, or --skip); step skipped");
         apply(step, names);
         waiting_ = true;
+        said_waiting_ = false;
+        wait_started_ = Clock::now();
       }
-      if (!step.wait_status.empty() && !satisfied(names, step.wait_status)) return;
+      if (!step.wait_status.empty() && !satisfied(names, step.wait_status)) {
+        say_still_waiting(step, names);
+        return;
+      }
     }
     waiting_ = false;
     ++next_;

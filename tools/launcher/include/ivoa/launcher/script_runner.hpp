@@ -21,8 +21,11 @@ class ScriptRunner {
   // announced itself; see readiness_gate.hpp).
   using ReadyCheck = std::function<bool(const std::string& command)>;
 
-  ScriptRunner(std::vector<ScriptStep> steps, Supervisor& supervisor, EventHandler on_event,
-               ReadyCheck ready = nullptr);
+  // A wait that has not held after `say_waiting_after` is said (once per
+  // step, naming the step, its targets and their states): a script that
+  // waits for a command that never gets there does not stall in silence.
+  ScriptRunner(std::vector<ScriptStep> steps, Supervisor& supervisor, EventHandler on_event, ReadyCheck ready = nullptr,
+               std::chrono::milliseconds say_waiting_after = std::chrono::seconds(30));
 
   void advance();
   bool done() const { return next_ >= steps_.size(); }
@@ -33,6 +36,7 @@ class ScriptRunner {
   std::vector<std::string> targets(const ScriptStep& step) const;
   bool satisfied(const std::vector<std::string>& names, const std::string& status) const;
   void apply(const ScriptStep& step, const std::vector<std::string>& names);
+  void say_still_waiting(const ScriptStep& step, const std::vector<std::string>& names);
 
   std::vector<ScriptStep> steps_;
   Supervisor& supervisor_;
@@ -40,7 +44,9 @@ class ScriptRunner {
   ReadyCheck ready_;
   size_t next_ = 0;
   bool waiting_ = false;
-  Clock::time_point wait_until_;
+  bool said_waiting_ = false;
+  Clock::time_point wait_until_, wait_started_;
+  std::chrono::milliseconds say_waiting_after_;
 };
 
 }  // namespace ivoa::launcher
