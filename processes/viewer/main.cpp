@@ -36,7 +36,7 @@ void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   app.add_option("--video", out.video, "also write every figure to this video (.avi, MJPG)");
   app.add_option("--video-fps", out.video_fps, "frame rate written in the video")
       ->capture_default_str()
-      ->check(ivoa::positive_number());
+      ->check(CLI::Range(0.1, 1000.0));
   app.add_option("--scale", o.figure.scale, "figure panel size relative to the image")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 4.0));
@@ -116,6 +116,12 @@ std::array<bool, ivoa::viewer::kNumParts> parts_in_log(const std::string& url, c
     ivoa::logio::LogReader reader(path, {/*resync=*/true, /*headers_only=*/true});
     ivoa::logio::LogEvent event;
     while (reader.next(event)) channels.insert(event.channel);
+    // LCM's file:// reader stops at the first damage with no more than a
+    // line: where and what is said here, before the figures.
+    if (const std::string why = reader.not_a_log(); !why.empty()) spdlog::warn("{}: {}", path, why);
+    else
+      for (const auto& p : reader.problems())
+        spdlog::warn("{}: {}: the frames after it may not be drawn", path, p.describe());
   } catch (const ivoa::logio::LogReadError& e) {
     spdlog::warn("{}; frames wait only for the channels seen so far", e.what());
   }

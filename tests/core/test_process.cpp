@@ -121,15 +121,17 @@ std::string verdict(const CLI::Validator& check, std::string text) { return chec
 TEST(FlagChecks, SayWhatANumericFlagMustBeInAFewWords) {
   EXPECT_EQ(verdict(positive_number(), "2"), "");
   EXPECT_EQ(verdict(positive_number(), "0.5"), "");
-  EXPECT_EQ(verdict(positive_number(), "0"), "must be > 0, not 0");
-  EXPECT_EQ(verdict(positive_number(), "-3"), "must be > 0, not -3");
+  EXPECT_EQ(verdict(positive_number(), "0"), "must be > 0 and finite, not 0");
+  EXPECT_EQ(verdict(positive_number(), "-3"), "must be > 0 and finite, not -3");
   EXPECT_EQ(verdict(positive_number(), "many"), "must be a number, not 'many'");
   EXPECT_EQ(verdict(positive_number(), "nan"), "must be a number, not 'nan'");
   EXPECT_EQ(verdict(finite_number(), "-2.5"), "");
   EXPECT_EQ(verdict(finite_number(), "nan"), "must be a number, not 'nan'");
   EXPECT_EQ(verdict(finite_number(), "inf"), "must be finite, not inf");
+  EXPECT_EQ(verdict(positive_number(), "inf"), "must be > 0 and finite, not inf");
   EXPECT_EQ(verdict(non_negative_number(), "0"), "");
-  EXPECT_EQ(verdict(non_negative_number(), "-0.1"), "must be >= 0, not -0.1");
+  EXPECT_EQ(verdict(non_negative_number(), "inf"), "must be >= 0 and finite, not inf");
+  EXPECT_EQ(verdict(non_negative_number(), "-0.1"), "must be >= 0 and finite, not -0.1");
   EXPECT_EQ(verdict(odd_positive_integer(), "1"), "");
   EXPECT_EQ(verdict(odd_positive_integer(), "5"), "");
   EXPECT_EQ(verdict(odd_positive_integer(), "4"), "must be an odd whole number >= 1, not 4");

@@ -139,7 +139,12 @@ TEST(LiveScorer, MessagesWithValuesItCannotScoreAreLeftOutAndSaidWhy) {
   EXPECT_EQ(scorer.add(prediction_message(5, {{1.0f, 0.0f, 7, 1, kFree, kTN, 1}})),
             "query 0: class 7 is none of the four");
   EXPECT_EQ(scorer.add(prediction_message(5, {{std::nanf(""), 0.0f, kTN, 1, kFree, kTN, 1}})),
-            "query 0: position is not finite");
+            "query 0: position is not finite or over 1000 km away");
+  // Finite but far: millimetre keys overflowed and every cell became one.
+  EXPECT_EQ(scorer.add(prediction_message(5, {{1e20f, 0.0f, kTN, 1, kFree, kTN, 1}})),
+            "query 0: position is not finite or over 1000 km away");
+  EXPECT_EQ(scorer.add(labels_message(7, {{0.0f, -3e19f, kTN, kFree}})),
+            "cell 0: position is not finite or over 1000 km away");
   EXPECT_EQ(scorer.add(prediction_message(5, {{1.0f, 0.0f, kTN, 1, kFree, 9, 1}})),
             "query 0: class given the verdict 9 is none of the four");
   EXPECT_EQ(scorer.add(prediction_message(5, {}, std::nan(""))).rfind("compute_ms nan", 0), 0u);

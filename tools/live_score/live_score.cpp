@@ -19,11 +19,19 @@ std::string cell_text(int i) { return "cell " + std::to_string(i) + ": "; }
 // same cell when its position agrees to the millimetre.
 std::pair<long, long> cell_key(float x, float y) { return {std::lround(x * 1000.0f), std::lround(y * 1000.0f)}; }
 
+// Grid cells lie near the robot; beyond this (metres) a position is a
+// damaged message, and millimetre keys would overflow.
+constexpr float kMaxCellDistanceM = 1e6f;
+
+bool sane_position(float x, float y) {
+  return std::isfinite(x) && std::isfinite(y) && std::abs(x) <= kMaxCellDistanceM && std::abs(y) <= kMaxCellDistanceM;
+}
+
 }  // namespace
 
 std::string LiveScorer::add(const introspection_labels_t& m) {
   for (int i = 0; i < m.num_cells; ++i) {
-    if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i])) return cell_text(i) + "position is not finite";
+    if (!sane_position(m.x[i], m.y[i])) return cell_text(i) + "position is not finite or over 1000 km away";
     if (!is_class_or_none(m.label[i])) return cell_text(i) + "label " + std::to_string(m.label[i]) + " is no class";
   }
   detectors_.insert(m.detector);
@@ -40,7 +48,7 @@ std::string LiveScorer::add(const introspection_t& m) {
     return "compute_ms " + std::to_string(m.compute_ms) + " is no duration";
   for (int i = 0; i < m.num_queries; ++i) {
     const std::string query = "query " + std::to_string(i) + ": ";
-    if (!std::isfinite(m.query_x[i]) || !std::isfinite(m.query_y[i])) return query + "position is not finite";
+    if (!sane_position(m.query_x[i], m.query_y[i])) return query + "position is not finite or over 1000 km away";
     if (!is_class(m.query_class[i]))
       return query + "class " + std::to_string(m.query_class[i]) + " is none of the four";
     if (!is_class_or_none(m.query_verdict_class[i]))

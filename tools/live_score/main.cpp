@@ -211,7 +211,8 @@ int report(const ScoreCommandLine& cl, const LiveScore& s, const ReadCounts& cou
 int main(int argc, char** argv) {
   CLI::App app{
       "Score the introspection a log recorded against the depth monitor's labels of the same frames, and "
-      "how long it took per frame. Exit codes: 0 scored, 3 a log is unreadable or has nothing to score, 4 the "
+      "how long it took per frame. Exit codes: 0 scored, 2 bad flags (a --json that is one of the logs), 3 a log is "
+      "unreadable or has nothing to score, 4 the "
       "JSON cannot be written."};
   CommonOptions common;
   add_offline_options(app, common);
@@ -224,6 +225,14 @@ int main(int argc, char** argv) {
   if (const std::string twice = named_twice(cl.files); !twice.empty()) {
     spdlog::error("{} is given twice: its frames would count twice", twice);
     return kExitUsage;
+  }
+  if (const std::string log = same_file_among(cl.json_path, cl.files); !log.empty()) {
+    spdlog::error("--json {} is the log {}: it would be written over", cl.json_path, log);
+    return kExitUsage;
+  }
+  if (const std::string why = why_cannot_write(cl.json_path); !why.empty()) {
+    spdlog::error("--json {}: cannot write: {}", cl.json_path, why);
+    return kExitIoError;
   }
   if (!score_logs(cl, s, counts)) return kExitBadInput;
   return report(cl, s, counts);

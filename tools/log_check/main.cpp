@@ -181,7 +181,8 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage; each "
       "process's last heartbeat.\n"
-      "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 3 a log is damaged or "
+      "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 2 bad flags (a --json that is one of "
+      "the logs), 3 a log is damaged or "
       "unreadable, 4 the --json file cannot be written."};
   ivoa::CommonOptions common;
   ivoa::add_offline_options(app, common);
@@ -189,5 +190,13 @@ int main(int argc, char** argv) {
   add_check_options(app, cl);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("log-check", common.log_level);
+  if (const std::string log = ivoa::same_file_among(cl.json_path, cl.files); !log.empty()) {
+    spdlog::error("--json {} is the log {}: it would be written over", cl.json_path, log);
+    return ivoa::kExitUsage;
+  }
+  if (const std::string why = ivoa::why_cannot_write(cl.json_path); !why.empty()) {
+    spdlog::error("--json {}: cannot write: {}", cl.json_path, why);
+    return ivoa::kExitIoError;
+  }
   return check_logs(cl);
 }

@@ -2,7 +2,6 @@
 // the split files of one session (run.lcmlog.00 .01 ...) as one stream.
 //   ivoa-log-play logs/record-20261202-212245.lcmlog.[0-9][0-9]
 //   ivoa-log-play --speed 0.5 -c '^(STEREO_IMAGES|DEPTH_IMAGE|RIG_CALIBRATION)$' session.lcmlog
-#include <sys/stat.h>
 
 #include <stdexcept>
 #include <string>
@@ -26,14 +25,7 @@ namespace {
 // of it is read.
 std::string output_among_inputs(const std::string& url, const std::vector<std::string>& logs) {
   if (url.rfind("file://", 0) != 0 || url.find("mode=w") == std::string::npos) return {};
-  const std::string out = url.substr(7, url.find('?') - 7);
-  struct stat o {};
-  if (::stat(out.c_str(), &o) != 0) return {};
-  for (const auto& log : logs) {
-    struct stat i {};
-    if (::stat(log.c_str(), &i) == 0 && i.st_dev == o.st_dev && i.st_ino == o.st_ino) return log;
-  }
-  return {};
+  return ivoa::same_file_among(url.substr(7, url.find('?') - 7), logs);
 }
 
 }  // namespace

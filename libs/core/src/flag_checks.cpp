@@ -31,7 +31,7 @@ const CLI::Validator& positive_number() {
   static const CLI::Validator check(
       [](std::string& text) {
         return check_number(
-            text, [](double v) { return v > 0; }, "must be > 0");
+            text, [](double v) { return v > 0 && std::isfinite(v); }, "must be > 0 and finite");
       },
       "POSITIVE");
   return check;
@@ -41,7 +41,7 @@ const CLI::Validator& non_negative_number() {
   static const CLI::Validator check(
       [](std::string& text) {
         return check_number(
-            text, [](double v) { return v >= 0; }, "must be >= 0");
+            text, [](double v) { return v >= 0 && std::isfinite(v); }, "must be >= 0 and finite");
       },
       "NONNEGATIVE");
   return check;

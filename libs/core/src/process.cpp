@@ -1,5 +1,7 @@
 #include "ivoa/core/process.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
@@ -176,6 +178,16 @@ std::string why_cannot_write(const std::string& path) {
   if (!probe) return errno != 0 ? std::strerror(errno) : "cannot be opened";
   probe.close();
   if (!existed) std::filesystem::remove(path, error);
+  return "";
+}
+
+std::string same_file_among(const std::string& path, const std::vector<std::string>& files) {
+  struct stat out {};
+  if (path.empty() || ::stat(path.c_str(), &out) != 0) return "";
+  for (const auto& file : files) {
+    struct stat in {};
+    if (::stat(file.c_str(), &in) == 0 && in.st_dev == out.st_dev && in.st_ino == out.st_ino) return file;
+  }
   return "";
 }
 

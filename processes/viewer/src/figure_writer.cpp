@@ -11,6 +11,7 @@
 #endif
 
 #include "ivoa/core/image_files.hpp"
+#include "ivoa/core/process.hpp"
 
 namespace ivoa::viewer {
 struct FigureWriter::Video {
@@ -30,6 +31,10 @@ FigureWriter::FigureWriter(OutputOptions options) : options_(std::move(options))
 #ifndef IVOA_VIEWER_HAS_VIDEOIO
     throw OutputError("cannot write " + options_.video + ": built without OpenCV videoio (libopencv-videoio-dev)");
 #endif
+    // Opened at the first figure, whose size it takes: a path that cannot
+    // be written is found out now.
+    if (const std::string why = why_cannot_write(options_.video); !why.empty())
+      throw OutputError("cannot write the video " + options_.video + ": " + why);
     video_ = std::make_unique<Video>();
   }
 }

@@ -8,9 +8,10 @@ namespace ivoa {
 
 // A finite number (help: NUMBER): not nan or inf.
 const CLI::Validator& finite_number();
-// A number > 0 (help: POSITIVE).
+// A finite number > 0 (help: POSITIVE). Infinities are refused: no flag
+// means "no limit" by inf, and some hang a library (cv::VideoWriter's fps).
 const CLI::Validator& positive_number();
-// A number >= 0 (help: NONNEGATIVE).
+// A finite number >= 0 (help: NONNEGATIVE).
 const CLI::Validator& non_negative_number();
 // A whole number >= 1 that is odd, e.g. a filter window (help: ODD).
 const CLI::Validator& odd_positive_integer();

@@ -4,6 +4,7 @@
 // that handles LCM until SIGINT/SIGTERM.
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "ivoa/core/channels.hpp"
 
@@ -62,6 +63,11 @@ bool write_text_file(const std::string& path, const std::string& text);
 // append, leaving no file behind that was not there: outputs written only
 // at the end of a long run are checked at its start.
 std::string why_cannot_write(const std::string& path);
+
+// The one of `files` that is the existing file `path` (the same device and
+// inode, whatever the spelling), or "": an output about to be written over
+// one of a tool's inputs (`--json run.lcmlog.0*` in a shell) is refused.
+std::string same_file_among(const std::string& path, const std::vector<std::string>& files);
 
 // --ready-file: creates `path` (nothing if empty) to tell a waiting script
 // that this process has subscribed or is serving (write_text_file).
