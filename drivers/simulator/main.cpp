@@ -63,8 +63,7 @@ void add_session_options(CLI::App& app, CommandLine& cl) {
   // A frame every 100 s at the slowest: the trajectory is integrated up to each frame's time.
   app.add_option("--rate", config.rate_hz, "frames per second (0.01 to 1000)")
       ->capture_default_str()
-      ->check(ivoa::finite_number())  // CLI::Range lets NaN through
-      ->check(CLI::Range(0.01, 1000.0));
+      ->check(ivoa::number_in(0.01, 1000.0));
   auto* realtime = app.add_flag("--realtime", config.realtime, "pace frames by the wall clock (default)");
   app.add_flag("--as-fast-as-possible", cl.fast, "render frames back to back (session time stays frame / rate)")
       ->excludes(realtime);
@@ -89,7 +88,7 @@ void add_output_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--depth-offset-ms", config.depth_offset_ms, "depth image utime minus stereo utime (-1000 to 1000)")
       ->capture_default_str()
       ->check(ivoa::finite_number())
-      ->check(CLI::Range(-1000.0, 1000.0));
+      ->check(ivoa::number_in(-1000.0, 1000.0));
   app.add_option("--calibration-period", config.calibration_period_s,
                  "seconds between RIG_CALIBRATION messages (0: with every frame)")
       ->capture_default_str()

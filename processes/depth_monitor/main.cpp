@@ -15,13 +15,13 @@ namespace {
 void add_monitor_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
   const char* g = "Depth monitor";
   auto& m = o.monitor;
-  app.add_option("--pixel-step", m.pixel_step, "use every n-th depth pixel")
+  app.add_option("--pixel-step", m.pixel_step, "use every n-th depth pixel (1-64)")
       ->capture_default_str()
-      ->check(ivoa::positive_number())
+      ->check(CLI::Range(1, 64))
       ->group(g);
   app.add_option("--voxel-size", m.voxel_size, "voxel grid leaf, m")
       ->capture_default_str()
-      ->check(ivoa::positive_number())
+      ->check(ivoa::number_in(0.001, 1.0))
       ->group(g);
   app.add_option("--obstacle-min-height", m.obstacle_min_height, "points higher are obstacles, m")
       ->capture_default_str()
@@ -49,11 +49,11 @@ void add_monitor_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
       ->group(g);
   app.add_option("--min-seen-fraction", m.min_seen_fraction, "ground samples seen for FREE (0-1)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(ivoa::number_in(0.0, 1.0))
       ->group(g);
   app.add_option("--sync-tolerance-us", o.pairing.tolerance_us, "max |stereo - depth| utime to pair, us")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number())
+      ->check(ivoa::number_in(0, 60e6))
       ->group(g);
   // A log recorded as fast as possible replays its depth frames in bursts,
   // seconds of stream time ahead of a detector that works through its queue.

@@ -32,11 +32,15 @@ struct CommandLine {
   double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
 };
 
+// A camera's side, pixels, at most.
+constexpr int kMaxFrameSide = 8192;
+
 // "960x600" -> 960 x 600; empty for anything else ("none").
 std::optional<cv::Size> frame_size(const std::string& text) {
   int width = 0, height = 0;
   char x = 0, rest = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &width, &x, &height, &rest) != 3 || x != 'x' || width <= 0 || height <= 0)
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &width, &x, &height, &rest) != 3 || x != 'x' || width <= 0 || height <= 0 ||
+      width > kMaxFrameSide || height > kMaxFrameSide)
     return std::nullopt;
   return cv::Size(width, height);
 }
@@ -44,9 +48,9 @@ std::optional<cv::Size> frame_size(const std::string& text) {
 void add_model_options(CLI::App& app, CommandLine& cl) {
   auto& config = cl.config;
   app.add_option("--model", cl.model_path, "model file (ivoa-train, or a scripted model)")->capture_default_str();
-  app.add_option("--mc-passes", config.mc_passes, "T, Monte-Carlo dropout passes")
+  app.add_option("--mc-passes", config.mc_passes, "T, Monte-Carlo dropout passes (1-1000)")
       ->capture_default_str()
-      ->check(ivoa::positive_number());
+      ->check(CLI::Range(1, 1000));
   app.add_option("--threshold", config.uncertainty_threshold,
                  "announce a prediction when its class variance is at most this (< 0: the model's value)")
       ->capture_default_str();
@@ -56,16 +60,17 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--grid-wait-ms", cl.grid_wait_ms,
                  "after the CNN, how long to wait for the detector's grid of the frame (its verdicts)")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number());
-  app.add_option("--mean-filter", config.mean_filter, "odd window of the heatmap mean filter, cells (1 = off)")
+      ->check(CLI::Range(0, 60000));
+  app.add_option("--mean-filter", config.mean_filter,
+                 "odd window of the heatmap mean filter, cells (1 = off; at most 99)")
       ->capture_default_str()
-      ->check(ivoa::odd_positive_integer());
+      ->check(ivoa::odd_positive_integer() & CLI::Range(1, 99));
   app.add_option("--lookup", cl.lookup, "query cell -> heatmap: nearest cell or bilinear")
       ->capture_default_str()
       ->check(CLI::IsMember({"nearest", "bilinear"}));
-  app.add_option("--threads", config.threads, "LibTorch threads")
+  app.add_option("--threads", config.threads, "LibTorch threads (1-256)")
       ->capture_default_str()
-      ->check(ivoa::positive_number());
+      ->check(CLI::Range(1, 256));
   app.add_option("--device", config.device, "cpu or cuda")
       ->capture_default_str()
       ->check(CLI::IsMember({"cpu", "cuda"}));
@@ -77,7 +82,8 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
                  "first real frame is not delayed by LibTorch's set-up; none: skip")
       ->capture_default_str()
       ->check([](const std::string& s) {
-        return s == "none" || frame_size(s) ? std::string() : "expected WxH (e.g. 960x600) or none";
+        return s == "none" || frame_size(s) ? std::string()
+                                            : "expected WxH (e.g. 960x600, each side at most 8192) or none";
       });
 }
 

@@ -214,7 +214,7 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
   app.add_option("--split-mb", f.split_mb,
                  "start a new numbered file (FILE.00, FILE.01, ...) before one passes this size; 0 = never, else at "
                  "least 1")
-      ->check(ivoa::non_negative_number() & CLI::Range(0.0, kMaxMb));
+      ->check(ivoa::number_in(0.0, kMaxMb));
   app.add_option("--calibration-channel", f.options.log.calibration_channel,
                  "always recorded, and copied to the start of every split file so each is self-contained "
                  "(empty: none)")
@@ -223,11 +223,11 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
                  "memory for messages waiting for the disk; beyond it new ones are "
                  "dropped and counted")
       ->capture_default_str()
-      ->check(ivoa::positive_number() & CLI::Range(0.0, kMaxMb));
+      ->check(ivoa::positive_number() & ivoa::number_in(0.0, kMaxMb));
   app.add_option("--max-write-mb-s", f.max_write_mb_s,
                  "cap the disk write rate while recording (0 = none; a stop "
                  "writes the queue out at full speed)")
-      ->check(ivoa::non_negative_number() & CLI::Range(0.0, kMaxMb));
+      ->check(ivoa::number_in(0.0, kMaxMb));
   ivoa::add_socket_buffer_option(app, f.socket_buffer_mb);
   auto* force = app.add_flag("-f,--force", f.force, "overwrite existing files");
   app.add_flag("-i,--increment", f.increment,

@@ -36,10 +36,10 @@ void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   app.add_option("--video", out.video, "also write every figure to this video (.avi, MJPG)");
   app.add_option("--video-fps", out.video_fps, "frame rate written in the video")
       ->capture_default_str()
-      ->check(CLI::Range(0.1, 1000.0));
+      ->check(ivoa::number_in(0.1, 1000.0));
   app.add_option("--scale", o.figure.scale, "figure panel size relative to the image")
       ->capture_default_str()
-      ->check(CLI::Range(0.05, 4.0));
+      ->check(ivoa::number_in(0.05, 4.0));
   app.add_option("--uncertainty-max", o.figure.uncertainty_max,
                  "top of the uncertainty panel's colour scale, class variance (0: each frame its own maximum, as "
                  "the paper's figures)")

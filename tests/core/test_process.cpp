@@ -132,6 +132,10 @@ TEST(FlagChecks, SayWhatANumericFlagMustBeInAFewWords) {
   EXPECT_EQ(verdict(non_negative_number(), "0"), "");
   EXPECT_EQ(verdict(non_negative_number(), "inf"), "must be >= 0 and finite, not inf");
   EXPECT_EQ(verdict(non_negative_number(), "-0.1"), "must be >= 0 and finite, not -0.1");
+  EXPECT_EQ(verdict(number_in(0.05, 4), "4"), "");
+  EXPECT_EQ(verdict(number_in(0.05, 4), "nan"), "must be a number, not 'nan'");
+  EXPECT_EQ(verdict(number_in(0.05, 4), "4.5"), "must be in [0.05, 4], not 4.5");
+  EXPECT_EQ(verdict(number_in(0, 1e9), "inf"), "must be in [0, 1e+09], not inf");
   EXPECT_EQ(verdict(odd_positive_integer(), "1"), "");
   EXPECT_EQ(verdict(odd_positive_integer(), "5"), "");
   EXPECT_EQ(verdict(odd_positive_integer(), "4"), "must be an odd whole number >= 1, not 4");

@@ -70,7 +70,7 @@ test::CommandResult build_refused_before_reading(const std::string& flags) {
 TEST(DatasetBuild, DetectorFlagOutOfRangeIsAUsageError) {
   const auto r = build_refused_before_reading("--labels jppc --rect_scale -1");
   EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
-  EXPECT_TRUE(contains(r.output, "rect_scale must be in (0, 1]")) << r.output;
+  EXPECT_TRUE(contains(r.output, "rect_scale must be in [0.05, 1]")) << r.output;
 }
 
 // A misspelt --labels is a usage error listing what it takes.

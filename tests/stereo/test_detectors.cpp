@@ -159,6 +159,21 @@ TEST(Detectors, FactoryAndConfigErrors) {
   config = {};
   config.dense.sgbm.num_disparities = 100;
   EXPECT_THROW(make_detector("dense", rig, config), std::invalid_argument);
+  // OpenCV aborted the process on a disparity range wider than the image.
+  config = {};
+  config.dense.sgbm.num_disparities = 496;
+  try {
+    make_detector("dense", rig, config);
+    FAIL() << "a range wider than the 480 px rectified image was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("do not fit the rectified image, 480 px wide"), std::string::npos) << e.what();
+  }
+  config = {};
+  config.jpp.grid_size = 1e-5;  // its sample count overflowed: every cell free
+  EXPECT_THROW(make_detector("jppc", rig, config), std::invalid_argument);
+  config = {};
+  config.jpp.daisy_R = 1e6;  // hung on every frame
+  EXPECT_THROW(make_detector("jppc", rig, config), std::invalid_argument);
 }
 
 TEST(Detectors, WrongImageSizeIsAFrameError) {

@@ -41,7 +41,7 @@ struct CliOptions {
 };
 
 // Times in seconds up to a year: beyond, std::chrono's nanoseconds overflow.
-const CLI::Range kSeconds(0.0, 365 * 86400.0);
+const CLI::Validator kSeconds = ivoa::number_in(0.0, 365 * 86400.0);
 
 void add_options(CLI::App& app, CliOptions& o) {
   auto& l = o.launcher;
@@ -58,19 +58,18 @@ void add_options(CLI::App& app, CliOptions& o) {
                  "at the stop, run this script of the file first if it has one (the producers before the logger), "
                  "then stop what still runs; \"\" = stop everything at once")
       ->capture_default_str();
-  app.add_option("--duration", l.duration_s, "stop everything after this many seconds (0: no limit)")
-      ->check(ivoa::non_negative_number() & kSeconds);
+  app.add_option("--duration", l.duration_s, "stop everything after this many seconds (0: no limit)")->check(kSeconds);
   app.add_flag("--once", l.once, "stop everything once every command without auto_respawn has ended");
   app.add_option("--until", l.until, "stop everything once these commands have ended");
   app.add_option("--grace", l.grace_s, "seconds the others keep running after --once/--until holds")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number() & kSeconds);
+      ->check(kSeconds);
   app.add_option("--status-file", l.status_file,
                  "write the final status here (JSON if it ends in .json, else the table)");
   app.add_option("--status-every", l.status_every_s,
                  "print the table every S seconds when not on a terminal (0: at the end only)")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number() & kSeconds);
+      ->check(kSeconds);
   app.add_flag("--plain", o.plain, "on a terminal too: prefixed lines and a periodic table instead of a live table");
   app.add_option("--output-dir", l.output_dir, "also append each command's output to DIR/NAME.log");
   app.add_option("--status-channel", l.status_channel,
@@ -82,7 +81,7 @@ void add_options(CLI::App& app, CliOptions& o) {
                  "a script's wait \"running\" on an ivoa program waits for its first heartbeat at most this long, "
                  "s (0: not at all)")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number() & kSeconds);
+      ->check(kSeconds);
   app.add_flag("--list", o.list,
                "print the commands that would run, expanded, and what it adds to their environment; exit");
   const char* g = "Respawn";
@@ -90,15 +89,15 @@ void add_options(CLI::App& app, CliOptions& o) {
   app.add_option("--respawn-delay", s.respawn_delay_s, "first back-off, s (doubles while it keeps failing)")
       ->capture_default_str()
       ->group(g)
-      ->check(ivoa::non_negative_number() & kSeconds);
+      ->check(kSeconds);
   app.add_option("--respawn-max-delay", s.respawn_max_delay_s, "longest back-off, s")
       ->capture_default_str()
       ->group(g)
-      ->check(ivoa::non_negative_number() & kSeconds);
+      ->check(kSeconds);
   app.add_option("--healthy-after", s.healthy_after_s, "a run this long resets the back-off, s")
       ->capture_default_str()
       ->group(g)
-      ->check(ivoa::non_negative_number() & kSeconds);
+      ->check(kSeconds);
 }
 
 // IVOA_BIN: where ivoa-launch itself is (build/bin: every executable);

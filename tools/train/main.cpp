@@ -67,7 +67,7 @@ void add_optimiser_options(CLI::App& app, TrainCommandLine& cl) {
           ->check(ivoa::positive_number());
   app.add_option("--momentum", c.momentum, "SGD momentum (paper: 0.9)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(ivoa::number_in(0.0, 1.0));
   cl.weight_decay_option = app.add_option("--weight-decay", cl.weight_decay,
                                           fmt::format("weight decay (default: AdamW {}, decoupled; SGD {}, as L2)",
                                                       introspection::kAdamWWeightDecay, introspection::kSgdWeightDecay))
@@ -86,7 +86,7 @@ void add_model_options(CLI::App& app, TrainCommandLine& cl) {
   app.add_flag("--resume", c.resume, "continue from OUT.checkpoint.* if present");
   app.add_option("--dropout", c.dropout, "dropout before FC1 and FC2 (> 0: the MC-dropout passes need it)")
       ->capture_default_str()
-      ->check(CLI::Range(0.01, 0.99));
+      ->check(ivoa::number_in(0.01, 0.99));
   app.add_option("--fn-weight", c.fn_weight, "FN share of class-balanced sampling (reference: 0.1 outdoors)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
@@ -123,7 +123,7 @@ void add_validation_options(CLI::App& app, TrainCommandLine& cl) {
   app.add_option("--threshold-retain", c.threshold_retain,
                  "the stored uncertainty gate keeps this fraction of validation samples")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(ivoa::number_in(0.0, 1.0));
   app.add_flag("--calibrate-only", cl.calibrate_only,
                "no training: re-calibrate the uncertainty gates of the --init model on the validation split and "
                "write it to --out");

@@ -59,7 +59,7 @@ void add_camera_options(CLI::App& app, Flags& f) {
       ->group(g);
   app.add_option("--frame-rate", c.frame_rate_hz, "frames per second (free-running, or the software-trigger rate)")
       ->capture_default_str()
-      ->check(CLI::Range(0.1, 500.0))
+      ->check(ivoa::number_in(0.1, 500.0))
       ->group(g);
   app.add_option("--exposure-us", c.exposure_us, "fixed exposure, microseconds (0 = continuous auto exposure)")
       ->capture_default_str()
@@ -140,7 +140,7 @@ void add_driver_options(CLI::App& app, Flags& f) {
   app.add_option("--rig-channel", d.rig_channel, "channel for ivoa.rig_calibration_t")->capture_default_str()->group(g);
   app.add_option("--rig-rate", d.rig_rate_hz, "RIG_CALIBRATION publications per second")
       ->capture_default_str()
-      ->check(CLI::Range(1.0, 100.0))
+      ->check(ivoa::number_in(1.0, 100.0))
       ->group(g);
   app.add_option("--source-name", d.source_name, "the 'source' field of published pairs")
       ->capture_default_str()

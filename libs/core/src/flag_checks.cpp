@@ -1,6 +1,7 @@
 #include "ivoa/core/flag_checks.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace ivoa {
@@ -13,6 +14,13 @@ std::string check_number(const std::string& text, Ok ok, const char* must) {
   const double value = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || std::isnan(value)) return "must be a number, not '" + text + "'";
   return ok(value) ? std::string() : std::string(must) + ", not " + text;
+}
+
+// 0.05, 1e+09: bounds as a user would type them.
+std::string short_text(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
 }
 
 }  // namespace
@@ -45,6 +53,16 @@ const CLI::Validator& non_negative_number() {
       },
       "NONNEGATIVE");
   return check;
+}
+
+CLI::Validator number_in(double lo, double hi) {
+  const std::string range = "[" + short_text(lo) + ", " + short_text(hi) + "]";
+  return CLI::Validator(
+      [lo, hi, range](std::string& text) {
+        return check_number(
+            text, [lo, hi](double v) { return v >= lo && v <= hi; }, ("must be in " + range).c_str());
+      },
+      "NUMBER in " + range);
 }
 
 const CLI::Validator& odd_positive_integer() {

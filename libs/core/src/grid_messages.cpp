@@ -20,7 +20,10 @@ void add_query_grid_options(CLI::App& app, QueryGridConfig& c) {
       {"--grid-y-min", &c.y_min, "rightmost grid column, m"},
       {"--grid-y-max", &c.y_max, "leftmost grid column, m"}};
   for (const auto& [name, value, help] : bounds)
-    app.add_option(name, *value, help)->check(finite_number())->capture_default_str()->group(g);
+    app.add_option(name, *value, help)
+        ->check(number_in(-kMaxGridExtentM, kMaxGridExtentM))
+        ->capture_default_str()
+        ->group(g);
   app.add_option("--grid-spacing", c.spacing, "distance between grid points, m")
       ->capture_default_str()
       ->check(positive_number())

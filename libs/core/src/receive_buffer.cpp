@@ -13,6 +13,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/core/flag_checks.hpp"
 
 namespace ivoa {
 namespace {
@@ -75,7 +76,7 @@ void add_socket_buffer_option(CLI::App& app, double& mb) {
                  "kernel receive buffer for LCM's udpm socket, past net.core.rmem_max where permitted "
                  "(CAP_NET_ADMIN); 0 = as LCM sets it")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 1000.0));  // the kernel takes an int of bytes, and books twice that
+      ->check(ivoa::number_in(0.0, 1000.0));  // the kernel takes an int of bytes, and books twice that
 }
 
 void enlarge_receive_buffer(Bus& bus, double mb) {

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
 
 namespace ivoa::stereo {
 namespace {
@@ -14,6 +17,12 @@ constexpr double kBinSize = 0.1;
 DenseDetector::DenseDetector(const RigCalibration& rig, const DenseConfig& config)
     : rig_(rig), config_(config), rect_(rig, config.sgbm.rect_scale), sgbm_(config.sgbm) {
   validate(config_);
+  const auto& sgbm = config_.sgbm;
+  if (std::abs(sgbm.min_disparity) + sgbm.num_disparities >= rect_.size().width)
+    throw std::invalid_argument("stereo detector config: sgbm_min_disparity " + std::to_string(sgbm.min_disparity) +
+                                " + sgbm_num_disparities " + std::to_string(sgbm.num_disparities) +
+                                " do not fit the rectified image, " + std::to_string(rect_.size().width) +
+                                " px wide (lower sgbm_num_disparities or raise sgbm_rect_scale)");
   bins_per_side_ = static_cast<int>(std::ceil(2.0 * config_.max_range / kBinSize));
 }
 

@@ -1,6 +1,8 @@
 #include "ivoa/stereo/sgbm.hpp"
 
+#include <cstdlib>
 #include <limits>
+#include <string>
 #include <stdexcept>
 
 namespace ivoa::stereo {
@@ -23,6 +25,14 @@ SgbmMatcher::SgbmMatcher(const SgbmConfig& c) {
 }
 
 cv::Mat SgbmMatcher::compute(const cv::Mat& left_gray, const cv::Mat& right_gray) const {
+  // OpenCV aborts the process (an exception from a buffer's destructor)
+  // when the disparity range is wider than the image.
+  const int range = std::abs(sgbm_->getMinDisparity()) + sgbm_->getNumDisparities();
+  if (range >= left_gray.cols)
+    throw std::invalid_argument("SGBM disparities " + std::to_string(sgbm_->getMinDisparity()) + " + " +
+                                std::to_string(sgbm_->getNumDisparities()) + " do not fit the rectified image " +
+                                std::to_string(left_gray.cols) +
+                                " px wide (lower --sgbm_num_disparities or raise --sgbm_rect_scale)");
   cv::Mat fixed;  // CV_16S, disparity * 16
   sgbm_->compute(left_gray, right_gray, fixed);
   cv::Mat disparity(fixed.size(), CV_32F);

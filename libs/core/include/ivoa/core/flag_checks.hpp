@@ -13,6 +13,9 @@ const CLI::Validator& finite_number();
 const CLI::Validator& positive_number();
 // A finite number >= 0 (help: NONNEGATIVE).
 const CLI::Validator& non_negative_number();
+// A number in [lo, hi] (help: "NUMBER in [lo, hi]"). CLI::Range lets NaN
+// through, and names its bounds with six decimals.
+CLI::Validator number_in(double lo, double hi);
 // A whole number >= 1 that is odd, e.g. a filter window (help: ODD).
 const CLI::Validator& odd_positive_integer();
 

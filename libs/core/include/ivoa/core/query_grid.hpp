@@ -14,6 +14,8 @@ namespace ivoa {
 // What the command-line options accept (defaults: 143 cells, 0.1 m).
 inline constexpr double kMaxQueryCells = 10000;
 inline constexpr double kMaxSafetyRadiusM = 1.0;
+// Grid bounds lie within this many metres of the robot (no sensor sees farther).
+inline constexpr double kMaxGridExtentM = 100.0;
 
 struct QueryGridConfig {
   double x_min = 0.5;           // metres ahead of the robot origin
