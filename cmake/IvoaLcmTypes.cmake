@@ -3,8 +3,11 @@
 # Generates C++ headers (C++11 mode, into the build tree) for LCM type files,
 # one struct per file, named after the file, each with a `package` line.
 # Creates an INTERFACE target whose include root is a SYSTEM directory (the
-# generated code is not warning-clean). When Java is available, also builds a
-# jar that lcm-spy can load.
+# generated code is not warning-clean). Each decode() is then patched to
+# refuse an array count its bytes cannot hold (GuardLcmArrays.cmake). When
+# Java is available, also builds a jar that lcm-spy can load.
+set(IVOA_LCM_GUARD_SCRIPT ${CMAKE_CURRENT_LIST_DIR}/GuardLcmArrays.cmake)
+
 function(ivoa_lcm_types)
   cmake_parse_arguments(ARG "" "TARGET;CPP_ROOT;JAR_NAME" "LCM_FILES" ${ARGN})
   set(headers "")
@@ -24,7 +27,8 @@ function(ivoa_lcm_types)
   add_custom_command(
     OUTPUT ${headers}
     COMMAND ${LCM_GEN_EXECUTABLE} --cpp --cpp-std c++11 --cpp-hpath ${ARG_CPP_ROOT} ${ARG_LCM_FILES}
-    DEPENDS ${ARG_LCM_FILES}
+    COMMAND ${CMAKE_COMMAND} "-DHEADERS=${headers}" -P ${IVOA_LCM_GUARD_SCRIPT}
+    DEPENDS ${ARG_LCM_FILES} ${IVOA_LCM_GUARD_SCRIPT}
     COMMENT "lcm-gen: C++ headers for ${ARG_TARGET}"
     VERBATIM)
   add_custom_target(${ARG_TARGET}_gen DEPENDS ${headers})

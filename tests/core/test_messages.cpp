@@ -1,6 +1,7 @@
 // Message types: pinned fingerprints (old logs must keep decoding) and
 // encode/decode round trips for every type, including a full-size stereo pair.
 #include <fstream>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -166,6 +167,45 @@ TEST(Messages, TruncatedPayloadDoesNotDecode) {
   EXPECT_LT(out.decode(buf.data(), 0, static_cast<int>(buf.size()) - 10), 0);
   depth_image_t wrong_type;
   EXPECT_LT(wrong_type.decode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+}
+
+// Overwrites the big-endian int32 that ends `bytes` at `end_offset` bytes
+// before its end (the array count field when the arrays are empty).
+void set_count_before_end(std::vector<uint8_t>& bytes, size_t end_offset, int32_t count) {
+  const auto u = static_cast<uint32_t>(count);
+  const size_t at = bytes.size() - end_offset - 4;
+  for (int i = 0; i < 4; ++i) bytes[at + static_cast<size_t>(i)] = static_cast<uint8_t>(u >> (24 - 8 * i));
+}
+
+template <class Msg>
+std::vector<uint8_t> encoded(Msg msg) {
+  set_counts(msg);
+  std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
+  EXPECT_GT(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+  return bytes;
+}
+
+TEST(Messages, ACountTheBytesCannotHoldAllocatesNothing) {
+  // lcm-gen sized arrays from the declared count before reading them: a
+  // 110-byte grid declaring 2e9 cells cost every reader 2 GB.
+  // GuardLcmArrays.cmake makes decode() refuse such a count first.
+  auto grid_bytes = encoded(obstacle_grid_t{});  // ends: num_cells, compute_ms
+  for (const int32_t count : {100000000, -1, std::numeric_limits<int32_t>::min()}) {
+    set_count_before_end(grid_bytes, sizeof(double), count);
+    obstacle_grid_t grid;
+    EXPECT_LT(grid.decode(grid_bytes.data(), 0, static_cast<int>(grid_bytes.size())), 0) << count;
+    EXPECT_EQ(grid.state.capacity(), 0u) << count;
+  }
+  // one cell fewer than declared is still refused, after the count check
+  set_count_before_end(grid_bytes, sizeof(double), 1);
+  obstacle_grid_t grid;
+  EXPECT_LT(grid.decode(grid_bytes.data(), 0, static_cast<int>(grid_bytes.size()) - sizeof(double)), 0);
+
+  auto status_bytes = encoded(process_status_t{});  // ends with num_counters
+  set_count_before_end(status_bytes, 0, 1000000);
+  process_status_t status;
+  EXPECT_LT(status.decode(status_bytes.data(), 0, static_cast<int>(status_bytes.size())), 0);
+  EXPECT_EQ(status.counter_names.capacity(), 0u);
 }
 
 }  // namespace
