@@ -103,6 +103,14 @@ TEST(Calibration, ImagesTooLargeForOpenCVsRemapAreRejected) {
   }
   msg.right.width = 32766;
   EXPECT_NO_THROW(from_message(msg));
+  // under remap's limit a side, but 1.07 Gpx: the monitor needed 1.75 GB
+  msg.right.height = 32766;
+  try {
+    from_message(msg);
+    FAIL() << "accepted a 32766x32766 right camera";
+  } catch (const CalibrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("32766x32766 is over 67108864 pixels"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Calibration, OpticalAxesMapToTheRobotFrame) {

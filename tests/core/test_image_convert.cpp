@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "ivoa/core/image_convert.hpp"
@@ -85,7 +86,7 @@ TEST(ImageConvert, BadImagesSayWhatIsWrong) {
   msg = encode_image(test_pattern(), image_t::PIXEL_FORMAT_JPEG, 0);
   for (size_t i = 10; i < msg.data.size(); ++i) msg.data[i] = 0;
   EXPECT_THROW(decode_image(msg), ImageError);
-  // width * 3 wraps round int32 to 1: no longer passes for a 16-byte row (OpenCV aborted on it)
+  // width * 3 wraps round int32 to 1: OpenCV aborted on it; now over the pixel bound
   msg = encode_image(test_pattern(), image_t::PIXEL_FORMAT_BGR, 0);
   msg.width = 715'827'883;
   msg.height = 2;
@@ -96,8 +97,52 @@ TEST(ImageConvert, BadImagesSayWhatIsWrong) {
     decode_image(msg);
     FAIL();
   } catch (const ImageError& e) {
-    EXPECT_NE(std::string(e.what()).find("row_stride 16 is smaller than width * 3"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()), "image size 715827883x2 is not between 1 and 67108864 pixels");
   }
+}
+
+std::string decode_error(const image_t& msg) {
+  try {
+    decode_image(msg);
+  } catch (const ImageError& e) {
+    return e.what();
+  }
+  return "decoded";
+}
+
+// A compressed image is decompressed only when its header's size is the
+// message's, and that size is bounded: a 584 kB PNG of 1.8 GB of pixels
+// used to be decompressed before its size was compared.
+TEST(ImageConvert, ACompressedImageIsCheckedBeforeItIsDecompressed) {
+  const cv::Mat big(2000, 3000, CV_8UC1, cv::Scalar(0));
+  for (const int32_t format : std::vector<int32_t>{image_t::PIXEL_FORMAT_PNG, image_t::PIXEL_FORMAT_JPEG}) {
+    image_t msg = encode_image(big, format, 0);
+    msg.width = 80;
+    msg.height = 60;
+    const std::string name = format == image_t::PIXEL_FORMAT_PNG ? "PNG" : "JPEG";
+    EXPECT_EQ(decode_error(msg), name + " header says 3000x2000 but the message says 80x60");
+    msg.data.resize(3);
+    msg.size = 3;
+    EXPECT_EQ(decode_error(msg), name + " data has no readable " + name + " header");
+  }
+  // a header rewritten to 20000x20000, and the message saying so too
+  image_t msg = encode_image(test_pattern(), image_t::PIXEL_FORMAT_PNG, 0);
+  for (const size_t at : {16u, 20u}) {
+    msg.data[at] = 0, msg.data[at + 1] = 0, msg.data[at + 2] = 0x4e, msg.data[at + 3] = 0x20;
+  }
+  msg.width = msg.height = 20000;
+  EXPECT_EQ(decode_error(msg), "image size 20000x20000 is not between 1 and 67108864 pixels");
+  msg.width = 0;
+  EXPECT_EQ(decode_error(msg), "image size 0x20000 is not between 1 and 67108864 pixels");
+  // a JPEG with application segments before its frame header still decodes
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", test_pattern(), jpeg);
+  const std::vector<uint8_t> comment = {0xFF, 0xFE, 0x00, 0x06, 'i', 'v', 'o', 'a'};
+  jpeg.insert(jpeg.begin() + 2, comment.begin(), comment.end());
+  image_t commented = encode_image(test_pattern(), image_t::PIXEL_FORMAT_JPEG, 0);
+  commented.data = jpeg;
+  commented.size = static_cast<int32_t>(jpeg.size());
+  EXPECT_EQ(decode_image(commented).size(), cv::Size(80, 60));
 }
 
 TEST(ImageConvert, DepthRoundTripsLittleEndian) {

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/message_counts.hpp"
 #include "ivoa/rig_calibration_t.hpp"
 
@@ -30,6 +31,10 @@ void validate_camera(const CameraIntrinsics& cam, const std::string& where, cons
   check(cam.width < SHRT_MAX && cam.height < SHRT_MAX, where,
         key + " image size " + std::to_string(cam.width) + "x" + std::to_string(cam.height) + " is not under " +
             std::to_string(SHRT_MAX) + " px a side (OpenCV's remap)");
+  // every process sizes its rectification maps and grids from it
+  check(static_cast<int64_t>(cam.width) * cam.height <= kMaxImagePixels, where,
+        key + " image size " + std::to_string(cam.width) + "x" + std::to_string(cam.height) + " is over " +
+            std::to_string(kMaxImagePixels) + " pixels");
   check(cam.K.allFinite() && cam.K(0, 0) > 0 && cam.K(1, 1) > 0, where,
         key + " focal lengths must be positive and finite");
   check(cam.K(2, 0) == 0 && cam.K(2, 1) == 0 && cam.K(2, 2) == 1, where, key + " last row must be [0 0 1]");

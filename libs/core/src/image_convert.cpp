@@ -1,6 +1,10 @@
 #include "ivoa/core/image_convert.hpp"
 
+#include <algorithm>
+#include <climits>
 #include <cstring>
+#include <optional>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -15,10 +19,9 @@ void require(bool ok, const std::string& what) {
   if (!ok) throw ImageError(what);
 }
 
-// Wraps the raw pixels of msg (no copy) after checking sizes.
+// Wraps the raw pixels of msg (no copy) after checking its size against
+// the bytes; decode_image has checked width and height.
 cv::Mat wrap_raw(const image_t& msg, int type, int bytes_per_pixel) {
-  require(msg.width > 0 && msg.height > 0,
-          "image has non-positive size " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
   // int64: a width near INT_MAX times 3 must not wrap round to pass
   require(static_cast<int64_t>(msg.row_stride) >= static_cast<int64_t>(msg.width) * bytes_per_pixel,
           "row_stride " + std::to_string(msg.row_stride) + " is smaller than width * " +
@@ -29,6 +32,61 @@ cv::Mat wrap_raw(const image_t& msg, int type, int bytes_per_pixel) {
                                          " bytes, message has " + std::to_string(msg.data.size()));
   return cv::Mat(msg.height, msg.width, type, const_cast<uint8_t*>(msg.data.data()),
                  static_cast<size_t>(msg.row_stride));
+}
+
+uint32_t big_endian(const uint8_t* p, int bytes) {
+  uint32_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+// Width and height from a PNG's IHDR chunk, which must come first.
+std::optional<cv::Size> png_header_size(const std::vector<uint8_t>& d) {
+  static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (d.size() < 24 || std::memcmp(d.data(), kSignature, 8) != 0 || std::memcmp(d.data() + 12, "IHDR", 4) != 0)
+    return std::nullopt;
+  return cv::Size(static_cast<int>(std::min<uint32_t>(big_endian(&d[16], 4), INT32_MAX)),
+                  static_cast<int>(std::min<uint32_t>(big_endian(&d[20], 4), INT32_MAX)));
+}
+
+// Width and height from a JPEG's first start-of-frame segment, walking the
+// segments before it by their lengths.
+std::optional<cv::Size> jpeg_header_size(const std::vector<uint8_t>& d) {
+  if (d.size() < 4 || d[0] != 0xFF || d[1] != 0xD8) return std::nullopt;
+  size_t at = 2;
+  while (at + 4 <= d.size()) {
+    if (d[at] != 0xFF) return std::nullopt;
+    const uint8_t marker = d[at + 1];
+    if (marker == 0xFF) {  // fill byte before a marker
+      ++at;
+      continue;
+    }
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) {  // no length field
+      at += 2;
+      continue;
+    }
+    const size_t length = big_endian(&d[at + 2], 2);
+    const bool start_of_frame = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (start_of_frame) {
+      if (length < 7 || at + 9 > d.size()) return std::nullopt;
+      return cv::Size(static_cast<int>(big_endian(&d[at + 7], 2)), static_cast<int>(big_endian(&d[at + 5], 2)));
+    }
+    if (marker == 0xDA || length < 2) return std::nullopt;  // scan data before any frame header
+    at += 2 + length;
+  }
+  return std::nullopt;
+}
+
+// Refuses a compressed image whose header is missing or whose size is not
+// the message's, before it is decompressed.
+void check_compressed_header(const image_t& msg) {
+  const bool png = msg.pixelformat == image_t::PIXEL_FORMAT_PNG;
+  const std::string name = pixelformat_name(msg.pixelformat);
+  const auto size = png ? png_header_size(msg.data) : jpeg_header_size(msg.data);
+  require(size.has_value(), name + " data has no readable " + name + " header");
+  require(size->width == msg.width && size->height == msg.height,
+          name + " header says " + std::to_string(size->width) + "x" + std::to_string(size->height) +
+              " but the message says " + std::to_string(msg.width) + "x" + std::to_string(msg.height));
 }
 
 cv::Mat to_output(const cv::Mat& src, ColorOutput output) {
@@ -117,6 +175,10 @@ cv::Mat decode_image(const image_t& msg, ColorOutput output) {
   require(static_cast<size_t>(msg.size) == msg.data.size(), "image size field " + std::to_string(msg.size) +
                                                                 " disagrees with " + std::to_string(msg.data.size()) +
                                                                 " data bytes");
+  require(msg.width > 0 && msg.height > 0 &&
+              static_cast<int64_t>(msg.width) * static_cast<int64_t>(msg.height) <= kMaxImagePixels,
+          "image size " + std::to_string(msg.width) + "x" + std::to_string(msg.height) + " is not between 1 and " +
+              std::to_string(kMaxImagePixels) + " pixels");
   const int32_t f = msg.pixelformat;
   if (f == image_t::PIXEL_FORMAT_GRAY) return to_output(wrap_raw(msg, CV_8UC1, 1), output);
   if (f == image_t::PIXEL_FORMAT_BGR) return to_output(wrap_raw(msg, CV_8UC3, 3), output);
@@ -132,6 +194,7 @@ cv::Mat decode_image(const image_t& msg, ColorOutput output) {
   }
   if (f == image_t::PIXEL_FORMAT_JPEG || f == image_t::PIXEL_FORMAT_PNG) {
     require(!msg.data.empty(), pixelformat_name(f) + " image has no data");
+    check_compressed_header(msg);
     const cv::Mat buffer(1, static_cast<int>(msg.data.size()), CV_8UC1, const_cast<uint8_t*>(msg.data.data()));
     cv::Mat decoded = cv::imdecode(buffer, output == ColorOutput::kBgr ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE);
     require(!decoded.empty(), pixelformat_name(f) + " data does not decode");

@@ -1,5 +1,6 @@
 #pragma once
 // Conversions between LCM image messages and cv::Mat.
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -17,8 +18,15 @@ class ImageError : public std::runtime_error {
 
 enum class ColorOutput { kBgr, kGray };
 
+// The most pixels an image message or a calibrated camera may have (64 Mi
+// px, past any stereo or depth camera's sensor). Declared sizes are checked
+// against it before anything is allocated or decompressed: a 584 kB PNG can
+// claim 1.8 GB of pixels.
+constexpr int64_t kMaxImagePixels = int64_t{1} << 26;
+
 // Decodes any supported image_t (gray, RGB, BGR, the four Bayer layouts,
-// JPEG, PNG) into an 8-bit BGR or gray cv::Mat that owns its data.
+// JPEG, PNG) into an 8-bit BGR or gray cv::Mat that owns its data. A JPEG
+// or PNG is decompressed only if its header's size is the message's.
 cv::Mat decode_image(const image_t& msg, ColorOutput output = ColorOutput::kBgr);
 
 // Encodes an 8-bit BGR (3 channels) or gray image. `pixelformat` picks the
