@@ -122,8 +122,7 @@ int main(int argc, char** argv) {
     ivoa::enlarge_receive_buffer(bus, socket_buffer_mb);
     spdlog::info("listening on {} ({} + {} -> {} + {})", bus.url(), options.depth_channel, options.stereo_channel,
                  options.depth_out_channel, options.labels_out_channel);
-    const bool offline = bus.url().rfind("file://", 0) == 0;
-    const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, offline);
+    const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, bus.reads_a_log());
     node.flush();
     heartbeat.publish_now();  // with the labels flush() published
     spdlog::info("stopped: {}", heartbeat.summary());

@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
     ivoa::Heartbeat heartbeat(bus, "introspection", common.status_channel);
     ivoa::IntrospectionNode node(bus, heartbeat, std::move(model), cl.options, cl.config.mc_passes);
     ivoa::enlarge_receive_buffer(bus, cl.socket_buffer_mb);
-    const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, bus.url().rfind("file://", 0) == 0);
+    const int code = ivoa::run_until_stopped(bus, &heartbeat, {}, 50, bus.reads_a_log());
     node.stop();
     heartbeat.publish_now();  // with the frames that were in hand and waiting at the stop
     spdlog::info("stopped: {}", heartbeat.summary());

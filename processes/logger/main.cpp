@@ -107,7 +107,7 @@ int report_end(const Recorder& recorder, double seconds, const std::string& filt
 
 // Handles LCM until a stop, the end of a file:// input or a write error.
 int receive(ivoa::Bus& bus, Recorder& recorder, StatusReporter& reporter, ivoa::Heartbeat& heartbeat) {
-  const bool reading_a_log = bus.url().rfind("file://", 0) == 0;
+  const bool reading_a_log = bus.reads_a_log();
   double next_status_ms = 0;
   while (!ivoa::stop_requested() && !recorder.failed()) {
     if (bus.handle(50) < 0) {

@@ -85,10 +85,14 @@ int run_detector(const ivoa::CommonOptions& common, const DetectorFlags& f,
     node.start();
     ivoa::enlarge_receive_buffer(bus, f.socket_buffer_mb);
     spdlog::info("{} on {} -> {} ({})", o.model, o.stereo_channel, o.output_channel, bus.url());
-    const int code = ivoa::run_until_stopped(bus, &heartbeat, [&] {
-      if (node.finished()) ivoa::request_stop();
-    });
+    const int code = ivoa::run_until_stopped(
+        bus, &heartbeat,
+        [&] {
+          if (node.finished()) ivoa::request_stop();
+        },
+        50, bus.reads_a_log());
     node.stop();
+    heartbeat.set_state("stopped");  // the worker may have said "running" since, on its last frames
     heartbeat.publish_now();
     spdlog::info("stopped: {}", heartbeat.summary());
     return code;

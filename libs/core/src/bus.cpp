@@ -96,6 +96,11 @@ void Bus::subscribe_raw(std::string_view channel_regex, RawHandler handler) {
   subscriptions_.push_back(std::move(sub));
 }
 
+bool Bus::reads_a_log() const {
+  return url_.rfind("file://", 0) == 0 && url_.find("mode=w") == std::string::npos &&
+         url_.find("mode=a") == std::string::npos;
+}
+
 int Bus::handle(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
 
 void Bus::report_decode_error(const std::string& what) {

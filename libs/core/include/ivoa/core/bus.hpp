@@ -96,6 +96,9 @@ class Bus {
   int handle(int timeout_ms);
 
   const std::string& url() const { return url_; }
+  // True on a file:// URL opened for reading: handle() < 0 then means the
+  // log has ended, and a process should finish as it would at a stop.
+  bool reads_a_log() const;
   lcm::LCM& lcm() { return *lcm_; }
 
  private:
