@@ -133,6 +133,7 @@ class LabelRepeatabilityTest(unittest.TestCase):
         self.assertIn("samples.csv: line 2", proc.stderr)
         # a label out of range, a row cut short, no rows: named by line, no traceback
         for name, rows, message in (("label9", "0,1000,0,9\n", "line 2: label 9, expected 0..3"),
+                                    ("wide", "0,1000,0," + "1" * 200000 + "\n", "line 2: field larger than field limit"),
                                     ("cut", "0,1000,0,1\n1,1000\n", "line 3 does not have the header's 4 fields"),
                                     ("empty", "", "empty: no samples in any session (office_s31)")):
             folder = os.path.join(self.tmp.name, name, "office_s31")
@@ -144,10 +145,11 @@ class LabelRepeatabilityTest(unittest.TestCase):
             self.assertEqual(proc.returncode, 3, proc.stderr)
             self.assertIn(message, proc.stderr)
             self.assertNotIn("Traceback", proc.stderr)
-        proc = subprocess.run([sys.executable, TOOL, *self.data, "--json", os.path.join(self.tmp.name, "no", "x.json")],
-                              capture_output=True, text=True, timeout=60)
+        # --json is checked before the analysis: an unreadable dataset does not hide it
+        proc = subprocess.run([sys.executable, TOOL, self.data[0], missing, "--json",
+                               os.path.join(self.tmp.name, "no", "x.json")], capture_output=True, text=True, timeout=60)
         self.assertEqual(proc.returncode, 4, proc.stderr)
-        self.assertIn("cannot write", proc.stderr)
+        self.assertIn("cannot write " + os.path.join(self.tmp.name, "no", "x.json") + ": its folder", proc.stderr)
 
     def test_a_session_without_samples_adds_no_cells_and_is_not_refused(self):
         # ivoa-dataset writes (and lists) a session where no frame gave a sample

@@ -976,7 +976,7 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         if os.geteuid() != 0:  # root writes into a read-only folder anyway
             read_only = os.path.join(self.root, "out_read_only")
             os.makedirs(read_only, mode=0o555)
-            cases.append((read_only, os.path.join(read_only, "jppc_degenerate") + ": Permission denied"))
+            cases.append((read_only, read_only + ": this user may not write in it"))
         for out, why in cases:
             code, _, stderr = run_main(["--eval", self.f.degenerate, "--dataset", self.f.data2, "--out", out])
             self.assertEqual(code, 4, stderr)
@@ -1220,21 +1220,67 @@ class CauseAndSettingsRowsTest(FabricatedInputsCase):
         self.assertEqual(code, 0, stderr)
         self.assertIn("the causes given hold no rows", stderr)
 
-    def test_a_dataset_value_that_is_not_an_integer_is_named_by_line(self):
-        d = os.path.join(self.root, "data_not_int")
+    def dataset_copy(self, name):
+        """A copy of the fabricated dataset and the folder of its first session."""
+        d = os.path.join(self.root, name)
         shutil.copytree(self.f.data, d)
-        session = sorted(n for n in os.listdir(d) if os.path.isdir(os.path.join(d, n)))[0]
-        path = os.path.join(d, session, "samples.csv")
+        return d, os.path.join(d, sorted(n for n in os.listdir(d) if os.path.isdir(os.path.join(d, n)))[0])
+
+    def dataset_with_sample_value(self, name, column, value):
+        """A copy of the dataset whose first session's samples.csv has `value` in `column` on line 4."""
+        d, session = self.dataset_copy(name)
+        path = os.path.join(session, "samples.csv")
         lines = read_text(path).splitlines()
         fields = lines[3].split(",")
-        fields[lines[0].split(",").index("label")] = "x"
+        fields[lines[0].split(",").index(column)] = value
         lines[3] = ",".join(fields)
         with open(path, "w") as fh:
             fh.write("\n".join(lines) + "\n")
-        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", d, "--out",
+        return d
+
+    def assert_refused(self, dataset, message):
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", dataset, "--out",
                                     os.path.join(self.root, "report_bad")])
         self.assertEqual(code, 3, stderr)
-        self.assertIn("samples.csv: line 4, column 'label': 'x' is not an integer", stderr)
+        self.assertIn(message, stderr)
+        self.assertNotIn("Traceback", stderr)
+
+    def test_a_dataset_value_that_is_not_an_integer_is_named_by_line(self):
+        self.assert_refused(self.dataset_with_sample_value("data_not_int", "label", "x"),
+                            "samples.csv: line 4, column 'label': 'x' is not an integer")
+
+    def test_a_dataset_value_too_large_for_64_bits_is_named_by_line(self):
+        """It was an OverflowError's traceback, exit code 1."""
+        self.assert_refused(self.dataset_with_sample_value("data_huge_utime", "utime", "9" * 20),
+                            "samples.csv: line 4, column 'utime': '" + "9" * 20 + "' does not fit a 64-bit integer")
+
+    def test_a_field_over_the_csv_limit_is_named_by_line(self):
+        """It was csv.Error's traceback (the csv module stops at 128 kB a field)."""
+        self.assert_refused(self.dataset_with_sample_value("data_huge_field", "label", "1" * 200000),
+                            "samples.csv: line 4: field larger than field limit")
+
+    def test_dataset_sizes_of_the_wrong_type_are_named(self):
+        """patch_size and evidence_size were read with int(): a TypeError's traceback for a list."""
+        for name, file, key, value in (("ds_patch", "dataset.json", "patch_size", "big"),
+                                       ("s_patch", "session.json", "patch_size", [100]),
+                                       ("s_evidence", "session.json", "evidence_size", -1)):
+            d, session = self.dataset_copy("data_field_" + name)
+            path = os.path.join(d if file == "dataset.json" else session, file)
+            meta = json.loads(read_text(path)) if os.path.isfile(path) else {}
+            meta[key] = value
+            with open(path, "w") as fh:
+                json.dump(meta, fh)
+            least = 0 if key == "evidence_size" else 1
+            self.assert_refused(d, f"{file}: field '{key}' = {value!r}, expected an integer >= {least}")
+
+    def test_an_unwritable_out_is_found_before_the_inputs_are_read(self):
+        a_file = os.path.join(self.root, "out_is_a_file")
+        with open(a_file, "w"):
+            pass
+        code, _, stderr = run_main(["--eval", os.path.join(self.root, "no_eval"), "--dataset", self.f.data,
+                                    "--out", os.path.join(a_file, "r")])
+        self.assertEqual(code, 4, stderr)
+        self.assertIn("cannot write the report: " + os.path.join(a_file, "r") + ": Not a directory", stderr)
 
     def test_a_settings_row_given_twice_is_refused(self):
         variants = os.path.join(self.root, "variants_twice.csv")

@@ -95,7 +95,21 @@ def _read_session_labels(path: str) -> Dict[Tuple[int, int], int]:
                     raise InputError(f"{path}: line {row_number}: label {label}, expected 0..3 (TP, TN, FP, FN)")
     except UnicodeDecodeError:
         raise InputError(f"{path}: not UTF-8 text, so not a dataset's samples.csv") from None
+    except csv.Error as e:  # a field over the csv module's limit (128 kB), a NUL byte, ...
+        raise InputError(f"{path}: line {reader.reader.line_num}: {e}") from None  # DictReader's own lags
     return labels
+
+
+def _why_cannot_write(path: str) -> str:
+    """Why `path` could not be written, or "" if it looks writable."""
+    folder = os.path.dirname(path) or "."
+    if os.path.isdir(path):
+        return "it is a folder"
+    if not os.path.isdir(folder):
+        return f"its folder {folder} does not exist"
+    if not os.access(path if os.path.exists(path) else folder, os.W_OK):
+        return "this user may not write it"
+    return ""
 
 
 def session_info(dataset: str, session: str) -> dict:
@@ -137,7 +151,7 @@ def read_worst_costs(dataset: str, session: str) -> Optional[Dict[Tuple[int, int
     with open(os.path.join(folder, "samples.csv"), newline="") as f:
         try:
             rows = [(int(r["sample"]), int(r["utime"]), int(r["cell"])) for r in csv.DictReader(f)]
-        except (KeyError, ValueError, TypeError) as e:  # TypeError: a row short of fields
+        except (KeyError, ValueError, TypeError, csv.Error) as e:  # TypeError: a row short of fields
             raise InputError(f"{folder}/samples.csv: evidence needs integer sample, utime and cell columns "
                              f"({type(e).__name__}: {e})") from None
     if values.size != len(rows) * size:
@@ -331,6 +345,9 @@ def main(argv=None) -> int:
         if os.path.realpath(d) in seen:
             ap.error(f"{d} is given twice (as {seen[os.path.realpath(d)]} too): give each realisation once")
         seen[os.path.realpath(d)] = d
+    if args.json and (why := _why_cannot_write(args.json)):  # before the analysis, not after
+        print(f"ivoa_label_repeatability: cannot write {args.json}: {why}", file=sys.stderr)
+        return EXIT_CANNOT_WRITE
     try:
         result = analyse(args.datasets, args.evidence_threshold)
     except InputError as e:

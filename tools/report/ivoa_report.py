@@ -355,6 +355,12 @@ class OutputError(Exception):
 
 def run_report(args: argparse.Namespace, argv: List[str]) -> int:
     """Loads, analyses, writes report.md + metrics.json, prints the summary."""
+    try:  # before minutes of loading and analysis, not after
+        os.makedirs(args.out, exist_ok=True)
+    except OSError as e:
+        raise OutputError(f"{e.filename or args.out}: {e.strerror or e}") from None
+    if not os.access(args.out, os.W_OK | os.X_OK):
+        raise OutputError(f"{args.out}: this user may not write in it")
     runs, settings, noise, warnings = load_inputs(args)
     try:
         numbers, report_path = write_report(args, argv, runs, settings, noise, warnings)

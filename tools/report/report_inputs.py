@@ -201,7 +201,7 @@ class Dataset:
             raise InputError(f"{path}: dataset folder not found")
         meta_path = os.path.join(path, "dataset.json")
         self.meta = _read_json(meta_path) if os.path.isfile(meta_path) else {}
-        self.patch_size = int(self.meta.get("patch_size", 100))
+        self.patch_size = _checked_field(meta_path, self.meta, "patch_size", 100, 1)
         self._sessions: Dict[str, DatasetSession] = {}
 
     def session(self, name: str) -> DatasetSession:
@@ -214,8 +214,9 @@ class Dataset:
         d = os.path.join(self.path, name)
         if not os.path.isdir(d):
             raise InputError(f"{d}: session folder not found in dataset {self.path}")
-        info = _read_session_info(os.path.join(d, "session.json"))
-        patch_size = int(info.get("patch_size", self.patch_size))
+        info_path = os.path.join(d, "session.json")
+        info = _read_session_info(info_path)
+        patch_size = _checked_field(info_path, info, "patch_size", self.patch_size, 1)
         samples_path = os.path.join(d, "samples.csv")
         cols = _read_csv_columns(samples_path, ("sample", "utime", "cell", "label"))
         sample, utime, cell, label = (_numeric(samples_path, cols, c, int) for c in ("sample", "utime", "cell", "label"))
@@ -236,7 +237,16 @@ def _read_session_info(path: str) -> dict:
         raise InputError(f"{path}: field 'views' = {views!r}, expected an integer >= 1")
     if not _is_number(scale) or not scale >= 0:
         raise InputError(f"{path}: field 'patch_scale' = {scale!r}, expected a number >= 0")
+    _checked_field(path, info, "evidence_size", 0, 0)
     return info
+
+
+def _checked_field(path: str, info: dict, key: str, default: int, least: int) -> int:
+    """An integer field of a dataset's JSON, at least `least`, or `default` where it is missing."""
+    value = info.get(key, default)
+    if not _is_integer(value) or not least <= value < 2**31:
+        raise InputError(f"{path}: field '{key}' = {value!r}, expected an integer >= {least}")
+    return value
 
 
 def _is_number(x) -> bool:
@@ -352,6 +362,7 @@ def _read_csv_columns(path: str, required) -> Dict[str, List[str]]:
     required columns exist and every row has as many fields as the header."""
     if not os.path.isfile(path):
         raise InputError(f"{path}: missing")
+    reader = None
     try:
         with open(path, newline="", encoding="utf-8") as f:
             reader = csv.reader(f)
@@ -374,6 +385,8 @@ def _read_csv_columns(path: str, required) -> Dict[str, List[str]]:
         raise InputError(f"{path}: cannot read ({e.strerror})") from None
     except UnicodeDecodeError:
         raise InputError(f"{path}: not UTF-8 text, so not the CSV file expected here") from None
+    except csv.Error as e:  # a field over the csv module's limit (128 kB), a NUL byte, ...
+        raise InputError(f"{path}: line {reader.line_num if reader else 1}: {e}") from None
     return cols
 
 
@@ -382,13 +395,15 @@ def _numeric(path: str, cols: Dict[str, List[str]], name: str, dtype):
     values = cols[name]
     try:
         return np.array([dtype(x) for x in values], dtype=np.int64 if dtype is int else np.float64)
-    except ValueError:
+    except (ValueError, OverflowError):  # OverflowError: an integer numpy's int64 cannot hold
         for i, x in enumerate(values):
+            where = f"{path}: line {_line(i)}, column '{name}': '{x}'"
             try:
-                dtype(x)
+                value = dtype(x)
             except ValueError:
-                what = "an integer" if dtype is int else "a number"
-                raise InputError(f"{path}: line {_line(i)}, column '{name}': '{x}' is not {what}") from None
+                raise InputError(f"{where} is not {'an integer' if dtype is int else 'a number'}") from None
+            if dtype is int and not -2**63 <= value < 2**63:
+                raise InputError(f"{where} does not fit a 64-bit integer") from None
         raise
 
 
