@@ -1,7 +1,8 @@
 // ivoa-log-check: what an LCM log holds and whether it is intact. Per
 // channel: type, count, size, sequence-number gaps, utime regressions.
 // For a damaged or truncated log: the byte offset of the first bad event
-// and how many good events come before it. Per process: its last
+// and how many good events come before it; messages of an ivoa type that
+// do not decode as it, per channel. Per process: its last
 // heartbeat (final state and counts). Several files (a split session, in
 // order) are checked as one recording.
 #include <filesystem>
@@ -13,6 +14,7 @@
 
 #include "ivoa/core/channel_counts.hpp"
 #include "ivoa/core/json_text.hpp"
+#include "ivoa/core/message_registry.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/logio/log_summary.hpp"
@@ -23,15 +25,34 @@ namespace {
 using ivoa::log_check::LastHeartbeats;
 using ivoa::logio::LogSummary;
 
+// Messages of an ivoa type, framed intact in the log, that do not decode
+// as that type: a reader skips each of them as bad input.
+struct DamagedPayloads {
+  std::string type;
+  int64_t count = 0;
+  uint64_t first_offset = 0;  // of the first such event in the file
+};
+
 struct FileResult {
   std::string path;
   uint64_t size = 0;
   int64_t events = 0;
   std::string first_channel;
   std::vector<ivoa::logio::LogProblem> problems;
-  std::vector<int64_t> events_before_problem;  // per problem
-  std::string error;                           // could not be read at all
+  std::vector<int64_t> events_before_problem;          // per problem
+  std::map<std::string, DamagedPayloads> undecodable;  // per channel
+  std::string error;                                   // could not be read at all
+  bool damaged() const { return !error.empty() || !problems.empty() || !undecodable.empty(); }
 };
+
+void check_payload(const ivoa::logio::LogEvent& event, FileResult& r) {
+  if (!ivoa::ivoa_payload_damaged(event.data.data(), event.data.size())) return;
+  DamagedPayloads& d = r.undecodable[event.channel];
+  if (d.count++ == 0) {
+    d.type = std::string(ivoa::payload_type_name(event.data.data(), event.data.size()).value_or("?"));
+    d.first_offset = event.offset;
+  }
+}
 
 FileResult check_file(const std::string& path, bool resync, LogSummary& summary, LastHeartbeats& heartbeats) {
   FileResult r;
@@ -46,6 +67,7 @@ FileResult check_file(const std::string& path, bool resync, LogSummary& summary,
       for (; problems_seen < reader.problems().size(); ++problems_seen) r.events_before_problem.push_back(r.events);
       if (!got) break;
       if (r.events++ == 0) r.first_channel = event.channel;
+      check_payload(event, r);
       summary.add(event);
       heartbeats.add(event);
     }
@@ -58,6 +80,7 @@ FileResult check_file(const std::string& path, bool resync, LogSummary& summary,
       r.error = why;
       r.problems.clear();
       r.events_before_problem.clear();
+      r.undecodable.clear();
     }
   } catch (const ivoa::logio::LogReadError& e) {
     r.error = e.what();
@@ -72,12 +95,18 @@ void print_file(const FileResult& r) {
   }
   std::printf("%s: %lld events, %.1f MB, first channel %s, %s\n", r.path.c_str(), static_cast<long long>(r.events),
               static_cast<double>(r.size) / 1e6, r.first_channel.empty() ? "-" : r.first_channel.c_str(),
-              !r.problems.empty() ? "DAMAGED"
-              : r.events == 0     ? "intact but empty (nothing recorded; ivoa-log-play refuses it)"
-                                  : "intact");
+              r.damaged()     ? "DAMAGED"
+              : r.events == 0 ? "intact but empty (nothing recorded; ivoa-log-play refuses it)"
+                              : "intact");
   for (size_t i = 0; i < r.problems.size(); ++i)
     std::printf("  %s; the %lld events before it are intact\n", r.problems[i].describe().c_str(),
                 static_cast<long long>(r.events_before_problem[i]));
+  for (const auto& [channel, d] : r.undecodable)
+    std::printf(
+        "  %s: %lld messages do not decode as %s (truncated or damaged inside; readers skip them), the "
+        "first at byte %llu\n",
+        channel.c_str(), static_cast<long long>(d.count), d.type.c_str(),
+        static_cast<unsigned long long>(d.first_offset));
 }
 
 std::string results_json(const std::vector<FileResult>& files, const LogSummary& summary,
@@ -95,7 +124,14 @@ std::string results_json(const std::vector<FileResult>& files, const LogSummary&
              ", \"what\": " + json_quote(f.problems[k].what) +
              ", \"skipped_bytes\": " + std::to_string(f.problems[k].skipped_bytes) +
              ", \"events_before\": " + std::to_string(f.events_before_problem[k]) + "}";
-    out += "]}";
+    out += "], \"undecodable\": {";
+    const char* sep = "";
+    for (const auto& [channel, d] : f.undecodable) {
+      out += sep + json_quote(channel) + ": {\"type\": " + json_quote(d.type) +
+             ", \"count\": " + std::to_string(d.count) + ", \"first_offset\": " + std::to_string(d.first_offset) + "}";
+      sep = ", ";
+    }
+    out += "}}";
   }
   out += "],\n\"events\": " + std::to_string(summary.events()) + ",\n\"channels\": {";
   const char* sep = "\n  ";
@@ -164,7 +200,7 @@ int check_logs(const CheckCommandLine& cl) {
   for (const auto& path : cl.files) {
     results.push_back(check_file(path, cl.resync, summary, heartbeats));
     print_file(results.back());
-    damaged = damaged || !results.back().error.empty() || !results.back().problems.empty();
+    damaged = damaged || results.back().damaged();
   }
   std::printf("\n%s", summary.table().c_str());
   if (const std::string table = heartbeats.table(); !table.empty()) std::printf("\n%s", table.c_str());
@@ -179,8 +215,8 @@ int check_logs(const CheckCommandLine& cl) {
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage; each "
-      "process's last heartbeat.\n"
+      "Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage, messages "
+      "that do not decode as their type; each process's last heartbeat.\n"
       "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 2 bad flags (a --json that is one of "
       "the logs), 3 a log is damaged or "
       "unreadable, 4 the --json file cannot be written."};

@@ -1,6 +1,7 @@
 #include "ivoa/core/message_registry.hpp"
 
 #include "ivoa/core/message_counts.hpp"
+#include "ivoa/core/message_decode.hpp"
 
 namespace ivoa {
 namespace {
@@ -11,20 +12,32 @@ int64_t read_be64(const uint8_t* b) {
   return static_cast<int64_t>(v);
 }
 
+template <class Msg>
+bool decodes_as(const void* data, size_t size) {
+  Msg msg;
+  return decode_message(msg, data, size);
+}
+
+template <class Msg>
+MessageTypeInfo info_of() {
+  static const std::string name = std::string("ivoa.") + Msg::getTypeName();
+  return {name, Msg::getHash(), &decodes_as<Msg>};
+}
+
 }  // namespace
 
 const std::vector<MessageTypeInfo>& message_types() {
   static const std::vector<MessageTypeInfo> types = {
-      {"ivoa.image_t", image_t::getHash()},
-      {"ivoa.stereo_image_t", stereo_image_t::getHash()},
-      {"ivoa.depth_image_t", depth_image_t::getHash()},
-      {"ivoa.camera_intrinsics_t", camera_intrinsics_t::getHash()},
-      {"ivoa.rig_calibration_t", rig_calibration_t::getHash()},
-      {"ivoa.obstacle_grid_t", obstacle_grid_t::getHash()},
-      {"ivoa.introspection_labels_t", introspection_labels_t::getHash()},
-      {"ivoa.introspection_t", introspection_t::getHash()},
-      {"ivoa.process_status_t", process_status_t::getHash()},
-      {"ivoa.sim_ground_truth_t", sim_ground_truth_t::getHash()},
+      info_of<image_t>(),
+      info_of<stereo_image_t>(),
+      info_of<depth_image_t>(),
+      info_of<camera_intrinsics_t>(),
+      info_of<rig_calibration_t>(),
+      info_of<obstacle_grid_t>(),
+      info_of<introspection_labels_t>(),
+      info_of<introspection_t>(),
+      info_of<process_status_t>(),
+      info_of<sim_ground_truth_t>(),
   };
   return types;
 }
@@ -50,12 +63,27 @@ std::optional<int64_t> payload_seq(std::string_view type_name, const void* data,
   return read_be64(static_cast<const uint8_t*>(data) + 16);
 }
 
-std::optional<std::string_view> payload_type_name(const void* data, size_t size) {
+namespace {
+
+const MessageTypeInfo* type_of(const void* data, size_t size) {
   const auto fp = payload_fingerprint(data, size);
-  if (!fp) return std::nullopt;
+  if (!fp) return nullptr;
   for (const auto& t : message_types())
-    if (t.fingerprint == *fp) return t.name;
-  return std::nullopt;
+    if (t.fingerprint == *fp) return &t;
+  return nullptr;
+}
+
+}  // namespace
+
+bool ivoa_payload_damaged(const void* data, size_t size) {
+  const MessageTypeInfo* type = type_of(data, size);
+  return type != nullptr && !type->decodes(data, size);
+}
+
+std::optional<std::string_view> payload_type_name(const void* data, size_t size) {
+  const MessageTypeInfo* type = type_of(data, size);
+  if (type == nullptr) return std::nullopt;
+  return type->name;
 }
 
 }  // namespace ivoa

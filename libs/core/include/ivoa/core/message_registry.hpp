@@ -10,8 +10,9 @@
 namespace ivoa {
 
 struct MessageTypeInfo {
-  std::string_view name;  // "ivoa.image_t"
-  int64_t fingerprint;    // the first 8 bytes of every encoded message
+  std::string_view name;                           // "ivoa.image_t"
+  int64_t fingerprint;                             // the first 8 bytes of every encoded message
+  bool (*decodes)(const void* data, size_t size);  // whether a payload decodes as this type
 };
 
 const std::vector<MessageTypeInfo>& message_types();
@@ -20,6 +21,10 @@ const std::vector<MessageTypeInfo>& message_types();
 std::optional<int64_t> payload_fingerprint(const void* data, size_t size);
 // "ivoa.stereo_image_t", or empty for a payload of another or unknown type.
 std::optional<std::string_view> payload_type_name(const void* data, size_t size);
+// True for a payload with an ivoa type's fingerprint that does not decode
+// as that type (truncated or damaged inside); false otherwise, payloads of
+// unknown types included.
+bool ivoa_payload_damaged(const void* data, size_t size);
 
 // Every ivoa type starts with utime; stereo and depth images follow it with
 // seq. Read straight from the payload of an ivoa message (no decoding);

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# ivoa-log-check decodes every message of an ivoa type: one whose payload
+# was cut short inside an intact log frame (what a reader skips as bad
+# input) makes the log DAMAGED (exit 3), named by channel, type, count and
+# the byte offset of the first. It used to count as intact. Messages of no
+# ivoa type are not judged.
+set -euo pipefail
+B=${IVOA_BUILD_DIR:?}
+d=$(mktemp -d)
+trap 'rm -rf "$d"' EXIT
+"$B/tests/ivoa-test-logger-helper" --lcm-url "file://$d/good.lcmlog?mode=w" --log-level warn \
+  publish --calibrations 3 --foreign 2 --rate 1000
+"$B/bin/ivoa-log-check" "$d/good.lcmlog" > "$d/good.txt" || { cat "$d/good.txt"; exit 1; }
+# The same log with the second calibration's payload 40 bytes short, its
+# frame's length field rewritten to match; prints that event's offset.
+offset=$(python3 - "$d/good.lcmlog" "$d/cut.lcmlog" <<'PY'
+import struct, sys
+data, out, at, seen = open(sys.argv[1], "rb").read(), bytearray(), 0, 0
+while at < len(data):
+    sync, number, utime, chan_len, data_len = struct.unpack_from(">IqqII", data, at)
+    channel = data[at + 28:at + 28 + chan_len]
+    payload = data[at + 28 + chan_len:at + 28 + chan_len + data_len]
+    if channel == b"RIG_CALIBRATION":
+        seen += 1
+        if seen == 2:
+            payload = payload[:-40]
+            print(len(out))  # the offset of the cut event
+    out += struct.pack(">IqqII", sync, number, utime, chan_len, len(payload)) + channel + payload
+    at += 28 + chan_len + data_len
+open(sys.argv[2], "wb").write(out)
+PY
+)
+rc=0
+"$B/bin/ivoa-log-check" --json "$d/cut.json" "$d/cut.lcmlog" > "$d/cut.txt" || rc=$?
+cat "$d/cut.txt"
+[ "$rc" = 3 ] || { echo "FAIL: exit $rc, expected 3 (damaged)"; exit 1; }
+grep -q "cut.lcmlog: 5 events, .* DAMAGED" "$d/cut.txt"
+grep -q "RIG_CALIBRATION: 1 messages do not decode as ivoa.rig_calibration_t (truncated or damaged inside; readers skip them), the first at byte $offset" "$d/cut.txt"
+python3 - "$d/cut.json" "$offset" <<'PY'
+import json, sys
+bad = json.load(open(sys.argv[1]))["files"][0]["undecodable"]
+assert bad == {"RIG_CALIBRATION": {"type": "ivoa.rig_calibration_t", "count": 1, "first_offset": int(sys.argv[2])}}, bad
+PY
+echo "OK: a payload cut inside an intact frame is named; the intact log passes"
