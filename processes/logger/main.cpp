@@ -102,7 +102,8 @@ int report_end(const Recorder& recorder, double seconds, const std::string& filt
         "LOST {} messages ({:.1f} MB) because the disk could not keep up (raise --max-queue-mb or use a "
         "faster disk)",
         s.dropped, mb(s.dropped_bytes));
-  return ivoa::kExitOk;
+  // A recording with holes is not a success, though what it holds is readable.
+  return s.dropped > 0 || s.deleted > 0 ? ivoa::kExitIoError : ivoa::kExitOk;
 }
 
 // Handles LCM until a stop, the end of a file:// input or a write error.
@@ -289,7 +290,8 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Record LCM channels into standard LCM log files (replay: lcm-logplayer; browse: lcm-spy).\n"
       "On SIGINT, SIGTERM or SIGHUP everything received is written before exiting. Exit codes: 0 ok, 1 LCM failure,\n"
-      "2 bad flags, 4 cannot write the log (the file written so far stays readable)."};
+      "2 bad flags, 4 the log could not be written, or not all of it: messages were LOST (what was written stays\n"
+      "readable)."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
   ivoa::add_status_channel_option(app, common.status_channel);
