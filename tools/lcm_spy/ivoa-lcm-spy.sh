@@ -16,6 +16,12 @@ J=/usr/share/java
 for f in "$jar" "$J/lcm.jar" "$J/jchart2d.jar"; do
   [ -f "$f" ] || { echo "ivoa-lcm-spy: missing $f (build the project; apt-get install liblcm-java libjchart2d-java)" >&2; exit 3; }
 done
+# lcm-spy is a window: without a display Java ends in a HeadlessException trace.
+if [ -z "${DISPLAY:-}" ]; then
+  echo "ivoa-lcm-spy: no display (DISPLAY is not set): lcm-spy opens a window. Run it in a desktop session," \
+    "over 'ssh -X', or under 'xvfb-run -a'; in a terminal, build/bin/ivoa-lcm-stats shows the traffic." >&2
+  exit 1
+fi
 # ClassDiscoverer scans $CLASSPATH for LCM types.
 export CLASSPATH="$jar${CLASSPATH:+:$CLASSPATH}"
 exec java -Djava.net.preferIPv4Stack=true -Xmx1g -cp "$J/lcm.jar:$J/jchart2d.jar:$jar" lcm.spy.Spy "$@"
