@@ -70,6 +70,14 @@ void RecentGrids::put(const obstacle_grid_t& grid) {
   arrived_.notify_all();
 }
 
+void RecentGrids::close() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    closed_ = true;
+  }
+  arrived_.notify_all();
+}
+
 std::optional<obstacle_grid_t> RecentGrids::latest() const {
   std::lock_guard<std::mutex> lock(mutex_);
   if (grids_.empty()) return std::nullopt;
@@ -85,8 +93,8 @@ std::optional<obstacle_grid_t> RecentGrids::of_frame(int64_t utime, std::chrono:
         found = *it;
         return true;
       }
-    // A newer frame's grid: this frame's will not come any more.
-    return !grids_.empty() && grids_.back().utime > utime;
+    // A newer frame's grid, or no more grids: this frame's will not come.
+    return closed_ || (!grids_.empty() && grids_.back().utime > utime);
   });
   return found;
 }
@@ -179,6 +187,7 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
 IntrospectionNode::~IntrospectionNode() { stop(); }
 
 void IntrospectionNode::stop() {
+  grids_.close();  // called once LCM is no longer handled: the frames left need not wait for theirs
   frames_.close();
   if (worker_.joinable()) worker_.join();
 }

@@ -55,14 +55,18 @@ class RecentGrids {
  public:
   void put(const obstacle_grid_t& grid);
   std::optional<obstacle_grid_t> latest() const;
-  // The grid of the frame `utime`, waiting up to `wait` for it to arrive.
+  // The grid of the frame `utime`, waiting up to `wait` for it to arrive
+  // (not at all once closed).
   std::optional<obstacle_grid_t> of_frame(int64_t utime, std::chrono::milliseconds wait);
+  // No grid arrives any more (LCM is no longer handled): ends every wait.
+  void close();
 
  private:
   static constexpr size_t kKept = 16;  // about a second of frames
   mutable std::mutex mutex_;
   std::condition_variable arrived_;
   std::deque<obstacle_grid_t> grids_;  // oldest first
+  bool closed_ = false;
 };
 
 // The predictions at the grid's in-image cells, in cell order: looked up in

@@ -361,6 +361,17 @@ TEST(RecentGrids, FindsTheFrameOrStopsWaitingOnceANewerOneIsIn) {
   });
   EXPECT_EQ(grids.of_frame(400, std::chrono::seconds(30))->utime, 400);  // woken by its arrival
   late.join();
+  // At a stop no grid arrives any more: a wait ends at once (it used to run
+  // its whole --grid-wait-ms, up to a minute, per frame left).
+  std::thread stopping([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    grids.close();
+  });
+  const auto before_close = std::chrono::steady_clock::now();
+  EXPECT_FALSE(grids.of_frame(500, std::chrono::seconds(30)).has_value());
+  EXPECT_LT(std::chrono::steady_clock::now() - before_close, std::chrono::seconds(10));
+  stopping.join();
+  EXPECT_EQ(grids.of_frame(400, std::chrono::seconds(30))->utime, 400);  // what arrived is still found
 }
 
 }  // namespace
