@@ -3,7 +3,7 @@
 # would explain a session wrongly: its log given twice (every row twice),
 # a scene file of another scene (every frame skipped, an empty CSV, exit
 # 0), a --start-utime far from the log's frames (it stepped the trajectory
-# billions of frames and hung).
+# billions of frames and hung), an output that is the log.
 set -euo pipefail
 shopt -s inherit_errexit
 B=${IVOA_BUILD_DIR:?}; S=${IVOA_SOURCE_DIR:?}
@@ -28,4 +28,14 @@ expect 2 "office_s5.lcmlog and ./office_s5.lcmlog are both session office_s5" of
 expect 3 "the log's scene is 'indoor_office', $S/libs/sim/scenes/home.yaml is 'home'" \
   --scene "$S/libs/sim/scenes/home.yaml" office_s5.lcmlog
 expect 3 "--start-utime 5 is not the session's first frame" --start-utime 5 office_s5.lcmlog
-echo "OK: a log given twice, another scene and a wrong start refused by name"
+# An output that is the log: it was truncated to a CSV header before it was read.
+before=$(md5sum <office_s5.lcmlog)
+for outputs in "--out office_s5.lcmlog" "--out c.csv --variants-out office_s5.lcmlog"; do
+  code=0
+  # shellcheck disable=SC2086
+  "$B/bin/ivoa-sim-causes" $outputs office_s5.lcmlog >said.txt 2>&1 || code=$?
+  [ "$code" = 2 ] && grep -qF "office_s5.lcmlog is the input office_s5.lcmlog: it would be written over" said.txt ||
+    { cat said.txt; echo "FAIL: $outputs: exit $code" >&2; exit 1; }
+  [ "$(md5sum <office_s5.lcmlog)" = "$before" ] || { echo "FAIL: $outputs changed the log" >&2; exit 1; }
+done
+echo "OK: a log given twice, another scene, a wrong start and an output over the log refused by name"

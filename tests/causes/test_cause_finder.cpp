@@ -1,6 +1,7 @@
 // CauseFinder replays a frame exactly (its verdicts are the recorded ones)
 // and blames a mirroring floor for the obstacles JPP-C sees in it.
 #include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -109,6 +110,29 @@ TEST(CauseFinder, RefusesAFrameItCannotReproduce) {
   CauseFinder finder = make_finder(spec);
   frame.pose.x += 0.05;  // not where the trajectory was
   EXPECT_THROW(finder.explain(frame.labels, frame.pose, image_t::PIXEL_FORMAT_BAYER_RGGB), ReplayError);
+}
+
+// A label value outside -1..3 indexed the tallies: heap corruption (label
+// 13: "free(): invalid size"), or silently wrong counts.
+TEST(CauseFinder, RefusesLabelsItCannotExplain) {
+  const sim::SceneSpec spec = mirroring_floor();
+  LabelledFrame frame = label_frame(spec);
+  CauseFinder finder = make_finder(spec);
+  Labels bad = frame.labels;
+  bad.label[1] = 13;
+  try {
+    finder.explain(bad, frame.pose, image_t::PIXEL_FORMAT_BAYER_RGGB);
+    FAIL() << "label 13 accepted";
+  } catch (const ReplayError& e) {
+    EXPECT_NE(std::string(e.what()).find("cell 1 has label 13, not -1..3"), std::string::npos) << e.what();
+  }
+  bad = frame.labels;
+  bad.x[0] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(check_labels(bad), std::invalid_argument);
+  bad = frame.labels;
+  bad.safety_radius = -1;
+  EXPECT_THROW(check_labels(bad), std::invalid_argument);
+  EXPECT_NO_THROW(check_labels(frame.labels));
 }
 
 TEST(CauseFinder, FrameWithoutFailuresRendersNothing) {

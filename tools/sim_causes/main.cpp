@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -118,11 +119,16 @@ void read_event(const logio::LogEvent& e, bool want_labels, SessionLog& log) {
     if ((ok = logio::decode(e, msg))) log.rig = from_message(msg);
   } else if (e.channel == channels::kSimGroundTruth) {
     sim_ground_truth_t msg;
-    if ((ok = logio::decode(e, msg)))
+    if ((ok = logio::decode(e, msg))) {
+      if (!std::isfinite(msg.robot_x) || !std::isfinite(msg.robot_y) || !std::isfinite(msg.robot_yaw))
+        throw std::invalid_argument(fmt::format("ground truth at utime {}: robot pose ({}, {}, {})", msg.utime,
+                                                msg.robot_x, msg.robot_y, msg.robot_yaw));
       log.truth[msg.utime] = {msg.scene, msg.seed, msg.seq, {msg.robot_x, msg.robot_y, msg.robot_yaw}};
+    }
   } else if (e.channel == channels::kIntrospectionLabels && want_labels) {
     Labels msg;
     if ((ok = logio::decode(e, msg))) {
+      causes::check_labels(msg);
       if (!log.labelled_utimes.insert(msg.utime).second) ++log.repeated_labels;
       else log.labels.push_back(std::move(msg));
     }
@@ -489,9 +495,28 @@ bool sessions_named_once(const std::vector<std::string>& logs) {
   return true;
 }
 
+// An output that is one of the logs (or the other output) would be
+// truncated before it is read: said before anything is opened.
+bool outputs_apart_from_inputs(const CommandLine& cl) {
+  std::vector<std::string> inputs = cl.logs;
+  if (!cl.opt.dataset.empty()) inputs.push_back(cl.opt.dataset);
+  for (const std::string* out : {&cl.opt.out, &cl.opt.variants_out}) {
+    if (const std::string input = same_file_among(*out, inputs); !input.empty()) {
+      spdlog::error("{} is the input {}: it would be written over", *out, input);
+      return false;
+    }
+  }
+  if (!cl.opt.variants_out.empty() &&
+      (cl.opt.out == cl.opt.variants_out || !same_file_among(cl.opt.out, {cl.opt.variants_out}).empty())) {
+    spdlog::error("--out and --variants-out are both {}", cl.opt.out);
+    return false;
+  }
+  return true;
+}
+
 int explain(const CommandLine& cl) {
   const Options& opt = cl.opt;
-  if (!sessions_named_once(cl.logs)) return kExitUsage;
+  if (!sessions_named_once(cl.logs) || !outputs_apart_from_inputs(cl)) return kExitUsage;
   std::ofstream csv, variants_csv;
   if (!open_outputs(opt, csv, variants_csv)) return kExitIoError;
   Tally tally;

@@ -23,7 +23,8 @@ using Labels = introspection_labels_t;
 
 // The pose the driver logs is the trajectory's, so any replay error shows
 // as a difference far above rounding.
-constexpr double kPoseTolerance = 1e-6;  // metres and radians
+constexpr double kPoseTolerance = 1e-6;          // metres and radians
+constexpr double kLongestSessionS = 4 * 3600.0;  // the simulator driver's sessions run minutes
 
 struct Twin {
   uint8_t phenomenon = 0;
@@ -111,6 +112,14 @@ sim::RenderRequest CauseFinder::Impl::request_for(const Labels& labels, const si
   if (index < 0)
     throw ReplayError("frame " + std::to_string(labels.utime) + " is before the session's start utime " +
                       std::to_string(timing.start_utime));
+  // The trajectory is stepped from the start to the frame: a utime far
+  // beyond any session would take it hours and gigabytes.
+  if (index / timing.rate_hz > kLongestSessionS)
+    throw ReplayError("frame " + std::to_string(labels.utime) + " is " +
+                      std::to_string(static_cast<int64_t>(index / timing.rate_hz)) +
+                      " s after the session's start utime " + std::to_string(timing.start_utime) +
+                      ": longer than any simulated session (" + std::to_string(static_cast<int>(kLongestSessionS)) +
+                      " s), skipped");
   const double t = index / timing.rate_hz;
   sim::RenderRequest request;
   request.stereo_pose = trajectory.pose_at(t);
@@ -180,8 +189,27 @@ uint8_t CauseFinder::testable() const { return impl_->testable; }
 
 const std::vector<VariantTally>& CauseFinder::variant_tallies() const { return impl_->tallies; }
 
+void check_labels(const introspection_labels_t& m) {
+  const auto refuse = [&](const std::string& what) {
+    throw std::invalid_argument("labels at utime " + std::to_string(m.utime) + ": " + what);
+  };
+  if (!std::isfinite(m.safety_radius) || m.safety_radius < 0)
+    refuse("safety_radius " + std::to_string(m.safety_radius));
+  for (size_t i = 0; i < m.label.size(); ++i) {
+    if (m.label[i] < Labels::LABEL_NONE || m.label[i] > Labels::LABEL_FN)
+      refuse("cell " + std::to_string(i) + " has label " + std::to_string(m.label[i]) + ", not -1..3");
+    if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]))
+      refuse("cell " + std::to_string(i) + " is at (" + std::to_string(m.x[i]) + ", " + std::to_string(m.y[i]) + ")");
+  }
+}
+
 std::vector<CellCause> CauseFinder::explain(const introspection_labels_t& labels, const sim::Pose2D& pose,
                                             int32_t pixelformat) {
+  try {
+    check_labels(labels);
+  } catch (const std::invalid_argument& e) {
+    throw ReplayError(e.what());
+  }
   std::vector<int32_t> cells;
   for (int32_t c = 0; c < labels.num_cells; ++c)
     if (is_failure(labels.label[static_cast<size_t>(c)])) cells.push_back(c);

@@ -35,6 +35,11 @@ class ReplayError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Throws std::invalid_argument, naming the frame and cell, for labels that
+// cannot be explained: a label outside -1..3 (it indexes the tallies), a
+// cell or safety radius that is not a finite distance.
+void check_labels(const introspection_labels_t& labels);
+
 // How the simulator driver recorded the session (its defaults are the driver's).
 struct SessionTiming {
   int64_t start_utime = 0;  // utime of frame 0
@@ -89,7 +94,7 @@ class CauseFinder {
 
   // The failure cells of one frame's labels, in cell order (none: nothing
   // rendered). `pose` is the pose recorded with the frame: a mismatch with
-  // the trajectory throws ReplayError. `pixelformat` is the recorded
+  // the trajectory, or labels check_labels refuses, throw ReplayError. `pixelformat` is the recorded
   // stereo pair's, so the detector sees the same demosaiced image.
   std::vector<CellCause> explain(const introspection_labels_t& labels, const sim::Pose2D& pose, int32_t pixelformat);
 
