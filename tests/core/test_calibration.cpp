@@ -1,5 +1,8 @@
 #include <cmath>
 #include <fstream>
+#include <functional>
+#include <regex>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -86,6 +89,60 @@ TEST(Calibration, InvalidValuesAreRejected) {
   rig_calibration_t msg = to_message(test::make_test_rig(), 0);
   msg.left.width = 0;
   EXPECT_THROW(from_message(msg), CalibrationError);
+}
+
+// A lens no camera has: the simulator's renderer crashed (SIGSEGV) on
+// these, and the rectification maps point outside the image.
+TEST(Calibration, IntrinsicsNoLensHasAreRejected) {
+  const auto refused = [](const std::function<void(CameraIntrinsics&)>& edit, const std::string& message) {
+    RigCalibration rig = test::make_test_rig();
+    edit(rig.right);
+    try {
+      validate(rig, "test");
+      ADD_FAILURE() << "accepted: " << message;
+    } catch (const CalibrationError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  refused([](CameraIntrinsics& c) { c.K(0, 0) = c.K(1, 1) = 1e-9; }, "focal lengths must be 1 to 1e6 px");
+  refused([](CameraIntrinsics& c) { c.K(0, 2) = 1e300; }, "principal point (1000000");
+  refused([](CameraIntrinsics& c) { c.K(1, 2) = -5; }, "must lie in the image");
+  refused([](CameraIntrinsics& c) { c.D[0] = 1e6; }, "distortion coefficients must be finite and within +-100");
+}
+
+// The file's matrices as OpenCV writes them or as plain lists; anything
+// else is named by file and key (OpenCV's exception used to abort the
+// stereo detector).
+TEST(Calibration, MatricesAsListsAreReadAndOthersNamed) {
+  test::TempDir dir;
+  save_rig_calibration(test::make_test_rig(), dir.file("rig.yml"));
+  std::stringstream text;
+  text << std::ifstream(dir.file("rig.yml")).rdbuf();
+  const auto with = [&](const std::string& key, const std::string& value) {
+    const std::regex block(key + ": !!opencv-matrix[\\s\\S]*?\\]");
+    std::ofstream(dir.file("edited.yml")) << std::regex_replace(text.str(), block, key + ": " + value);
+    return dir.file("edited.yml");
+  };
+  const RigCalibration listed = load_rig_calibration(with("K1", "[ 600, 0, 480, 0, 600, 300, 0, 0, 1 ]"));
+  EXPECT_EQ(listed.left.K(0, 2), 480);
+  EXPECT_EQ(listed.left.K(1, 1), 600);
+  EXPECT_NO_THROW(load_rig_calibration(with("D1", "[ 0.01, 0, 0, 0, 0 ]")));
+  const auto named = [&](const std::string& file, const std::string& message) {
+    try {
+      load_rig_calibration(file);
+      ADD_FAILURE() << "accepted: " << message;
+    } catch (const CalibrationError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(dir.file("edited.yml") + ": ", 0), 0u) << e.what();
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  named(with("K1", "!!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 1, 2, 3, 4, 5 ]"),
+        "key 'K1' is not a 3x3 matrix (an opencv-matrix or a list of numbers)");
+  named(with("K1", "[ 1, 2, 3 ]"), "key 'K1' must be 3x3, it has 3 numbers");
+  named(with("D1", "[ 0.1, oops, 0, 0, 0 ]"), "key 'D1' holds something that is not a number");
+  std::ofstream(dir.file("edited.yml")) << std::regex_replace(text.str(), std::regex("left_width: 960"),
+                                                              "left_width: abc");
+  named(dir.file("edited.yml"), "keys 'left_width' and 'left_height' must be whole numbers");
 }
 
 // Such a camera would pass every other check, then hold a detector busy for

@@ -14,6 +14,8 @@
 namespace ivoa {
 namespace {
 
+constexpr double kMaxDistortion = 100;  // plumb-bob k1..k3, p1, p2: real lenses stay within a few units
+
 void check(bool ok, const std::string& where, const std::string& what) {
   if (!ok) throw CalibrationError(where + ": " + what);
 }
@@ -38,34 +40,57 @@ void validate_camera(const CameraIntrinsics& cam, const std::string& where, cons
   check(cam.K.allFinite() && cam.K(0, 0) > 0 && cam.K(1, 1) > 0, where,
         key + " focal lengths must be positive and finite");
   check(cam.K(2, 0) == 0 && cam.K(2, 1) == 0 && cam.K(2, 2) == 1, where, key + " last row must be [0 0 1]");
-  for (double d : cam.D) check(std::isfinite(d), where, key + " distortion must be finite");
+  // Past these no lens is described, and the simulator's rays and the
+  // rectification maps leave the image (the renderer crashed on them).
+  check(cam.K(0, 0) >= 1 && cam.K(1, 1) >= 1 && cam.K(0, 0) <= 1e6 && cam.K(1, 1) <= 1e6, where,
+        key + " focal lengths must be 1 to 1e6 px");
+  check(cam.K(0, 2) >= 0 && cam.K(0, 2) <= cam.width && cam.K(1, 2) >= 0 && cam.K(1, 2) <= cam.height, where,
+        key + " principal point (" + std::to_string(cam.K(0, 2)) + ", " + std::to_string(cam.K(1, 2)) +
+            ") must lie in the image");
+  for (double d : cam.D)
+    check(std::isfinite(d) && std::abs(d) <= kMaxDistortion, where,
+          key + " distortion coefficients must be finite and within +-" +
+              std::to_string(static_cast<int>(kMaxDistortion)));
+}
+
+// A key's numbers, as one column: an opencv-matrix or a plain YAML list
+// (JPP writes T as one). Anything else names the key instead of letting
+// OpenCV's exception end the process.
+cv::Mat read_numbers(const cv::FileStorage& fs, const std::string& key, const std::string& path,
+                     const std::string& what) {
+  const cv::FileNode node = fs[key];
+  check(!node.empty(), path, "missing key '" + key + "' (" + what + ")");
+  cv::Mat m;
+  try {
+    if (node.isSeq()) {
+      std::vector<double> v;
+      for (const cv::FileNode& item : node) {
+        check(item.isReal() || item.isInt(), path, "key '" + key + "' holds something that is not a number");
+        v.push_back(static_cast<double>(item));
+      }
+      m = cv::Mat(v, true);
+    } else {
+      node >> m;
+    }
+  } catch (const cv::Exception&) {
+    m.release();
+  }
+  check(!m.empty(), path, "key '" + key + "' is not a " + what + " (an opencv-matrix or a list of numbers)");
+  m.convertTo(m, CV_64F);
+  return m.reshape(1, static_cast<int>(m.total()));
 }
 
 Eigen::Matrix3d read_matrix3(const cv::FileStorage& fs, const std::string& key, const std::string& path) {
-  cv::Mat m;
-  fs[key] >> m;
-  check(!m.empty(), path, "missing key '" + key + "' (3x3 matrix)");
-  check(m.rows == 3 && m.cols == 3, path, "key '" + key + "' must be 3x3");
-  m.convertTo(m, CV_64F);
+  const cv::Mat m = read_numbers(fs, key, path, "3x3 matrix");
+  check(m.total() == 9, path, "key '" + key + "' must be 3x3, it has " + std::to_string(m.total()) + " numbers");
   Eigen::Matrix3d out;
-  cv::cv2eigen(m, out);
+  cv::cv2eigen(m.reshape(1, 3), out);  // row by row
   return out;
 }
 
 Eigen::Vector3d read_vector3(const cv::FileStorage& fs, const std::string& key, const std::string& path) {
-  cv::Mat m;
-  const cv::FileNode node = fs[key];
-  check(!node.empty(), path, "missing key '" + key + "' (3-vector)");
-  if (node.isSeq()) {  // JPP writes T as a plain YAML sequence
-    std::vector<double> v;
-    node >> v;
-    m = cv::Mat(v, true);
-  } else {
-    node >> m;
-  }
+  const cv::Mat m = read_numbers(fs, key, path, "3-vector");
   check(m.total() == 3, path, "key '" + key + "' must have 3 elements");
-  m.convertTo(m, CV_64F);
-  m = m.reshape(1, 3);
   return {m.at<double>(0), m.at<double>(1), m.at<double>(2)};
 }
 
@@ -75,14 +100,12 @@ CameraIntrinsics read_camera(const cv::FileStorage& fs, const std::string& name,
   cam.name = name;
   const cv::FileNode w = fs[name + "_width"], h = fs[name + "_height"];
   check(!w.empty() && !h.empty(), path, "missing key '" + name + "_width' or '" + name + "_height'");
+  check(w.isInt() && h.isInt(), path, "keys '" + name + "_width' and '" + name + "_height' must be whole numbers");
   cam.width = static_cast<int>(w);
   cam.height = static_cast<int>(h);
   cam.K = read_matrix3(fs, K_key, path);
-  cv::Mat D;
-  fs[D_key] >> D;
-  check(!D.empty(), path, "missing key '" + D_key + "' (1x5 distortion)");
+  const cv::Mat D = read_numbers(fs, D_key, path, "1x5 distortion");
   check(D.total() == 5 || D.total() == 4, path, "key '" + D_key + "' must have 4 or 5 elements");
-  D.convertTo(D, CV_64F);
   for (size_t i = 0; i < D.total(); ++i) cam.D[i] = D.at<double>(static_cast<int>(i));
   return cam;
 }
