@@ -66,7 +66,7 @@ void add_options(CLI::App& app, CommandLine& cl) {
       ->check(ivoa::positive_number());
   app.add_option("--scale", cl.scale, "resize images and disparities by this factor (aloeGT is full resolution)")
       ->capture_default_str()
-      ->check(ivoa::positive_number());
+      ->check(ivoa::number_in(1e-6, 4));  // 4: a 1282 px image is 5128 px, and SGBM's buffers grow with it
   app.add_option("--stride", cl.scoring.stride, "score every N-th pixel in x and y")
       ->capture_default_str()
       ->check(ivoa::positive_number());
@@ -140,6 +140,23 @@ std::vector<ivoa::stereo_eval::ModelScore> score_models(const CommandLine& cl, c
   return scores;
 }
 
+// The matcher settings, and outputs that would write over an input.
+int check_flags(const CommandLine& cl) {
+  try {
+    ivoa::stereo::validate(cl.sgbm);
+  } catch (const std::invalid_argument& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitUsage;
+  }
+  for (const std::string* out : {&cl.json_path, &cl.overlay_path})
+    if (const std::string input = ivoa::same_file_among(*out, {cl.left_path, cl.right_path, cl.gt_path});
+        !input.empty()) {
+      spdlog::error("{} is the input {}: it would be written over", *out, input);
+      return ivoa::kExitUsage;
+    }
+  return ivoa::kExitOk;
+}
+
 int write_outputs(const CommandLine& cl, const std::vector<ivoa::stereo_eval::ModelScore>& scores,
                   const cv::Mat& overlay) {
   std::printf("%s", ivoa::stereo_eval::to_table(scores).c_str());
@@ -161,6 +178,7 @@ int main(int argc, char** argv) {
   add_options(app, cl);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("stereo-eval", common.log_level);
+  if (const int code = check_flags(cl); code != ivoa::kExitOk) return code;
   Pair pair;
   try {
     pair = load_pair(cl);

@@ -13,18 +13,20 @@ void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("stereo detector config: " + what);
 }
 
+}  // namespace
+
 void validate(const SgbmConfig& c) {
   require(c.rect_scale >= 0.05 && c.rect_scale <= 1, "sgbm_rect_scale must be in [0.05, 1]");
   require(c.num_disparities > 0 && c.num_disparities <= kMaxDisparities && c.num_disparities % 16 == 0,
           "sgbm_num_disparities must be a multiple of 16 in [16, 1024]");
-  require(std::abs(c.min_disparity) <= kMaxDisparities, "sgbm_min_disparity must be in [-1024, 1024]");
+  // not std::abs: -INT_MIN overflows (to INT_MIN, which passed)
+  require(c.min_disparity >= -kMaxDisparities && c.min_disparity <= kMaxDisparities,
+          "sgbm_min_disparity must be in [-1024, 1024]");
   require(c.block_size >= 1 && c.block_size <= 51 && c.block_size % 2 == 1, "sgbm_block_size must be odd, 1 to 51");
   require(c.p1 >= 0 && c.p2 >= 0 && c.p2 <= 1000000, "sgbm_p1 and sgbm_p2 must be in [0, 1000000]");
   require(c.p2 == 0 || c.p2 > c.p1, "sgbm_p2 must exceed sgbm_p1");
   require(c.mode == "3way" || c.mode == "sgbm" || c.mode == "hh", "sgbm_mode must be 3way, sgbm or hh");
 }
-
-}  // namespace
 
 void validate(const JppConfig& c) {
   require(c.rect_scale >= 0.05 && c.rect_scale <= 1, "rect_scale must be in [0.05, 1]");

@@ -27,7 +27,7 @@ SgbmMatcher::SgbmMatcher(const SgbmConfig& c) {
 cv::Mat SgbmMatcher::compute(const cv::Mat& left_gray, const cv::Mat& right_gray) const {
   // OpenCV aborts the process (an exception from a buffer's destructor)
   // when the disparity range is wider than the image.
-  const int range = std::abs(sgbm_->getMinDisparity()) + sgbm_->getNumDisparities();
+  const int64_t range = std::abs(int64_t{sgbm_->getMinDisparity()}) + sgbm_->getNumDisparities();
   if (range >= left_gray.cols)
     throw std::invalid_argument("SGBM disparities " + std::to_string(sgbm_->getMinDisparity()) + " + " +
                                 std::to_string(sgbm_->getNumDisparities()) + " do not fit the rectified image " +

@@ -94,6 +94,7 @@ struct DetectorConfig {
 
 // Throw std::invalid_argument naming the first bad field (with its flag name).
 void validate(const JppConfig& config);
+void validate(const SgbmConfig& config);
 void validate(const DenseConfig& config);
 
 }  // namespace ivoa::stereo
