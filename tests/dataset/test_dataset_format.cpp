@@ -386,6 +386,34 @@ TEST(DatasetFormat, SessionNameOfAFileInTheDatasetIsRefusedAndTheFileKept) {
   EXPECT_EQ(test::read_file(dir.file("dataset.json")), "{}");
 }
 
+// A folder of the session's name is replaced only if it is a session built
+// before: a folder holding the input log (`--session logs` beside
+// logs/run.lcmlog) was deleted with the log in it.
+TEST(DatasetFormat, AFolderThatIsNotASessionIsNotReplaced) {
+  test::TempDir dir;
+  std::filesystem::create_directories(dir.file("logs"));
+  std::ofstream(dir.file("logs/run.lcmlog")) << "recording";
+  const auto refused = [&](const std::string& name, const std::string& message) {
+    try {
+      SessionWriter w(dir.path().string(), info(name));
+      ADD_FAILURE() << "accepted " << name;
+    } catch (const DatasetError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  refused("logs", "logs is a folder without session.json, not a dataset session, so it is not replaced");
+  std::ofstream(dir.file("logs/session.json")) << "{}";
+  refused("logs", "logs holds run.lcmlog, which is not a session's, so it is not replaced");
+  EXPECT_EQ(test::read_file(dir.file("logs/run.lcmlog")), "recording");
+  {  // a session built before is replaced
+    SessionWriter w(dir.path().string(), info("s1"));
+    w.close();
+  }
+  SessionWriter again(dir.path().string(), info("s1"));
+  again.close();
+  EXPECT_TRUE(std::filesystem::exists(dir.file("s1/session.json")));
+}
+
 TEST(DatasetFormat, RejectsWrongPatchesAndLabels) {
   test::TempDir dir;
   SessionWriter w(dir.path().string(), info("s3"));

@@ -211,6 +211,29 @@ struct SessionWriter::Files {
   }
 };
 
+namespace {
+
+// A folder the new session will replace must be a session built before:
+// session.json and only the files a session holds. Anything else (a log
+// kept there, notes) would be deleted with it.
+void check_replaceable(const std::string& dir, const std::string& name) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return;
+  static const std::set<std::string> kSessionFiles = {"session.json", "samples.csv", "patches.bin", "evidence.f32",
+                                                      "frames.csv"};
+  const auto refuse = [&](const std::string& why) {
+    throw DatasetError("session name '" + name + "': " + dir + " " + why +
+                       ", so it is not replaced (a new session replaces only one built before); name another "
+                       "session or move it");
+  };
+  if (!fs::exists(dir + "/session.json")) refuse("is a folder without session.json, not a dataset session");
+  for (const auto& entry : fs::directory_iterator(dir, ec))
+    if (!kSessionFiles.count(entry.path().filename().string()))
+      refuse("holds " + entry.path().filename().string() + ", which is not a session's");
+}
+
+}  // namespace
+
 SessionWriter::SessionWriter(const std::string& dataset_root, SessionInfo info)
     : dir_((fs::path(dataset_root) / info.session).string()),
       work_dir_((fs::path(dataset_root) / ("." + info.session + ".partial")).string()),
@@ -224,6 +247,7 @@ SessionWriter::SessionWriter(const std::string& dataset_root, SessionInfo info)
   std::error_code ec;
   if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
     throw DatasetError("session name '" + name + "': " + dir_ + " is a file, not a session folder; name another");
+  check_replaceable(dir_, name);
   fs::remove_all(work_dir_, ec);  // left by a build that was killed
   fs::create_directories(work_dir_, ec);
   if (ec) throw DatasetError(work_dir_ + ": cannot create the session's folder: " + ec.message());
