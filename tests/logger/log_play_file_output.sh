@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# ivoa-log-play into a log (file://PATH?mode=w): it refuses to write over
+# ivoa-log-play into a log (file://PATH?mode=w or a): it refuses to write over
 # one of the logs it is to play (opening it would empty it), leaving that
 # log as it was; into another file it plays every event; an output LCM
 # cannot publish to (a file:// URL without mode=w) is named in its summary.
@@ -11,11 +11,15 @@ trap 'rm -rf "$out"' EXIT
 "$B/bin/ivoa-sim-driver" --frames 2 --as-fast-as-possible --lcm-url "file://$out/in.lcmlog?mode=w" --log-level warn
 before=$(md5sum <"$out/in.lcmlog")
 
-code=0
-(cd "$out" && "$B/bin/ivoa-log-play" -s 0 --lcm-url "file://$out/./in.lcmlog?mode=w" in.lcmlog) >"$out/same.txt" 2>&1 || code=$?
-[ "$code" = 2 ] || { cat "$out/same.txt"; echo "FAIL: writing over the input exited $code, expected 2" >&2; exit 1; }
-grep -q "would write over in.lcmlog, one of the logs to play" "$out/same.txt" || { cat "$out/same.txt"; exit 1; }
-[ "$(md5sum <"$out/in.lcmlog")" = "$before" ] || { echo "FAIL: the input log changed" >&2; exit 1; }
+# mode=a appended the log to itself (it doubled)
+for mode in w a; do
+  code=0
+  (cd "$out" && "$B/bin/ivoa-log-play" -s 0 --lcm-url "file://$out/./in.lcmlog?mode=$mode" in.lcmlog) >"$out/same.txt" 2>&1 ||
+    code=$?
+  [ "$code" = 2 ] || { cat "$out/same.txt"; echo "FAIL: mode=$mode into the input exited $code, expected 2" >&2; exit 1; }
+  grep -q "would write over in.lcmlog, one of the logs to play" "$out/same.txt" || { cat "$out/same.txt"; exit 1; }
+  [ "$(md5sum <"$out/in.lcmlog")" = "$before" ] || { echo "FAIL: mode=$mode changed the input log" >&2; exit 1; }
+done
 
 "$B/bin/ivoa-log-play" -s 0 --lcm-url "file://$out/copy.lcmlog?mode=w" "$out/in.lcmlog" >"$out/copy.txt" 2>&1
 "$B/bin/ivoa-log-check" --json "$out/in.json" "$out/in.lcmlog" >/dev/null

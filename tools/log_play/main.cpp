@@ -20,11 +20,12 @@
 
 namespace {
 
-// The log a file://PATH?mode=w URL would write, if it already exists as one
-// of the logs to play: opening it for writing would empty it before a byte
-// of it is read.
+// The log a file://PATH?mode=w (or mode=a) URL would write, if it already
+// exists as one of the logs to play: mode=w would empty it before a byte of
+// it is read, mode=a would append it to itself.
 std::string output_among_inputs(const std::string& url, const std::vector<std::string>& logs) {
-  if (url.rfind("file://", 0) != 0 || url.find("mode=w") == std::string::npos) return {};
+  const bool writes = url.find("mode=w") != std::string::npos || url.find("mode=a") != std::string::npos;
+  if (url.rfind("file://", 0) != 0 || !writes) return {};
   return ivoa::same_file_among(url.substr(7, url.find('?') - 7), logs);
 }
 
