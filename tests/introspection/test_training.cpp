@@ -237,6 +237,55 @@ TEST(Training, DamagedCheckpointStepFileIsRefusedWithTheWayOut) {
   EXPECT_NE(what.find(c.output + ".checkpoint.*"), std::string::npos) << what;
 }
 
+// LibTorch does not check a checkpoint's CRCs: a damaged optimiser state
+// loaded, trained to NaN and replaced the good model and checkpoint.
+TEST(Training, ADamagedOptimiserCheckpointIsRefusedAndTheModelKept) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 5);  // a checkpoint at step 5
+  train_model(c);
+  const std::string model = test::read_file(c.output);
+  std::fstream optimiser(c.output + ".checkpoint.optimizer", std::ios::in | std::ios::out | std::ios::binary);
+  optimiser.seekg(0, std::ios::end);
+  const std::streamoff middle = optimiser.tellg() / 2;
+  optimiser.seekg(middle);
+  const char byte = static_cast<char>(optimiser.get());
+  optimiser.seekp(middle);
+  optimiser.put(static_cast<char>(byte ^ 0x5a));
+  optimiser.close();
+  const std::string what = resume_refusal(c, 8);
+  ASSERT_FALSE(what.empty()) << "resumed from a damaged optimiser state";
+  EXPECT_NE(what.find("cannot resume " + c.output + ".checkpoint: " + c.output + ".checkpoint.optimizer: "),
+            std::string::npos)
+      << what;
+  EXPECT_NE(what.find("the model file is damaged"), std::string::npos) << what;
+  EXPECT_EQ(test::read_file(c.output), model);
+}
+
+// --out that is an input, or a device: it used to be replaced (as root,
+// /dev/full became a model file).
+TEST(Training, AnOutputThatIsAnInputOrNotAFileIsRefused) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 1);
+  const std::string split = test::read_file(c.split_file);
+  const auto refusal = [&](const std::string& out) {
+    TrainConfig bad = c;
+    bad.output = out;
+    try {
+      train_model(bad);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("trained");
+  };
+  EXPECT_EQ(refusal(c.split_file), "--out " + c.split_file + " is the split file: it would be written over");
+  EXPECT_EQ(refusal(dir.file("data/a/patches.bin")), "--out " + dir.file("data/a/patches.bin") +
+                                                         " is a file of the dataset " + c.dataset +
+                                                         ": it would be written over");
+  EXPECT_EQ(refusal(dir.file("data")),
+            "--out " + dir.file("data") + " exists and is not a file (a device, folder or pipe)");
+  EXPECT_EQ(test::read_file(c.split_file), split);
+}
+
 TEST(Training, ADiskThatFillsDuringACheckpointKeepsTheLastOneForResume) {
   test::TempDir dir;
   TrainConfig c = tiny_run(dir, 5, 5);  // a checkpoint at step 5

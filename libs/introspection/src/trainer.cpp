@@ -17,6 +17,7 @@
 #include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/label_confusion.hpp"
+#include "ivoa/core/process.hpp"
 #include "ivoa/core/time.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
@@ -361,6 +362,25 @@ std::string saved_bytes(const Value& value) {
   return out.str();
 }
 
+// An existing --out that is not a model file to replace: a device, folder
+// or pipe (as root, /dev/full became a model), the split file, or a file of
+// the dataset (patches.bin was replaced).
+void check_output_is_not_an_input(const TrainConfig& c) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::file_status status = fs::status(c.output, error);
+  if (!fs::exists(status)) return;
+  if (!fs::is_regular_file(status))
+    throw std::invalid_argument("--out " + c.output + " exists and is not a file (a device, folder or pipe)");
+  if (!same_file_among(c.output, {c.split_file}).empty())
+    throw std::invalid_argument("--out " + c.output + " is the split file: it would be written over");
+  const fs::path out = fs::weakly_canonical(c.output, error), data = fs::weakly_canonical(c.dataset, error);
+  if (!c.dataset.empty() && !error &&
+      std::mismatch(data.begin(), data.end(), out.begin(), out.end()).first == data.end())
+    throw std::invalid_argument("--out " + c.output + " is a file of the dataset " + c.dataset +
+                                ": it would be written over");
+}
+
 // The model file's folder, created if need be, before any training.
 void make_output_folder(const std::string& output) {
   const std::filesystem::path folder = std::filesystem::path(output).parent_path();
@@ -419,6 +439,15 @@ int64_t load_checkpoint(const std::string& checkpoint, EvidenceTask* evidence, d
     throw std::runtime_error("cannot resume " + checkpoint + ": it was trained with --optimizer " + saved_kind +
                              ", this run uses " + optimizer_name(kind) + " (remove " + checkpoint +
                              ".* to start over)");
+  try {
+    // LibTorch does not check the archives' CRCs: a damaged one would load,
+    // train to NaN and replace the good model and checkpoint.
+    for (const char* part : {".optimizer", ".evidence"})
+      if (std::filesystem::exists(checkpoint + part)) check_model_archive(checkpoint + part);
+  } catch (const ModelError& e) {
+    throw std::runtime_error("cannot resume " + checkpoint + ": " + e.what() + " (remove " + checkpoint +
+                             ".* to start over)");
+  }
   try {
     resume_evidence_task(evidence, checkpoint, evidence_weight);
     torch::load(optimizer, checkpoint + ".optimizer");
@@ -558,6 +587,7 @@ TrainReport calibrate_model(const TrainConfig& c) {
   const double start = monotonic_ms();
   torch::set_num_threads(std::max(c.threads, 1));
   if (c.init.empty() || c.output.empty()) throw std::runtime_error("calibration needs a model (--init) and --out");
+  check_output_is_not_an_input(c);  // --init may be --out: it is read before the calibrated model is written
   make_output_folder(c.output);
   const torch::Device device = device_named(c.device);
   const SplitData val = load_split_data(c, c.val_split);
@@ -589,6 +619,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     throw std::invalid_argument("the validation split '" + c.val_split +
                                 "' is the one trained on: the kept model and the uncertainty gate need held-out "
                                 "sessions");
+  check_output_is_not_an_input(c);
   make_output_folder(c.output);
   const SplitData train = load_split_data(c, c.train_split);
   const SplitData val = load_split_data(c, c.val_split);
