@@ -2,6 +2,7 @@
 // sessions, and per-frame overlay figures from logs (see README.md).
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <cstdio>
 #include <filesystem>
@@ -80,6 +81,11 @@ void check_session_fits(const dataset::SessionInfo& info, const introspection::M
     differs += fmt::format("{}{} view(s) per patch (model: {})", differs.empty() ? "" : ", ", info.views, model.views);
     flags += fmt::format("{}--views {}", flags.empty() ? "" : " ", model.views);
   }
+  if (info.patch_size != model.patch_size) {  // its patches would be resized to the model's, unlike in training
+    differs +=
+        fmt::format("{}{} px patches (model: {})", differs.empty() ? "" : ", ", info.patch_size, model.patch_size);
+    flags += fmt::format("{}--patch-size {}", flags.empty() ? "" : " ", model.patch_size);
+  }
   if (!differs.empty())
     throw dataset::DatasetError(
         fmt::format("session {} has {}: model {} was not trained on such patches (build the "
@@ -121,6 +127,11 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
     for (size_t i = begin; i < end; ++i) {
       const auto& s = session.samples()[i];
       const auto& p = out.predictions[i - begin];
+      if (!std::all_of(p.probability.begin(), p.probability.end(), [](float v) { return std::isfinite(v); }))
+        throw introspection::ModelError(
+            fmt::format("{}: predicts a probability that is not a number (session {}, sample {}): its weights "
+                        "overflow on real input (a training that diverged?)",
+                        model.info().id, info.session, i));
       // Given the verdict the detector recorded for this cell, as the live process sees it.
       const auto v =
           introspection::given_verdict(p, s.stereo_state == obstacle_grid_t::STATE_OBSTACLE, model.verdict_threshold());
