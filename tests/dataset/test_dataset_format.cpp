@@ -138,17 +138,24 @@ TEST(DatasetFormat, ANonsensePatchSizeInSessionJsonIsNamedThere) {
     std::ifstream j(path);
     json.assign(std::istreambuf_iterator<char>(j), {});
   }
-  const size_t key = json.find("  \"patch_size\": ");  // the session's, before the grid's
-  ASSERT_NE(key, std::string::npos);
-  json.replace(key, json.find(',', key) - key, "  \"patch_size\": -5");
-  std::ofstream(path) << json;
-  try {
-    SessionReader reader(dir.path().string() + "/bad");
-    FAIL() << "read a session with patch_size -5";
-  } catch (const DatasetError& e) {
-    EXPECT_NE(std::string(e.what()).find("session.json: patch_size must be > 0, not -5"), std::string::npos)
-        << e.what();
-  }
+  const auto refused = [&](const std::string& field, const std::string& value, const std::string& message) {
+    const size_t at = json.find("  \"" + field + "\": ");  // the session's, before the grid's
+    ASSERT_NE(at, std::string::npos);
+    std::string edited = json;
+    edited.replace(at, edited.find(',', at) - at, "  \"" + field + "\": " + value);
+    std::ofstream(path) << edited;
+    try {
+      SessionReader reader(dir.path().string() + "/bad");
+      ADD_FAILURE() << "read a session with " << field << " " << value;
+    } catch (const DatasetError& e) {
+      EXPECT_NE(std::string(e.what()).find("session.json: " + message), std::string::npos) << e.what();
+    }
+  };
+  refused("patch_size", "-5", "patch_size must be 1 to 4096, not -5");
+  // 2^30: patches.bin's expected size overflowed to 0, so an empty file passed
+  refused("patch_size", "1073741824", "patch_size must be 1 to 4096, not 1073741824");
+  // read into memory before its size was checked: 2 GB for 4e6
+  refused("evidence_size", "4000000", "evidence_size must be 0 to 4096, not 4000000");
 }
 
 TEST(DatasetFormat, TwoViewPatchesRoundTripStacked) {

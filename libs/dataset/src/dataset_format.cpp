@@ -31,6 +31,9 @@ namespace fs = std::filesystem;
 namespace ivoa::dataset {
 namespace {
 
+constexpr int kMaxPatchSize = 4096;     // px a side; patches are 100 px
+constexpr int kMaxEvidenceSize = 4096;  // values per sample; JPP-C keeps one per ground sample, a few dozen
+
 constexpr const char* kSamplesHeaderV1 =
     "sample,frame,utime,depth_utime,cell,label,stereo_state,depth_state,x,y,u,v,phenomena,phenomenon,surface";
 constexpr const char* kSamplesHeader =
@@ -92,7 +95,11 @@ SessionInfo parse_session_json(const std::string& path) {
   i.environment = get<std::string>(root, "environment", path);
   i.rig_name = get<std::string>(root, "rig_name", path);
   i.patch_size = get<int>(root, "patch_size", path);
-  if (i.patch_size <= 0) throw DatasetError(path + ": patch_size must be > 0, not " + std::to_string(i.patch_size));
+  // the bound keeps patches.bin's expected size from overflowing (a huge
+  // patch_size made an empty file pass its size check)
+  if (i.patch_size <= 0 || i.patch_size > kMaxPatchSize)
+    throw DatasetError(path + ": patch_size must be 1 to " + std::to_string(kMaxPatchSize) + ", not " +
+                       std::to_string(i.patch_size));
   i.views = root["views"] ? get<int>(root, "views", path) : 1;  // datasets written before views existed
   if (i.views != 1 && i.views != 2) throw DatasetError(path + ": views must be 1 or 2, not " + std::to_string(i.views));
   i.patch_scale = root["patch_scale"] ? get<double>(root, "patch_scale", path) : 0.0;  // written before scaling existed
@@ -100,7 +107,9 @@ SessionInfo parse_session_json(const std::string& path) {
   i.tn_kept = root["tn_kept"] ? get<double>(root, "tn_kept", path) : 1.0;  // written before TN could be thinned
   if (!(i.tn_kept > 0 && i.tn_kept <= 1)) throw DatasetError(path + ": tn_kept must be in (0, 1]");
   i.evidence_size = root["evidence_size"] ? get<int>(root, "evidence_size", path) : 0;  // written before evidence
-  if (i.evidence_size < 0) throw DatasetError(path + ": evidence_size must be >= 0");
+  if (i.evidence_size < 0 || i.evidence_size > kMaxEvidenceSize)
+    throw DatasetError(path + ": evidence_size must be 0 to " + std::to_string(kMaxEvidenceSize) + ", not " +
+                       std::to_string(i.evidence_size));
   i.tn_dropped = root["tn_dropped"] ? get<int64_t>(root, "tn_dropped", path) : 0;
   i.frames = get<int64_t>(root, "frames", path);
   i.samples = get<int64_t>(root, "samples", path);
@@ -440,6 +449,13 @@ void SessionReader::read_evidence() {
   if (!in)
     throw DatasetError(path + ": cannot open (session.json says evidence_size " + std::to_string(info_.evidence_size) +
                        ")");
+  // The file's size is checked before anything is allocated for it: a 7.7 kB
+  // file with a large evidence_size cost 2 GB.
+  const uint64_t expected = samples_.size() * static_cast<uint64_t>(info_.evidence_size) * sizeof(float);
+  std::error_code error;
+  if (fs::file_size(path, error) != expected || error)
+    throw DatasetError(path + ": does not hold " + std::to_string(info_.evidence_size) + " values for each of the " +
+                       std::to_string(samples_.size()) + " samples (truncated dataset?)");
   evidence_.resize(samples_.size() * static_cast<size_t>(info_.evidence_size));
   in.read(reinterpret_cast<char*>(evidence_.data()), static_cast<std::streamsize>(evidence_.size() * sizeof(float)));
   if (in.gcount() != static_cast<std::streamsize>(evidence_.size() * sizeof(float)) || in.peek() != EOF)
