@@ -353,6 +353,19 @@ TEST(DatasetFormat, EvidenceRoundTripsPerSampleAndOldSessionsHaveNone) {
   EXPECT_EQ(none.evidence(0), nullptr);
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "none" / "evidence.f32"));
 
+  {  // an infinity is damage, not "not observed" (training blamed --lr for it)
+    std::fstream f((dir.path() / "ev" / "evidence.f32").string(), std::ios::in | std::ios::out | std::ios::binary);
+    const float inf = std::numeric_limits<float>::infinity();
+    f.seekp(4 * sizeof(float));
+    f.write(reinterpret_cast<const char*>(&inf), sizeof(inf));
+  }
+  try {
+    SessionReader damaged((dir.path() / "ev").string());
+    FAIL() << "read an infinite evidence value";
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("evidence.f32: sample 1 holds an infinite value"), std::string::npos)
+        << e.what();
+  }
   std::filesystem::resize_file(dir.path() / "ev" / "evidence.f32", 5 * sizeof(float));
   try {
     SessionReader truncated((dir.path() / "ev").string());

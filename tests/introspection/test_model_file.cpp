@@ -280,6 +280,11 @@ TEST(ModelFile, BadFilesAreRefusedWithTheReason) {
     info.uncertainty_threshold = std::numeric_limits<double>::quiet_NaN();
     save_model(*net, info, dir.file("nan_gate.pt"));
     expect_refusal(dir.file("nan_gate.pt"), "nan_gate.pt: ");
+    // an input normalisation that divides by 0: every prediction was NaN, exit 0
+    info.uncertainty_threshold = 0.03;
+    info.std[1] = 0;
+    save_model(*net, info, dir.file("std_0.pt"));
+    expect_refusal(dir.file("std_0.pt"), "its input normalisation (mean, std) must be finite numbers with std > 0");
   }
 }
 

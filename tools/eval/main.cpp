@@ -406,8 +406,8 @@ void add_options(CLI::App& app, Options& o) {
                "paper)");
   app.add_option("--mc-passes", o.inference.mc_passes, "Monte-Carlo dropout passes per sample (the paper's T)")
       ->capture_default_str()
-      ->check(positive_number());
-  app.add_option("--threads", o.inference.threads, "LibTorch threads")->capture_default_str()->check(positive_number());
+      ->check(number_in(1, 1000));  // as ivoa-introspection: 1e6 passes grew past 10 GB
+  app.add_option("--threads", o.inference.threads, "LibTorch threads")->capture_default_str()->check(number_in(1, 256));
   app.add_option("--seed", o.inference.seed, "dropout masks (0: from the clock, a new draw each run)")
       ->capture_default_str()
       ->check(non_negative_number());

@@ -60,7 +60,7 @@ void add_gallery_options(CLI::App& app, GalleryOptions& o) {
       ->check(CLI::Range(16, 4000));
   app.add_option("--time", o.start_time, "seconds into the drive to start looking for a frame")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::number_in(0, 3600));  // the drive is stepped to it: 1e5 s took 30 s and 600 MB
 }
 
 // One scene's row: left (with what was rendered), right, depth, truth.

@@ -461,6 +461,11 @@ void SessionReader::read_evidence() {
   if (in.gcount() != static_cast<std::streamsize>(evidence_.size() * sizeof(float)) || in.peek() != EOF)
     throw DatasetError(path + ": does not hold " + std::to_string(info_.evidence_size) + " values for each of the " +
                        std::to_string(samples_.size()) + " samples (truncated dataset?)");
+  // NaN is "not observed"; an infinity is damage (training blamed --lr for it)
+  const auto bad = std::find_if(evidence_.begin(), evidence_.end(), [](float v) { return std::isinf(v); });
+  if (bad != evidence_.end())
+    throw DatasetError(path + ": sample " + std::to_string((bad - evidence_.begin()) / info_.evidence_size) +
+                       " holds an infinite value");
 }
 
 const float* SessionReader::evidence(size_t i) const {

@@ -122,6 +122,9 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
   if (!(i.patch_scale >= 0)) throw ModelError(where + ": patch_scale must be >= 0");
   if (!std::isfinite(i.uncertainty_threshold) || !std::isfinite(i.verdict_uncertainty_threshold))
     throw ModelError(where + ": its uncertainty gates are not numbers (a training that diverged?)");
+  for (size_t c = 0; c < 3; ++c)  // the input normalisation: a std of 0 or a NaN mean made every prediction NaN
+    if (!std::isfinite(i.mean[c]) || !std::isfinite(i.std[c]) || !(i.std[c] > 0))
+      throw ModelError(where + ": its input normalisation (mean, std) must be finite numbers with std > 0");
   return i;
 }
 
