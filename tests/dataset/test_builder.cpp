@@ -9,6 +9,8 @@
 #include <map>
 #include <set>
 
+#include <limits>
+
 #include <gtest/gtest.h>
 
 #include "ivoa/core/bus.hpp"
@@ -207,6 +209,38 @@ TEST(DatasetBuilder, RecordedLabelsAreUsedAsRecorded) {
   EXPECT_EQ(session.info().labels_from, "recorded");
   ASSERT_EQ(session.size(), recorded.size());
   for (const auto& s : session.samples()) EXPECT_EQ(s.label, (recorded.at({s.utime, s.cell})));
+}
+
+// A recorded labels message the session cannot store is skipped, named by
+// its byte offset, and the rest built: a label of 9 or a NaN position ended
+// the whole build; a patch_size of -64 wrote a session no reader opens.
+TEST(DatasetBuilder, RecordedLabelsTheSessionCannotStoreAreSkipped) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("rec.lcmlog");
+  int frame = 0;
+  test::write_sim_log(log_path, kScene, 5, 4, [&](Bus& bus, const test::SimLogFrame& f, const sim::SimFrame& rendered) {
+    introspection_labels_t labels = recompute_labels(sim::make_sim_rig(), rendered, f.utime, f.depth_utime);
+    if (frame == 1) labels.label[3] = 9;
+    if (frame == 2) labels.patch_size = -64;
+    if (frame == 3) labels.x[0] = std::numeric_limits<float>::quiet_NaN();
+    ++frame;
+    bus.publish(channels::kIntrospectionLabels, labels);
+  });
+  SessionBuilder builder(dir.file("data"), "rec", BuildOptions{});
+  builder.add_log(log_path);
+  const BuildReport report = builder.finish();
+  EXPECT_EQ(report.bad_messages, 3);
+  const auto said = [&](const std::string& what) {
+    return std::any_of(report.problems.begin(), report.problems.end(),
+                       [&](const std::string& p) { return p.find(what) != std::string::npos; });
+  };
+  EXPECT_TRUE(said("cell 3 has label 9, not -1..3, skipped"));
+  EXPECT_TRUE(said("patch_size -64 is not 1-4096, skipped"));
+  EXPECT_TRUE(said("cell 0 has no finite position, skipped"));
+  EXPECT_TRUE(said("INTROSPECTION_LABELS at byte "));
+  const SessionReader session(dir.file("data") + "/rec");
+  EXPECT_EQ(session.info().frames, 1);
+  EXPECT_EQ(session.info().patch_size, 100);
 }
 
 // A log given twice (or frames recorded twice) stores each frame once.

@@ -1,7 +1,9 @@
 #include "ivoa/dataset/builder.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
+#include <iterator>
 #include <limits>
 #include <filesystem>
 #include <map>
@@ -199,6 +201,27 @@ void SessionBuilder::Impl::on_depth(const logio::LogEvent& e) {
   }
 }
 
+namespace {
+
+// What in a recorded labels message the session could not store (empty:
+// nothing). A session of such messages was written unreadable, or one
+// message ended the whole build.
+std::string unstorable(const introspection_labels_t& m) {
+  const double geometry[] = {m.x_min, m.x_max, m.y_min, m.y_max, m.spacing, m.safety_radius};
+  if (!std::all_of(std::begin(geometry), std::end(geometry), [](double v) { return std::isfinite(v); }))
+    return "its grid geometry is not finite";
+  if (m.patch_size < 1 || m.patch_size > 4096) return "patch_size " + std::to_string(m.patch_size) + " is not 1-4096";
+  for (size_t i = 0; i < m.label.size(); ++i) {
+    if (m.label[i] < introspection_labels_t::LABEL_NONE || m.label[i] > introspection_labels_t::LABEL_FN)
+      return "cell " + std::to_string(i) + " has label " + std::to_string(m.label[i]) + ", not -1..3";
+    if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]))
+      return "cell " + std::to_string(i) + " has no finite position";
+  }
+  return "";
+}
+
+}  // namespace
+
 void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
   if (rerun()) return;
   ++label_sources;
@@ -206,6 +229,8 @@ void SessionBuilder::Impl::on_labels(const logio::LogEvent& e) {
   if (!logio::decode(e, msg))
     return bad(e.channel + " at byte " + std::to_string(e.offset) +
                ": does not decode as ivoa.introspection_labels_t (another type, truncated or damaged)");
+  if (const std::string why = unstorable(msg); !why.empty())
+    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": " + why + ", skipped");
   if (info.detector.empty()) {
     info.detector = msg.detector;
     info.grid = geometry_of(msg);
