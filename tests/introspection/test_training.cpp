@@ -177,6 +177,25 @@ TEST(Training, ADivergedTrainingStopsAndSaysSo) {
   }
 }
 
+// Weights that are finite but overflow on real input: the first validation
+// used to keep (and save) a model that predicts only NaN.
+TEST(Training, AModelWhoseValidationOutputsAreNotNumbersIsNotKept) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 3);
+  c.validate_every = 1;
+  c.learning_rate = 1e30;
+  try {
+    train_model(c);
+    FAIL() << "trained at lr 1e30 without a word";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("step 1: the model's outputs on the validation patches are not numbers"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("no model was written"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(c.output));
+}
+
 // A validation of one sample scores 0 or 1: a run must leave a model either way.
 TEST(Training, AValidationThatScoresNothingStillLeavesAModel) {
   for (const uint64_t seed : {1, 2, 3, 4, 5, 6, 7, 8}) {

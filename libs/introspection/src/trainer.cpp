@@ -132,6 +132,7 @@ std::vector<SampleRef> validation_subset(const SplitData& d, int64_t max_samples
 
 struct ValOutputs {
   LabelConfusion confusion;
+  bool outputs_finite = true;  // false: the class probabilities overflowed
   std::vector<int> truth, predicted;
   std::vector<float> variance;  // predicted-class variance (MC only)
   // given_verdict() of the detector's verdict the sample recorded (stereo_state).
@@ -151,6 +152,7 @@ ValOutputs run_validation(IntrospectionNetImpl& net, const SplitData& d, const s
                                        refs.begin() + static_cast<long>(std::min(refs.size(), begin + kBatch)));
     const auto features = net.features(decode(patch_pointers(d, batch)).to(device));
     const McStats s = passes > 1 ? mc_dropout_head(net, features, passes, g) : deterministic_head(net, features);
+    out.outputs_finite = out.outputs_finite && torch::isfinite(s.mean).all().item<bool>();
     const auto predicted = s.mean.argmax(1).to(torch::kCPU);
     const auto variance = s.variance.gather(1, s.mean.argmax(1, true)).squeeze(1).to(torch::kCPU);
     const auto vmean = s.verdict_mean.to(torch::kCPU), vvar = s.verdict_variance.to(torch::kCPU);
@@ -546,11 +548,13 @@ StepResult train_step(Learner& l, const TrainConfig& c, const SplitData& train, 
 
 // A loss that is not finite poisons every weight from then on: stop, and
 // say what is left (settings, not the data, are the likely cause).
-[[noreturn]] void throw_diverged(const TrainConfig& c, const TrainReport& report, int64_t step, double loss) {
-  throw std::invalid_argument(fmt::format(
-      "step {}: the training loss is {}: training diverged (try a lower --lr than {}); {}", step, loss, c.learning_rate,
-      report.best_step > 0 ? fmt::format("{} holds the model kept at step {}", c.output, report.best_step)
-                           : std::string("no model was written")));
+// `what`: "the training loss is nan", or that the validation's outputs are not numbers.
+[[noreturn]] void throw_diverged(const TrainConfig& c, const TrainReport& report, int64_t step,
+                                 const std::string& what) {
+  throw std::invalid_argument(
+      fmt::format("step {}: {}: training diverged (try a lower --lr than {}); {}", step, what, c.learning_rate,
+                  report.best_step > 0 ? fmt::format("{} holds the model kept at step {}", c.output, report.best_step)
+                                       : std::string("no model was written")));
 }
 
 // What the progress callback sees after a step: the running means, the rate.
@@ -646,7 +650,8 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   for (int64_t step = first_step; step < c.steps; ++step) {
     const std::vector<SampleRef> batch = sampler.batch(c.batch_size);
     const StepResult result = train_step(learner, c, train, batch, make_batch, step, device);
-    if (!std::isfinite(result.loss)) throw_diverged(c, report, step + 1, result.loss);
+    if (!std::isfinite(result.loss))
+      throw_diverged(c, report, step + 1, fmt::format("the training loss is {}", result.loss));
     means.add(result);
     update_status(
         status, means, c, step, static_cast<bool>(learner.evidence),
@@ -655,6 +660,9 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
     const bool last = step + 1 == c.steps;
     if ((step + 1) % c.validate_every == 0 || last) {
       const ValOutputs v = run_validation(*learner.net, val, val_refs, info, device, 1, generator);
+      // Finite weights can still overflow on real input: such a model must not be kept.
+      if (!v.outputs_finite)
+        throw_diverged(c, report, step + 1, "the model's outputs on the validation patches are not numbers");
       status.val_mean_class_accuracy = v.confusion.mean_per_class();
       // The first validation is kept whatever it scores: a run must leave a model.
       const bool better = report.best_step == 0 || status.val_mean_class_accuracy > report.best_val_mean_class_accuracy;
