@@ -80,5 +80,18 @@ TEST(DatasetBuild, UnknownLabelSourceIsAUsageErrorListingTheChoices) {
   EXPECT_TRUE(contains(r.output, "jpcc not in {recorded,jppc,dense}")) << r.output;
 }
 
+// A dataset folder that cannot be made is a write error (exit 4, it was 3),
+// said before any log is read.
+TEST(DatasetBuild, AnOutputFolderThatCannotBeWrittenIsAWriteError) {
+  test::TempDir dir;
+  std::ofstream(dir.file("a_file")) << "in the way";
+  std::ofstream(dir.file("a.lcmlog")) << "never read";
+  const auto r = test::run_command("timeout 60 " IVOA_DATASET_EXE " build --out " + dir.file("a_file/data") + " " +
+                                   dir.file("a.lcmlog"));
+  EXPECT_EQ(r.exit_code, kExitIoError) << r.output;
+  EXPECT_TRUE(contains(r.output, "cannot write the dataset folder " + dir.file("a_file/data") + ": ")) << r.output;
+  EXPECT_FALSE(contains(r.output, "never read")) << r.output;
+}
+
 }  // namespace
 }  // namespace ivoa

@@ -92,6 +92,15 @@ int build_session(const std::string& out, const std::string& session, const std:
 
 int run_build(const std::string& out, const std::string& session, const std::vector<std::string>& logs,
               const dataset::BuildOptions& options) {
+  // The dataset folder is made and probed first: one that cannot be written
+  // is a write error (exit 4), said before any log is read.
+  std::error_code made;
+  fs::create_directories(out, made);
+  const std::string why = made ? made.message() : why_cannot_write((fs::path(out) / ".write-probe").string());
+  if (!why.empty()) {
+    spdlog::error("cannot write the dataset folder {}: {}", out, why);
+    return kExitIoError;
+  }
   // Logs of one session (explicit --session, or split files name.NN) go together.
   std::vector<std::pair<std::string, std::vector<std::string>>> sessions;
   for (const auto& log : logs) {
