@@ -5,6 +5,7 @@
 #include <optional>
 #include <utility>
 
+#include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
 #include "ivoa/sim/counterfactual.hpp"
@@ -190,17 +191,8 @@ uint8_t CauseFinder::testable() const { return impl_->testable; }
 const std::vector<VariantTally>& CauseFinder::variant_tallies() const { return impl_->tallies; }
 
 void check_labels(const introspection_labels_t& m) {
-  const auto refuse = [&](const std::string& what) {
-    throw std::invalid_argument("labels at utime " + std::to_string(m.utime) + ": " + what);
-  };
-  if (!std::isfinite(m.safety_radius) || m.safety_radius < 0)
-    refuse("safety_radius " + std::to_string(m.safety_radius));
-  for (size_t i = 0; i < m.label.size(); ++i) {
-    if (m.label[i] < Labels::LABEL_NONE || m.label[i] > Labels::LABEL_FN)
-      refuse("cell " + std::to_string(i) + " has label " + std::to_string(m.label[i]) + ", not -1..3");
-    if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]))
-      refuse("cell " + std::to_string(i) + " is at (" + std::to_string(m.x[i]) + ", " + std::to_string(m.y[i]) + ")");
-  }
+  if (const std::string error = labels_content_error(m); !error.empty())
+    throw std::invalid_argument("labels at utime " + std::to_string(m.utime) + ": " + error);
 }
 
 std::vector<CellCause> CauseFinder::explain(const introspection_labels_t& labels, const sim::Pose2D& pose,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <tuple>
 #include <utility>
 
@@ -100,6 +101,20 @@ std::string grid_content_error(const obstacle_grid_t& msg) {
     if (msg.in_image[i] && !(std::isfinite(msg.u[i]) && std::isfinite(msg.v[i])))
       return where() + "in_image, but its pixel (" + std::to_string(msg.u[i]) + ", " + std::to_string(msg.v[i]) +
              ") is not finite";
+  }
+  return "";
+}
+
+std::string labels_content_error(const introspection_labels_t& m) {
+  const double geometry[] = {m.x_min, m.x_max, m.y_min, m.y_max, m.spacing, m.safety_radius};
+  if (!std::all_of(std::begin(geometry), std::end(geometry), [](double v) { return std::isfinite(v); }) ||
+      m.safety_radius < 0)
+    return "its grid geometry or safety radius is not a finite distance";
+  for (size_t i = 0; i < m.label.size(); ++i) {
+    if (m.label[i] < introspection_labels_t::LABEL_NONE || m.label[i] > introspection_labels_t::LABEL_FN)
+      return "cell " + std::to_string(i) + " has label " + std::to_string(m.label[i]) + ", not -1..3";
+    if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]))
+      return "cell " + std::to_string(i) + " has no finite position";
   }
   return "";
 }

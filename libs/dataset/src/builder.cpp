@@ -1,9 +1,7 @@
 #include "ivoa/dataset/builder.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <deque>
-#include <iterator>
 #include <limits>
 #include <filesystem>
 #include <map>
@@ -207,17 +205,8 @@ namespace {
 // nothing). A session of such messages was written unreadable, or one
 // message ended the whole build.
 std::string unstorable(const introspection_labels_t& m) {
-  const double geometry[] = {m.x_min, m.x_max, m.y_min, m.y_max, m.spacing, m.safety_radius};
-  if (!std::all_of(std::begin(geometry), std::end(geometry), [](double v) { return std::isfinite(v); }))
-    return "its grid geometry is not finite";
   if (m.patch_size < 1 || m.patch_size > 4096) return "patch_size " + std::to_string(m.patch_size) + " is not 1-4096";
-  for (size_t i = 0; i < m.label.size(); ++i) {
-    if (m.label[i] < introspection_labels_t::LABEL_NONE || m.label[i] > introspection_labels_t::LABEL_FN)
-      return "cell " + std::to_string(i) + " has label " + std::to_string(m.label[i]) + ", not -1..3";
-    if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]))
-      return "cell " + std::to_string(i) + " has no finite position";
-  }
-  return "";
+  return labels_content_error(m);
 }
 
 }  // namespace

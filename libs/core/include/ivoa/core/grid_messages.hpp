@@ -6,6 +6,7 @@
 #include <string>
 
 #include "ivoa/core/query_grid.hpp"
+#include "ivoa/introspection_labels_t.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
 
 namespace CLI {
@@ -24,6 +25,10 @@ obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& det
 // wrong: arrays not num_cells long, a state none of STATE_*, a position that
 // is not finite, or a cell in_image whose pixel is not.
 std::string grid_content_error(const obstacle_grid_t& msg);
+
+// The same for a labels message: a grid geometry or safety radius that is
+// not a finite distance, a label none of LABEL_*, a position not finite.
+std::string labels_content_error(const introspection_labels_t& msg);
 
 // Cell positions are floats made from the same doubles on every machine,
 // but a compiler may round a last bit differently: 0.1 mm is "the same".
