@@ -3,6 +3,7 @@
 // possible into memq://, so nothing here depends on timing.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -151,10 +152,44 @@ TEST(LogPlay, AnEmptyFileHoldsNoEventAndIsReported) {
 }
 
 TEST(LogPlay, EventsAreDueAtTheirLogTimeOverTheSpeed) {
-  EXPECT_DOUBLE_EQ(due_ms(1'500'000, 1'000'000, 1.0), 500.0);
-  EXPECT_DOUBLE_EQ(due_ms(1'500'000, 1'000'000, 2.0), 250.0);
-  EXPECT_DOUBLE_EQ(due_ms(1'500'000, 1'000'000, 0.0), 0.0) << "as fast as possible";
-  EXPECT_DOUBLE_EQ(due_ms(900'000, 1'000'000, 1.0), 0.0) << "earlier than the first event: at once";
+  PlayClock clock(1.0, 0.0);
+  EXPECT_DOUBLE_EQ(clock.due_ms(1'000'000), 0.0);
+  EXPECT_DOUBLE_EQ(clock.due_ms(1'500'000), 500.0);
+  EXPECT_DOUBLE_EQ(clock.due_ms(900'000), 500.0) << "earlier than the latest event: at once";
+  PlayClock twice(2.0, 0.0);
+  twice.due_ms(1'000'000);
+  EXPECT_DOUBLE_EQ(twice.due_ms(1'500'000), 250.0);
+  PlayClock fastest(0.0, 0.0);
+  fastest.due_ms(1'000'000);
+  EXPECT_DOUBLE_EQ(fastest.due_ms(1'500'000), 0.0) << "as fast as possible";
+}
+
+TEST(LogPlay, APauseLongerThanTheMaximumIsCutToIt) {
+  PlayClock clock(2.0, 10.0);
+  EXPECT_DOUBLE_EQ(clock.due_ms(0), 0.0);
+  EXPECT_DOUBLE_EQ(clock.due_ms(4'000'000), 2'000.0);
+  EXPECT_EQ(clock.last_cut_us(), 0u) << "4 s is no long pause";
+  EXPECT_DOUBLE_EQ(clock.due_ms(10'000'004'000'000), 7'000.0) << "a jump of 116 days plays as 10 s, at twice the pace";
+  EXPECT_EQ(clock.last_cut_us(), 9'999'990'000'000u);
+  EXPECT_DOUBLE_EQ(clock.due_ms(10'000'005'000'000), 7'500.0) << "and the pace goes on after it";
+  EXPECT_EQ(clock.last_cut_us(), 0u);
+  PlayClock extremes(1.0, 10.0);
+  extremes.due_ms(INT64_MIN);
+  EXPECT_DOUBLE_EQ(extremes.due_ms(INT64_MAX), 10'000.0) << "log times of any sign and size";
+}
+
+TEST(LogPlay, AClockJumpIsNotWaitedOut) {
+  test::TempDir dir;
+  const std::string log = dir.file("s.lcmlog");
+  write_log(log, {{"CAM", 1'000}, {"CAM", 10'000'000'001'000}, {"CAM", 10'000'000'002'000}});
+  PlayFixture f;
+  LogPlayerOptions options;
+  options.max_gap_s = 0.01;  // at the recorded pace: 10 ms for the jump, 1 ms after it
+  LogPlayer player(f.bus, f.heartbeat, {log}, options);
+  ASSERT_TRUE(player.play());
+  EXPECT_EQ(player.counts().published, 3);
+  EXPECT_EQ(player.counts().shortened_pauses, 1);
+  EXPECT_EQ(f.heartbeat.counter("shortened_pauses"), 1);
 }
 
 }  // namespace

@@ -47,6 +47,11 @@ int main(int argc, char** argv) {
   app.add_option("-s,--speed", options.speed, "multiple of the recorded pace (0: as fast as possible)")
       ->check(ivoa::non_negative_number())
       ->capture_default_str();
+  app.add_option("--max-gap-s", options.max_gap_s,
+                 "a pause in the log longer than this (s of log time) is cut to it and reported, so a clock jump "
+                 "is not waited out (0: every pause as recorded)")
+      ->check(ivoa::number_in(0, 1e6))
+      ->capture_default_str();
   app.add_option("-c,--channels", options.channels, "play the channels matching this regex (whole name)")
       ->capture_default_str();
   app.add_option("-x,--exclude", options.exclude, "leave out the channels matching this regex");
@@ -66,12 +71,13 @@ int main(int argc, char** argv) {
     const auto& c = player.counts();
     heartbeat.set_state(whole ? "finished" : "stopped");
     heartbeat.publish_now();
-    spdlog::info("{}: {} of {} files{}, {} events published{}, {} of other channels, {} damaged stretches skipped",
-                 whole ? "finished" : "stopped", c.files_done, logs.size(),
-                 c.not_logs > 0 ? fmt::format(" ({} of them no LCM log: nothing played from it)", c.not_logs) : "",
-                 c.published,
-                 c.publish_failures > 0 ? fmt::format(" ({} refused by LCM: not published)", c.publish_failures) : "",
-                 c.filtered_out, c.damaged);
+    spdlog::info(
+        "{}: {} of {} files{}, {} events published{}, {} of other channels, {} damaged stretches skipped, "
+        "{} long pauses cut short",
+        whole ? "finished" : "stopped", c.files_done, logs.size(),
+        c.not_logs > 0 ? fmt::format(" ({} of them no LCM log: nothing played from it)", c.not_logs) : "", c.published,
+        c.publish_failures > 0 ? fmt::format(" ({} refused by LCM: not published)", c.publish_failures) : "",
+        c.filtered_out, c.damaged, c.shortened_pauses);
     if (c.publish_failures > 0) return ivoa::kExitFailure;
     return c.not_logs > 0 ? ivoa::kExitBadInput : ivoa::kExitOk;
   } catch (const ivoa::logio::LogReadError& e) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 #include <fmt/format.h>
@@ -16,16 +17,32 @@
 
 namespace ivoa::log_play {
 
-double due_ms(int64_t timestamp_us, int64_t first_timestamp_us, double speed) {
-  if (speed <= 0) return 0;
-  return static_cast<double>(std::max<int64_t>(0, timestamp_us - first_timestamp_us)) / 1000.0 / speed;
+PlayClock::PlayClock(double speed, double max_gap_s)
+    : speed_(speed), max_gap_us_(max_gap_s > 0 ? static_cast<uint64_t>(std::llround(max_gap_s * 1e6)) : 0) {}
+
+double PlayClock::due_ms(int64_t timestamp_us) {
+  last_cut_us_ = 0;
+  if (!started_) {
+    started_ = true;
+    latest_us_ = timestamp_us;
+  }
+  if (timestamp_us > latest_us_) {
+    // Unsigned, so that log times of any sign and size do not overflow; the
+    // pauses add up to at most the span of log time, which fits.
+    const uint64_t pause = static_cast<uint64_t>(timestamp_us) - static_cast<uint64_t>(latest_us_);
+    const uint64_t played = max_gap_us_ > 0 ? std::min(pause, max_gap_us_) : pause;
+    last_cut_us_ = pause - played;
+    played_us_ += played;
+    latest_us_ = timestamp_us;
+  }
+  return speed_ > 0 ? static_cast<double>(played_us_) / 1000.0 / speed_ : 0.0;
 }
 
-// The stream's clock across files: the first event's log time and the wall
-// time play began, and the latest log time played (log time never runs back).
+// The stream's clock across files, and the wall time play began.
 struct LogPlayer::Pacing {
+  explicit Pacing(const LogPlayerOptions& options) : clock(options.speed, options.max_gap_s) {}
+  PlayClock clock;
   bool started = false;
-  int64_t first_us = 0, latest_us = 0;
   double start_ms = 0;
 };
 
@@ -43,7 +60,7 @@ LogPlayer::LogPlayer(Bus& bus, Heartbeat& heartbeat, std::vector<std::string> pa
 LogPlayer::~LogPlayer() = default;
 
 bool LogPlayer::play() {
-  Pacing pacing;
+  Pacing pacing(options_);
   for (size_t i = 0; i < readers_.size(); ++i) {
     heartbeat_.set_state(fmt::format("playing {} ({} of {})", readers_[i]->path(), i + 1, readers_.size()));
     heartbeat_.publish_now();
@@ -65,11 +82,11 @@ bool LogPlayer::play_file(logio::LogReader& reader, Pacing& pacing) {
     }
     if (!pacing.started) {
       pacing.started = true;
-      pacing.first_us = pacing.latest_us = event.timestamp;
       pacing.start_ms = monotonic_ms();
     }
-    pacing.latest_us = std::max(pacing.latest_us, event.timestamp);
-    if (!wait_until(pacing.start_ms + due_ms(pacing.latest_us, pacing.first_us, options_.speed))) return false;
+    const double due = pacing.clock.due_ms(event.timestamp);
+    if (pacing.clock.last_cut_us() > 0) report_cut(reader, event, pacing.clock.last_cut_us());
+    if (!wait_until(pacing.start_ms + due)) return false;
     if (bus_.publish_raw(event.channel, event.data.data(), event.data.size())) {
       ++counts_.published;
       heartbeat_.count_out();
@@ -81,6 +98,15 @@ bool LogPlayer::play_file(logio::LogReader& reader, Pacing& pacing) {
     if (stop_requested()) return false;
   }
   return true;
+}
+
+void LogPlayer::report_cut(const logio::LogReader& reader, const logio::LogEvent& event, uint64_t cut_us) {
+  heartbeat_.set_counter("shortened_pauses", ++counts_.shortened_pauses);
+  spdlog::warn(
+      "{}: event {} (byte {}, {}) comes {:.1f} s of log time after the one before: "
+      "the pause is cut to {} s (--max-gap-s)",
+      reader.path(), event.event_number, event.offset, event.channel,
+      static_cast<double>(cut_us) / 1e6 + options_.max_gap_s, options_.max_gap_s);
 }
 
 // Sleeps in short steps, so a stop and the heartbeat are not held up by a
