@@ -1,3 +1,5 @@
+#include <sys/stat.h>
+
 #include <atomic>
 #include <cmath>
 #include <filesystem>
@@ -181,7 +183,17 @@ TEST(DatasetFormat, TwoViewPatchesRoundTripStacked) {
   EXPECT_EQ(cv::norm(r.left_patch(0), left, cv::NORM_INF), 0);
 }
 
-TEST(DatasetFormat, TruncatedPatchStoreIsReported) {
+// The error reading session s2 of `dir` ("" if none).
+std::string reading_error(const test::TempDir& dir) {
+  try {
+    SessionReader r((dir.path() / "s2").string());
+  } catch (const DatasetError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(DatasetFormat, APatchStoreOfTheWrongSizeIsReported) {
   test::TempDir dir;
   {
     SessionWriter w(dir.path().string(), info("s2"));
@@ -190,12 +202,37 @@ TEST(DatasetFormat, TruncatedPatchStoreIsReported) {
     w.add_sample(s, numbered_patch(1));
     w.add_sample(s, numbered_patch(2));
   }
-  std::filesystem::resize_file(dir.path() / "s2" / "patches.bin", 100 * 100 * 3 + 17);
-  try {
-    SessionReader r((dir.path() / "s2").string());
-    FAIL();
-  } catch (const DatasetError& e) {
-    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  const auto patches = dir.path() / "s2" / "patches.bin";
+  std::filesystem::resize_file(patches, 100 * 100 * 3);
+  EXPECT_NE(reading_error(dir).find("30000 bytes, 1 patches; samples.csv lists 2 (truncated"), std::string::npos)
+      << reading_error(dir);
+  // Bytes past the last patch: the store used to be reported as "2 patches, samples.csv lists 2".
+  std::filesystem::resize_file(patches, 2 * 100 * 100 * 3 + 17);
+  EXPECT_NE(reading_error(dir).find("60017 bytes, not a whole number of 30000-byte patches; samples.csv lists 2"),
+            std::string::npos)
+      << reading_error(dir);
+}
+
+// A named pipe in place of a session's file blocked the reader for ever.
+TEST(DatasetFormat, SessionFilesThatAreNoFilesAreNamed) {
+  for (const char* name : {"session.json", "samples.csv", "patches.bin", "evidence.f32"}) {
+    test::TempDir dir;
+    SessionInfo with_evidence = info("s2");
+    with_evidence.evidence_size = 2;
+    {
+      SessionWriter w(dir.path().string(), with_evidence);
+      w.add_frame(1, 1, 1);
+      w.add_sample(SampleRecord{}, numbered_patch(1), std::vector<float>{0.5F, 0.25F});
+    }
+    const auto file = dir.path() / "s2" / name;
+    std::filesystem::remove(file);
+    ASSERT_EQ(mkfifo(file.c_str(), 0600), 0) << file;
+    EXPECT_NE(reading_error(dir).find(file.string() + ": is a pipe, device or socket, not a file"), std::string::npos)
+        << name << ": " << reading_error(dir);
+    std::filesystem::remove(file);
+    std::filesystem::create_directory(file);
+    EXPECT_NE(reading_error(dir).find(file.string() + ": is a folder, not a file"), std::string::npos)
+        << name << ": " << reading_error(dir);
   }
 }
 

@@ -1,5 +1,7 @@
 // Model files round-trip exactly with their metadata; bad files are refused
 // with the reason; full-frame heatmaps agree with patch-by-patch inference.
+#include <sys/stat.h>
+
 #include <cstdio>
 #include <fstream>
 #include <limits>
@@ -230,6 +232,10 @@ TEST(ModelFile, BadFilesAreRefusedWithTheReason) {
     }
   };
   expect_refusal(dir.file("missing.pt"), "no such model file");
+  ASSERT_EQ(mkfifo(dir.file("pipe.pt").c_str(), 0600), 0);  // blocked the reader for ever
+  expect_refusal(dir.file("pipe.pt"), "pipe.pt: is a pipe, device or socket, not a file");
+  EXPECT_THROW(load_native_model(dir.file("pipe.pt")), ModelError);
+  expect_refusal(dir.path().string(), "is a folder, not a file");
   std::ofstream(dir.file("garbage.pt")) << "not a model";
   expect_refusal(dir.file("garbage.pt"), "not a TorchScript model");
   // A torch file without our metadata.

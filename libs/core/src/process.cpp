@@ -191,6 +191,14 @@ std::string same_file_among(const std::string& path, const std::vector<std::stri
   return "";
 }
 
+std::string why_not_a_file(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return errno == ENOENT ? "no such file" : std::strerror(errno);
+  if (S_ISDIR(st.st_mode)) return "is a folder, not a file";
+  if (!S_ISREG(st.st_mode)) return "is a pipe, device or socket, not a file";
+  return "";
+}
+
 bool write_ready_file(const std::string& path) { return write_text_file(path, "ready\n"); }
 
 }  // namespace ivoa

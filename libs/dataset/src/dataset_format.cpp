@@ -25,6 +25,7 @@
 
 #include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/json_text.hpp"
+#include "ivoa/core/process.hpp"
 
 namespace fs = std::filesystem;
 
@@ -70,11 +71,16 @@ T get(const YAML::Node& node, const std::string& key, const std::string& where) 
   }
 }
 
-// A YAML (JSON) file read whole; a folder in its place is named as one
-// (the stream's error was "basic_filebuf::underflow ... Is a directory").
+// A dataset file that is missing or no file (a folder in its place gave
+// "basic_filebuf::underflow ... Is a directory"; a named pipe blocked the
+// reader for ever) is named as such.
+void require_file(const std::string& path) {
+  if (const std::string why = why_not_a_file(path); !why.empty()) throw DatasetError(path + ": " + why);
+}
+
+// A YAML (JSON) file read whole.
 YAML::Node load_yaml_file(const std::string& path) {
-  if (fs::is_directory(path)) throw DatasetError(path + ": is a folder, not a file");
-  if (!fs::exists(path)) throw DatasetError(path + ": no such file");
+  require_file(path);
   return YAML::LoadFile(path);
 }
 
@@ -379,6 +385,7 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
   if (folder.filename() != info_.session && folder.filename() != ".")
     throw DatasetError(dir_ + "/session.json: names the session '" + info_.session + "' but its folder is '" +
                        folder.filename().string() + "': rename the folder back, or build the session again");
+  require_file(dir_ + "/samples.csv");
   std::ifstream in(dir_ + "/samples.csv");
   if (!in) throw DatasetError(dir_ + "/samples.csv: cannot open");
   std::string line;
@@ -403,6 +410,7 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
   check_index_matches_metadata();
   const size_t patch_bytes = this->patch_bytes();
   const std::string patches = dir_ + "/patches.bin";
+  require_file(patches);
   const int fd = ::open(patches.c_str(), O_RDONLY);
   if (fd < 0) throw DatasetError(patches + ": cannot open");
   struct stat st {};
@@ -410,8 +418,11 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
   mapped_bytes_ = static_cast<size_t>(st.st_size);
   if (mapped_bytes_ != samples_.size() * patch_bytes) {
     ::close(fd);
-    throw DatasetError(patches + ": holds " + std::to_string(mapped_bytes_ / patch_bytes) +
-                       " patches, samples.csv lists " + std::to_string(samples_.size()) + " (truncated dataset?)");
+    throw DatasetError(patches + ": " + std::to_string(mapped_bytes_) + " bytes, " +
+                       (mapped_bytes_ % patch_bytes == 0
+                            ? std::to_string(mapped_bytes_ / patch_bytes) + " patches"
+                            : "not a whole number of " + std::to_string(patch_bytes) + "-byte patches") +
+                       "; samples.csv lists " + std::to_string(samples_.size()) + " (truncated or damaged dataset?)");
   }
   if (mapped_bytes_ > 0) {
     void* m = mmap(nullptr, mapped_bytes_, PROT_READ, MAP_PRIVATE, fd, 0);
@@ -445,6 +456,7 @@ void SessionReader::check_index_matches_metadata() const {
 void SessionReader::read_evidence() {
   if (info_.evidence_size == 0) return;
   const std::string path = dir_ + "/evidence.f32";
+  require_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in)
     throw DatasetError(path + ": cannot open (session.json says evidence_size " + std::to_string(info_.evidence_size) +

@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <cstdlib>
-#include <filesystem>
 #include <functional>
 #include <utility>
 
@@ -284,7 +283,7 @@ std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& 
   if (config.mc_passes < 1) throw ModelError("mc_passes must be >= 1");
   if (config.mean_filter < 1 || config.mean_filter % 2 == 0) throw ModelError("mean_filter must be odd and >= 1");
   torch::set_num_threads(std::max(config.threads, 1));
-  if (std::filesystem::exists(path)) check_model_archive(path);  // native and scripted files alike
+  check_model_archive(path);  // native and scripted files alike
   std::string json;
   bool native = false;
   try {
@@ -292,7 +291,6 @@ std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& 
   } catch (const c10::Error&) {
   }
   if (native) return std::make_unique<NativeIntrospectionModel>(load_checked_native_model(path), config);
-  if (!std::filesystem::exists(path)) throw ModelError(path + ": no such model file");
   return load_scripted(path, config);
 }
 

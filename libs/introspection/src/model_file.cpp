@@ -14,6 +14,7 @@
 
 #include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/json_text.hpp"
+#include "ivoa/core/process.hpp"
 
 namespace ivoa::introspection {
 namespace {
@@ -46,6 +47,8 @@ std::string from_bytes(const torch::Tensor& t) {
 // number and the model would predict nonsense without a word. A file that
 // is no zip archive is left to LibTorch, which says what it is not.
 void check_model_archive(const std::string& path) {
+  if (const std::string why = why_not_a_file(path); !why.empty())
+    throw ModelError(path + (why == "no such file" ? ": no such model file" : ": " + why));
   const unzFile zip = unzOpen64(path.c_str());
   if (!zip) return;
   std::vector<char> buffer(1 << 16);
@@ -154,7 +157,6 @@ bool read_metadata(const std::string& path, std::string& json) {
 }
 
 NativeModel load_native_model(const std::string& path) {
-  if (!std::filesystem::exists(path)) throw ModelError(path + ": no such model file");
   check_model_archive(path);
   return load_checked_native_model(path);
 }

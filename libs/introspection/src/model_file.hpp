@@ -28,9 +28,10 @@ struct NativeModel {
   std::shared_ptr<IntrospectionNetImpl> net;
   ModelInfo info;
 };
-// Throws ModelError for a missing, unreadable or incompatible file.
-// Throws ModelError naming the entry if the file is a zip archive with an
-// entry that fails its CRC-32 (LibTorch's reader does not check them).
+// Throws ModelError for a missing file or one that is no file (a named pipe
+// would block the reader for ever), and naming the entry if the file is a
+// zip archive with an entry that fails its CRC-32 (LibTorch's reader does
+// not check them).
 void check_model_archive(const std::string& path);
 
 NativeModel load_native_model(const std::string& path);

@@ -69,6 +69,11 @@ std::string why_cannot_write(const std::string& path);
 // one of a tool's inputs (`--json run.lcmlog.0*` in a shell) is refused.
 std::string same_file_among(const std::string& path, const std::vector<std::string>& files);
 
+// Why `path` cannot be read as a file ("no such file", "is a folder", "is a
+// pipe, device or socket, not a file"), or "" if it is a regular file: a
+// reader that opened a named pipe would wait for a writer for ever.
+std::string why_not_a_file(const std::string& path);
+
 // --ready-file: creates `path` (nothing if empty) to tell a waiting script
 // that this process has subscribed or is serving (write_text_file).
 bool write_ready_file(const std::string& path);
