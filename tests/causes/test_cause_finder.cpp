@@ -108,8 +108,20 @@ TEST(CauseFinder, RefusesAFrameItCannotReproduce) {
   const sim::SceneSpec spec = mirroring_floor();
   LabelledFrame frame = label_frame(spec);
   CauseFinder finder = make_finder(spec);
+  const sim::Pose2D recorded = frame.pose;
   frame.pose.x += 0.05;  // not where the trajectory was
   EXPECT_THROW(finder.explain(frame.labels, frame.pose, image_t::PIXEL_FORMAT_BAYER_RGGB), ReplayError);
+  frame.pose.x = std::numeric_limits<double>::quiet_NaN();  // used to pass the pose comparison
+  EXPECT_THROW(finder.explain(frame.labels, frame.pose, image_t::PIXEL_FORMAT_BAYER_RGGB), ReplayError);
+  // Five hours after the start: stepping the trajectory there hung.
+  frame.pose = recorded;
+  frame.labels.utime = kStart + 5 * 3600 * int64_t{1'000'000};
+  try {
+    finder.explain(frame.labels, frame.pose, image_t::PIXEL_FORMAT_BAYER_RGGB);
+    FAIL() << "a frame 5 h after the start was replayed";
+  } catch (const ReplayError& e) {
+    EXPECT_NE(std::string(e.what()).find("18000 s after the session's start utime"), std::string::npos) << e.what();
+  }
 }
 
 // A label value outside -1..3 indexed the tallies: heap corruption (label

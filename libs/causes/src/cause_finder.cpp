@@ -128,8 +128,9 @@ sim::RenderRequest CauseFinder::Impl::request_for(const Labels& labels, const si
   request.frame_index = static_cast<uint64_t>(index);
   request.motion = trajectory.twist_at(t);
   const sim::Pose2D& p = request.stereo_pose;
-  if (std::abs(p.x - recorded_pose.x) > kPoseTolerance || std::abs(p.y - recorded_pose.y) > kPoseTolerance ||
-      std::abs(p.yaw - recorded_pose.yaw) > kPoseTolerance)
+  // Written as "not within" so that a NaN recorded pose is refused too.
+  if (!(std::abs(p.x - recorded_pose.x) <= kPoseTolerance && std::abs(p.y - recorded_pose.y) <= kPoseTolerance &&
+        std::abs(p.yaw - recorded_pose.yaw) <= kPoseTolerance))
     throw ReplayError("frame " + std::to_string(labels.utime) + ": the recorded robot pose (" +
                       std::to_string(recorded_pose.x) + ", " + std::to_string(recorded_pose.y) + ", " +
                       std::to_string(recorded_pose.yaw) + ") is not the trajectory's at frame " +
