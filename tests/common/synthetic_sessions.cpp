@@ -44,6 +44,7 @@ void write_synthetic_session(const std::string& dataset_root, const std::string&
   info.evidence_size = s.evidence_size;
   info.patch_scale = s.patch_scale;
   info.views = s.views;
+  info.patch_size = s.patch_size;
   info.scene = s.scene;
   info.seed = s.scene_seed;
   dataset::SessionWriter w(dataset_root, info);
@@ -57,6 +58,7 @@ void write_synthetic_session(const std::string& dataset_root, const std::string&
       sample.label = label;
       sample.stereo_state = label == 0 || label == 2 ? 1 : 0;  // TP / FP: the detector said obstacle
       cv::Mat patch = pattern(label, rng);
+      if (s.patch_size != patch.cols) cv::resize(patch, patch, {s.patch_size, s.patch_size}, 0, 0, cv::INTER_AREA);
       if (s.views == 2) cv::vconcat(patch, patch.clone(), patch);
       w.add_sample(sample, patch, evidence_of(label, s.evidence_size));
     }

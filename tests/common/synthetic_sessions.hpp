@@ -13,6 +13,7 @@ struct SyntheticSession {
   std::string detector = "jppc";
   double patch_scale = 0;  // recorded only: every patch is the fixed 100 px square
   int views = 1;           // 2: each patch stacked over a copy of itself (as a two-view session's)
+  int patch_size = 100;    // px, the side of each (view's) square
   std::string scene;       // recorded in session.json, as a simulated session's scene and seed
   int64_t scene_seed = -1;
 };

@@ -6,6 +6,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <torch/torch.h>
 
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/process.hpp"
@@ -13,6 +14,7 @@
 #include "ivoa/logio/log_writer.hpp"
 #include "ivoa/sim_ground_truth_t.hpp"
 #include "ivoa/stereo_image_t.hpp"
+#include "model_file.hpp"
 #include "synthetic_sessions.hpp"
 #include "test_rig.hpp"
 
@@ -50,12 +52,16 @@ class EvalCli : public ::testing::Test {
     test::write_synthetic_session(dir_.file("data"), "s", s);
     s.views = 2;
     test::write_synthetic_session(dir_.file("data"), "b", s);
+    s.views = 1;
+    s.patch_scale = 0;
+    s.patch_size = 64;
+    test::write_synthetic_session(dir_.file("data"), "q", s);
     s.per_class = 0;
     test::write_synthetic_session(dir_.file("data"), "z", s);           // a session without samples
     std::filesystem::create_directories(dir_.file("data/unfinished"));  // a build that never wrote session.json
     std::ofstream(dir_.file("split.yaml")) << "train: [a]\nval: [v]\ntest: [t]\ndense: [d]\nscaled: [s]\n"
                                               "scaled_two_views: [b]\nempty: []\nunfinished: [unfinished]\n"
-                                              "no_samples: [z]\n";
+                                              "no_samples: [z]\nother_size: [q]\n";
 
     introspection::TrainConfig c;
     c.dataset = dir_.file("data");
@@ -112,6 +118,28 @@ TEST_F(EvalCli, NamesEveryWayThePatchesDifferAtOnce) {
   EXPECT_TRUE(contains(r.output, "session b has patch scale 1.6 (model: 0), 2 view(s) per patch (model: 1)"))
       << r.output;
   EXPECT_TRUE(contains(r.output, "--patch-scale 0 --views 1")) << r.output;
+}
+
+// They would be resized to the model's, as they never were in training.
+TEST_F(EvalCli, RefusesPatchesOfAnotherSize) {
+  const auto r = eval("other_size");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "session q has 64 px patches (model: 100)")) << r.output;
+  EXPECT_TRUE(contains(r.output, "--patch-size 100")) << r.output;
+}
+
+// Finite weights that overflow on real input: a diverged training's model
+// wrote rows of NaN and exited 0.
+TEST_F(EvalCli, RefusesAModelThatPredictsNaN) {
+  introspection::NativeModel model = introspection::load_native_model(dir_.file("model.pt"));
+  {
+    torch::NoGradGuard no_grad;
+    for (auto& p : model.net->parameters()) p.mul_(1e30);
+  }
+  introspection::save_model(*model.net, model.info, dir_.file("model.pt"));
+  const auto r = eval("test");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "predicts a probability that is not a number (session t, sample 0)")) << r.output;
 }
 
 TEST_F(EvalCli, OverlaysOfAnEarlierRunAreRemovedNotPassedOffAsThisModels) {
