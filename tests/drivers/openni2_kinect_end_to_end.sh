@@ -14,7 +14,9 @@
 #     a missing recording, exit 3;
 #  5. a recording is never overwritten (a respawned driver given the same
 #     name records to NAME-1.oni and leaves the first one whole); time
-#     patterns in the name are expanded.
+#     patterns in the name are expanded;
+#  6. a damaged recording (its header's depth mode or field of view) is bad
+#     input, exit 3, named: it crashed the driver (SIGSEGV, SIGABRT).
 . "$(dirname "$0")/driver_test_lib.sh"
 DRIVER="$B/bin/ivoa-openni2-kinect"
 CHECK="$B/tests/ivoa-test-check-depth"
@@ -97,5 +99,35 @@ year_before=$(date +%Y)
 "$DRIVER" --record "$OUT/timed-%Y.oni" --max-frames 5 >"$OUT/timed.log" 2>&1 || { show timed; exit 1; }
 [ -s "$OUT/timed-$year_before.oni" ] || [ -s "$OUT/timed-$(date +%Y).oni" ] ||
   { echo "FAILED: --record timed-%Y.oni wrote no timed-YYYY.oni" >&2; ls "$OUT" >&2; cat "$OUT/timed.log" >&2; exit 1; }
+# 6. clip-1.oni (depth only) with its header damaged: the depth stream's
+# output mode (the second 640x480 in it) or its horizontal field of view.
+python3 - "$OUT" <<'PY'
+import struct, sys
+out = sys.argv[1]
+clean = open(out + "/clip-1.oni", "rb").read()
+def damaged(name, old, new, occurrence=1):
+    data, at = bytearray(clean), -1
+    for _ in range(occurrence):
+        at = data.find(old, at + 1)
+    assert at >= 0, name + ": nothing to damage"
+    data[at:at + len(new)] = new
+    open(out + "/" + name + ".oni", "wb").write(data)
+damaged("wide", struct.pack("<ii", 640, 480), struct.pack("<ii", 1280, 480), 2)
+damaged("huge", struct.pack("<ii", 640, 480), struct.pack("<ii", 100000, 100000), 2)
+hfov = struct.unpack("<f", struct.pack("<f", 1.0210))[0]  # Kinect v1's, stored as a float widened to double
+damaged("fov", struct.pack("<d", hfov), struct.pack("<d", 4.0))
+PY
+for case in "wide:depth frame 1: 1280x480 frame in 614400 bytes of data, not the 1228800 it needs" \
+  "huge:its depth stream's mode is 100000x100000, no image size" \
+  "fov:its depth field of view: field of view must be in (0, pi) radians"; do
+  name=${case%%:*}
+  code=0
+  timeout 30 "$DRIVER" --device "$OUT/$name.oni" --playback-speed 0 >"$OUT/$name.log" 2>&1 || code=$?
+  if [ "$code" != 3 ] || ! grep -qF "${case#*:}" "$OUT/$name.log"; then
+    echo "FAILED: damaged recording $name.oni: exit $code (want 3), expected to say: ${case#*:}" >&2
+    cat "$OUT/$name.log" >&2
+    exit 1
+  fi
+done
 echo "OK: live $(cat "$OUT/live.json")"
 echo "OK: replay $(cat "$OUT/replay.json")"

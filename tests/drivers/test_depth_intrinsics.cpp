@@ -4,6 +4,7 @@
 
 #include "ivoa/core/calibration.hpp"
 #include "ivoa/openni2_kinect/depth_intrinsics.hpp"
+#include "ivoa/openni2_kinect/frame_buffer.hpp"
 
 namespace ivoa::openni2_kinect {
 namespace {
@@ -32,6 +33,22 @@ TEST(DepthIntrinsics, RejectsAMissingFieldOfView) {
   EXPECT_THROW(intrinsics_from_fov(640, 480, 0.0, 0.0), std::invalid_argument);
   EXPECT_THROW(intrinsics_from_fov(640, 480, 4.0, 0.8), std::invalid_argument);
   EXPECT_THROW(intrinsics_from_fov(0, 480, 1.0, 0.8), std::invalid_argument);
+  // A damaged recording's 1e-30 rad: fx 6.4e32 px was published.
+  EXPECT_THROW(intrinsics_from_fov(640, 480, 1e-30, 0.8), std::invalid_argument);
+}
+
+// A damaged recording claimed a mode larger than its frames: the driver
+// wrapped the buffer as that image and read past its end (SIGSEGV).
+TEST(FrameBuffer, AFrameIsReadOnlyFromDataThatHoldsIt) {
+  EXPECT_EQ(frame_buffer_error(640, 480, 1280, 2, 640 * 480 * 2), "");
+  EXPECT_EQ(frame_buffer_error(640, 480, 1280, 2, 640 * 480 * 2 - 1),
+            "640x480 frame in 614399 bytes of data, not the 614400 it needs");
+  EXPECT_EQ(frame_buffer_error(1280, 480, 2560, 2, 640 * 480 * 2),
+            "1280x480 frame in 614400 bytes of data, not the 1228800 it needs");
+  EXPECT_EQ(frame_buffer_error(640, 480, 640, 2, 1 << 30),
+            "640x480 frame with rows 640 bytes apart, too close for 1280 bytes a row");
+  EXPECT_EQ(frame_buffer_error(0, 480, 0, 2, 100), "a 0x480 frame");
+  EXPECT_NE(frame_buffer_error(100000, 100000, 200000, 2, 1 << 30).find("larger than any image"), std::string::npos);
 }
 
 TEST(DepthIntrinsics, FromTheRigWhenItMatchesTheStream) {

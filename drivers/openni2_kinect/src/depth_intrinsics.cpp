@@ -22,6 +22,11 @@ PinholeIntrinsics intrinsics_from_fov(int width, int height, double hfov_rad, do
   k.fy = 0.5 * height / std::tan(0.5 * vfov_rad);
   k.cx = 0.5 * width;
   k.cy = 0.5 * height;
+  // The focal lengths a calibration file may give (calibration.hpp).
+  if (!(k.fx >= kMinFocalPx && k.fx <= kMaxFocalPx && k.fy >= kMinFocalPx && k.fy <= kMaxFocalPx))
+    throw std::invalid_argument("a field of view of " + std::to_string(hfov_rad) + " x " + std::to_string(vfov_rad) +
+                                " radians makes focal lengths of " + std::to_string(k.fx) + " x " +
+                                std::to_string(k.fy) + " px, no lens's");
   return k;
 }
 

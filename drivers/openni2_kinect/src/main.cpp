@@ -73,16 +73,28 @@ void add_options(CLI::App& app, Flags& f) {
 
 // Intrinsics from the rig file if given, else from the reported field of
 // view, else (a device that reports none) Kinect v1's nominal one.
+// A depth mode or field of view no sensor has (a damaged recording) is
+// bad input, named: DeviceError, exit 3.
 PinholeIntrinsics choose_intrinsics(const OpenNiCamera& camera, const Flags& f, std::string* origin) {
   const int w = camera.depth_width(), h = camera.depth_height();
+  if (w <= 0 || h <= 0 || int64_t{w} * h > ivoa::kMaxImagePixels)
+    throw DeviceError(camera.description() + ": its depth stream's mode is " + std::to_string(w) + "x" +
+                          std::to_string(h) + ", no image size",
+                      ivoa::kExitBadInput);
   if (!f.rig_path.empty()) {
     *origin = "K_depth of " + f.rig_path;
     return intrinsics_from_rig(ivoa::load_rig_calibration(f.rig_path), w, h, f.rig_path);
   }
   PinholeIntrinsics k;
-  if (camera.depth_fov_intrinsics(&k)) {
-    *origin = camera.registered() ? "the colour camera's field of view (registered)" : "the depth field of view";
-    return k;
+  try {
+    if (camera.depth_fov_intrinsics(&k)) {
+      *origin = camera.registered() ? "the colour camera's field of view (registered)" : "the depth field of view";
+      return k;
+    }
+  } catch (const std::invalid_argument& e) {
+    throw DeviceError(
+        camera.description() + ": its depth field of view: " + e.what() + " (give the sensor's calibration with --rig)",
+        ivoa::kExitBadInput);
   }
   *origin = "Kinect v1's nominal field of view (the device reports none)";
   return intrinsics_from_fov(w, h, kKinectV1DepthHfovRad, kKinectV1DepthVfovRad);
@@ -138,21 +150,43 @@ class Publisher {
   int last_index_ = 0;
 };
 
+// Reads and publishes the frame that is ready; false for a bad frame
+// (counted and reported in the heartbeat, and skipped).
+bool publish_ready(OpenNiCamera& camera, OpenNiCamera::Ready ready, Publisher& publisher, ivoa::Heartbeat& heartbeat) {
+  try {
+    if (ready == OpenNiCamera::Ready::kDepth) publisher.depth(camera.read_depth());
+    else publisher.color(camera.read_color());
+    return true;
+  } catch (const BadFrame& e) {
+    heartbeat.bad_input(camera.description() + ": " + e.what());
+    return false;
+  }
+}
+
 int stream(OpenNiCamera& camera, Publisher& publisher, ivoa::Heartbeat& heartbeat, const Flags& f) {
   heartbeat.set_state("running");
   double last_depth_ms = ivoa::monotonic_ms();
+  int64_t bad_depth_frames = 0;
   while (!ivoa::stop_requested()) {
     const auto ready = camera.wait(100);
     if (ready == OpenNiCamera::Ready::kEndOfRecording) {
       spdlog::info("end of recording {} after {} depth frames", f.camera.device, publisher.depth_frames());
+      // A recording none of whose depth frames could be read is bad input, not a session.
+      if (publisher.depth_frames() == 0 && bad_depth_frames > 0) {
+        spdlog::error("{}: none of its {} depth frames could be read", f.camera.device, bad_depth_frames);
+        return ivoa::kExitBadInput;
+      }
       break;
     }
     if (ready == OpenNiCamera::Ready::kDepth) {
-      publisher.depth(camera.read_depth());
-      last_depth_ms = ivoa::monotonic_ms();
-      if (f.max_frames > 0 && publisher.depth_frames() >= f.max_frames) break;
+      if (publish_ready(camera, ready, publisher, heartbeat)) {
+        last_depth_ms = ivoa::monotonic_ms();
+        if (f.max_frames > 0 && publisher.depth_frames() >= f.max_frames) break;
+      } else {
+        ++bad_depth_frames;
+      }
     } else if (ready == OpenNiCamera::Ready::kColor) {
-      publisher.color(camera.read_color());
+      publish_ready(camera, ready, publisher, heartbeat);
     } else if (ivoa::monotonic_ms() - last_depth_ms > f.frame_timeout_s * 1000.0) {
       spdlog::error("no depth frame for {:.1f} s from {}; is the sensor still connected?", f.frame_timeout_s,
                     camera.description());

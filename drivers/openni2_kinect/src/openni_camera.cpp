@@ -13,6 +13,7 @@
 
 #include "ivoa/core/file_names.hpp"
 #include "ivoa/core/process.hpp"
+#include "ivoa/openni2_kinect/frame_buffer.hpp"
 
 namespace ivoa::openni2_kinect {
 namespace {
@@ -90,6 +91,16 @@ struct EndOfFileListener : openni::OpenNI::DeviceStateChangedListener {
     if (state == openni::DEVICE_STATE_EOF) reached = true;
   }
 };
+
+// A frame whose data does not hold the image it claims is skipped, not
+// wrapped (a damaged recording's mode read past the buffer's end).
+void check_buffer(const openni::VideoFrameRef& frame, int bytes_per_pixel, const char* stream) {
+  const std::string error = frame_buffer_error(frame.getWidth(), frame.getHeight(), frame.getStrideInBytes(),
+                                               bytes_per_pixel, frame.getDataSize());
+  if (!error.empty())
+    throw BadFrame(std::string(stream) + " frame " + std::to_string(frame.getFrameIndex()) + ": " + error +
+                   ": skipped");
+}
 
 }  // namespace
 
@@ -269,6 +280,7 @@ DepthFrame OpenNiCamera::read_depth() {
     throw DeviceError("depth frame cannot be read: " + extended_error(), kExitFailure);
   ++impl_->depth_frames_read;
   const openni::PixelFormat format = frame.getVideoMode().getPixelFormat();
+  check_buffer(frame, 2, "depth");
   const cv::Mat wrapped(frame.getHeight(), frame.getWidth(), CV_16UC1, const_cast<void*>(frame.getData()),
                         static_cast<size_t>(frame.getStrideInBytes()));
   DepthFrame out;
@@ -288,6 +300,7 @@ ColorFrame OpenNiCamera::read_color() {
     throw DeviceError("colour frame cannot be read: " + extended_error(), kExitFailure);
   if (frame.getVideoMode().getPixelFormat() != openni::PIXEL_FORMAT_RGB888)
     throw DeviceError("colour stream is not RGB888", kExitFailure);
+  check_buffer(frame, 3, "colour");
   const cv::Mat wrapped(frame.getHeight(), frame.getWidth(), CV_8UC3, const_cast<void*>(frame.getData()),
                         static_cast<size_t>(frame.getStrideInBytes()));
   ColorFrame out;

@@ -42,8 +42,9 @@ void validate_camera(const CameraIntrinsics& cam, const std::string& where, cons
   check(cam.K(2, 0) == 0 && cam.K(2, 1) == 0 && cam.K(2, 2) == 1, where, key + " last row must be [0 0 1]");
   // Past these no lens is described, and the simulator's rays and the
   // rectification maps leave the image (the renderer crashed on them).
-  check(cam.K(0, 0) >= 1 && cam.K(1, 1) >= 1 && cam.K(0, 0) <= 1e6 && cam.K(1, 1) <= 1e6, where,
-        key + " focal lengths must be 1 to 1e6 px");
+  check(cam.K(0, 0) >= kMinFocalPx && cam.K(1, 1) >= kMinFocalPx && cam.K(0, 0) <= kMaxFocalPx &&
+            cam.K(1, 1) <= kMaxFocalPx,
+        where, key + " focal lengths must be 1 to 1e6 px");
   check(cam.K(0, 2) >= 0 && cam.K(0, 2) <= cam.width && cam.K(1, 2) >= 0 && cam.K(1, 2) <= cam.height, where,
         key + " principal point (" + std::to_string(cam.K(0, 2)) + ", " + std::to_string(cam.K(1, 2)) +
             ") must lie in the image");

@@ -25,6 +25,13 @@ class DeviceError : public std::runtime_error {
   int exit_code_;
 };
 
+// One frame cannot be read as the image it claims (a damaged recording):
+// skipped and counted, the stream goes on.
+class BadFrame : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 struct OpenNiOptions {
   std::string device = "ANY_DEVICE";  // ANY_DEVICE (the first device), a device URI, or an .oni file
   bool color = false;                 // also stream 640x480 RGB
@@ -62,8 +69,8 @@ class OpenNiCamera {
   enum class Ready { kDepth, kColor, kTimeout, kEndOfRecording };
   // Waits up to timeout_ms for a frame.
   Ready wait(int timeout_ms);
-  DepthFrame read_depth();  // after kDepth
-  ColorFrame read_color();  // after kColor
+  DepthFrame read_depth();  // after kDepth; throws BadFrame for one whose data does not hold its image
+  ColorFrame read_color();  // after kColor; likewise
 
   // Intrinsics of the depth image from the reported field of view (the
   // colour camera's when registered); nothing if the device reports none.

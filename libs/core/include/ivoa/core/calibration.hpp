@@ -50,6 +50,10 @@ class CalibrationError : public std::runtime_error {
 // forward along robot x, pitched down by `pitch_down_rad` about robot y.
 Eigen::Matrix3d optical_to_robot(double pitch_down_rad);
 
+// The focal lengths a camera may have, in pixels: outside them OpenCV's
+// undistortion and the renderer fail (an fx of 1e-9 crashed the renderer).
+constexpr double kMinFocalPx = 1, kMaxFocalPx = 1e6;
+
 // Checks sizes, focal lengths, rotations and ranges; throws CalibrationError
 // naming `where` and the first problem found.
 void validate(const RigCalibration& rig, const std::string& where);
