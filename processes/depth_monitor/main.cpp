@@ -6,6 +6,7 @@
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/process.hpp"
+#include "ivoa/logio/replay_check.hpp"
 #include "ivoa/core/receive_buffer.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "monitor_node.hpp"
@@ -116,6 +117,7 @@ int main(int argc, char** argv) {
   if (!heights_in_order(options.monitor)) return ivoa::kExitUsage;
   ivoa::install_stop_handlers();
   try {
+    ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "depth_monitor", common.status_channel);
     ivoa::MonitorNode node(bus, heartbeat, options);

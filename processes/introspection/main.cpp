@@ -12,6 +12,7 @@
 #include "introspection_node.hpp"
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
+#include "ivoa/logio/replay_check.hpp"
 #include "ivoa/core/receive_buffer.hpp"
 #include "ivoa/core/stop_signal.hpp"
 
@@ -141,6 +142,7 @@ int main(int argc, char** argv) {
   log_model(*model, cl.config.mc_passes);
   cl.options.warm_up = frame_size(cl.warm_up);
   try {
+    ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "introspection", common.status_channel);
     ivoa::IntrospectionNode node(bus, heartbeat, std::move(model), cl.options, cl.config.mc_passes);

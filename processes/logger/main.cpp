@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/logio/replay_check.hpp"
 #include "ivoa/core/file_names.hpp"
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/heartbeat.hpp"
@@ -163,6 +164,7 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
            double socket_buffer_mb) {
   std::unique_ptr<ivoa::Bus> bus;
   try {
+    ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
     bus = std::make_unique<ivoa::Bus>(common.lcm_url);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());

@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/logio/replay_check.hpp"
 #include "ivoa/core/calibration.hpp"
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/grid_messages.hpp"
@@ -77,6 +78,7 @@ int run_detector(const ivoa::CommonOptions& common, const DetectorFlags& f,
                  const std::optional<ivoa::RigCalibration>& initial_rig) {
   const ivoa::StereoDetectorOptions& o = f.options;
   try {
+    ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "stereo_detector", common.status_channel);
     bus.on_decode_error([&](const std::string& what) { heartbeat.bad_input(what); });

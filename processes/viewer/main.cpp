@@ -13,6 +13,7 @@
 
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
+#include "ivoa/logio/replay_check.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/viewer/figure_window.hpp"
@@ -115,13 +116,7 @@ std::array<bool, ivoa::viewer::kNumParts> parts_in_log(const std::string& url, c
   try {
     ivoa::logio::LogReader reader(path, {/*resync=*/true, /*headers_only=*/true});
     ivoa::logio::LogEvent event;
-    while (reader.next(event)) channels.insert(event.channel);
-    // LCM's file:// reader stops at the first damage with no more than a
-    // line: where and what is said here, before the figures.
-    if (const std::string why = reader.not_a_log(); !why.empty()) spdlog::warn("{}: {}", path, why);
-    else
-      for (const auto& p : reader.problems())
-        spdlog::warn("{}: {}: the frames after it may not be drawn", path, p.describe());
+    while (reader.next(event)) channels.insert(event.channel);  // damage is refused next (run_viewer)
   } catch (const ivoa::logio::LogReadError& e) {
     spdlog::warn("{}; frames wait only for the channels seen so far", e.what());
   }
@@ -135,6 +130,7 @@ std::array<bool, ivoa::viewer::kNumParts> parts_in_log(const std::string& url, c
 // Draws until stopped (or, offline, until the log ends); the exit code.
 int run_viewer(const ivoa::CommonOptions& common, const ivoa::viewer::ViewerOptions& options, bool window,
                bool offline) {
+  ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
   ivoa::Bus bus(common.lcm_url);
   ivoa::Heartbeat heartbeat(bus, "viewer", common.status_channel);
   ivoa::viewer::ViewerNode node(bus, heartbeat, options);

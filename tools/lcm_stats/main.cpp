@@ -13,6 +13,7 @@
 #include "channel_stats.hpp"
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/bus.hpp"
+#include "ivoa/logio/replay_check.hpp"
 #include "ivoa/core/channel_counts.hpp"
 #include "ivoa/core/message_registry.hpp"
 #include "ivoa/core/process.hpp"
@@ -51,6 +52,7 @@ struct Watch {
 // Counts traffic until the expectations are met, the duration is over or a
 // stop signal; prints the table as it goes and at the end.
 int watch(const std::string& lcm_url, const Watch& w) {
+  ivoa::logio::refuse_a_log_lcm_cannot_replay(lcm_url);
   ivoa::Bus bus(lcm_url);
   ivoa::tools::TrafficStats stats;
   try {

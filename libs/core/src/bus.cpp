@@ -96,10 +96,14 @@ void Bus::subscribe_raw(std::string_view channel_regex, RawHandler handler) {
   subscriptions_.push_back(std::move(sub));
 }
 
-bool Bus::reads_a_log() const {
-  return url_.rfind("file://", 0) == 0 && url_.find("mode=w") == std::string::npos &&
-         url_.find("mode=a") == std::string::npos;
+std::string replayed_log(const std::string& url) {
+  if (url.rfind("file://", 0) != 0 || url.find("mode=w") != std::string::npos ||
+      url.find("mode=a") != std::string::npos)
+    return "";
+  return url.substr(7, url.find('?') - 7);
 }
+
+bool Bus::reads_a_log() const { return !replayed_log(url_).empty(); }
 
 int Bus::handle(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
 

@@ -29,6 +29,10 @@ inline constexpr const char* kProjectDefaultUrl = "udpm://239.255.76.67:7667?ttl
 std::string default_lcm_url();
 std::string with_receive_buffer(const std::string& url);
 
+// The log a file:// URL replays (not mode=w or mode=a), or "" for a URL that
+// replays none.
+std::string replayed_log(const std::string& url);
+
 class BusError : public std::runtime_error {
  public:
   explicit BusError(const std::string& what, int exit_code = kExitFailure)
