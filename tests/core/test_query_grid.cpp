@@ -97,6 +97,10 @@ TEST(QueryGrid, ReceivedCellsThatCannotBeUsedAreNamed) {
   EXPECT_EQ(grid_content_error(msg), "");
   msg.y[0] = std::numeric_limits<float>::infinity();
   EXPECT_EQ(grid_content_error(msg), "cell 0: position is not finite");
+  msg = good;
+  msg.num_x = 0;  // was taken for every later frame's grid, and failed each of them
+  EXPECT_EQ(grid_content_error(msg), "num_x 0 by num_y " + std::to_string(good.num_y) + " is not its " +
+                                         std::to_string(good.num_cells) + " cells");
 }
 
 TEST(QueryGrid, RejectsEmptyConfig) {

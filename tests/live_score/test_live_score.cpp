@@ -82,7 +82,8 @@ TEST(LiveScorer, MatchesCellsByPositionWhicheverMessageComesFirst) {
                                 {3.0f, 0.25f, kTN, kFree}}));  // no query there, in view
   obstacle_grid_t grid{};  // the detector's: (3, 0) is outside the image, (3, 0.25) inside
   grid.utime = 1;
-  grid.num_cells = 2;
+  grid.num_cells = grid.num_x = 2;
+  grid.num_y = 1;
   grid.x = {3.0f, 3.0f};
   grid.y = {0.0f, 0.25f};
   grid.in_image = {0, 1};
@@ -154,7 +155,7 @@ TEST(LiveScorer, MessagesWithValuesItCannotScoreAreLeftOutAndSaidWhy) {
   EXPECT_EQ(scorer.add(bad_label), "cell 1: label 5 is no class");
   obstacle_grid_t grid{};
   grid.utime = 5;
-  grid.num_cells = 1;
+  grid.num_cells = grid.num_x = grid.num_y = 1;
   grid.state = {42};
   grid.x = {1.0f};
   grid.y = {0.0f};

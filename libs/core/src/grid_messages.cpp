@@ -82,6 +82,11 @@ obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& det
 }
 
 std::string grid_content_error(const obstacle_grid_t& msg) {
+  // Cells are indexed ix * num_y + iy: a shape that is not the cells' count
+  // was taken as the grid of every later frame and failed each of them.
+  if (msg.num_x < 0 || msg.num_y < 0 || int64_t{msg.num_x} * msg.num_y != msg.num_cells)
+    return "num_x " + std::to_string(msg.num_x) + " by num_y " + std::to_string(msg.num_y) + " is not its " +
+           std::to_string(msg.num_cells) + " cells";
   const size_t n = static_cast<size_t>(std::max(msg.num_cells, 0));
   for (const auto& [name, size] : {std::pair<const char*, size_t>{"state", msg.state.size()},
                                    {"x", msg.x.size()},
