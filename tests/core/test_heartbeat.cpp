@@ -44,6 +44,16 @@ TEST(Heartbeat, PublishesCountersLatencyAndLastError) {
   EXPECT_DOUBLE_EQ(hb.snapshot().latency_ms_max, 0.0);
 }
 
+// A message quoting its input: a 3 MB detector name made every heartbeat 3 MB.
+TEST(Heartbeat, AnErrorIsKeptCutToItsStart) {
+  Bus bus("memq://");
+  Heartbeat hb(bus, "tester", "HB_TEST_STATUS", 3600.0);
+  const std::string text = "detector '" + std::string(3'000'000, 'x') + "'";
+  hb.bad_input(text);
+  const std::string kept = hb.snapshot().last_error;
+  EXPECT_EQ(kept, text.substr(0, kMaxErrorChars) + "... (2999011 more characters)");
+}
+
 TEST(Heartbeat, SummaryGivesTheCountsAndTheCountersThatAreNotZero) {
   Bus bus("memq://");
   Heartbeat hb(bus, "tester", "HB_SUMMARY_TEST_STATUS", 3600.0);

@@ -44,7 +44,11 @@ void Heartbeat::count_dropped(int64_t n) {
   dropped_ += n;
 }
 
-void Heartbeat::bad_input(const std::string& what) {
+void Heartbeat::bad_input(const std::string& full_text) {
+  const std::string what = full_text.size() <= kMaxErrorChars
+                               ? full_text
+                               : full_text.substr(0, kMaxErrorChars) + "... (" +
+                                     std::to_string(full_text.size() - kMaxErrorChars) + " more characters)";
   std::lock_guard<std::mutex> l(mutex_);
   ++bad_;
   last_error_ = what;

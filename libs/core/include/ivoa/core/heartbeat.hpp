@@ -3,7 +3,9 @@
 // the counters the launcher and lcm-spy show: messages in and out, inputs
 // dropped for a newer one, bad inputs, latency, and process-specific counts.
 // Bad input is reported here: it is logged (rate-limited), counted, and
-// kept as last_error; the process skips it and goes on.
+// kept as last_error; the process skips it and goes on. The text is cut to
+// kMaxErrorChars, for it may quote the input (a 3 MB detector name made every
+// heartbeat 3 MB).
 #include <cstdint>
 #include <map>
 #include <mutex>
@@ -20,6 +22,8 @@ class process_status_t;
 // bad input: a consumer started a moment before the driver sees a frame or
 // two first, and the state says "waiting for calibration" meanwhile.
 inline constexpr const char* kFramesWithoutCalibration = "frames_without_calibration";
+
+inline constexpr size_t kMaxErrorChars = 1000;
 
 class Heartbeat {
  public:
