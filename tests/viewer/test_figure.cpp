@@ -161,6 +161,11 @@ TEST(ViewerFigure, UndrawableIntrospectionIsNamed) {
   EXPECT_EQ(check_introspection(h).rfind("heatmap of 10x16 patches of 100000 px every ", 0), 0u)
       << check_introspection(h);
   EXPECT_NE(check_introspection(h).find("more than its "), std::string::npos);
+  h = introspection(1);
+  h.rows = h.cols = h.num_cells = 1;
+  h.stride = 100'000;  // one cell passed with any stride, and drawing it asked 30 GB
+  EXPECT_EQ(check_introspection(h).rfind("heatmap of 1x1 patches of 20 px every 100000 px", 0), 0u)
+      << check_introspection(h);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // is waited for at most settle_ms; late parts and old frames are counted.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <vector>
 
 #include "ivoa/viewer/frame_matcher.hpp"
@@ -174,6 +175,24 @@ TEST(ViewerFrameMatcher, EveryFrameModeDrawsTheOldestIncompleteFrameRatherThanDr
   ASSERT_EQ(drawn.size(), 20u);
   for (size_t i = 0; i < drawn.size(); ++i) EXPECT_EQ(drawn[i], static_cast<int64_t>(i + 1));
   EXPECT_EQ(m.skipped(), 0u);
+}
+
+// One frame stamped far ahead stopped the drawing for good; a log played
+// again drew nothing the second time.
+TEST(ViewerFrameMatcher, AClockThatWentBackIsFollowed) {
+  FrameMatcher m(options());
+  m.add_image(100, gray_image(100), 0);
+  ASSERT_EQ(m.take(1)->utime, 100);
+  m.add_image(1'000'000'000'100, gray_image(100), 2);  // 11.6 days ahead
+  ASSERT_EQ(m.take(3)->utime, 1'000'000'000'100);
+  m.add_image(200, gray_image(100), 4);
+  ASSERT_TRUE(m.take(5)) << "the frame after the jump";
+  EXPECT_EQ(m.clock_restarts(), 1u);
+  m.add_image(150, gray_image(100), 6);  // a part a little late is still late
+  EXPECT_FALSE(m.take(7));
+  EXPECT_EQ(m.late(), 1u);
+  m.add_image(INT64_MIN, gray_image(100), 8);  // of any sign
+  EXPECT_EQ(m.take(9)->utime, INT64_MIN);
 }
 
 TEST(ViewerFrameMatcher, OverlaysWithoutTheirImageAreNotDrawn) {

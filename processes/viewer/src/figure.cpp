@@ -1,5 +1,6 @@
 #include "ivoa/viewer/figure.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -130,7 +131,9 @@ std::string check_introspection(const introspection_t& h) {
   // The model's patches lie inside the image: a heatmap reaching past it is not of this image.
   const int64_t width = int64_t{h.cols - 1} * h.stride + h.patch_size;
   const int64_t height = int64_t{h.rows - 1} * h.stride + h.patch_size;
-  if (width > h.image_width || height > h.image_height)
+  // One row or column passes the check above with any stride, and the
+  // heatmap is drawn over cols x stride pixels (a stride of 1e5 asked 30 GB).
+  if (width > h.image_width || height > h.image_height || h.stride > std::max(h.image_width, h.image_height))
     return "heatmap of " + std::to_string(h.rows) + "x" + std::to_string(h.cols) + " patches of " +
            std::to_string(h.patch_size) + " px every " + std::to_string(h.stride) + " px covers " +
            std::to_string(width) + "x" + std::to_string(height) + " px, more than its " +

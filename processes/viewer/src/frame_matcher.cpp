@@ -39,6 +39,13 @@ FrameMatcher::FrameMatcher(MatcherOptions options) : options_(options) {
 
 FrameSet* FrameMatcher::slot(int64_t utime, Part part, double now_ms) {
   last_seen_ms_[part] = now_ms;
+  // Unsigned: utimes far apart, of either sign, do not overflow.
+  if (last_taken_utime_ &&
+      utime<*last_taken_utime_&& static_cast<uint64_t>(*last_taken_utime_) - static_cast<uint64_t>(utime)>
+          kClockWentBackUs) {
+    last_taken_utime_.reset();
+    ++clock_restarts_;
+  }
   if (last_taken_utime_ && utime <= *last_taken_utime_) {
     ++late_;
     return nullptr;

@@ -85,6 +85,8 @@ void ViewerNode::update_drop_count() {
   const uint64_t dropped = matcher_.skipped() + frames_.dropped();
   if (dropped > counted_dropped_) heartbeat_.count_dropped(static_cast<int64_t>(dropped - counted_dropped_));
   counted_dropped_ = dropped;
+  heartbeat_.set_counter("late_parts", static_cast<int64_t>(matcher_.late()));
+  heartbeat_.set_counter("clock_restarts", static_cast<int64_t>(matcher_.clock_restarts()));
 }
 
 void ViewerNode::finish() {

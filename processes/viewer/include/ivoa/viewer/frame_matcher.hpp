@@ -45,12 +45,18 @@ struct MatcherOptions {
   std::array<bool, kNumParts> expected{};
 };
 
+inline constexpr int64_t kClockWentBackUs = 10'000'000;
+
 class FrameMatcher {
  public:
   explicit FrameMatcher(MatcherOptions options = {});
 
   // Each message joins the frame of its utime; `now_ms` is monotonic time.
-  // Parts of frames older than the last one taken are ignored (too late).
+  // Parts of frames older than the last one taken are ignored (too late),
+  // unless more than kClockWentBackUs older: the clock went back (a log
+  // played again, or one frame's time jumped ahead and back), and frames
+  // are taken again from there on. A frame stamped far ahead stopped the
+  // drawing for good.
   void add_image(int64_t utime, image_t left, double now_ms);
   void add_stereo_grid(const obstacle_grid_t& grid, double now_ms);
   void add_depth_grid(const obstacle_grid_t& grid, double now_ms);
@@ -63,6 +69,7 @@ class FrameMatcher {
 
   uint64_t skipped() const { return skipped_; }  // frames with an image never taken
   uint64_t late() const { return late_; }        // parts that came after their frame was drawn
+  uint64_t clock_restarts() const { return clock_restarts_; }
   size_t pending() const { return frames_.size(); }
 
  private:
@@ -76,7 +83,7 @@ class FrameMatcher {
   std::array<double, kNumParts> last_seen_ms_;
   std::optional<int64_t> last_taken_utime_;
   std::optional<double> last_take_ms_;
-  uint64_t skipped_ = 0, late_ = 0;
+  uint64_t skipped_ = 0, late_ = 0, clock_restarts_ = 0;
 };
 
 }  // namespace ivoa::viewer
