@@ -1,3 +1,4 @@
+#include <cstdint>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -134,6 +135,13 @@ TEST(FramePairer, OneDepthFrameFarInTheFutureIsIgnoredNotTheEndOfThePairing) {
   append(out, p.flush());
   EXPECT_EQ(paired(out), 23u);
   EXPECT_EQ(p.counters().stereo_clock.outliers, 1);
+  // as is the farthest (its distance overflowed: counted late, not an outlier)
+  append(out, p.add_depth(INT64_MIN, "wrong clock"));
+  feed(p, out, 2'000'000, 3);
+  append(out, p.flush());
+  EXPECT_EQ(paired(out), 26u);
+  EXPECT_EQ(p.counters().depth_clock.outliers, 2);
+  EXPECT_EQ(p.counters().late_depth, 0);
 }
 
 TEST(FramePairer, AGapInBothStreamsIsFollowed) {

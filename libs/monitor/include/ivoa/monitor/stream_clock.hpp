@@ -56,18 +56,25 @@ class StreamClock {
     event = fmt::format(
         "{} frame at utime {} is {} from its stream's time (utime {}) and the next frame did not "
         "follow it: ignored",
-        stream_, held_->first, seconds(held_->first - *newest_), *newest_);
+        stream_, held_->first, seconds(held_->first, *newest_), *newest_);
     held_.reset();
   }
 
   int epoch() const { return epoch_; }
 
  private:
-  bool near(int64_t a, int64_t b) const { return (a > b ? a - b : b - a) <= jump_us_; }
+  // Unsigned: utimes of opposite sign and far apart (INT64_MIN) do not overflow.
+  bool near(int64_t a, int64_t b) const {
+    const uint64_t apart = a > b ? static_cast<uint64_t>(a) - static_cast<uint64_t>(b)
+                                 : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
+    return apart <= static_cast<uint64_t>(jump_us_);
+  }
 
-  // Signed seconds, cut (not rounded) to a tenth.
-  static std::string seconds(int64_t us) {
-    const std::string s = std::to_string(static_cast<double>(us) / 1e6);
+  // Signed seconds from `from` to `to`, cut (not rounded) to a tenth; in
+  // doubles, so utimes far apart do not overflow.
+  static std::string seconds(int64_t to, int64_t from) {
+    const double us = static_cast<double>(to) - static_cast<double>(from);
+    const std::string s = std::to_string(us / 1e6);
     return (us >= 0 ? "+" : "") + s.substr(0, s.find('.') + 2) + " s";
   }
 
@@ -80,7 +87,7 @@ class StreamClock {
       event = fmt::format(
           "{} stream's time went back {} (utime {} to {}) and stayed: a log played again? Its "
           "frames are paired with the other stream's after its own restart",
-          stream_, seconds(utime - *newest_), *newest_, utime);
+          stream_, seconds(utime, *newest_), *newest_, utime);
       newest_ = utime;
     }
     take(utime, std::move(frame), out);
