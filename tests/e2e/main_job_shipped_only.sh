@@ -27,6 +27,14 @@ usage_error "--scale must be" --scale no-such-scale
 usage_error "--scale must be" --scale no-such-scale --shipped-only
 # The model's patch scale written another way passes the check (the scale's error comes after it).
 usage_error "--scale must be" --scale no-such-scale --shipped-only --patch-scale 1.60
+# Flags checked before anything is recorded (a bad --patch-scale failed
+# only once every session was; a value left out was "$2: unbound variable").
+usage_error "--scale needs a value" --scale
+usage_error "--out needs a value" --out --scale smoke
+usage_error "--patch-scale must be a number" --scale smoke --patch-scale abc --out "$OUT/refused"
+usage_error "--noise-draws must be 0 (off) or 2 to 999" --scale smoke --noise-draws 1000 --out "$OUT/refused"
+usage_error "white space in it is not supported" --scale smoke --out "$OUT/with space"
+[ ! -e "$OUT/refused" ] && [ ! -e "$OUT/with space" ] || { echo "FAILED: a refused run made its folder" >&2; exit 1; }
 # A full run's folder is not overwritten.
 mkdir -p "$OUT/full_run" && echo model > "$OUT/full_run/model_dense.pt"
 usage_error "holds a full run" --scale smoke --shipped-only --out "$OUT/full_run"
@@ -53,4 +61,14 @@ assert sorted(s["session"] for s in ev["sessions"]) == logs and {s["split"] for 
 assert models["jppc_eval_shipped_jppc"]["overall"]["n"] == ev["samples"] > 0
 print(f"shipped model alone on {len(logs)} test sessions, {ev['samples']} cells")
 PY
+# A rerun keeps whole logs and records again one an earlier run left cut
+# short (it was kept as "already recorded").
+cut=$OUT/run/logs/polished_lobby_s31.lcmlog
+truncate -s $(($(stat -c %s "$cut") / 2)) "$cut"
+"$JOB" --scale smoke --shipped-only --out "$OUT/run" > "$OUT/rerun.log" 2>&1 ||
+  { echo "FAILED: the rerun exited non-zero" >&2; tail -40 "$OUT/rerun.log" >&2; exit 1; }
+grep -q "indoor_office_s31: already recorded" "$OUT/rerun.log" &&
+  grep -q "polished_lobby_s31: the log of an earlier run is not 6 whole frames: recorded again" "$OUT/rerun.log" &&
+  "${IVOA_BUILD_DIR:?}/bin/ivoa-log-check" "$cut" --expect STEREO_IMAGES=6 > /dev/null ||
+  { echo "FAILED: the cut log was kept, or a whole one recorded again" >&2; cat "$OUT/rerun.log" >&2; exit 1; }
 echo "OK: main job --shipped-only (smoke) $(grep -o 'Main job done in [0-9ms]*' "$OUT/main_job.log")"

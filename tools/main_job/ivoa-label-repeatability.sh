@@ -22,7 +22,11 @@ seed=31
 frames=60
 detector=jppc
 out=$ROOT/out/label-repeatability
+usage_error() { echo "ivoa-label-repeatability: $*" >&2; exit 2; }
 while [ $# -gt 0 ]; do
+  case "$1" in --realisations|--seed|--frames|--scenes|--detector|--out)
+    [ $# -ge 2 ] && [ -n "$2" ] && [ "${2#--}" = "$2" ] || usage_error "$1 needs a value (see --help)" ;;
+  esac
   case "$1" in
     --realisations) realisations=$2; shift 2 ;;
     --seed) seed=$2; shift 2 ;;
@@ -37,13 +41,28 @@ done
 for scene in "${SCENE_NAMES[@]}"; do
   [ -f "$ROOT/libs/sim/scenes/$scene.yaml" ] || { echo "ivoa-label-repeatability: no scene '$scene' in libs/sim/scenes" >&2; exit 2; }
 done
-[ "$realisations" -ge 2 ] 2>/dev/null || { echo "ivoa-label-repeatability: --realisations must be 2 or more" >&2; exit 2; }
+# Plain decimal numbers only: a value is used in shell arithmetic, which
+# would run a command written into it.
+[[ $realisations =~ ^[0-9]{1,3}$ ]] && [ "$realisations" -ge 2 ] ||
+  usage_error "--realisations must be 2 to 999, not '$realisations'"
+[[ $seed =~ ^[0-9]{1,6}$ ]] || usage_error "--seed must be a whole number 0 to 999999, not '$seed'"
+[[ $frames =~ ^[0-9]{1,6}$ ]] && [ "$frames" -ge 1 ] ||
+  usage_error "--frames must be a whole number 1 to 999999, not '$frames' (0 would record without end)"
+case "$detector" in jppc|dense) ;; *) usage_error "--detector must be jppc or dense, not '$detector'" ;; esac
+[ ${#SCENE_NAMES[@]} -gt 0 ] || usage_error "--scenes names no scene"
 [ -x "$BIN/ivoa-sim-driver" ] || { echo "ivoa-label-repeatability: no build at $BIN (run ./tools/run-main-job.sh once)" >&2; exit 3; }
 
 # The main job's session timing (RATE 2, a fixed start time per seed), so
 # noise seed 0 reproduces its test sessions label for label.
 utime=$((1700000000000000 + seed * 10000000000))
 mkdir -p "$out"
+# Sessions labelled before are kept only if labelled with these settings.
+settings="seed $seed, $frames frames, $detector"
+if [ -f "$out/settings.txt" ] && [ "$(cat "$out/settings.txt")" != "$settings" ]; then
+  echo "  $out was labelled with $(cat "$out/settings.txt"): labelling again with $settings"
+  rm -rf "$out"/data_noise*
+fi
+echo "$settings" > "$out/settings.txt"
 datasets=()
 for ((n = 0; n < realisations; n++)); do
   data=$out/data_noise$n
@@ -55,8 +74,8 @@ for ((n = 0; n < realisations; n++)); do
     LCM_DEFAULT_URL=memq:// "$BIN/ivoa-sim-driver" --log-level warn --scene "$ROOT/libs/sim/scenes/$scene.yaml" \
       --seed "$seed" --rate 2 --frames "$frames" --as-fast-as-possible --start-utime "$utime" --noise-seed "$n" \
       --log "$log"
-    "$BIN/ivoa-dataset" --log-level warn build --out "$data" --labels "$detector" --views 1 --session "$name" "$log" \
-      2>/dev/null | tail -1 | sed "s/^/  noise seed $n: /"
+    "$BIN/ivoa-dataset" --log-level warn build --out "$data" --labels "$detector" --views 1 --session "$name" "$log" |
+      tail -1 | sed "s/^/  noise seed $n: /"
     rm -f "$log"
   done
 done

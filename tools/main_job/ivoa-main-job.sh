@@ -60,7 +60,11 @@ out=""
 live=0
 shipped_only=0
 noise_draws=0
+usage_error() { echo "ivoa-main-job: $*" >&2; exit 2; }
 while [ $# -gt 0 ]; do
+  case "$1" in --scale|--views|--patch-scale|--out|--noise-draws)
+    [ $# -ge 2 ] && [ -n "$2" ] && [ "${2#--}" = "$2" ] || usage_error "$1 needs a value (see --help)" ;;
+  esac
   case "$1" in
     --scale) scale=$2; shift 2 ;;
     --views) views=$2; shift 2 ;;
@@ -74,8 +78,11 @@ while [ $# -gt 0 ]; do
   esac
 done
 case "$views" in 1|2) ;; *) echo "ivoa-main-job: --views must be 1 or 2, not '$views'" >&2; exit 2 ;; esac
-case "$noise_draws" in 0|[2-9]|[1-9][0-9]) ;;
-  *) echo "ivoa-main-job: --noise-draws must be 0 (off) or 2 or more, not '$noise_draws'" >&2; exit 2 ;; esac
+[[ $noise_draws =~ ^(0|[2-9]|[1-9][0-9]{1,2})$ ]] ||
+  usage_error "--noise-draws must be 0 (off) or 2 to 999, not '$noise_draws'"
+# Checked here, not by ivoa-dataset once every session is recorded.
+[[ $patch_scale =~ ^[0-9]+(\.[0-9]+)?$ ]] ||
+  usage_error "--patch-scale must be a number, 0 or more (0: the paper's fixed squares), not '$patch_scale'"
 if [ $shipped_only = 1 ]; then
   [ $live = 0 ] || { echo "ivoa-main-job: --live and --shipped-only are two different runs; give one" >&2; exit 2; }
   if ! fits_shipped; then
@@ -95,6 +102,8 @@ if [ $shipped_only = 1 ]; then
 else
   out=${out:-$ROOT/out/main-job-$scale}
 fi
+# The process commands of sim.pmd take the log and figure paths as words.
+case "$out" in *[[:space:]]*) usage_error "the output folder '$out': a path with white space in it is not supported" ;; esac
 
 # Scene files, and the sessions of each split per scale.
 SCENE_NAMES=(indoor_office home corridor polished_lobby warehouse outdoor_campus sidewalk wet_parking_lot night_plaza)
@@ -116,6 +125,8 @@ case "$scale" in
     STEPS=14000; BATCH=128; KEEP_LAST=0 ;;
   *) echo "ivoa-main-job: --scale must be default, full or smoke" >&2; exit 2 ;;
 esac
+# ./tools/run-main-job.sh checks the flags so, before it installs and builds.
+[ "${IVOA_MAIN_JOB_CHECK_FLAGS:-0}" = 1 ] && exit 0
 # KEEP_LAST: three validation sessions of 24 frames cannot rank checkpoints
 # (docs/accuracy.md, "What remains": over training seeds the two choices are even), so
 # the smaller scales keep the final model, the simpler rule; the full scale's
@@ -156,7 +167,13 @@ in_lcm_net() {
 record_session() {
   local worker=$1 name=$2 scene=$3 seed=$4 frames=$5
   local log=$out/logs/$name.lcmlog
-  [ -s "$log" ] && { echo "  $name: already recorded"; return; }
+  # A log of an earlier run is kept only if whole and of this scale's frames
+  # (a run stopped part way, or --scale smoke's 8 frames, left another).
+  if [ -s "$log" ] && "$BIN/ivoa-log-check" "$log" --expect STEREO_IMAGES="$frames" >/dev/null 2>&1; then
+    echo "  $name: already recorded"
+    return
+  fi
+  [ -e "$log" ] && echo "  $name: the log of an earlier run is not $frames whole frames: recorded again"
   rm -f "$log" "$log.json"
   # A fixed start time per seed: the same session is the same log bytes.
   local utime=$((1700000000000000 + seed * 10000000000))
