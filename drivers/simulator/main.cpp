@@ -1,9 +1,11 @@
 // ivoa-sim-driver: the simulated robot. Publishes STEREO_IMAGES,
 // DEPTH_IMAGE, RIG_CALIBRATION and SIM_GROUND_TRUTH exactly as the real
 // drivers would, from a scene file and a seed (one seed + scene = one session).
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -55,11 +57,13 @@ void add_session_options(CLI::App& app, CommandLine& cl) {
   auto& config = cl.driver;
   app.add_option("--scene", config.scene_file, "scene file (YAML, see libs/sim/scenes)")->capture_default_str();
   app.add_option("--seed", config.seed, "scene and trajectory seed (one seed + scene = one session)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::seed_number());
   app.add_option("--noise-seed", cl.noise_seed,
                  "sensor noise realisation: 0 keys the noise by frame alone; another value, same session with other "
                  "noise")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::seed_number());
   // A frame every 100 s at the slowest: the trajectory is integrated up to each frame's time.
   app.add_option("--rate", config.rate_hz, "frames per second (0.01 to 1000)")
       ->capture_default_str()
@@ -90,21 +94,51 @@ void add_output_options(CLI::App& app, CommandLine& cl) {
       ->check(ivoa::finite_number())
       ->check(ivoa::number_in(-1000.0, 1000.0));
   app.add_option("--calibration-period", config.calibration_period_s,
-                 "seconds between RIG_CALIBRATION messages (0: with every frame)")
+                 "seconds between RIG_CALIBRATION messages (0: with every frame; at most a day)")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::number_in(0, 86400));
   app.add_flag("--no-truth", cl.no_truth, "do not publish SIM_GROUND_TRUTH");
   app.add_option("--log", config.log_file,
                  "also write every message to this LCM log, timestamped by message utime "
                  "(bit-identical for the same session)");
   app.add_option("--stereo-channel", config.stereo_channel, "out: stereo pairs (ivoa.stereo_image_t)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::channel_name());
   app.add_option("--depth-channel", config.depth_channel, "out: depth images (ivoa.depth_image_t)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::channel_name());
   app.add_option("--rig-channel", config.rig_channel, "out: rig calibration (ivoa.rig_calibration_t)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::channel_name());
   app.add_option("--truth-channel", config.truth_channel, "out: what each left pixel shows (ivoa.sim_ground_truth_t)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::channel_name());
+}
+
+// An output (--log, --save-rig, a file:// --lcm-url to write) that is an
+// input (--scene, --rig) or another output: "" if none. The scene file was
+// replaced by a log.
+std::string output_clash(const CommandLine& cl, const std::string& lcm_url) {
+  namespace fs = std::filesystem;
+  const std::string url_log = lcm_url.rfind("file://", 0) == 0 && ivoa::replayed_log(lcm_url).empty()
+                                  ? lcm_url.substr(7, lcm_url.find('?') - 7)
+                                  : "";
+  const std::vector<std::pair<std::string, std::string>> outputs{
+      {"--log", cl.driver.log_file}, {"--save-rig", cl.save_rig}, {"--lcm-url", url_log}};
+  std::vector<std::string> inputs{cl.driver.scene_file};
+  if (!cl.rig_file.empty()) inputs.push_back(cl.rig_file);
+  std::error_code error;
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    const auto& [flag, path] = outputs[i];
+    if (path.empty()) continue;
+    if (const std::string input = ivoa::same_file_among(path, inputs); !input.empty())
+      return flag + " " + path + " is the input " + input + ": it would be written over";
+    for (size_t j = i + 1; j < outputs.size(); ++j)
+      if (!outputs[j].second.empty() &&
+          fs::weakly_canonical(path, error) == fs::weakly_canonical(outputs[j].second, error))
+        return flag + " and " + outputs[j].first + " name the same file " + path;
+  }
+  return "";
 }
 
 // The rig to render with (--rig, else the built-in one), written to --save-rig
@@ -147,7 +181,15 @@ int drive(const ivoa::sim::SimDriverConfig& config, const ivoa::sim::SimulatorCo
   }
   spdlog::info("scene {} seed {} at {} Hz ({}), start utime {}, publishing on {}", config.scene_file, config.seed,
                config.rate_hz, config.realtime ? "real time" : "as fast as possible", driver->start_utime(), bus.url());
-  const int64_t frames = driver->run();
+  int64_t frames = 0;
+  try {
+    frames = driver->run();
+  } catch (const std::runtime_error& e) {  // the --log cannot be written
+    spdlog::error("{}", e.what());
+    heartbeat.set_state("failed");
+    heartbeat.publish_now();
+    return ivoa::kExitIoError;
+  }
   heartbeat.set_state("stopped");
   heartbeat.publish_now();
   // Frames --realtime skipped because rendering fell behind are part of the session: said here too.
@@ -155,6 +197,10 @@ int drive(const ivoa::sim::SimDriverConfig& config, const ivoa::sim::SimulatorCo
   spdlog::info("published {} frames{}{}", frames,
                skipped > 0 ? fmt::format(", skipped {} that rendering was late for (--realtime)", skipped) : "",
                ivoa::stop_requested() ? " (stopped by signal)" : "");
+  if (driver->publish_failures() > 0) {
+    spdlog::error("{} messages were refused by LCM, not published", driver->publish_failures());
+    return ivoa::kExitFailure;
+  }
   return ivoa::kExitOk;
 }
 
@@ -177,6 +223,10 @@ int main(int argc, char** argv) {
   cl.driver.publish_truth = !cl.no_truth;
   cl.driver.pixelformat = kPixelFormats.at(cl.pixel_format);
 
+  if (const std::string clash = output_clash(cl, common.lcm_url); !clash.empty()) {
+    spdlog::error("{}", clash);
+    return ivoa::kExitUsage;
+  }
   ivoa::sim::SimulatorConfig sim_config;
   sim_config.noise_seed = cl.noise_seed;
   if (const int code = prepare_rig(cl, sim_config); code >= 0) return code;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -51,7 +52,10 @@ void SimDriver::send(const std::string& channel, Msg& msg, int64_t utime) {
   set_counts(msg);
   std::vector<uint8_t> buffer(static_cast<size_t>(msg.getEncodedSize()));
   msg.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
-  bus_.publish_raw(channel, buffer.data(), buffer.size());
+  if (!bus_.publish_raw(channel, buffer.data(), buffer.size())) {
+    if (publish_failures_++ == 0) spdlog::error("LCM refused a message on {}: not published", channel);
+    if (heartbeat_) heartbeat_->add_to_counter("publish_failures", 1);
+  }
   if (log_) {
     lcm::LogEvent event;
     event.eventnum = 0;
@@ -59,7 +63,10 @@ void SimDriver::send(const std::string& channel, Msg& msg, int64_t utime) {
     event.channel = channel;
     event.datalen = static_cast<int32_t>(buffer.size());
     event.data = buffer.data();
-    log_->writeEvent(&event);
+    // Flushed per message, so a full disk is found at the frame it hits.
+    if (log_->writeEvent(&event) != 0 || std::fflush(log_->getFilePtr()) != 0)
+      throw std::runtime_error("cannot write the LCM log " + config_.log_file + " (disk full?): stopped at utime " +
+                               std::to_string(utime));
   }
   if (heartbeat_) heartbeat_->count_out();
 }

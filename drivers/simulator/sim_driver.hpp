@@ -49,10 +49,14 @@ class SimDriver {
   ~SimDriver();
 
   // Publishes frames until the frame count or duration is reached or a stop
-  // is requested. Returns the number of frames published.
+  // is requested. Returns the number of frames published. Throws
+  // std::runtime_error when the --log cannot be written (disk full).
   int64_t run();
   // Renders and publishes frame `index` (session time index / rate).
   void publish_frame(int64_t index);
+  // Messages LCM refused (a channel name it does not take, a file:// output
+  // it cannot write): not published, counted and said at the end.
+  int64_t publish_failures() const { return publish_failures_; }
   const Simulator& simulator() const { return simulator_; }
   int64_t start_utime() const { return start_utime_; }
 
@@ -72,6 +76,7 @@ class SimDriver {
   int64_t start_utime_ = 0;
   int64_t seq_ = 0;
   int64_t last_calibration_utime_ = 0;
+  int64_t publish_failures_ = 0;
 };
 
 }  // namespace ivoa::sim

@@ -84,10 +84,12 @@ void add_channel_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
       ->group(g);
   app.add_option("--depth-out-channel", o.depth_out_channel, "out: the depth grid (ivoa.obstacle_grid_t)")
       ->capture_default_str()
-      ->group(g);
+      ->group(g)
+      ->check(ivoa::channel_name());
   app.add_option("--labels-out-channel", o.labels_out_channel, "out: TP/TN/FP/FN labels (ivoa.introspection_labels_t)")
       ->capture_default_str()
-      ->group(g);
+      ->group(g)
+      ->check(ivoa::channel_name());
 }
 
 // The heights are compared once both are parsed (the grid options hold the

@@ -93,9 +93,11 @@ void MonitorNode::publish(std::vector<monitor::PipelineOutcome> outcomes) {
       spdlog::debug("stereo frame {} has no depth frame within the pairing tolerance", o.stereo_utime);
       continue;
     }
-    bus_.publish(options_.depth_out_channel, o.labeled->depth_grid);
-    bus_.publish(options_.labels_out_channel, o.labeled->labels);
-    heartbeat_.count_out(2);
+    // Only what LCM took counts as out; the rest is counted as refused.
+    const int published = int{bus_.publish(options_.depth_out_channel, o.labeled->depth_grid)} +
+                          int{bus_.publish(options_.labels_out_channel, o.labeled->labels)};
+    heartbeat_.count_out(published);
+    if (published < 2) heartbeat_.add_to_counter("publish_failures", 2 - published);
     heartbeat_.latency(o.labeled->monitor_ms);
     for (int8_t l : o.labeled->labels.label) labelled_cells_ += l != introspection_labels_t::LABEL_NONE;
   }

@@ -324,8 +324,8 @@ void IntrospectionNode::process(const Frame& frame) {
       make_introspection_message(*model_, h, frame.msg.utime, left.cols, left.rows, grid ? &*grid : nullptr,
                                  predictions, mc_passes_, grid_is_this_frames);
   msg.compute_ms = monotonic_ms() - frame.received_ms;
-  bus_.publish(options_.out_channel, msg);
-  heartbeat_.count_out();
+  if (bus_.publish(options_.out_channel, msg)) heartbeat_.count_out();
+  else heartbeat_.add_to_counter("publish_failures", 1);  // not counted as out
   heartbeat_.latency(msg.compute_ms);
   ++frames_done_;
 }

@@ -54,10 +54,12 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
       ->check(CLI::Range(1, 1000));
   app.add_option("--threshold", config.uncertainty_threshold,
                  "announce a prediction when its class variance is at most this (< 0: the model's value)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::finite_number());  // NaN fell back to the model's gate, inf announced everything
   app.add_option("--verdict-threshold", config.verdict_uncertainty_threshold,
                  "gate of the predictions given the detector's verdict (variance of P(wrong)); < 0: the model's")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::finite_number());
   app.add_option("--grid-wait-ms", cl.grid_wait_ms,
                  "after the CNN, how long to wait for the detector's grid of the frame (its verdicts)")
       ->capture_default_str()
@@ -77,7 +79,7 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
       ->check(CLI::IsMember({"cpu", "cuda"}));
   app.add_option("--seed", config.seed, "dropout masks (0 = from the clock)")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::seed_number());
   app.add_option("--warm-up", cl.warm_up,
                  "before listening, run the model once on a blank frame of this size (WxH, the camera's), so the "
                  "first real frame is not delayed by LibTorch's set-up; none: skip")
@@ -97,7 +99,8 @@ void add_channel_options(CLI::App& app, ivoa::IntrospectionNodeOptions& options)
       ->group("Channels");
   app.add_option("--out-channel", options.out_channel, "out: predictions (ivoa.introspection_t)")
       ->capture_default_str()
-      ->group("Channels");
+      ->group("Channels")
+      ->check(ivoa::channel_name());
   app.add_option("--calibration-channel", options.calibration_channel,
                  "rig calibration (two-view models warp the right image with it)")
       ->capture_default_str()

@@ -41,7 +41,8 @@ void add_detector_flags(CLI::App& app, DetectorFlags& f) {
       ->group("Channels");
   app.add_option("--output-channel", o.output_channel, "out: obstacle grid (ivoa.obstacle_grid_t)")
       ->capture_default_str()
-      ->group("Channels");
+      ->group("Channels")
+      ->check(ivoa::channel_name());
   app.add_option("--max-frames", o.max_frames, "exit after publishing this many grids (0: run until stopped)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());

@@ -21,6 +21,14 @@ expect_exit() {
 expect_exit 3 "/nonexistent/rig.yaml" "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig /nonexistent/rig.yaml
 expect_exit 2 "--output" "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --output jpeg
 expect_exit 0 "--packet-size" "$DRIVER" --help
+# Values the camera took for others without a word: NaN gain (auto gain),
+# 1e300 us (exposure 0), a width alone (ignored), a channel LCM refuses.
+expect_exit 2 "--gain: must be a number" "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --gain nan
+expect_exit 2 "--exposure-us: must be in" "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --exposure-us 1e300
+expect_exit 2 "--width and --height set the region together" \
+  "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --width 320
+expect_exit 2 "--stereo-channel: must be a channel name of 1 to 63 characters" \
+  "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --stereo-channel "$(printf 'S%.0s' {1..70})"
 expect_exit 1 "cameras not ready after 1 s \(left NOT open, right NOT open\)" \
   "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --startup-timeout 1
 

@@ -133,6 +133,35 @@ TEST(SimDriver, ExecutableRunsAndFailsCleanly) {
                             "--depth-offset-ms 1e30", "--start-utime 9223372036854775000"})
     EXPECT_EQ(WEXITSTATUS(std::system((driver + " " + flags + " --frames 1 --log-level off 2>/dev/null").c_str())), 2)
         << flags;
+  // Seeds CLI11 wrapped or saturated (each ran as seed 2^64-1), and a period
+  // whose microseconds overflowed into "with every frame".
+  // And channels LCM refuses (it said so on stderr; the driver reported the frames published).
+  const std::string too_long = "--stereo-channel " + std::string(64, 'S');
+  for (const std::string& flags :
+       {std::string("--seed=-1"), std::string("--seed 99999999999999999999"), std::string("--noise-seed=-2"),
+        std::string("--seed 1e3"), std::string("--calibration-period 1e13"), too_long,
+        std::string("--status-channel ''")})
+    EXPECT_EQ(WEXITSTATUS(std::system((driver + " " + flags + " --frames 1 --log-level off 2>/dev/null").c_str())), 2)
+        << flags;
+}
+
+// The scene file was replaced by a log, and a log written twice over itself
+// (--log and a file:// --lcm-url) was damaged; a full disk passed as a log.
+TEST(SimDriver, OutputsThatWouldLoseDataAreRefused) {
+  test::TempDir dir;
+  const std::string scene = dir.file("scene.yaml");
+  std::ofstream(scene) << read_file(std::string(IVOA_SIM_SCENES_DIR) + "/warehouse.yaml");
+  const std::string before = read_file(scene);
+  const std::string driver = std::string(IVOA_SIM_DRIVER_PATH) + " --as-fast-as-possible --frames 1 --scene " + scene;
+  const auto exit_code = [&](const std::string& flags) {
+    return WEXITSTATUS(std::system((driver + " " + flags + " --log-level off 2>/dev/null").c_str()));
+  };
+  EXPECT_EQ(exit_code("--lcm-url memq:// --log " + scene), 2);
+  EXPECT_EQ(exit_code("--lcm-url memq:// --save-rig " + scene), 2);
+  EXPECT_EQ(exit_code("--lcm-url 'file://" + scene + "?mode=w'"), 2);
+  EXPECT_EQ(read_file(scene), before) << "the scene file was written over";
+  EXPECT_EQ(exit_code("--log " + dir.file("s.lcmlog") + " --lcm-url 'file://" + dir.file("s.lcmlog") + "?mode=w'"), 2);
+  EXPECT_EQ(exit_code("--lcm-url memq:// --log /dev/full"), 4);
 }
 
 }  // namespace

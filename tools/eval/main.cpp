@@ -410,7 +410,7 @@ void add_options(CLI::App& app, Options& o) {
   app.add_option("--threads", o.inference.threads, "LibTorch threads")->capture_default_str()->check(number_in(1, 256));
   app.add_option("--seed", o.inference.seed, "dropout masks (0: from the clock, a new draw each run)")
       ->capture_default_str()
-      ->check(non_negative_number());
+      ->check(ivoa::seed_number());
 }
 
 // The figures of an earlier run into the same --out would pass for this

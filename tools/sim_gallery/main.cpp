@@ -53,7 +53,7 @@ struct GalleryOptions {
 
 void add_gallery_options(CLI::App& app, GalleryOptions& o) {
   app.add_option("--scene", o.scenes, "scene files (default: every shipped scene)");
-  app.add_option("--seed", o.seed, "scene and trajectory seed")->capture_default_str();
+  app.add_option("--seed", o.seed, "scene and trajectory seed")->capture_default_str()->check(ivoa::seed_number());
   app.add_option("--output", o.output, "PNG to write")->capture_default_str();
   app.add_option("--tile-width", o.tile_width, "width of each picture in pixels")
       ->capture_default_str()

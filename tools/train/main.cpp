@@ -100,7 +100,9 @@ void add_model_options(CLI::App& app, TrainCommandLine& cl) {
                  "largest per-pixel Gaussian noise sigma the augmentation adds (on [0, 1]; 0: none)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
-  app.add_option("--seed", c.seed, "initial weights, batch draws, augmentation and dropout")->capture_default_str();
+  app.add_option("--seed", c.seed, "initial weights, batch draws, augmentation and dropout")
+      ->capture_default_str()
+      ->check(ivoa::seed_number());
   app.add_option("--threads", c.threads, "LibTorch threads")->capture_default_str()->check(ivoa::positive_number());
   app.add_option("--device", c.device, "cpu or cuda")->capture_default_str()->check(CLI::IsMember({"cpu", "cuda"}));
 }

@@ -61,12 +61,15 @@ void add_camera_options(CLI::App& app, Flags& f) {
       ->capture_default_str()
       ->check(ivoa::number_in(0.1, 500.0))
       ->group(g);
+  // Bounded: the camera's int conversion made 1e300 us an exposure of 0, and
+  // a NaN gain turned on auto gain without a word.
   app.add_option("--exposure-us", c.exposure_us, "fixed exposure, microseconds (0 = continuous auto exposure)")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number())
+      ->check(ivoa::number_in(0, 1e8))
       ->group(g);
   app.add_option("--gain", c.gain, "fixed gain in camera units, dB on FLIR (negative = continuous auto gain)")
       ->capture_default_str()
+      ->check(ivoa::number_in(-1e3, 1e3))
       ->group(g);
   app.add_option("--trigger", c.trigger, "none (free-running), software, or a hardware line such as Line0")
       ->capture_default_str()
@@ -123,11 +126,11 @@ void add_driver_options(CLI::App& app, Flags& f) {
       ->group(g);
   app.add_option("--reconnect-initial", d.worker.backoff.initial_s, "first wait between reopen attempts, seconds")
       ->capture_default_str()
-      ->check(ivoa::positive_number())
+      ->check(ivoa::number_in(0.001, 3600))
       ->group(g);
   app.add_option("--reconnect-max", d.worker.backoff.max_s, "longest wait between reopen attempts, seconds")
       ->capture_default_str()
-      ->check(ivoa::positive_number())
+      ->check(ivoa::number_in(0.001, 3600))
       ->group(g);
   app.add_option("--startup-timeout", d.startup_timeout_s,
                  "exit with an error if a camera has not opened after this many seconds (0 = wait forever)")
@@ -136,8 +139,12 @@ void add_driver_options(CLI::App& app, Flags& f) {
       ->group(g);
   app.add_option("--stereo-channel", d.stereo_channel, "channel for ivoa.stereo_image_t")
       ->capture_default_str()
-      ->group(g);
-  app.add_option("--rig-channel", d.rig_channel, "channel for ivoa.rig_calibration_t")->capture_default_str()->group(g);
+      ->group(g)
+      ->check(ivoa::channel_name());
+  app.add_option("--rig-channel", d.rig_channel, "channel for ivoa.rig_calibration_t")
+      ->capture_default_str()
+      ->group(g)
+      ->check(ivoa::channel_name());
   app.add_option("--rig-rate", d.rig_rate_hz, "RIG_CALIBRATION publications per second")
       ->capture_default_str()
       ->check(ivoa::number_in(1.0, 100.0))
@@ -166,6 +173,15 @@ int main(int argc, char** argv) {
   add_options(app, f);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("aravis_stereo", f.common.log_level);
+  // The region is set whole or not at all: a width alone was ignored.
+  const auto& c = f.camera;
+  if ((c.width > 0) != (c.height > 0) || ((c.offset_x > 0 || c.offset_y > 0) && c.width == 0)) {
+    spdlog::error(
+        "--width and --height set the region together, and --offset-x/--offset-y need them "
+        "(given: {}x{} at {}, {})",
+        c.width, c.height, c.offset_x, c.offset_y);
+    return ivoa::kExitUsage;
+  }
 
   f.driver.output = *parse_output_format(f.output);
   f.driver.frame_rate_hz = f.camera.frame_rate_hz;

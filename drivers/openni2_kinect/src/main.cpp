@@ -62,9 +62,12 @@ void add_options(CLI::App& app, Flags& f) {
   app.add_option("--frame-timeout", f.frame_timeout_s, "exit with an error after this many seconds without depth")
       ->capture_default_str()
       ->check(ivoa::positive_number());
-  app.add_option("--depth-channel", f.depth_channel, "channel for ivoa.depth_image_t")->capture_default_str();
+  app.add_option("--depth-channel", f.depth_channel, "channel for ivoa.depth_image_t")
+      ->capture_default_str()
+      ->check(ivoa::channel_name());
   app.add_option("--color-channel", f.color_channel, "channel for the colour image (ivoa.image_t)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ivoa::channel_name());
   app.add_option("--color-format", f.color_format, "colour image wire format")
       ->capture_default_str()
       ->check(CLI::IsMember({"rgb", "jpeg"}));

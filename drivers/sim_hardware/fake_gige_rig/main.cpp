@@ -73,7 +73,8 @@ void add_camera_options(CLI::App& app, Flags& f) {
   app.add_option("--packet-loss", f.packet_loss, "fraction of GVSP packets dropped (the fake never resends)")
       ->capture_default_str()
       ->check(ivoa::number_in(0.0, 1.0));
-  app.add_option("--genicam", f.genicam, "custom GenICam XML for both cameras (default: Aravis' fake camera)");
+  app.add_option("--genicam", f.genicam, "custom GenICam XML for both cameras (default: Aravis' fake camera)")
+      ->check(CLI::ExistingFile);  // Aravis served nothing for a missing one, saying "serving"
   app.add_option("--power-cycled", f.power_cycled, "the camera SIGUSR1/SIGUSR2 power off/on")
       ->capture_default_str()
       ->check(CLI::IsMember({"left", "right"}));

@@ -1,8 +1,11 @@
 #include "ivoa/core/flag_checks.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
+
+#include "ivoa/core/channels.hpp"
 
 namespace ivoa {
 namespace {
@@ -63,6 +66,28 @@ CLI::Validator number_in(double lo, double hi) {
             text, [lo, hi](double v) { return v >= lo && v <= hi; }, ("must be in " + range).c_str());
       },
       "NUMBER in " + range);
+}
+
+const CLI::Validator& seed_number() {
+  static const CLI::Validator check(
+      [](std::string& text) {
+        const bool digits = !text.empty() && text.size() <= 18 &&
+                            std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+        return digits ? std::string() : "must be a whole number 0 to 999999999999999999, not " + text;
+      },
+      "SEED");
+  return check;
+}
+
+const CLI::Validator& channel_name() {
+  static const CLI::Validator check(
+      [](std::string& text) {
+        if (!text.empty() && text.size() <= channels::kMaxChannelLength) return std::string();
+        return "must be a channel name of 1 to " + std::to_string(channels::kMaxChannelLength) +
+               " characters (LCM's limit), not " + std::to_string(text.size()) + " characters";
+      },
+      "CHANNEL");
+  return check;
 }
 
 const CLI::Validator& odd_positive_integer() {

@@ -14,6 +14,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/heartbeat.hpp"
 #include "ivoa/core/stop_signal.hpp"
 
@@ -30,7 +31,8 @@ void add_status_channel_option(CLI::App& app, std::string& channel) {
   app.add_option("--status-channel", channel, "out: heartbeat (ivoa.process_status_t)")
       ->capture_default_str()
       ->envname(kStatusChannelEnv)
-      ->group("Channels");
+      ->group("Channels")
+      ->check(ivoa::channel_name());
 }
 
 void add_offline_options(CLI::App& app, CommonOptions& options) {

@@ -16,6 +16,14 @@ const CLI::Validator& non_negative_number();
 // A number in [lo, hi] (help: "NUMBER in [lo, hi]"). CLI::Range lets NaN
 // through, and names its bounds with six decimals.
 CLI::Validator number_in(double lo, double hi);
+// A seed: decimal digits, 0 to 999999999999999999 (help: SEED). CLI11
+// wraps "-1" and saturates a 20-digit number into an unsigned flag, so
+// different seeds ran as the same session.
+const CLI::Validator& seed_number();
+// A channel to publish on: 1 to 63 characters, LCM's limit (help: CHANNEL).
+// LCM refused a longer one with a line on stderr, and the process counted
+// every message as published.
+const CLI::Validator& channel_name();
 // A whole number >= 1 that is odd, e.g. a filter window (help: ODD).
 const CLI::Validator& odd_positive_integer();
 
