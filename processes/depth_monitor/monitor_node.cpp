@@ -41,6 +41,7 @@ void MonitorNode::on_calibration(const rig_calibration_t& msg) {
     if (pipeline_) {
       spdlog::info("rig calibration changed: rebuilding the monitor");
       publish(pipeline_->flush());
+      earlier_pipelines_ += pipeline_->counters();
     }
     pipeline_ = std::make_unique<monitor::LabelingPipeline>(rig, options_.grid, options_.monitor, options_.pairing);
     calibration_bytes_ = std::move(bytes);
@@ -106,7 +107,8 @@ void MonitorNode::publish(std::vector<monitor::PipelineOutcome> outcomes) {
 
 void MonitorNode::update_counters() {
   if (!pipeline_) return;
-  const auto& c = pipeline_->counters();
+  monitor::PairingCounters c = earlier_pipelines_;  // the counts of the whole run
+  c += pipeline_->counters();
   heartbeat_.set_counter("frames_labelled", c.paired);
   heartbeat_.set_counter("stereo_unmatched", unmatched_);
   heartbeat_.set_counter("stereo_duplicates", c.duplicate_stereo);

@@ -98,6 +98,22 @@ TEST(MonitorNode, InputsBeforeTheCalibrationAreCountedApartFromBadInput) {
   EXPECT_EQ(f.heartbeat.snapshot().state, "running");
 }
 
+// A new calibration rebuilds the monitor: its counts went back to 0 (the
+// summary said 2 frames labelled of 4).
+TEST(MonitorNode, CountsAreOfTheWholeRunAcrossACalibrationChange) {
+  NodeFixture f;
+  f.send_calibration();
+  const cv::Mat floor = test::render_depth(f.rig, {});
+  f.send_depth(100'000, floor);
+  f.send_stereo(100'000, 0);
+  f.rig.rig_name = "recalibrated";
+  f.send_calibration();
+  f.send_depth(200'000, floor);
+  f.send_stereo(200'000, 0);
+  EXPECT_EQ(f.labels.size(), 2u);
+  EXPECT_EQ(f.heartbeat.counter("frames_labelled"), 2);
+}
+
 // Depth frames lost on the way (seq gaps) are counted, as the detector does.
 TEST(MonitorNode, DepthFramesThatNeverArrivedAreCounted) {
   NodeFixture f;

@@ -41,6 +41,16 @@ struct PairingCounters {
   int64_t duplicate_depth = 0;              // same utime as a buffered depth frame: ignored
   int64_t late_depth = 0;                   // older than a depth frame already used: ignored
   ClockCounters depth_clock, stereo_clock;  // jumps: outliers ignored, restarts followed
+
+  // Another pairer's counts added (a process that rebuilt its pairer for a
+  // new calibration reports the session's, not the last pairer's).
+  PairingCounters& operator+=(const PairingCounters& o) {
+    paired += o.paired, unmatched_stereo += o.unmatched_stereo, duplicate_stereo += o.duplicate_stereo;
+    duplicate_depth += o.duplicate_depth, late_depth += o.late_depth;
+    depth_clock.outliers += o.depth_clock.outliers, depth_clock.restarts += o.depth_clock.restarts;
+    stereo_clock.outliers += o.stereo_clock.outliers, stereo_clock.restarts += o.stereo_clock.restarts;
+    return *this;
+  }
 };
 
 template <class Depth, class Stereo>
