@@ -86,6 +86,12 @@ TEST(Calibration, InvalidValuesAreRejected) {
   rig = test::make_test_rig();
   rig.depth_max_range = 0.1;
   EXPECT_THROW(validate(rig, "test"), CalibrationError);
+  rig = test::make_test_rig();
+  rig.stereo_T.x() = 1e308;  // was taken as a rig
+  EXPECT_THROW(validate(rig, "test"), CalibrationError);
+  rig = test::make_test_rig();
+  rig.left_to_robot.translation().z() = -1e308;
+  EXPECT_THROW(validate(rig, "test"), CalibrationError);
   rig_calibration_t msg = to_message(test::make_test_rig(), 0);
   msg.left.width = 0;
   EXPECT_THROW(from_message(msg), CalibrationError);

@@ -181,11 +181,16 @@ void validate(const RigCalibration& rig, const std::string& where) {
   validate_camera(rig.right, where, "right camera");
   validate_camera(rig.depth, where, "depth sensor");
   validate_rotation(rig.stereo_R, where, "stereo R");
-  check(rig.stereo_T.allFinite() && rig.baseline() > 1e-3, where, "stereo T must be a non-zero baseline");
+  // Bounded as the lenses are: a baseline of 1e308 m was taken as a rig.
+  check(rig.stereo_T.allFinite() && rig.baseline() > 1e-3 && rig.baseline() <= kMaxBaselineM, where,
+        "stereo T must be a baseline of 1 mm to 10 m");
   validate_rotation(rig.left_to_robot.linear(), where, "left camera -> robot rotation");
   validate_rotation(rig.depth_to_robot.linear(), where, "depth sensor -> robot rotation");
-  check(rig.left_to_robot.translation().allFinite() && rig.depth_to_robot.translation().allFinite(), where,
-        "camera -> robot translations must be finite");
+  const auto on_robot = [](const Eigen::Isometry3d& t) {
+    return t.translation().allFinite() && t.translation().norm() <= kMaxMountM;
+  };
+  check(on_robot(rig.left_to_robot) && on_robot(rig.depth_to_robot), where,
+        "camera -> robot translations must be finite and within 100 m of the robot");
   check(rig.depth_min_range > 0 && rig.depth_max_range > rig.depth_min_range, where,
         "depth range must satisfy 0 < min < max");
 }

@@ -53,6 +53,9 @@ Eigen::Matrix3d optical_to_robot(double pitch_down_rad);
 // The focal lengths a camera may have, in pixels: outside them OpenCV's
 // undistortion and the renderer fail (an fx of 1e-9 crashed the renderer).
 constexpr double kMinFocalPx = 1, kMaxFocalPx = 1e6;
+// The stereo baseline and how far a camera may sit from the robot's origin,
+// in metres: past them no robot is described.
+constexpr double kMaxBaselineM = 10, kMaxMountM = 100;
 
 // Checks sizes, focal lengths, rotations and ranges; throws CalibrationError
 // naming `where` and the first problem found.
