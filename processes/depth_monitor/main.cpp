@@ -75,13 +75,16 @@ void add_channel_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
   const char* g = "Channels";
   app.add_option("--depth-channel", o.depth_channel, "in: depth images (ivoa.depth_image_t)")
       ->capture_default_str()
-      ->group(g);
+      ->group(g)
+      ->check(ivoa::channel_regex());
   app.add_option("--stereo-channel", o.stereo_channel, "in: the stereo grid to label (ivoa.obstacle_grid_t)")
       ->capture_default_str()
-      ->group(g);
+      ->group(g)
+      ->check(ivoa::channel_regex());
   app.add_option("--calibration-channel", o.calibration_channel, "in: rig calibration (ivoa.rig_calibration_t)")
       ->capture_default_str()
-      ->group(g);
+      ->group(g)
+      ->check(ivoa::channel_regex());
   app.add_option("--depth-out-channel", o.depth_out_channel, "out: the depth grid (ivoa.obstacle_grid_t)")
       ->capture_default_str()
       ->group(g)

@@ -93,10 +93,12 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
 void add_channel_options(CLI::App& app, ivoa::IntrospectionNodeOptions& options) {
   app.add_option("--stereo-channel", options.stereo_channel, "in: stereo pairs (ivoa.stereo_image_t)")
       ->capture_default_str()
-      ->group("Channels");
+      ->group("Channels")
+      ->check(ivoa::channel_regex());
   app.add_option("--grid-channel", options.grid_channel, "obstacle grid giving the query cells (\"\" = none)")
       ->capture_default_str()
-      ->group("Channels");
+      ->group("Channels")
+      ->check(ivoa::channel_regex());
   app.add_option("--out-channel", options.out_channel, "out: predictions (ivoa.introspection_t)")
       ->capture_default_str()
       ->group("Channels")
@@ -104,7 +106,8 @@ void add_channel_options(CLI::App& app, ivoa::IntrospectionNodeOptions& options)
   app.add_option("--calibration-channel", options.calibration_channel,
                  "rig calibration (two-view models warp the right image with it)")
       ->capture_default_str()
-      ->group("Channels");
+      ->group("Channels")
+      ->check(ivoa::channel_regex());
 }
 
 void log_model(const ivoa::introspection::IntrospectionModel& model, int mc_passes) {

@@ -35,10 +35,12 @@ void add_detector_flags(CLI::App& app, DetectorFlags& f) {
                  "rig calibration file to start with (RIG_CALIBRATION messages replace it)");
   app.add_option("--stereo-channel", o.stereo_channel, "in: stereo pairs (ivoa.stereo_image_t)")
       ->capture_default_str()
-      ->group("Channels");
+      ->group("Channels")
+      ->check(ivoa::channel_regex());
   app.add_option("--calibration-channel", o.calibration_channel, "in: rig calibration (ivoa.rig_calibration_t)")
       ->capture_default_str()
-      ->group("Channels");
+      ->group("Channels")
+      ->check(ivoa::channel_regex());
   app.add_option("--output-channel", o.output_channel, "out: obstacle grid (ivoa.obstacle_grid_t)")
       ->capture_default_str()
       ->group("Channels")

@@ -76,19 +76,24 @@ void add_channel_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   const char* g = "Channels";
   app.add_option("--stereo-channel", o.stereo_channel, "stereo pairs (ivoa.stereo_image_t)")
       ->capture_default_str()
-      ->group(g);
+      ->group(g)
+      ->check(ivoa::channel_regex());
   app.add_option("--stereo-grid-channel", o.stereo_grid_channel, "stereo grid (ivoa.obstacle_grid_t)")
       ->capture_default_str()
-      ->group(g);
+      ->group(g)
+      ->check(ivoa::channel_regex());
   app.add_option("--depth-grid-channel", o.depth_grid_channel, "depth grid (ivoa.obstacle_grid_t)")
       ->capture_default_str()
-      ->group(g);
+      ->group(g)
+      ->check(ivoa::channel_regex());
   app.add_option("--labels-channel", o.labels_channel, "labels (ivoa.introspection_labels_t)")
       ->capture_default_str()
-      ->group(g);
+      ->group(g)
+      ->check(ivoa::channel_regex());
   app.add_option("--introspection-channel", o.introspection_channel, "predictions (ivoa.introspection_t)")
       ->capture_default_str()
-      ->group(g);
+      ->group(g)
+      ->check(ivoa::channel_regex());
 }
 
 // Whether to open a window; nullopt (after saying why) when the viewer would

@@ -186,5 +186,19 @@ TEST(Bus, AGroupThatIsNoMulticastAddressIsNamed) {
   }
 }
 
+// 99999 was blamed on the multicast route; 0 failed at the first subscription, 10 s later.
+TEST(Bus, APortLcmCannotUseIsNamed) {
+  for (const char* port : {"99999", "0", "x"}) {
+    try {
+      Bus bus(std::string("udpm://239.255.76.67:") + port + "?ttl=0");
+      FAIL() << port;
+    } catch (const BusError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("port '") + port + "' is not 1 to 65535"), std::string::npos)
+          << e.what();
+      EXPECT_EQ(e.exit_code(), kExitUsage);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ivoa

@@ -152,6 +152,21 @@ TEST(FlagChecks, SayWhatANumericFlagMustBeInAFewWords) {
   EXPECT_EQ(steps, 5);
 }
 
+// Seeds CLI11 wrapped ("-1") or saturated, channels LCM refuses only once running.
+TEST(FlagChecks, SeedsAndChannelsAreCheckedAsTyped) {
+  EXPECT_EQ(verdict(seed_number(), "0"), "");
+  EXPECT_EQ(verdict(seed_number(), "999999999999999999"), "");
+  EXPECT_EQ(verdict(seed_number(), "-1"), "must be a whole number 0 to 999999999999999999, not -1");
+  EXPECT_NE(verdict(seed_number(), "99999999999999999999"), "");
+  EXPECT_NE(verdict(seed_number(), "1e3"), "");
+  EXPECT_EQ(verdict(channel_name(), "STEREO_IMAGES"), "");
+  EXPECT_EQ(verdict(channel_name(), std::string(64, 'S')),
+            "must be a channel name of 1 to 63 characters (LCM's limit), not 64 characters");
+  EXPECT_NE(verdict(channel_name(), ""), "");
+  EXPECT_EQ(verdict(channel_regex(), "STEREO_IMAGES|DEPTH_.*"), "");
+  EXPECT_EQ(verdict(channel_regex(), "(").rfind("is not a channel regex (GLib's syntax): ", 0), 0u);
+}
+
 TEST(WriteTextFile, WritesTheTextOrSaysItCannot) {
   test::TempDir dir;
   EXPECT_TRUE(write_text_file(dir.file("out.json"), "{\"a\": 1}\n"));

@@ -3,6 +3,7 @@
 #include <arpa/inet.h>
 #include <netinet/in.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 
@@ -56,6 +57,21 @@ BusError cannot_start(const std::string& url) {
       kExitUsage);
 }
 
+// A udpm port LCM cannot use ("" if the URL gives a usable one or none):
+// 99999 was taken for a missing multicast route, and 0 passed LCM's start
+// and failed at the first subscription, 10 s later.
+std::string bad_udpm_port(const std::string& url) {
+  if (url.rfind("udpm://", 0) != 0) return "";
+  const std::string address = url.substr(7, url.find('?') - 7);
+  const size_t colon = address.find(':');
+  if (colon == std::string::npos) return "";
+  const std::string port = address.substr(colon + 1);
+  const bool digits = !port.empty() && port.size() <= 5 &&
+                      std::all_of(port.begin(), port.end(), [](char c) { return c >= '0' && c <= '9'; });
+  if (digits && std::stoi(port) >= 1 && std::stoi(port) <= 65535) return "";
+  return "cannot start LCM on '" + url + "': port '" + port + "' is not 1 to 65535";
+}
+
 }  // namespace
 
 // Owns the std::function; LCM's C API calls it through `user`.
@@ -68,6 +84,7 @@ struct Bus::Subscription {
 };
 
 Bus::Bus(const std::string& url) : url_(url.empty() ? default_lcm_url() : url) {
+  if (const std::string why = bad_udpm_port(url_); !why.empty()) throw BusError(why, kExitUsage);
   lcm_ = std::make_unique<lcm::LCM>(url_);
   if (!lcm_->good()) throw cannot_start(url_);
 }

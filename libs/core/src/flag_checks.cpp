@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <string>
 
+#include <glib.h>
+
 #include "ivoa/core/channels.hpp"
 
 namespace ivoa {
@@ -87,6 +89,23 @@ const CLI::Validator& channel_name() {
                " characters (LCM's limit), not " + std::to_string(text.size()) + " characters";
       },
       "CHANNEL");
+  return check;
+}
+
+const CLI::Validator& channel_regex() {
+  static const CLI::Validator check(
+      [](std::string& text) {
+        GError* error = nullptr;
+        GRegex* regex = g_regex_new(("^(" + text + ")$").c_str(), static_cast<GRegexCompileFlags>(0),
+                                    static_cast<GRegexMatchFlags>(0), &error);
+        std::string why;
+        if (regex == nullptr)
+          why = std::string("is not a channel regex (GLib's syntax): ") + (error ? error->message : "?");
+        if (regex) g_regex_unref(regex);
+        if (error) g_error_free(error);
+        return why;
+      },
+      "REGEX");
   return check;
 }
 

@@ -24,6 +24,10 @@ const CLI::Validator& seed_number();
 // LCM refused a longer one with a line on stderr, and the process counted
 // every message as published.
 const CLI::Validator& channel_name();
+// Channels to subscribe to: a regex in LCM's syntax (GLib's), matched
+// against whole names (help: REGEX). LCM refused a bad one only once the
+// process had started, in a message that did not name the flag.
+const CLI::Validator& channel_regex();
 // A whole number >= 1 that is odd, e.g. a filter window (help: ODD).
 const CLI::Validator& odd_positive_integer();
 
