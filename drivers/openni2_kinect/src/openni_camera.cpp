@@ -12,6 +12,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/file_names.hpp"
+#include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/openni2_kinect/frame_buffer.hpp"
 
@@ -173,6 +174,28 @@ struct OpenNiCamera::Impl {
     registered = true;
   }
 
+  // A recording whose header gives a depth mode or field of view no sensor
+  // has is refused before any stream starts: the driver read past frames
+  // (SIGSEGV) or aborted on them, and OpenNI2 could crash tearing down a
+  // file player it had just started.
+  void check_depth_stream() const {
+    const openni::VideoMode mode = depth.getVideoMode();
+    const int w = mode.getResolutionX(), h = mode.getResolutionY();
+    if (w <= 0 || h <= 0 || int64_t{w} * h > kMaxImagePixels)
+      throw DeviceError(description + ": its depth stream's mode is " + std::to_string(w) + "x" + std::to_string(h) +
+                            ", no image size",
+                        kExitBadInput);
+    const double hfov = depth.getHorizontalFieldOfView(), vfov = depth.getVerticalFieldOfView();
+    if (!(hfov > 0 && vfov > 0)) return;  // none reported: the nominal one is used
+    try {
+      intrinsics_from_fov(w, h, hfov, vfov);
+    } catch (const std::invalid_argument& e) {
+      throw DeviceError(
+          description + ": its depth field of view: " + e.what() + " (give the sensor's calibration with --rig)",
+          kExitBadInput);
+    }
+  }
+
   void start_streams() {
     if (depth.start() != openni::STATUS_OK)
       throw DeviceError(description + ": depth stream does not start: " + extended_error(), kExitFailure);
@@ -242,6 +265,7 @@ OpenNiCamera::OpenNiCamera(const OpenNiOptions& options) : impl_(std::make_uniqu
   try {
     m.open_device();
     m.create_stream(m.depth, openni::SENSOR_DEPTH, openni::PIXEL_FORMAT_DEPTH_1_MM, "depth");
+    if (m.file) m.check_depth_stream();
     if (options.color) m.create_stream(m.color, openni::SENSOR_COLOR, openni::PIXEL_FORMAT_RGB888, "colour");
     m.set_registration();
     m.start_streams();
