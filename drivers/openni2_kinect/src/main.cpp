@@ -2,6 +2,8 @@
 // sensor (or an .oni recording of one) through OpenNI2 -> DEPTH_IMAGE
 // (millimetres, with intrinsics), optionally DEPTH_COLOR, and the
 // PROCESS_STATUS heartbeat. Can record what it streams to an .oni file.
+#include <cstdlib>
+
 #include <CLI/CLI.hpp>
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
@@ -238,6 +240,12 @@ int main(int argc, char** argv) {
     } catch (const DeviceError& e) {
       spdlog::error("{}", e.what());
       exit_code = e.exit_code();
+      if (exit_code == ivoa::kExitBadInput && is_recording_path(f.camera.device)) {
+        heartbeat.set_state("failed");
+        heartbeat.publish_now();
+        spdlog::shutdown();
+        std::_Exit(exit_code);  // past OpenNI2's teardown (OpenNiCamera's constructor)
+      }
     } catch (const ivoa::CalibrationError& e) {
       spdlog::error("{}", e.what());
       exit_code = ivoa::kExitBadInput;

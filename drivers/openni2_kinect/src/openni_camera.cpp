@@ -31,11 +31,6 @@ const char* const kNoDeviceHelp =
     "built from libfreenect with -DBUILD_OPENNI2_DRIVER=ON and copied into "
     "/usr/lib/x86_64-linux-gnu/OpenNI2/Drivers/), and USB access for your user (udev rule)";
 
-bool is_recording_path(const std::string& device) {
-  const std::filesystem::path path(device);
-  return path.extension() == ".oni" || std::filesystem::is_regular_file(path);
-}
-
 // OpenNI2's last error, on one line.
 std::string extended_error() {
   std::string text = openni::OpenNI::getExtendedError();
@@ -259,6 +254,11 @@ struct OpenNiCamera::Impl {
   }
 };
 
+bool is_recording_path(const std::string& device) {
+  const std::filesystem::path path(device);
+  return path.extension() == ".oni" || std::filesystem::is_regular_file(path);
+}
+
 OpenNiCamera::OpenNiCamera(const OpenNiOptions& options) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.options = options;
@@ -271,6 +271,11 @@ OpenNiCamera::OpenNiCamera(const OpenNiOptions& options) : impl_(std::make_uniqu
     m.start_streams();
     m.set_up_playback();
     m.start_recording();
+  } catch (const DeviceError& e) {
+    // A damaged recording: OpenNI2 crashed now and then (SIGSEGV) tearing
+    // down the file player it had just started, so it is left to the exit.
+    if (e.exit_code() != kExitBadInput || !m.file) m.close();
+    throw;
   } catch (...) {
     m.close();
     throw;

@@ -54,13 +54,18 @@ struct ColorFrame {
   uint64_t device_time_us = 0;
 };
 
+// True for an .oni recording (by name, or any regular file), not a device URI.
+bool is_recording_path(const std::string& device);
+
 class OpenNiCamera {
  public:
   // Initialises OpenNI2, opens the device, starts the streams (and the
   // recorder). Throws DeviceError: no device or driver (exit 1), an .oni
   // file that is missing or unreadable (exit 3), a recording that cannot
   // be written (exit 4). A recording whose file exists goes to the first
-  // free "stem-N.oni" next to it instead.
+  // free "stem-N.oni" next to it instead. A recording whose header is
+  // damaged (exit 3) leaves OpenNI2 as it is: the process must end with
+  // std::_Exit, for OpenNI2's teardown of it could crash.
   explicit OpenNiCamera(const OpenNiOptions& options);
   ~OpenNiCamera();
   OpenNiCamera(const OpenNiCamera&) = delete;
