@@ -78,28 +78,16 @@ void add_options(CLI::App& app, Flags& f) {
 
 // Intrinsics from the rig file if given, else from the reported field of
 // view, else (a device that reports none) Kinect v1's nominal one.
-// A depth mode or field of view no sensor has (a damaged recording) is
-// bad input, named: DeviceError, exit 3.
 PinholeIntrinsics choose_intrinsics(const OpenNiCamera& camera, const Flags& f, std::string* origin) {
   const int w = camera.depth_width(), h = camera.depth_height();
-  if (w <= 0 || h <= 0 || int64_t{w} * h > ivoa::kMaxImagePixels)
-    throw DeviceError(camera.description() + ": its depth stream's mode is " + std::to_string(w) + "x" +
-                          std::to_string(h) + ", no image size",
-                      ivoa::kExitBadInput);
   if (!f.rig_path.empty()) {
     *origin = "K_depth of " + f.rig_path;
     return intrinsics_from_rig(ivoa::load_rig_calibration(f.rig_path), w, h, f.rig_path);
   }
-  PinholeIntrinsics k;
-  try {
-    if (camera.depth_fov_intrinsics(&k)) {
-      *origin = camera.registered() ? "the colour camera's field of view (registered)" : "the depth field of view";
-      return k;
-    }
-  } catch (const std::invalid_argument& e) {
-    throw DeviceError(
-        camera.description() + ": its depth field of view: " + e.what() + " (give the sensor's calibration with --rig)",
-        ivoa::kExitBadInput);
+  PinholeIntrinsics k;  // the camera checked its mode and field of view on opening
+  if (camera.depth_fov_intrinsics(&k)) {
+    *origin = camera.registered() ? "the colour camera's field of view (registered)" : "the depth field of view";
+    return k;
   }
   *origin = "Kinect v1's nominal field of view (the device reports none)";
   return intrinsics_from_fov(w, h, kKinectV1DepthHfovRad, kKinectV1DepthVfovRad);

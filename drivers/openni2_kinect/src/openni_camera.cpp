@@ -169,8 +169,8 @@ struct OpenNiCamera::Impl {
     registered = true;
   }
 
-  // A recording whose header gives a depth mode or field of view no sensor
-  // has is refused before any stream starts: the driver read past frames
+  // A depth mode or field of view no sensor has (a recording's damaged
+  // header) is refused before any stream starts: the driver read past frames
   // (SIGSEGV) or aborted on them, and OpenNI2 could crash tearing down a
   // file player it had just started.
   void check_depth_stream() const {
@@ -265,9 +265,9 @@ OpenNiCamera::OpenNiCamera(const OpenNiOptions& options) : impl_(std::make_uniqu
   try {
     m.open_device();
     m.create_stream(m.depth, openni::SENSOR_DEPTH, openni::PIXEL_FORMAT_DEPTH_1_MM, "depth");
-    if (m.file) m.check_depth_stream();
     if (options.color) m.create_stream(m.color, openni::SENSOR_COLOR, openni::PIXEL_FORMAT_RGB888, "colour");
     m.set_registration();
+    m.check_depth_stream();  // after registration, which gives depth the colour camera's view
     m.start_streams();
     m.set_up_playback();
     m.start_recording();

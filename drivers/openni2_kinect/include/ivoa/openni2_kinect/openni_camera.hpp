@@ -63,8 +63,9 @@ class OpenNiCamera {
   // recorder). Throws DeviceError: no device or driver (exit 1), an .oni
   // file that is missing or unreadable (exit 3), a recording that cannot
   // be written (exit 4). A recording whose file exists goes to the first
-  // free "stem-N.oni" next to it instead. A recording whose header is
-  // damaged (exit 3) leaves OpenNI2 as it is: the process must end with
+  // free "stem-N.oni" next to it instead. A depth mode or field of view no
+  // sensor has is bad input (exit 3); a recording whose header is so
+  // damaged leaves OpenNI2 as it is: the process must end with
   // std::_Exit, for OpenNI2's teardown of it could crash.
   explicit OpenNiCamera(const OpenNiOptions& options);
   ~OpenNiCamera();
