@@ -9,11 +9,13 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "ivoa/core/bus.hpp"
 #include "ivoa/core/message_counts.hpp"
 #include "ivoa/logio/log_format.hpp"
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/logio/log_summary.hpp"
 #include "ivoa/logio/log_writer.hpp"
+#include "ivoa/logio/replay_check.hpp"
 #include "ivoa/process_status_t.hpp"
 #include "logger_test_util.hpp"
 #include "test_rig.hpp"
@@ -136,6 +138,7 @@ TEST(LogReader, TruncatedEventIsReportedAtItsOffsetAfterTheGoodOnes) {
   EXPECT_EQ(r.problems[0].offset, offsets[3]);
   EXPECT_NE(r.problems[0].what.find("truncated"), std::string::npos) << r.problems[0].what;
   EXPECT_NE(r.problems[0].describe().find("byte " + std::to_string(offsets[3])), std::string::npos);
+  EXPECT_TRUE(r.problems[0].cut_short && r.problems[0].to_end);
 }
 
 TEST(LogReader, EndInsideAnEventHeaderIsReported) {
@@ -148,6 +151,7 @@ TEST(LogReader, EndInsideAnEventHeaderIsReported) {
   ASSERT_EQ(r.problems.size(), 1u);
   EXPECT_EQ(r.problems[0].offset, offsets[2]);
   EXPECT_NE(r.problems[0].what.find("10 bytes into an event header"), std::string::npos) << r.problems[0].what;
+  EXPECT_TRUE(r.problems[0].cut_short);
 }
 
 TEST(LogReader, CorruptEventStopsReadingThereByDefault) {
@@ -160,6 +164,7 @@ TEST(LogReader, CorruptEventStopsReadingThereByDefault) {
   ASSERT_EQ(r.problems.size(), 1u);
   EXPECT_EQ(r.problems[0].offset, offsets[1]);
   EXPECT_NE(r.problems[0].what.find("sync word"), std::string::npos) << r.problems[0].what;
+  EXPECT_FALSE(r.problems[0].cut_short);
 }
 
 TEST(LogReader, ResyncSkipsOnlyTheDamagedEvent) {
@@ -247,6 +252,63 @@ TEST(LogWriter, ARefusedWriteLeavesTheFileEndingWithItsLastWholeEvent) {
   int lcm_events = 0;
   while (log.readNextEvent() != nullptr) ++lcm_events;
   EXPECT_EQ(lcm_events, 2);
+}
+
+// A recording that stopped while writing its last event (a logger killed,
+// a power cut) loses only that event: LCM's reader, which processes
+// replaying a log go through, plays every event before it and ends there,
+// so such a log is played with a warning. Any other damage is refused.
+TEST(ReplayCheck, OnlyALastEventCutShortIsPlayedAndWithAWarning) {
+  test::TempDir dir;
+  const std::string cut = dir.file("cut.lcmlog");
+  for (const uint64_t into_last : {300, 2, 20}) {  // bytes into the last event: its data, sync word, header
+    std::filesystem::remove(cut);
+    const auto offsets = write_log(cut, 4, 500);
+    const uint64_t size = offsets[3] + into_last;
+    std::filesystem::resize_file(cut, size);
+    const ReplayCheck check = check_log_for_replay("file://" + cut + "?speed=0");
+    EXPECT_EQ(check.refusal, "") << "cut at " << size;
+    EXPECT_NE(check.warning.find(cut + ": its last event, at byte " + std::to_string(offsets[3]) +
+                                 ", is cut short (truncated: "),
+              std::string::npos)
+        << check.warning;
+    EXPECT_NE(check.warning.find("the recording stopped while writing it. The 3 events before it are played"),
+              std::string::npos)
+        << check.warning;
+    lcm::LogFile log(cut, "r");
+    int lcm_events = 0;
+    while (log.readNextEvent() != nullptr) ++lcm_events;
+    EXPECT_EQ(lcm_events, 3) << "LCM's reader plays up to the cut";
+  }
+  EXPECT_NO_THROW(refuse_a_log_lcm_cannot_replay("file://" + cut));
+
+  const std::string whole = dir.file("whole.lcmlog");
+  write_log(whole, 2, 100);
+  const ReplayCheck whole_check = check_log_for_replay("file://" + whole);
+  EXPECT_EQ(whole_check.refusal + whole_check.warning, "");
+
+  const std::string garbage_tail = dir.file("garbage_tail.lcmlog");
+  write_log(garbage_tail, 2, 100);
+  std::ofstream(garbage_tail, std::ios::app) << "xyz";  // bytes that start no event
+  EXPECT_NE(check_log_for_replay("file://" + garbage_tail).refusal.find("damaged at byte"), std::string::npos);
+
+  const std::string damaged_before_cut = dir.file("two_problems.lcmlog");
+  const auto at = write_log(damaged_before_cut, 4, 500);
+  overwrite_byte(damaged_before_cut, at[1], 0x00);
+  std::filesystem::resize_file(damaged_before_cut, at[3] + 300);
+  const ReplayCheck two = check_log_for_replay("file://" + damaged_before_cut);
+  EXPECT_NE(two.refusal.find("damaged at byte " + std::to_string(at[1])), std::string::npos) << two.refusal;
+  EXPECT_THROW(refuse_a_log_lcm_cannot_replay("file://" + damaged_before_cut), BusError);
+
+  const std::string absurd_tail = dir.file("absurd_tail.lcmlog");  // the header that crashed LCM's reader
+  write_log(absurd_tail, 2, 100);
+  EventHeader absurd;
+  absurd.channel_bytes = 2;
+  absurd.data_bytes = 0x7FFFFFFF;
+  const auto head = encode_header(absurd);
+  std::ofstream(absurd_tail, std::ios::app | std::ios::binary)
+      .write(reinterpret_cast<const char*>(head.data()), static_cast<std::streamsize>(head.size()));
+  EXPECT_NE(check_log_for_replay("file://" + absurd_tail).refusal.find("message length"), std::string::npos);
 }
 
 std::vector<uint8_t> encoded_stereo(int64_t seq, int64_t utime) {

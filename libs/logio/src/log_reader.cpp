@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 
 #include "ivoa/logio/log_format.hpp"
 
@@ -68,10 +69,16 @@ void LogReader::read_exactly(void* out, size_t bytes, uint64_t offset) {
   }
 }
 
-std::string LogReader::check_event_at(uint64_t offset, EventHeader& h, std::string& channel) {
+std::string LogReader::check_event_at(uint64_t offset, EventHeader& h, std::string& channel, bool& cut_short) {
+  cut_short = false;
   const uint64_t left = size_ - offset;
-  if (left < kEventHeaderBytes)
+  if (left < kEventHeaderBytes) {
+    uint8_t start[4] = {};
+    const size_t present = static_cast<size_t>(std::min<uint64_t>(left, sizeof(start)));
+    read_exactly(start, present, offset);
+    cut_short = std::equal(start, start + present, kSyncBytes);  // not garbage after the last event
     return "truncated: the file ends " + std::to_string(left) + " bytes into an event header";
+  }
   uint8_t head[kEventHeaderBytes];
   read_exactly(head, sizeof(head), offset);
   h = decode_header(head);
@@ -80,9 +87,11 @@ std::string LogReader::check_event_at(uint64_t offset, EventHeader& h, std::stri
   if (h.channel_bytes == 0 || h.channel_bytes > kMaxChannelBytes)
     return "corrupt event header: channel name length " + std::to_string(h.channel_bytes);
   if (h.data_bytes > kMaxDataBytes) return "corrupt event header: message length " + std::to_string(h.data_bytes);
-  if (h.event_bytes() > left)
+  if (h.event_bytes() > left) {
+    cut_short = true;
     return "truncated: event " + std::to_string(h.event_number) + " needs " + std::to_string(h.event_bytes()) +
            " bytes but the file ends after " + std::to_string(left);
+  }
   channel.resize(h.channel_bytes);
   read_exactly(channel.data(), channel.size(), offset + kEventHeaderBytes);
   if (!printable(channel)) return "corrupt event: the channel name is not printable text";
@@ -93,8 +102,9 @@ bool LogReader::next(LogEvent& event) {
   while (!stopped_ && position_ < size_) {
     const uint64_t offset = position_;
     EventHeader h;
-    if (std::string what = check_event_at(offset, h, event.channel); !what.empty()) {
-      if (!recover(offset, std::move(what))) return false;
+    bool cut_short = false;
+    if (std::string what = check_event_at(offset, h, event.channel, cut_short); !what.empty()) {
+      if (!recover(offset, std::move(what), cut_short)) return false;
       continue;
     }
     event.offset = offset;
@@ -110,10 +120,10 @@ bool LogReader::next(LogEvent& event) {
 }
 
 // Records the problem; with resync, moves to the next plausible event.
-bool LogReader::recover(uint64_t offset, std::string what) {
+bool LogReader::recover(uint64_t offset, std::string what, bool cut_short) {
   const uint64_t next_event = options_.resync ? find_next_event(offset + 1) : size_;
   stopped_ = next_event >= size_;
-  problems_.push_back({offset, std::move(what), next_event - offset, stopped_});
+  problems_.push_back({offset, std::move(what), next_event - offset, stopped_, cut_short});
   position_ = next_event;
   return !stopped_;
 }
@@ -121,21 +131,21 @@ bool LogReader::recover(uint64_t offset, std::string what) {
 // The offset of the next sync word that starts a plausible event, or the
 // file size if there is none.
 uint64_t LogReader::find_next_event(uint64_t from) {
-  const uint8_t sync[4] = {0xED, 0xA1, 0xDA, 0x01};
   std::vector<uint8_t> chunk(1 << 20);
   EventHeader header;
   std::string channel;
-  for (uint64_t base = from; base + sizeof(sync) <= size_;) {
+  bool cut_short = false;
+  for (uint64_t base = from; base + sizeof(kSyncBytes) <= size_;) {
     const size_t n = static_cast<size_t>(std::min<uint64_t>(chunk.size(), size_ - base));
     read_exactly(chunk.data(), n, base);
-    for (auto it = chunk.begin(); (it = std::search(it, chunk.begin() + static_cast<long>(n), sync, sync + 4)) !=
-                                  chunk.begin() + static_cast<long>(n);
+    for (auto it = chunk.begin(); (it = std::search(it, chunk.begin() + static_cast<long>(n), std::begin(kSyncBytes),
+                                                    std::end(kSyncBytes))) != chunk.begin() + static_cast<long>(n);
          ++it) {
       const uint64_t candidate = base + static_cast<uint64_t>(it - chunk.begin());
-      if (check_event_at(candidate, header, channel).empty()) return candidate;
+      if (check_event_at(candidate, header, channel, cut_short).empty()) return candidate;
     }
-    if (n < sizeof(sync)) break;
-    base += n - (sizeof(sync) - 1);  // overlap so a sync word across chunks is found
+    if (n < sizeof(kSyncBytes)) break;
+    base += n - (sizeof(kSyncBytes) - 1);  // overlap so a sync word across chunks is found
   }
   return size_;
 }

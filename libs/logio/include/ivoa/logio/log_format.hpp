@@ -10,6 +10,7 @@
 namespace ivoa::logio {
 
 inline constexpr uint32_t kSyncWord = 0xEDA1DA01;
+inline constexpr uint8_t kSyncBytes[4] = {0xED, 0xA1, 0xDA, 0x01};  // kSyncWord as it is in the file
 inline constexpr size_t kEventHeaderBytes = 28;
 // Limits a plausible header must respect; larger values mean corruption.
 // LCM itself refuses messages over 256 MB and channel names over 63 bytes

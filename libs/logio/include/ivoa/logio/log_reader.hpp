@@ -34,6 +34,7 @@ struct LogProblem {
   std::string what;
   uint64_t skipped_bytes = 0;    // bytes skipped to the next good event, or to the end of the file
   bool to_end = false;           // no good event follows: reading stopped here
+  bool cut_short = false;        // the file ends inside this event, as when a recording stops mid-write
   std::string describe() const;  // "byte 123: what (N bytes skipped ...)"
 };
 
@@ -75,10 +76,11 @@ class LogReader {
 
  private:
   // Empty if a plausible event starts at `offset` (its header and channel
-  // are then in `header` and `channel`), else what is wrong with it.
-  std::string check_event_at(uint64_t offset, EventHeader& header, std::string& channel);
+  // are then in `header` and `channel`), else what is wrong with it;
+  // `cut_short` says whether the file merely ends inside that event.
+  std::string check_event_at(uint64_t offset, EventHeader& header, std::string& channel, bool& cut_short);
   void read_exactly(void* out, size_t bytes, uint64_t offset);
-  bool recover(uint64_t offset, std::string what);
+  bool recover(uint64_t offset, std::string what, bool cut_short);
   uint64_t find_next_event(uint64_t from);
 
   std::string path_;

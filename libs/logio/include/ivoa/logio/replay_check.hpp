@@ -4,17 +4,25 @@
 // byte offset, losing every event after it, and crashes (SIGSEGV) on an
 // event that claims 2^31-1 bytes. Such a log is refused before LCM opens
 // it, naming where it is damaged: ivoa-log-play plays it, skipping the damage.
+// A log whose only damage is its last event cut short (the recording
+// stopped while writing it) loses nothing else: LCM plays every event
+// before the cut and ends there, so it is played, with a warning.
 #include <string>
 
 namespace ivoa::logio {
 
-// Why LCM cannot replay the log `lcm_url` names (its damage, by byte
-// offset, and what plays it instead); "" if it can, or if the URL replays
-// no log (one that does not exist is left to LCM, which says so).
-std::string why_lcm_cannot_replay(const std::string& lcm_url);
+struct ReplayCheck {
+  std::string refusal;  // why LCM cannot replay the log, by byte offset; "" if it can
+  std::string warning;  // what a replay leaves out (a last event cut short); "" if nothing
+};
 
-// Throws BusError (exit code kExitBadInput) with why_lcm_cannot_replay's
-// reason, if any: called just before a process starts LCM on `lcm_url`.
+// Checks the log `lcm_url` replays, if it names one (a log that does not
+// exist is left to LCM, which says so).
+ReplayCheck check_log_for_replay(const std::string& lcm_url);
+
+// Throws BusError (exit code kExitBadInput) with check_log_for_replay's
+// refusal, if any, and warns of what the replay leaves out: called just
+// before a process starts LCM on `lcm_url`.
 void refuse_a_log_lcm_cannot_replay(const std::string& lcm_url);
 
 }  // namespace ivoa::logio
