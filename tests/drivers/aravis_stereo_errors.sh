@@ -29,6 +29,10 @@ expect_exit 2 "--width and --height set the region together" \
   "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --width 320
 expect_exit 2 "--stereo-channel: must be a channel name of 1 to 63 characters" \
   "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --stereo-channel "$(printf 'S%.0s' {1..70})"
+expect_exit 2 "--reconnect-max: must be in \[0.001, 3600\], not 1e10" \
+  "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --reconnect-max 1e10  # the wait overflowed
+expect_exit 2 "--genicam: File does not exist: /nonexistent/camera.xml" \
+  "$B/bin/ivoa-fake-gige-rig" --genicam /nonexistent/camera.xml  # it said it was serving, and served nothing
 expect_exit 1 "cameras not ready after 1 s \(left NOT open, right NOT open\)" \
   "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --startup-timeout 1
 
@@ -36,4 +40,4 @@ start rig "$B/bin/ivoa-fake-gige-rig" --ready-file "$OUT/rig.ready"
 wait_for_file "$OUT/rig.ready" 10
 expect_exit 2 "pixel format 'YUV422Packed' refused.*offers: .*BayerRG8" \
   "$DRIVER" --left 127.0.0.1 --right 127.0.0.2 --rig "$RIG" --pixel-format YUV422Packed
-echo "OK: missing rig 3, bad flag 2, absent cameras 1, unsupported pixel format 2"
+echo "OK: missing rig 3, bad flags 2, absent cameras 1, unsupported pixel format 2"
