@@ -151,7 +151,7 @@ int run_viewer(const ivoa::CommonOptions& common, const ivoa::viewer::ViewerOpti
       50, offline);
   node.finish();
   heartbeat.publish_now();  // with the figures finish() drew
-  spdlog::info("{} figures drawn", node.figures());
+  spdlog::info("{} figures drawn; {}", node.figures(), heartbeat.summary());
   return node.output_failed() ? ivoa::kExitIoError : code;
 }
 
