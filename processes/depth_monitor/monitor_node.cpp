@@ -118,9 +118,6 @@ void MonitorNode::update_counters() {
   heartbeat_.set_counter("clock_restarts", c.depth_clock.restarts + c.stereo_clock.restarts);
   report_clock_events(c.depth_clock, depth_clock_seen_, options_.depth_channel);
   report_clock_events(c.stereo_clock, stereo_clock_seen_, options_.stereo_channel);
-  heartbeat_.set_counter("clock_one_sided_restarts", c.one_sided_restarts);
-  if (c.one_sided_restarts > one_sided_restarts_seen_) spdlog::warn("{}", pipeline_->last_clock_event());
-  one_sided_restarts_seen_ = c.one_sided_restarts;
 }
 
 // A frame whose utime jumped alone is bad input; a stream whose clock went

@@ -51,7 +51,6 @@ class MonitorNode {
   std::unique_ptr<monitor::LabelingPipeline> pipeline_;
   int64_t unmatched_ = 0, labelled_cells_ = 0;
   monitor::ClockCounters depth_clock_seen_, stereo_clock_seen_;  // what update_counters last reported
-  int64_t one_sided_restarts_seen_ = 0;                          // likewise
   monitor::PairingCounters earlier_pipelines_;                   // of the pipelines a calibration change replaced
 };
 

@@ -175,43 +175,5 @@ TEST(FramePairer, ALogPlayedAgainIsPairedAgain) {
   EXPECT_EQ(p.counters().duplicate_stereo + p.counters().duplicate_depth + p.counters().late_depth, 0);
 }
 
-// One stream's clock runs 5 s ahead for a second, then comes back to agree
-// with the other's: its move back is a restart the other stream never
-// makes. The pairing must go on once the clocks agree (it stopped for good).
-TEST(FramePairer, AClockThatWentBackAloneIsPairedAgainOnceTheClocksAgree) {
-  for (const bool stereo_ran_ahead : {true, false}) {
-    SCOPED_TRACE(stereo_ran_ahead ? "stereo ran ahead" : "depth ran ahead");
-    Pairer p;
-    Results out;
-    auto frames = [&](int64_t start, int n, int64_t stereo_ahead, int64_t depth_ahead) {
-      for (int i = 0; i < n; ++i) {
-        const int64_t t = start + i * 33'333;
-        append(out, p.add_depth(t + 2'000 + depth_ahead, "d"));
-        append(out, p.add_stereo(t + stereo_ahead, "s"));
-      }
-    };
-    frames(1'000'000, 30, 0, 0);
-    const int64_t ahead = 5'000'000;
-    frames(2'000'000, 30, stereo_ran_ahead ? ahead : 0, stereo_ran_ahead ? 0 : ahead);  // nothing pairs
-    const size_t paired_before = paired(out);
-    frames(3'000'000, 30, 0, 0);
-    append(out, p.flush());
-    EXPECT_EQ(paired_before, 30u);
-    EXPECT_EQ(out.size(), 90u);
-    // The first frame back is held until the next confirms it; the other
-    // stream then joins the restart, with its frames since it began. When
-    // depth ran ahead, the stereo frame of depth's held one is decided as
-    // it comes (depth's time is past it), without it.
-    EXPECT_EQ(paired(out) - paired_before, stereo_ran_ahead ? 30u : 29u);
-    const ClockCounters& moved = stereo_ran_ahead ? p.counters().stereo_clock : p.counters().depth_clock;
-    EXPECT_EQ(moved.restarts, 1);
-    EXPECT_EQ(p.counters().one_sided_restarts, 1);
-    EXPECT_NE(p.last_clock_event().find(std::string("only the ") + (stereo_ran_ahead ? "stereo" : "depth") +
-                                        " stream's time went back"),
-              std::string::npos)
-        << p.last_clock_event();
-  }
-}
-
 }  // namespace
 }  // namespace ivoa::monitor

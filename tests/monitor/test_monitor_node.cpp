@@ -195,23 +195,6 @@ TEST(MonitorNode, ALogPlayedAgainIsLabelledAgain) {
   EXPECT_EQ(f.heartbeat.bad_input_count(), 0);
 }
 
-// The stereo clock ran 5 s ahead for a second and came back; the depth
-// clock never moved. Labelling stopped for good at its return.
-TEST(MonitorNode, AStereoClockThatWentBackAloneIsLabelledAgain) {
-  NodeFixture f;
-  const cv::Mat ground = test::render_depth(f.rig, {});
-  f.send_calibration();
-  for (int i = 0; i < 90; ++i) {
-    const int64_t t = 1'000'000 + i * 33'333;
-    f.send_depth(t, ground);
-    f.send_stereo(i >= 30 && i < 60 ? t + 5'000'000 : t, 0);
-  }
-  EXPECT_EQ(f.labels.size(), 60u);  // every frame but those while it ran ahead
-  EXPECT_EQ(f.heartbeat.counter("clock_restarts"), 1);
-  EXPECT_EQ(f.heartbeat.counter("clock_one_sided_restarts"), 1);
-  EXPECT_EQ(f.heartbeat.bad_input_count(), 0);
-}
-
 TEST(MonitorNode, UnmatchedStereoFramesAreCountedNotLabelled) {
   NodeFixture f;
   f.send_calibration();

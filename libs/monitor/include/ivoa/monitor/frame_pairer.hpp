@@ -13,10 +13,6 @@
 // moved (a gap; or, going back, a log played again, whose frames are then
 // paired only with the other stream's frames after its own restart); if not,
 // the one frame was wrong and is ignored, so it cannot stop the pairing.
-// If only one stream's clock went back (its clock had run ahead, or was
-// reset) and the other stream's frames keep to its new time, the other
-// stream is taken to have restarted with it, so the pairing goes on.
-#include <cmath>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -45,13 +41,12 @@ struct PairingCounters {
   int64_t duplicate_depth = 0;              // same utime as a buffered depth frame: ignored
   int64_t late_depth = 0;                   // older than a depth frame already used: ignored
   ClockCounters depth_clock, stereo_clock;  // jumps: outliers ignored, restarts followed
-  int64_t one_sided_restarts = 0;           // one stream's clock went back and the other's agreed with it
 
   // Another pairer's counts added (a process that rebuilt its pairer for a
   // new calibration reports the session's, not the last pairer's).
   PairingCounters& operator+=(const PairingCounters& o) {
     paired += o.paired, unmatched_stereo += o.unmatched_stereo, duplicate_stereo += o.duplicate_stereo;
-    duplicate_depth += o.duplicate_depth, late_depth += o.late_depth, one_sided_restarts += o.one_sided_restarts;
+    duplicate_depth += o.duplicate_depth, late_depth += o.late_depth;
     depth_clock.outliers += o.depth_clock.outliers, depth_clock.restarts += o.depth_clock.restarts;
     stereo_clock.outliers += o.stereo_clock.outliers, stereo_clock.restarts += o.stereo_clock.restarts;
     return *this;
@@ -73,8 +68,6 @@ class FramePairer {
 
   std::vector<Result> add_depth(int64_t utime, Depth depth) {
     for (auto& [t, d, epoch] : depth_clock_.admit(utime, std::move(depth), counters_.depth_clock, clock_event_)) {
-      if (epoch < stereo_clock_.epoch() && agrees(t, newest_stereo_, stereo_clock_.epoch()))
-        epoch = join_stereo_restart();
       if (depth_.count({epoch, t})) {
         ++counters_.duplicate_depth;
       } else if (last_used_depth_.count(epoch) && t < last_used_depth_[epoch]) {
@@ -82,7 +75,6 @@ class FramePairer {
       } else {
         depth_.emplace(Key{epoch, t}, std::move(d));
         raise(newest_depth_, epoch, t);
-        lower(oldest_depth_, epoch, t);
       }
     }
     return decide(false);
@@ -90,7 +82,6 @@ class FramePairer {
 
   std::vector<Result> add_stereo(int64_t utime, Stereo stereo) {
     for (auto& [t, s, epoch] : stereo_clock_.admit(utime, std::move(stereo), counters_.stereo_clock, clock_event_)) {
-      if (epoch < depth_clock_.epoch() && agrees(t, newest_depth_, depth_clock_.epoch())) epoch = join_depth_restart();
       if (!seen_stereo_.insert({epoch, t}).second) {
         ++counters_.duplicate_stereo;
         continue;
@@ -98,7 +89,6 @@ class FramePairer {
       while (seen_stereo_.size() > 256) seen_stereo_.erase(seen_stereo_.begin());
       pending_.emplace(Key{epoch, t}, std::move(s));
       raise(newest_stereo_, epoch, t);
-      lower(oldest_stereo_, epoch, t);
     }
     return decide(false);
   }
@@ -122,62 +112,6 @@ class FramePairer {
   static void raise(std::map<int, int64_t>& newest, int epoch, int64_t t) {
     auto [it, added] = newest.emplace(epoch, t);
     if (!added && t > it->second) it->second = t;
-  }
-  static void lower(std::map<int, int64_t>& oldest, int epoch, int64_t t) {
-    auto [it, added] = oldest.emplace(epoch, t);
-    if (!added && t < it->second) it->second = t;
-  }
-
-  static int64_t before(int64_t t, int64_t by) { return t >= INT64_MIN + by ? t - by : INT64_MIN; }
-
-  // Whether utime `t` of a stream that has not restarted is within
-  // max_wait_us of the other stream's time since its restart `epoch`: the
-  // two clocks agree again, so that restart was the other stream's alone.
-  bool agrees(int64_t t, const std::map<int, int64_t>& other_newest, int epoch) const {
-    const auto it = other_newest.find(epoch);
-    if (it == other_newest.end()) return false;
-    const double apart = static_cast<double>(t) - static_cast<double>(it->second);  // no overflow
-    return std::abs(apart) <= static_cast<double>(config_.max_wait_us);
-  }
-
-  // The depth stream joins the stereo stream's latest restart: its frames
-  // since that restart's first stereo frame are moved into its epoch.
-  int join_stereo_restart() {
-    const int epoch = stereo_clock_.epoch();
-    const int64_t from = oldest_stereo_.count(epoch) ? before(oldest_stereo_[epoch], config_.tolerance_us) : INT64_MAX;
-    for (auto it = depth_.lower_bound({depth_clock_.epoch(), from}); it != depth_.end() && it->first.first < epoch;) {
-      raise(newest_depth_, epoch, it->first.second);
-      lower(oldest_depth_, epoch, it->first.second);
-      depth_.emplace(Key{epoch, it->first.second}, std::move(it->second));
-      it = depth_.erase(it);
-    }
-    depth_clock_.join_restart(epoch);
-    note_one_sided_restart("stereo", "depth");
-    return epoch;
-  }
-
-  // The stereo stream joins the depth stream's latest restart, likewise.
-  int join_depth_restart() {
-    const int epoch = depth_clock_.epoch();
-    const int64_t from = oldest_depth_.count(epoch) ? before(oldest_depth_[epoch], config_.tolerance_us) : INT64_MAX;
-    for (auto it = pending_.lower_bound({stereo_clock_.epoch(), from});
-         it != pending_.end() && it->first.first < epoch;) {
-      raise(newest_stereo_, epoch, it->first.second);
-      lower(oldest_stereo_, epoch, it->first.second);
-      seen_stereo_.insert({epoch, it->first.second});
-      pending_.emplace(Key{epoch, it->first.second}, std::move(it->second));
-      it = pending_.erase(it);
-    }
-    stereo_clock_.join_restart(epoch);
-    note_one_sided_restart("depth", "stereo");
-    return epoch;
-  }
-
-  void note_one_sided_restart(const char* restarted, const char* kept) {
-    ++counters_.one_sided_restarts;
-    clock_event_ = std::string("only the ") + restarted + " stream's time went back, and the " + kept +
-                   " stream's frames agree with its new time: the " + kept +
-                   " stream is taken to have restarted with it, and the pairing goes on";
   }
 
   std::vector<Result> decide(bool final) {
@@ -250,7 +184,6 @@ class FramePairer {
   std::map<Key, Stereo> pending_;
   std::set<Key> seen_stereo_;
   std::map<int, int64_t> newest_depth_, newest_stereo_, last_used_depth_;  // per restart
-  std::map<int, int64_t> oldest_depth_, oldest_stereo_;                    // per restart
   std::string clock_event_;
 };
 

@@ -6,7 +6,6 @@
 // log played again, a sensor's clock reset) that starts a new epoch; if not,
 // the held frame is ignored as an outlier. One wrong utime then cannot move
 // the stream's time away from every frame after it.
-#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -62,9 +61,6 @@ class StreamClock {
   }
 
   int epoch() const { return epoch_; }
-  // The other stream restarted alone and this one's frames keep to its new
-  // time (FramePairer): this stream's frames from now on are of its epoch.
-  void join_restart(int epoch) { epoch_ = std::max(epoch_, epoch); }
 
  private:
   // Unsigned: utimes of opposite sign and far apart (INT64_MIN) do not overflow.
