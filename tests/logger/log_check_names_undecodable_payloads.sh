@@ -2,8 +2,10 @@
 # ivoa-log-check decodes every message of an ivoa type: one whose payload
 # was cut short inside an intact log frame (what a reader skips as bad
 # input) makes the log DAMAGED (exit 3), named by channel, type, count and
-# the byte offset of the first. It used to count as intact. Messages of no
-# ivoa type are not judged.
+# the byte offset of the first. It used to count as intact. So does a
+# message of no ivoa type on a channel of one (its fingerprint damaged: it
+# was called intact, blaming the good messages as "of another type").
+# Messages of no ivoa type on channels of none are not judged.
 set -euo pipefail
 B=${IVOA_BUILD_DIR:?}
 d=$(mktemp -d)
@@ -39,6 +41,28 @@ grep -q "RIG_CALIBRATION: 1 messages do not decode as ivoa.rig_calibration_t (tr
 python3 - "$d/cut.json" "$offset" <<'PY'
 import json, sys
 bad = json.load(open(sys.argv[1]))["files"][0]["undecodable"]
-assert bad == {"RIG_CALIBRATION": {"type": "ivoa.rig_calibration_t", "count": 1, "first_offset": int(sys.argv[2])}}, bad
+assert bad == {"RIG_CALIBRATION": {"type": "ivoa.rig_calibration_t", "count": 1, "first_offset": int(sys.argv[2]),
+                                    "untyped": 0, "first_untyped_offset": 0}}, bad
 PY
+
+# The first calibration's fingerprint damaged (its first byte flipped).
+fp_offset=$(python3 - "$d/good.lcmlog" "$d/fingerprint.lcmlog" <<'PY'
+import struct, sys
+data, at = bytearray(open(sys.argv[1], "rb").read()), 0
+while at < len(data):
+    _, _, _, chan_len, data_len = struct.unpack_from(">IqqII", data, at)
+    if data[at + 28:at + 28 + chan_len] == b"RIG_CALIBRATION":
+        data[at + 28 + chan_len] ^= 0xFF
+        print(at)
+        break
+    at += 28 + chan_len + data_len
+open(sys.argv[2], "wb").write(data)
+PY
+)
+rc=0
+"$B/bin/ivoa-log-check" "$d/fingerprint.lcmlog" > "$d/fingerprint.txt" || rc=$?
+cat "$d/fingerprint.txt"
+[ "$rc" = 3 ] || { echo "FAIL: exit $rc for a damaged fingerprint, expected 3 (damaged)"; exit 1; }
+grep -q "RIG_CALIBRATION: 1 messages are of no ivoa type among its ivoa.rig_calibration_t messages (damaged at or before the fingerprint, or another program's type; readers skip them), the first at byte $fp_offset" "$d/fingerprint.txt"
+grep -q "RIG_CALIBRATION: 1 of its 3 messages are of another type than ivoa.rig_calibration_t" "$d/fingerprint.txt"
 echo "OK: a payload cut inside an intact frame is named; the intact log passes"

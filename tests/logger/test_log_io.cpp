@@ -380,8 +380,7 @@ TEST(LogSummary, MessagesOfAnotherTypeOnAChannelAreSaidUnderTheTable) {
   summary.add("STEREO_IMAGES", 1, stereo.data(), stereo.size());
   const auto blob = numbered_bytes(64, 3);
   summary.add("STEREO_IMAGES", 2, blob.data(), blob.size());
-  EXPECT_NE(summary.table().find(
-                "STEREO_IMAGES: 1 of its 2 messages are of another type than its first (ivoa.stereo_image_t)"),
+  EXPECT_NE(summary.table().find("STEREO_IMAGES: 1 of its 2 messages are of another type than ivoa.stereo_image_t"),
             std::string::npos)
       << summary.table();
 }

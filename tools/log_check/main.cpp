@@ -25,12 +25,17 @@ namespace {
 using ivoa::log_check::LastHeartbeats;
 using ivoa::logio::LogSummary;
 
-// Messages of an ivoa type, framed intact in the log, that do not decode
-// as that type: a reader skips each of them as bad input.
+// Messages on a channel of an ivoa type that a reader of that type skips
+// as bad input: framed intact in the log, but not decoding as the type, or
+// of no ivoa type at all (damaged at or before the fingerprint, or another
+// program's type on the channel).
 struct DamagedPayloads {
-  std::string type;
-  int64_t count = 0;
-  uint64_t first_offset = 0;  // of the first such event in the file
+  std::string type;                   // the channel's ivoa type ("" if none was seen)
+  int64_t count = 0;                  // of its fingerprint, not decoding as it
+  int64_t untyped = 0;                // of no ivoa type's fingerprint
+  uint64_t first_offset = 0;          // of the first not decoding, in the file
+  uint64_t first_untyped_offset = 0;  // of the first of no ivoa type
+  bool damaged() const { return count > 0 || (untyped > 0 && !type.empty()); }
 };
 
 struct FileResult {
@@ -40,18 +45,28 @@ struct FileResult {
   std::string first_channel;
   std::vector<ivoa::logio::LogProblem> problems;
   std::vector<int64_t> events_before_problem;          // per problem
-  std::map<std::string, DamagedPayloads> undecodable;  // per channel
+  std::map<std::string, DamagedPayloads> undecodable;  // per channel, only those damaged() after the file
   std::string error;                                   // could not be read at all
   bool damaged() const { return !error.empty() || !problems.empty() || !undecodable.empty(); }
 };
 
 void check_payload(const ivoa::logio::LogEvent& event, FileResult& r) {
-  if (!ivoa::ivoa_payload_damaged(event.data.data(), event.data.size())) return;
+  const auto type = ivoa::payload_type_name(event.data.data(), event.data.size());
   DamagedPayloads& d = r.undecodable[event.channel];
-  if (d.count++ == 0) {
-    d.type = std::string(ivoa::payload_type_name(event.data.data(), event.data.size()).value_or("?"));
-    d.first_offset = event.offset;
+  if (type) {
+    if (d.type.empty()) d.type = std::string(*type);
+    if (!ivoa::ivoa_payload_damaged(event.data.data(), event.data.size())) return;
+    if (d.count++ == 0) d.first_offset = event.offset;
+  } else if (d.untyped++ == 0) {
+    d.first_untyped_offset = event.offset;
   }
+}
+
+// Keeps the channels with damaged payloads: untyped messages count only on
+// a channel that also carries an ivoa type.
+void keep_damaged_channels(FileResult& r) {
+  for (auto it = r.undecodable.begin(); it != r.undecodable.end();)
+    it = it->second.damaged() ? std::next(it) : r.undecodable.erase(it);
 }
 
 FileResult check_file(const std::string& path, bool resync, LogSummary& summary, LastHeartbeats& heartbeats) {
@@ -72,6 +87,7 @@ FileResult check_file(const std::string& path, bool resync, LogSummary& summary,
       heartbeats.add(event);
     }
     r.problems = reader.problems();
+    keep_damaged_channels(r);
     if (std::string why = reader.not_a_log(); !why.empty()) {
       if (std::filesystem::path(path).extension() == ".json")
         why +=
@@ -99,14 +115,24 @@ void print_file(const FileResult& r) {
               : r.events == 0 ? "intact but empty (nothing recorded; ivoa-log-play refuses it)"
                               : "intact");
   for (size_t i = 0; i < r.problems.size(); ++i)
-    std::printf("  %s; the %lld events before it are intact\n", r.problems[i].describe().c_str(),
-                static_cast<long long>(r.events_before_problem[i]));
-  for (const auto& [channel, d] : r.undecodable)
     std::printf(
-        "  %s: %lld messages do not decode as %s (truncated or damaged inside; readers skip them), the "
-        "first at byte %llu\n",
-        channel.c_str(), static_cast<long long>(d.count), d.type.c_str(),
-        static_cast<unsigned long long>(d.first_offset));
+        "  %s; the %lld events before it are intact%s\n", r.problems[i].describe().c_str(),
+        static_cast<long long>(r.events_before_problem[i]),
+        r.problems[i].cut_short && r.problems[i].to_end ? " (the recording stopped while writing this event)" : "");
+  for (const auto& [channel, d] : r.undecodable) {
+    if (d.count > 0)
+      std::printf(
+          "  %s: %lld messages do not decode as %s (truncated or damaged inside; readers skip them), the first at "
+          "byte %llu\n",
+          channel.c_str(), static_cast<long long>(d.count), d.type.c_str(),
+          static_cast<unsigned long long>(d.first_offset));
+    if (d.untyped > 0)
+      std::printf(
+          "  %s: %lld messages are of no ivoa type among its %s messages (damaged at or before the fingerprint, "
+          "or another program's type; readers skip them), the first at byte %llu\n",
+          channel.c_str(), static_cast<long long>(d.untyped), d.type.c_str(),
+          static_cast<unsigned long long>(d.first_untyped_offset));
+  }
 }
 
 std::string results_json(const std::vector<FileResult>& files, const LogSummary& summary,
@@ -123,12 +149,15 @@ std::string results_json(const std::vector<FileResult>& files, const LogSummary&
       out += std::string(k ? ", " : "") + "{\"offset\": " + std::to_string(f.problems[k].offset) +
              ", \"what\": " + json_quote(f.problems[k].what) +
              ", \"skipped_bytes\": " + std::to_string(f.problems[k].skipped_bytes) +
+             ", \"cut_short\": " + (f.problems[k].cut_short ? "true" : "false") +
              ", \"events_before\": " + std::to_string(f.events_before_problem[k]) + "}";
     out += "], \"undecodable\": {";
     const char* sep = "";
     for (const auto& [channel, d] : f.undecodable) {
       out += sep + json_quote(channel) + ": {\"type\": " + json_quote(d.type) +
-             ", \"count\": " + std::to_string(d.count) + ", \"first_offset\": " + std::to_string(d.first_offset) + "}";
+             ", \"count\": " + std::to_string(d.count) + ", \"first_offset\": " + std::to_string(d.first_offset) +
+             ", \"untyped\": " + std::to_string(d.untyped) +
+             ", \"first_untyped_offset\": " + std::to_string(d.first_untyped_offset) + "}";
       sep = ", ";
     }
     out += "}}";

@@ -10,7 +10,7 @@ namespace ivoa::logio {
 namespace {
 
 void add_seq(ChannelSummary& s, int64_t seq) {
-  if (s.count == 1) {
+  if (s.typed == 1) {
     s.first_seq = seq;
   } else if (seq <= s.last_seq) {
     ++s.seq_regressions;
@@ -32,23 +32,28 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
   bytes_ += size;
   ChannelSummary& s = channels_[channel];
   const int64_t fingerprint = payload_fingerprint(data, size).value_or(0);
-  if (s.count == 0) {
-    s.fingerprint = fingerprint;
-    s.type = std::string(payload_type_name(data, size).value_or("unknown"));
-    s.has_seq = type_has_seq(s.type);
-    s.utime_ordered = !type_has_many_senders(s.type);
-    s.first_timestamp = timestamp;
-  }
+  const auto type = payload_type_name(data, size);
+  if (s.count == 0) s.first_timestamp = timestamp;
   ++s.count;
   s.bytes += size;
   s.last_timestamp = timestamp;
+  // The channel's type is its first message's, or the first ivoa type on it
+  // if that one was of none (damaged at its start, or foreign).
+  if (s.count == 1 || (s.type == "unknown" && type)) {
+    s.other_fingerprints = s.count - 1;
+    s.fingerprint = fingerprint;
+    s.type = std::string(type.value_or("unknown"));
+    s.has_seq = type_has_seq(s.type);
+    s.utime_ordered = !type_has_many_senders(s.type);
+  }
   if (fingerprint != s.fingerprint) {
     ++s.other_fingerprints;
     return;
   }
+  ++s.typed;
   const auto utime = payload_utime(data, size);
   if (s.type == "unknown" || !utime) return;
-  if (s.count == 1) s.first_utime = *utime;
+  if (s.typed == 1) s.first_utime = *utime;
   else if (*utime < s.last_utime && s.utime_ordered) ++s.utime_regressions;
   s.last_utime = *utime;
   if (const auto seq = payload_seq(s.type, data, size)) add_seq(s, *seq);
@@ -71,7 +76,7 @@ std::string LogSummary::table() const {
   for (const auto& [name, s] : channels_)  // one type per channel: a reader of the first skips these
     if (s.other_fingerprints > 0)
       out += name + ": " + std::to_string(s.other_fingerprints) + " of its " + std::to_string(s.count) +
-             " messages are of another type than its first (" + s.type + "), or damaged before the fingerprint\n";
+             " messages are of another type than " + s.type + ", or damaged before the fingerprint\n";
   return out;
 }
 

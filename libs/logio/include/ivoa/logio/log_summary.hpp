@@ -17,11 +17,12 @@ struct SeqGap {
 };
 
 struct ChannelSummary {
-  std::string type = "unknown";  // "ivoa.stereo_image_t", or unknown
-  int64_t fingerprint = 0;       // of the first message
+  std::string type = "unknown";  // "ivoa.stereo_image_t", or unknown: its first message's, or its first ivoa type
+  int64_t fingerprint = 0;       // of that type
   int64_t count = 0;
   uint64_t bytes = 0;
-  int64_t other_fingerprints = 0;                   // messages of another type than the first (one type per channel!)
+  int64_t other_fingerprints = 0;  // messages of another type than the channel's (one type per channel!)
+  int64_t typed = 0;               // messages of the channel's type
   int64_t first_timestamp = 0, last_timestamp = 0;  // log (receive) time
   int64_t first_utime = 0, last_utime = 0;          // message utime, ivoa types only
   int64_t utime_regressions = 0;                    // message utime went backwards
