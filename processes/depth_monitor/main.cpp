@@ -123,6 +123,9 @@ int main(int argc, char** argv) {
   ivoa::install_stop_handlers();
   try {
     ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
+    ivoa::logio::warn_that_a_replay_publishes_nothing(
+        common.lcm_url,
+        "its depth grids and labels (" + options.depth_out_channel + ", " + options.labels_out_channel + ")");
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "depth_monitor", common.status_channel);
     ivoa::MonitorNode node(bus, heartbeat, options);

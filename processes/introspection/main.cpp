@@ -149,6 +149,8 @@ int main(int argc, char** argv) {
   cl.options.warm_up = frame_size(cl.warm_up);
   try {
     ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
+    ivoa::logio::warn_that_a_replay_publishes_nothing(common.lcm_url,
+                                                      "its predictions (" + cl.options.out_channel + ")");
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "introspection", common.status_channel);
     ivoa::IntrospectionNode node(bus, heartbeat, std::move(model), cl.options, cl.config.mc_passes);

@@ -153,7 +153,9 @@ void StereoDetectorNode::process(const Frame& frame) {
   }
   out.compute_ms = monotonic_ms() - start_ms;
   if (!bus_.publish(options_.output_channel, out)) {
-    spdlog::error("publishing on {} failed", options_.output_channel);
+    if (publish_failures_++ == 0)
+      spdlog::error("publishing on {} failed (counted as publish_failures from now on)", options_.output_channel);
+    heartbeat_.add_to_counter("publish_failures", 1);  // not counted as out
     return;
   }
   heartbeat_.count_out();
