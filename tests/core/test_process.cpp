@@ -37,6 +37,24 @@ TEST(CommonOptions, ProcessesTakeAnLcmUrlAndOfflineToolsRefuseOne) {
   EXPECT_EQ(parse(add_offline_options, {"--log-level", "loud"}, offline), kExitUsage);
 }
 
+// A tool that reads logs given as arguments: CLI11 took the URL for one of
+// them ("logs: File does not exist: udpm://..."), naming no flag.
+TEST(CommonOptions, AnOfflineToolNamesAnLcmUrlAsRefusedNotAsAMissingFile) {
+  for (const char* url_arg : {"--lcm-url", "--lcm-url=udpm://239.255.76.67:7667"}) {
+    CLI::App app;
+    CommonOptions options;
+    add_offline_options(app, options);
+    std::vector<std::string> logs;
+    app.add_option("logs", logs)->check(CLI::ExistingFile);
+    std::vector<const char*> args = {"ivoa-tool", "/nonexistent.lcmlog", url_arg};
+    if (std::string_view(url_arg) == "--lcm-url") args.push_back("udpm://239.255.76.67:7667");
+    testing::internal::CaptureStderr();
+    EXPECT_EQ(parse_command_line(app, static_cast<int>(args.size()), const_cast<char**>(args.data())), kExitUsage);
+    EXPECT_EQ(testing::internal::GetCapturedStderr(),
+              "--lcm-url: ivoa-tool reads files and talks no LCM: give the logs as arguments\n");
+  }
+}
+
 TEST(CommonOptions, HeartbeatsGoToProcessStatusUnlessTheFlagNamesAnotherChannel) {
   const auto add_with_status = [](CLI::App& app, CommonOptions& o) {
     add_common_options(app, o);

@@ -116,9 +116,26 @@ void explain_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char
   else app.exit(e);
 }
 
+// An offline tool (no --lcm-url of its own) given one: CLI11 took its value
+// for a file to read ("logs: File does not exist: udpm://...").
+bool refuse_an_lcm_url_offline(const CLI::App& app, int argc, char** argv) {
+  if (app.get_option_no_throw("--lcm-url")) return false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    if (arg == "--") break;
+    if (arg == "--lcm-url" || arg.rfind("--lcm-url=", 0) == 0) {
+      std::cerr << "--lcm-url: " << std::filesystem::path(argv[0]).filename().string()
+                << " reads files and talks no LCM: give the logs as arguments\n";
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 int parse_command_line(CLI::App& app, int argc, char** argv) {
+  if (refuse_an_lcm_url_offline(app, argc, argv)) return kExitUsage;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ConfigError& e) {
