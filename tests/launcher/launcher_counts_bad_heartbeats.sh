@@ -30,7 +30,12 @@ PMD
 timeout 60 "$B/bin/ivoa-launch" "$out/run.pmd" --script start --plain --status-every 0 --until player --grace 2.5 --duration 30 \
   --status-file "$out/status.json" >"$out/launch.txt" 2>&1 || { cat "$out/launch.txt"; echo "FAIL: ivoa-launch failed" >&2; exit 1; }
 
-"$B/bin/ivoa-log-check" --json "$out/check.json" "$out/recorded.lcmlog" >/dev/null
+# The logger records the message as it came; ivoa-log-check names it (no
+# ivoa type on a channel of one: readers skip it) and exits 3.
+code=0
+"$B/bin/ivoa-log-check" --json "$out/check.json" "$out/recorded.lcmlog" >"$out/check.txt" || code=$?
+grep -q "PROCESS_STATUS: 1 messages are of no ivoa type among its ivoa.process_status_t messages" "$out/check.txt" &&
+  [ "$code" = 3 ] || { cat "$out/check.txt"; echo "FAIL: ivoa-log-check exit $code, expected 3 naming it" >&2; exit 1; }
 python3 - "$out/check.json" <<'PY' || { cat "$out/launch.txt"; exit 1; }
 import json, sys
 launcher = json.load(open(sys.argv[1]))["processes"].get("launcher")
