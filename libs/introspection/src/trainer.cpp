@@ -140,16 +140,19 @@ struct ValOutputs {
   std::vector<float> verdict_variance;
 };
 
+// Validation runs in batches; the cells of a batch share their MC-dropout
+// masks, as the cells of a live frame do.
+constexpr size_t kValBatch = 256;
+
 ValOutputs run_validation(IntrospectionNetImpl& net, const SplitData& d, const std::vector<SampleRef>& refs,
                           const ModelInfo& info, torch::Device device, int passes, torch::Generator& g) {
   BatchAugmenter decode(info, false, 0);  // normalisation only
   torch::NoGradGuard no_grad;
   net.eval();
   ValOutputs out;
-  constexpr size_t kBatch = 256;
-  for (size_t begin = 0; begin < refs.size(); begin += kBatch) {
+  for (size_t begin = 0; begin < refs.size(); begin += kValBatch) {
     const std::vector<SampleRef> batch(refs.begin() + static_cast<long>(begin),
-                                       refs.begin() + static_cast<long>(std::min(refs.size(), begin + kBatch)));
+                                       refs.begin() + static_cast<long>(std::min(refs.size(), begin + kValBatch)));
     const auto features = net.features(decode(patch_pointers(d, batch)).to(device));
     const McStats s = passes > 1 ? mc_dropout_head(net, features, passes, g) : deterministic_head(net, features);
     out.outputs_finite = out.outputs_finite && torch::isfinite(s.mean).all().item<bool>();
@@ -224,11 +227,28 @@ std::pair<double, double> calibrate_threshold(const std::vector<int>& truth, con
   return {threshold, kept.mean_per_class()};
 }
 
+// One pass over a small validation set sees few mask draws (one a batch),
+// and its variances, so the gate, follow them: on 300 cells the gates of
+// four seeds were up to 4.6x apart. The pass is repeated until this many
+// draws are pooled.
+constexpr size_t kMinMaskDraws = 64;
+
+void append(ValOutputs& to, const ValOutputs& more) {
+  auto add = [](auto& a, const auto& b) { a.insert(a.end(), b.begin(), b.end()); };
+  add(to.truth, more.truth), add(to.predicted, more.predicted), add(to.variance, more.variance);
+  add(to.verdict_predicted, more.verdict_predicted), add(to.verdict_variance, more.verdict_variance);
+  to.outputs_finite = to.outputs_finite && more.outputs_finite;
+}
+
 // Both gates (the model's own prediction, and the prediction given the
-// detector's verdict) from one MC-dropout pass over the validation subset.
+// detector's verdict) from MC-dropout passes over the validation subset.
 void calibrate_gates(NativeModel& model, const SplitData& val, const std::vector<SampleRef>& refs, const TrainConfig& c,
                      torch::Device device, torch::Generator& generator, TrainReport& report) {
-  const ValOutputs mc = run_validation(*model.net, val, refs, model.info, device, c.threshold_passes, generator);
+  const size_t batches = (refs.size() + kValBatch - 1) / kValBatch;
+  const size_t repeats = std::max<size_t>(1, (kMinMaskDraws + batches - 1) / std::max<size_t>(batches, 1));
+  ValOutputs mc = run_validation(*model.net, val, refs, model.info, device, c.threshold_passes, generator);
+  for (size_t r = 1; r < repeats; ++r)
+    append(mc, run_validation(*model.net, val, refs, model.info, device, c.threshold_passes, generator));
   std::tie(report.uncertainty_threshold, report.val_accuracy_retained) =
       calibrate_threshold(mc.truth, mc.predicted, mc.variance, c.threshold_retain);
   std::tie(report.verdict_uncertainty_threshold, report.val_verdict_accuracy_retained) =
