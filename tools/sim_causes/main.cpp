@@ -315,6 +315,7 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
   out.tally.unexplained_fixed.resize(opt.variants.size());
   Progress progress(session + " (" + causes::phenomena_names(finder.testable()) + ")",
                     static_cast<double>(log.labels.size()), "frames", 20.0);
+  int64_t not_replayed = 0;  // frames the trajectory does not reach at the rate used
   for (size_t f = 0; f < log.labels.size(); ++f) {
     const Labels& labels = log.labels[f];
     const auto truth = log.truth.find(labels.utime);
@@ -331,11 +332,19 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
       ++out.tally.frames;
     } catch (const causes::ReplayError& e) {
       ++out.tally.skipped_frames;
+      ++not_replayed;
       spdlog::warn("{}: {}", session, e.what());
     }
     progress.update(static_cast<double>(f + 1));
   }
   progress.finish();
+  // A real-time recording whose simulator dropped frames has frame times
+  // that suggest too low a rate; most frames then miss their poses.
+  if (opt.timing.rate_hz == 0 && 2 * not_replayed > static_cast<int64_t>(log.labels.size()))
+    spdlog::warn(
+        "{}: {} of {} frames were not replayed at {:.6g} Hz, the rate read from the frames' times (which a "
+        "simulator that dropped frames leaves uneven): give the driver's --rate",
+        session, not_replayed, log.labels.size(), timing.rate_hz);
   out.tally.variants = finder.variant_tallies();
   write_variant_rows(out.variant_rows, session, log.labels.front().detector, opt.variants, out.tally.variants);
 }
