@@ -101,7 +101,6 @@ class StereoDetectorNode {
 
   std::atomic<bool> finished_{false};
   std::atomic<int64_t> published_{0};
-  int64_t publish_failures_ = 0;  // the worker's
   std::thread worker_;
 };
 

@@ -13,6 +13,11 @@ namespace {
 
 // LCM reads up to a last event the file ends inside, then stops as at the
 // end: nothing is lost that any reader could play.
+// The log file `lcm_url` replays (the default URL if empty), or "".
+std::string log_replayed_by(const std::string& lcm_url) {
+  return replayed_log(lcm_url.empty() ? default_lcm_url() : lcm_url);
+}
+
 bool only_the_last_event_is_cut_short(const std::vector<LogProblem>& problems) {
   return problems.size() == 1 && problems.front().to_end && problems.front().cut_short;
 }
@@ -20,7 +25,7 @@ bool only_the_last_event_is_cut_short(const std::vector<LogProblem>& problems) {
 }  // namespace
 
 ReplayCheck check_log_for_replay(const std::string& lcm_url) {
-  const std::string path = replayed_log(lcm_url.empty() ? default_lcm_url() : lcm_url);
+  const std::string path = log_replayed_by(lcm_url);
   std::error_code error;
   if (path.empty() || !std::filesystem::is_regular_file(path, error)) return {};
   try {
@@ -53,7 +58,7 @@ void refuse_a_log_lcm_cannot_replay(const std::string& lcm_url) {
 }
 
 void warn_that_a_replay_publishes_nothing(const std::string& lcm_url, const std::string& outputs) {
-  const std::string path = replayed_log(lcm_url.empty() ? default_lcm_url() : lcm_url);
+  const std::string path = log_replayed_by(lcm_url);
   if (path.empty()) return;
   spdlog::warn(
       "reading the log {}: LCM cannot publish into a log it reads, so {} are computed and counted as "
