@@ -114,6 +114,7 @@ void MonitorNode::update_counters() {
   heartbeat_.set_counter("stereo_duplicates", c.duplicate_stereo);
   heartbeat_.set_counter("depth_duplicates", c.duplicate_depth);
   heartbeat_.set_counter("depth_late", c.late_depth);
+  heartbeat_.set_counter("depth_dropped", c.dropped_depth);
   heartbeat_.set_counter("cells_labelled", labelled_cells_);
   heartbeat_.set_counter("clock_restarts", c.depth_clock.restarts + c.stereo_clock.restarts);
   report_clock_events(c.depth_clock, depth_clock_seen_, options_.depth_channel);

@@ -175,5 +175,21 @@ TEST(FramePairer, ALogPlayedAgainIsPairedAgain) {
   EXPECT_EQ(p.counters().duplicate_stereo + p.counters().duplicate_depth + p.counters().late_depth, 0);
 }
 
+TEST(FramePairer, ADepthLogLoopingWhileStereoIsSilentKeepsBoundedMemory) {
+  Pairer p;  // default: keeps 2 s of depth, the newest 2 restarts ahead of stereo's
+  Results out;
+  constexpr int kPlays = 10, kFrames = 36;  // a 1.2 s depth log at 30 Hz, looped
+  for (int play = 0; play < kPlays; ++play)
+    for (int i = 0; i < kFrames; ++i) append(out, p.add_depth(1'000'000 + i * 33'333, "depth"));
+  EXPECT_EQ(p.counters().depth_clock.restarts, kPlays - 1);
+  // The first play (the stereo stream's) and the last two, not all ten.
+  EXPECT_EQ(p.buffered_depth(), 3u * kFrames);
+  EXPECT_EQ(p.counters().dropped_depth, (kPlays - 3) * kFrames);
+  // The detector comes up late: its first play still pairs with the depth log's first.
+  for (int i = 0; i < kFrames; ++i) append(out, p.add_stereo(1'000'000 + i * 33'333 + 1, "grid"));
+  append(out, p.flush());
+  EXPECT_EQ(paired(out), static_cast<size_t>(kFrames));
+}
+
 }  // namespace
 }  // namespace ivoa::monitor

@@ -13,6 +13,7 @@
 // moved (a gap; or, going back, a log played again, whose frames are then
 // paired only with the other stream's frames after its own restart); if not,
 // the one frame was wrong and is ignored, so it cannot stop the pairing.
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -32,6 +33,10 @@ struct PairingConfig {
   int64_t depth_history_us = 2'000'000;
   int64_t max_wait_us = 500'000;     // decide a pending stereo frame once stereo time moves this far past it
   int64_t time_jump_us = 1'000'000;  // a utime this far from its stream's newest, either way, is a jump
+  // Depth restarts kept beyond the stereo stream's, newest first: a depth log
+  // looping while the detector is silent would otherwise keep depth_history_us
+  // of frames for every play. Stereo frames of a dropped play go unmatched.
+  int max_depth_restarts_ahead = 2;  // at least 1: the depth stream's own
 };
 
 struct PairingCounters {
@@ -40,13 +45,14 @@ struct PairingCounters {
   int64_t duplicate_stereo = 0;             // same utime as an earlier stereo frame: ignored
   int64_t duplicate_depth = 0;              // same utime as a buffered depth frame: ignored
   int64_t late_depth = 0;                   // older than a depth frame already used: ignored
+  int64_t dropped_depth = 0;                // of a restart too far ahead of the stereo stream's: dropped
   ClockCounters depth_clock, stereo_clock;  // jumps: outliers ignored, restarts followed
 
   // Another pairer's counts added (a process that rebuilt its pairer for a
   // new calibration reports the session's, not the last pairer's).
   PairingCounters& operator+=(const PairingCounters& o) {
     paired += o.paired, unmatched_stereo += o.unmatched_stereo, duplicate_stereo += o.duplicate_stereo;
-    duplicate_depth += o.duplicate_depth, late_depth += o.late_depth;
+    duplicate_depth += o.duplicate_depth, late_depth += o.late_depth, dropped_depth += o.dropped_depth;
     depth_clock.outliers += o.depth_clock.outliers, depth_clock.restarts += o.depth_clock.restarts;
     stereo_clock.outliers += o.stereo_clock.outliers, stereo_clock.restarts += o.stereo_clock.restarts;
     return *this;
@@ -103,6 +109,7 @@ class FramePairer {
 
   const PairingCounters& counters() const { return counters_; }
   size_t pending() const { return pending_.size(); }
+  size_t buffered_depth() const { return depth_.size(); }
   // The last outlier ignored or restart followed (see StreamClock), in a sentence.
   const std::string& last_clock_event() const { return clock_event_; }
 
@@ -158,14 +165,22 @@ class FramePairer {
   }
 
   // Within a restart, the depth frames of the last depth_history_us (at least
-  // one); of an earlier restart, none once no stereo frame of it can come.
+  // one); of an earlier restart, none once no stereo frame of it can come; of
+  // a restart the stereo stream has not reached, none unless it is one of the
+  // newest max_depth_restarts_ahead.
   void prune_depth() {
+    const int stereo_epoch = stereo_clock_.epoch();
+    const int depth_epoch = depth_clock_.epoch();
     for (auto it = depth_.begin(); it != depth_.end();) {
       const auto [epoch, t] = it->first;
-      const bool stereo_moved_on = epoch < stereo_clock_.epoch() && !has_pending(epoch);
+      const bool stereo_moved_on = epoch < stereo_epoch && !has_pending(epoch);
+      const bool too_far_ahead =
+          epoch > stereo_epoch && epoch <= depth_epoch - std::max(1, config_.max_depth_restarts_ahead);
       const auto next = std::next(it);
       const bool newest_of_its_restart = next == depth_.end() || next->first.first != epoch;
-      if (stereo_moved_on || (!newest_of_its_restart && t < newest_depth_[epoch] - config_.depth_history_us))
+      if (too_far_ahead) ++counters_.dropped_depth;
+      if (stereo_moved_on || too_far_ahead ||
+          (!newest_of_its_restart && t < newest_depth_[epoch] - config_.depth_history_us))
         it = depth_.erase(it);
       else it = next;
     }
