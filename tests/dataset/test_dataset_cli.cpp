@@ -57,6 +57,12 @@ TEST(DatasetInfo, FolderWithoutADatasetIsBadInput) {
   EXPECT_TRUE(contains(r.output, "not a dataset")) << r.output;
 }
 
+TEST(DatasetInfo, WithoutAFolderAsksForOneAsTheArgumentOrTheFlag) {
+  const auto r = dataset_info("");
+  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+  EXPECT_TRUE(contains(r.output, "ivoa-dataset info DATASET (or --dataset DATASET)")) << r.output;
+}
+
 // `ivoa-dataset build` with `flags` on a file that a flag check must refuse
 // before reading it.
 test::CommandResult build_refused_before_reading(const std::string& flags) {

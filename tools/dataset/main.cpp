@@ -280,13 +280,17 @@ int main(int argc, char** argv) {
   add_build_command(app, build);
   auto* info = app.add_subcommand("info", "sessions, class counts and splits of a dataset");
   std::string root, split;
+  // Not ->required(): CLI11 would name only "--dataset" as missing.
   info->add_option("dataset,--dataset", root, "dataset folder: the argument, or --dataset as ivoa-train takes it")
-      ->required()
       ->check(CLI::ExistingDirectory);
   info->add_option("--split", split, "a split file to check against the dataset")->check(CLI::ExistingFile);
 
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("dataset", common.log_level);
+  if (*info && root.empty()) {
+    spdlog::error("info: which dataset? Give its folder: ivoa-dataset info DATASET (or --dataset DATASET)");
+    return kExitUsage;
+  }
   if (*build.command)
     if (const int code = finish_build_options(build); code >= 0) return code;
   try {
