@@ -16,7 +16,10 @@
 #     name records to NAME-1.oni and leaves the first one whole); time
 #     patterns in the name are expanded;
 #  6. a damaged recording (its header's depth mode or field of view) is bad
-#     input, exit 3, named: it crashed the driver (SIGSEGV, SIGABRT).
+#     input, exit 3, named: it crashed the driver (SIGSEGV, SIGABRT);
+#  7. recording onto a disk that fills (a 300 kB tmpfs, where a mount
+#     namespace is permitted): said as it runs low and when full, exit 4;
+#     OpenNI2 itself says nothing and the driver exited 0.
 . "$(dirname "$0")/driver_test_lib.sh"
 DRIVER="$B/bin/ivoa-openni2-kinect"
 CHECK="$B/tests/ivoa-test-check-depth"
@@ -129,5 +132,29 @@ for case in "wide:depth frame 1: 1280x480 frame in 614400 bytes of data, not the
     exit 1
   fi
 done
+# 7. A disk that fills while recording (depth and colour, 90 frames; about
+# 30 fit). The frames before it filled stay playable.
+FULL="$OUT/full_disk"
+mkdir "$FULL"
+if unshare -m true 2>/dev/null; then
+  code=0
+  # The tmpfs lives as long as its namespace: record, then play it back, there.
+  unshare -m sh -c 'mount -t tmpfs -o size=300k tmpfs "$2" || exit 99
+    code=0
+    "$1" --color --record "$2/clip.oni" --max-frames 90 >"$3/full.log" 2>&1 || code=$?
+    "$1" --device "$2/clip.oni" --playback-speed 0 >"$3/full_replay.log" 2>&1
+    exit $code' sh "$DRIVER" "$FULL" "$OUT" || code=$?
+  if [ "$code" != 4 ] || ! grep -q "clip.oni: .* MB left on its disk" "$OUT/full.log" ||
+    ! grep -qE "clip.oni: its disk is full \(0\.[0-9] MB left\) after [0-9]+ depth frames" "$OUT/full.log"; then
+    echo "FAILED: recording onto a full disk: exit $code (want 4), expected the low and full messages" >&2
+    cat "$OUT/full.log" >&2
+    exit 1
+  fi
+  grep -qE "end of recording .* after [1-9][0-9] depth frames" "$OUT/full_replay.log" ||
+    { echo "FAILED: the frames recorded before the disk filled do not play" >&2; cat "$OUT/full_replay.log" >&2; exit 1; }
+  echo "OK: a disk that fills while recording is said, exit 4"
+else
+  echo "NOTE: no mount namespace here (unshare -m not permitted); the full-disk recording was not run"
+fi
 echo "OK: live $(cat "$OUT/live.json")"
 echo "OK: replay $(cat "$OUT/replay.json")"

@@ -3,6 +3,7 @@
 // (millimetres, with intrinsics), optionally DEPTH_COLOR, and the
 // PROCESS_STATUS heartbeat. Can record what it streams to an .oni file.
 #include <cstdlib>
+#include <optional>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgproc.hpp>
@@ -20,6 +21,7 @@
 #include "ivoa/depth_image_t.hpp"
 #include "ivoa/image_t.hpp"
 #include "ivoa/openni2_kinect/openni_camera.hpp"
+#include "ivoa/openni2_kinect/recording_disk_watch.hpp"
 
 namespace {
 
@@ -156,8 +158,27 @@ bool publish_ready(OpenNiCamera& camera, OpenNiCamera::Ready ready, Publisher& p
   }
 }
 
+// Says when the recording's disk runs low, and when it is full: OpenNI2's
+// recorder then drops what it cannot write without an error, so the
+// recording is incomplete (exit 4 at the end; the depth stream goes on).
+void watch_recording_disk(RecordingDiskWatch& watch, const Publisher& publisher, ivoa::Heartbeat& heartbeat) {
+  const auto event = watch.check(ivoa::monotonic_ms() / 1000.0);
+  const double free_mb = static_cast<double>(watch.last_free_bytes()) / (1 << 20);
+  if (event == RecordingDiskWatch::Event::kLow) {
+    spdlog::warn("{}: {:.1f} MB left on its disk; the recording stops when it is full", watch.recording(), free_mb);
+  } else if (event == RecordingDiskWatch::Event::kFull) {
+    spdlog::error(
+        "{}: its disk is full ({:.1f} MB left) after {} depth frames; OpenNI2 drops what it cannot write without "
+        "saying so, so the recording is incomplete from about here (depth is still published)",
+        watch.recording(), free_mb, publisher.depth_frames());
+    heartbeat.set_counter("recording_disk_full", 1);
+  }
+}
+
 int stream(OpenNiCamera& camera, Publisher& publisher, ivoa::Heartbeat& heartbeat, const Flags& f) {
   heartbeat.set_state("running");
+  std::optional<RecordingDiskWatch> disk_watch;
+  if (!camera.record_path().empty()) disk_watch.emplace(camera.record_path());
   double last_depth_ms = ivoa::monotonic_ms();
   int64_t bad_depth_frames = 0;
   while (!ivoa::stop_requested()) {
@@ -185,9 +206,10 @@ int stream(OpenNiCamera& camera, Publisher& publisher, ivoa::Heartbeat& heartbea
                     camera.description());
       return ivoa::kExitFailure;
     }
+    if (disk_watch) watch_recording_disk(*disk_watch, publisher, heartbeat);
     heartbeat.tick();
   }
-  return ivoa::kExitOk;
+  return disk_watch && disk_watch->full() ? ivoa::kExitIoError : ivoa::kExitOk;
 }
 
 }  // namespace

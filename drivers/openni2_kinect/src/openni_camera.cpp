@@ -352,5 +352,6 @@ int OpenNiCamera::depth_height() const { return impl_->depth.getVideoMode().getR
 bool OpenNiCamera::registered() const { return impl_->registered; }
 bool OpenNiCamera::is_recording_file() const { return impl_->file; }
 std::string OpenNiCamera::description() const { return impl_->description; }
+std::string OpenNiCamera::record_path() const { return impl_->recorder.isValid() ? impl_->options.record_path : ""; }
 
 }  // namespace ivoa::openni2_kinect

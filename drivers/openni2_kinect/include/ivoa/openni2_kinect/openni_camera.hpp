@@ -86,6 +86,8 @@ class OpenNiCamera {
   bool registered() const;
   bool is_recording_file() const;
   std::string description() const;
+  // The file being recorded to (a numbered name if the one given existed); "" if none.
+  std::string record_path() const;
 
  private:
   struct Impl;
