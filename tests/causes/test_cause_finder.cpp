@@ -232,5 +232,20 @@ TEST(SessionRate, FramesSkippedInRealTimeDoNotSlowIt) {
   EXPECT_EQ(rate_from_frame_times({t0}), 1.0);
 }
 
+// A simulator too slow for its --rate publishes every second or third
+// frame: no gap is one period, and the shortest (two) would halve the rate.
+TEST(SessionRate, NoTwoFramesInARowStillGiveTheRate) {
+  const int64_t t0 = 1700000000000000;
+  std::vector<int64_t> at_5hz;  // frames 0, 2, 5, 7, 10, ...: gaps of 2 and 3 periods
+  for (int k = 0; k <= 50; k += (k % 5 == 0) ? 2 : 3) at_5hz.push_back(t0 + 200000 * k);
+  EXPECT_DOUBLE_EQ(rate_from_frame_times(at_5hz), 5.0);
+  std::vector<int64_t> at_30hz;  // stamps rounded to the microsecond; gaps of 3, 4 and 5 periods
+  for (int k : {0, 3, 7, 12, 15, 19, 24, 27, 31, 300}) at_30hz.push_back(t0 + std::llround(k * 1e6 / 30.0));
+  EXPECT_NEAR(rate_from_frame_times(at_30hz), 30.0, 1e-6);
+  std::vector<int64_t> at_10hz;  // 269 periods (the 1e6 / 10 period, on uneven gaps)
+  for (int k : {0, 7, 11, 13, 200, 269}) at_10hz.push_back(t0 + 100000 * k);
+  EXPECT_DOUBLE_EQ(rate_from_frame_times(at_10hz), 10.0);
+}
+
 }  // namespace
 }  // namespace ivoa::causes

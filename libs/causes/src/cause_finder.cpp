@@ -267,6 +267,22 @@ std::string describe(const CellCause& c) {
   return c.jointly ? "together: " + phenomena_names(c.tested) : "none found";
 }
 
+namespace {
+
+// Whether every gap is a whole number of `period`s, to the frame times'
+// rounding: each time is within 0.5 us, so a gap within 1 us, and n periods
+// taken from the shortest gap cut in `parts` are off by n / parts us more.
+bool gaps_are_whole_periods(const std::vector<int64_t>& utimes, double period, int parts) {
+  for (size_t i = 1; i < utimes.size(); ++i) {
+    const double gap = static_cast<double>(utimes[i] - utimes[i - 1]);
+    const double n = std::round(gap / period);
+    if (n < 1 || std::abs(gap - n * period) > 1.5 + n / parts) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 double rate_from_frame_times(const std::vector<int64_t>& utimes) {
   int64_t shortest = 0;
   for (size_t i = 1; i < utimes.size(); ++i) {
@@ -274,9 +290,18 @@ double rate_from_frame_times(const std::vector<int64_t>& utimes) {
     if (gap > 0 && (shortest == 0 || gap < shortest)) shortest = gap;
   }
   if (shortest == 0) return 1.0;
+  // The longest period every gap is a multiple of: the shortest gap itself,
+  // or a half, a third... of it when no two frames follow each other.
+  constexpr int kMostPeriodsInTheShortestGap = 16;
+  double period = static_cast<double>(shortest);
+  for (int parts = 1; parts <= kMostPeriodsInTheShortestGap; ++parts)
+    if (gaps_are_whole_periods(utimes, static_cast<double>(shortest) / parts, parts)) {
+      period = static_cast<double>(shortest) / parts;
+      break;
+    }
   double periods = 0;
   for (size_t i = 1; i < utimes.size(); ++i)
-    periods += std::round(static_cast<double>(utimes[i] - utimes[i - 1]) / static_cast<double>(shortest));
+    periods += std::round(static_cast<double>(utimes[i] - utimes[i - 1]) / period);
   return periods * 1e6 / static_cast<double>(utimes.back() - utimes.front());
 }
 

@@ -52,7 +52,10 @@ struct SessionTiming {
 // It stamps frame k at start + k / rate, rounded to the microsecond, but
 // in real time it skips the frames it is late for (and a logger can drop
 // some): a gap may span several periods, never less than one. So the
-// shortest gap is one period, and the span counted in periods gives the rate.
+// period is the longest that every gap is a whole number of (the shortest
+// gap, or up to a 16th of it when no two frames follow each other), and
+// the span counted in periods gives the rate. Gaps that are all even
+// multiples of the period cannot tell it from twice the period.
 double rate_from_frame_times(const std::vector<int64_t>& utimes);
 
 // Other settings of the same detector to try on the factual frames, e.g.
