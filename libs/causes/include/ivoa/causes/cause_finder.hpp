@@ -55,7 +55,8 @@ struct SessionTiming {
 // period is the longest that every gap is a whole number of (the shortest
 // gap, or up to a 16th of it when no two frames follow each other), and
 // the span counted in periods gives the rate. Gaps that are all even
-// multiples of the period cannot tell it from twice the period.
+// multiples of the period cannot tell it from twice the period (the poses
+// agree then; the noise, drawn per frame index, does not).
 double rate_from_frame_times(const std::vector<int64_t>& utimes);
 
 // Other settings of the same detector to try on the factual frames, e.g.
