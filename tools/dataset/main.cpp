@@ -233,7 +233,7 @@ void add_build_command(CLI::App& app, BuildCommand& b) {
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
-  build->add_option("logs", b.logs, "LCM log files, in order")->required()->check(CLI::ExistingFile);
+  build->add_option("logs", b.logs, "LCM log files, in order")->required()->check(ivoa::input_file());
   const size_t before_relabel_flags = build->get_options().size();
   add_query_grid_options(*build, options.grid);
   stereo::add_detector_options(*build, options.detector);
@@ -282,8 +282,8 @@ int main(int argc, char** argv) {
   std::string root, split;
   // Not ->required(): CLI11 would name only "--dataset" as missing.
   info->add_option("dataset,--dataset", root, "dataset folder: the argument, or --dataset as ivoa-train takes it")
-      ->check(CLI::ExistingDirectory);
-  info->add_option("--split", split, "a split file to check against the dataset")->check(CLI::ExistingFile);
+      ->check(ivoa::input_folder());
+  info->add_option("--split", split, "a split file to check against the dataset")->check(ivoa::input_file());
 
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("dataset", common.log_level);

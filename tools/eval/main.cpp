@@ -385,12 +385,12 @@ void write_eval_json(const Options& o, const introspection::IntrospectionModel& 
 }
 
 void add_options(CLI::App& app, Options& o) {
-  app.add_option("--model", o.model, "model file")->required()->check(CLI::ExistingFile);
-  app.add_option("--dataset", o.dataset, "dataset folder")->required()->check(CLI::ExistingDirectory);
-  app.add_option("--split", o.split_file, "split file")->required()->check(CLI::ExistingFile);
+  app.add_option("--model", o.model, "model file")->required()->check(ivoa::input_file());
+  app.add_option("--dataset", o.dataset, "dataset folder")->required()->check(ivoa::input_folder());
+  app.add_option("--split", o.split_file, "split file")->required()->check(ivoa::input_file());
   app.add_option("--splits", o.splits, "splits to evaluate")->delimiter(',')->capture_default_str();
   app.add_option("--out", o.out, "output folder")->required();
-  app.add_option("--logs", o.logs, "logs of evaluated sessions, for overlay figures")->check(CLI::ExistingFile);
+  app.add_option("--logs", o.logs, "logs of evaluated sessions, for overlay figures")->check(ivoa::input_file());
   app.add_option("--overlay-every", o.overlay_every, "one overlay per this many labelled frames")
       ->capture_default_str()
       ->check(positive_number());

@@ -12,6 +12,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/channels.hpp"
+#include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/logio/log_reader.hpp"
@@ -165,7 +166,7 @@ struct ScoreCommandLine {
 void add_score_options(CLI::App& app, ScoreCommandLine& cl) {
   app.add_option("files", cl.files, "log files, in recording order (a split session is read as one)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(ivoa::input_file());
   app.add_flag("--resync", cl.resync, "skip damaged parts and read on (default: stop at the first damage)");
   app.add_option("--json", cl.json_path, "also write the counts and figures as JSON to this file");
 }

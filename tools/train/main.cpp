@@ -40,10 +40,10 @@ struct TrainCommandLine {
 void add_data_options(CLI::App& app, introspection::TrainConfig& c) {
   app.add_option("--dataset", c.dataset, "dataset folder (ivoa-dataset build)")
       ->required()
-      ->check(CLI::ExistingDirectory);
+      ->check(ivoa::input_folder());
   app.add_option("--split", c.split_file, "split file (YAML: train/val/test -> sessions)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(ivoa::input_file());
   app.add_option("--out", c.output, "model file to write")->required();
   app.add_option("--train-split", c.train_split, "split file entry whose sessions are trained on")
       ->capture_default_str();
@@ -82,7 +82,7 @@ void add_model_options(CLI::App& app, TrainCommandLine& cl) {
   app.add_option("--architecture", c.architecture, "slidenet (fast, default) or alexnet (reference, 224x224)")
       ->capture_default_str()
       ->check(CLI::IsMember({"slidenet", "alexnet"}));
-  app.add_option("--init", c.init, "start from this model (fine-tuning)")->check(CLI::ExistingFile);
+  app.add_option("--init", c.init, "start from this model (fine-tuning)")->check(ivoa::input_file());
   app.add_flag("--resume", c.resume, "continue from OUT.checkpoint.* if present");
   app.add_option("--dropout", c.dropout, "dropout before FC1 and FC2 (> 0: the MC-dropout passes need it)")
       ->capture_default_str()

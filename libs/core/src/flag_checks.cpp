@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include <glib.h>
@@ -117,6 +118,44 @@ const CLI::Validator& odd_positive_integer() {
       },
       "ODD");
   return check;
+}
+
+namespace {
+
+// Begins every message of input_file() and input_folder(), so that
+// is_missing_input can tell their errors from other flags'.
+constexpr const char* kMissingInput = "cannot be read: ";
+
+CLI::Validator input_path(bool folder) {
+  return CLI::Validator(
+      [folder](std::string& text) {
+        std::error_code error;
+        const auto status = std::filesystem::status(text, error);
+        if (!std::filesystem::exists(status)) return std::string(kMissingInput) + "no such file or folder: " + text;
+        if (folder && !std::filesystem::is_directory(status))
+          return std::string(kMissingInput) + text + " is a file, not a folder";
+        if (!folder && std::filesystem::is_directory(status))
+          return std::string(kMissingInput) + text + " is a folder, not a file";
+        return std::string();
+      },
+      folder ? "DIR" : "FILE");
+}
+
+}  // namespace
+
+const CLI::Validator& input_file() {
+  static const CLI::Validator check = input_path(false);
+  return check;
+}
+
+const CLI::Validator& input_folder() {
+  static const CLI::Validator check = input_path(true);
+  return check;
+}
+
+bool is_missing_input(const CLI::ParseError& e) {
+  return dynamic_cast<const CLI::ValidationError*>(&e) != nullptr &&
+         std::string(e.what()).find(kMissingInput) != std::string::npos;
 }
 
 }  // namespace ivoa

@@ -1,5 +1,5 @@
 #pragma once
-// Checks for numeric flags whose errors a user can read. CLI11 2.1's
+// Checks for flags whose errors a user can read. CLI11 2.1's
 // PositiveNumber and NonNegativeNumber name the double range they test
 // against, 300 digits long; these say "--steps: must be > 0, not 0".
 #include <CLI/CLI.hpp>
@@ -30,5 +30,12 @@ const CLI::Validator& channel_name();
 const CLI::Validator& channel_regex();
 // A whole number >= 1 that is odd, e.g. a filter window (help: ODD).
 const CLI::Validator& odd_positive_integer();
+// A file (help: FILE) or folder (DIR) to read, which must exist. Unlike
+// CLI11's ExistingFile, a missing one is an unusable input, exit 3 as for
+// one that cannot be read (parse_command_line asks is_missing_input), not a
+// flag error (exit 2).
+const CLI::Validator& input_file();
+const CLI::Validator& input_folder();
+bool is_missing_input(const CLI::ParseError& e);
 
 }  // namespace ivoa
