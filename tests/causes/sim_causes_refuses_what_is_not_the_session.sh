@@ -3,7 +3,8 @@
 # would explain a session wrongly: its log given twice (every row twice),
 # a scene file of another scene (every frame skipped, an empty CSV, exit
 # 0), a --start-utime far from the log's frames (it stepped the trajectory
-# billions of frames and hung), an output that is the log.
+# billions of frames and hung), an output that is the log, a file of the
+# dataset or the scene file, or the other output by another name.
 set -euo pipefail
 shopt -s inherit_errexit
 B=${IVOA_BUILD_DIR:?}; S=${IVOA_SOURCE_DIR:?}
@@ -34,8 +35,23 @@ for outputs in "--out office_s5.lcmlog" "--out c.csv --variants-out office_s5.lc
   code=0
   # shellcheck disable=SC2086
   "$B/bin/ivoa-sim-causes" $outputs office_s5.lcmlog >said.txt 2>&1 || code=$?
-  [ "$code" = 2 ] && grep -qF "office_s5.lcmlog is the input office_s5.lcmlog: it would be written over" said.txt ||
+  [ "$code" = 2 ] && grep -qF "office_s5.lcmlog is (or is inside) the input office_s5.lcmlog: it would be written over" said.txt ||
     { cat said.txt; echo "FAIL: $outputs: exit $code" >&2; exit 1; }
   [ "$(md5sum <office_s5.lcmlog)" = "$before" ] || { echo "FAIL: $outputs changed the log" >&2; exit 1; }
 done
-echo "OK: a log given twice, another scene, a wrong start and an output over the log refused by name"
+# A file of the dataset, or the scene file: cut to a CSV header, they broke the dataset and the scene.
+cp "$S/libs/sim/scenes/indoor_office.yaml" scene.yaml
+kept=$(cat data/office_s5/samples.csv scene.yaml | md5sum)
+for outputs in "--dataset data --out data/office_s5/samples.csv" "--scene scene.yaml --out scene.yaml" \
+  "--scene scene.yaml --out c.csv --variants-out ./scene.yaml"; do
+  code=0
+  # shellcheck disable=SC2086
+  "$B/bin/ivoa-sim-causes" --no-variants $outputs office_s5.lcmlog >said.txt 2>&1 || code=$?
+  [ "$code" = 2 ] && grep -qF "is (or is inside) the input" said.txt || { cat said.txt; echo "FAIL: $outputs: exit $code" >&2; exit 1; }
+done
+[ "$(cat data/office_s5/samples.csv scene.yaml | md5sum)" = "$kept" ] || { echo "FAIL: an input was written over" >&2; exit 1; }
+code=0
+"$B/bin/ivoa-sim-causes" --out c2.csv --variants-out ./c2.csv office_s5.lcmlog >said.txt 2>&1 || code=$?
+[ "$code" = 2 ] && grep -qF -- "--out c2.csv and --variants-out ./c2.csv are the same file" said.txt ||
+  { cat said.txt; echo "FAIL: --out c2.csv --variants-out ./c2.csv: exit $code" >&2; exit 1; }
+echo "OK: a log given twice, another scene, a wrong start and an output over an input or the other output refused by name"

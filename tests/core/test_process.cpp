@@ -1,8 +1,10 @@
 // What every executable shares: its common flags and the small file outputs
 // (--json, --ready-file).
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -53,6 +55,60 @@ TEST(CommonOptions, AnOfflineToolNamesAnLcmUrlAsRefusedNotAsAMissingFile) {
     EXPECT_EQ(testing::internal::GetCapturedStderr(),
               "--lcm-url: ivoa-tool reads files and talks no LCM: give the logs as arguments\n");
   }
+}
+
+// A file or folder to read that is missing, or of the other kind, is an
+// unusable input (exit 3) named with its flag; a bad flag stays exit 2.
+TEST(CommonOptions, AMissingInputFileIsBadInputNotAUsageError) {
+  test::TempDir dir;
+  std::ofstream(dir.file("model.pt")) << "x";
+  const auto parse_inputs = [](std::vector<const char*> args) {
+    CLI::App app;
+    CommonOptions options;
+    add_offline_options(app, options);
+    std::string model, dataset;
+    int steps = 0;
+    app.add_option("--model", model)->check(input_file());
+    app.add_option("--dataset", dataset)->check(input_folder());
+    app.add_option("--steps", steps)->check(positive_number());
+    args.insert(args.begin(), "ivoa-tool");
+    testing::internal::CaptureStderr();
+    const int code = parse_command_line(app, static_cast<int>(args.size()), const_cast<char**>(args.data()));
+    return std::make_pair(code, testing::internal::GetCapturedStderr());
+  };
+  const std::string model = dir.file("model.pt"), folder = dir.path().string(), missing = dir.file("none.pt");
+  EXPECT_EQ(parse_inputs({"--model", model.c_str(), "--dataset", folder.c_str()}).first, -1);
+  auto [code, err] = parse_inputs({"--model", missing.c_str()});
+  EXPECT_EQ(code, kExitBadInput);
+  EXPECT_NE(err.find("--model: cannot be read: no such file or folder: " + missing), std::string::npos) << err;
+  std::tie(code, err) = parse_inputs({"--model", folder.c_str()});
+  EXPECT_EQ(code, kExitBadInput);
+  EXPECT_NE(err.find("is a folder, not a file"), std::string::npos) << err;
+  std::tie(code, err) = parse_inputs({"--dataset", model.c_str()});
+  EXPECT_EQ(code, kExitBadInput);
+  EXPECT_NE(err.find("is a file, not a folder"), std::string::npos) << err;
+  EXPECT_EQ(parse_inputs({"--model", model.c_str(), "--steps", "0"}).first, kExitUsage);
+}
+
+TEST(WritesOver, TheSameFileByAnySpellingOrAFileInsideTheInputFolder) {
+  test::TempDir dir;
+  std::filesystem::create_directories(dir.file("data/office_s1"));
+  std::ofstream(dir.file("data/office_s1/samples.csv")) << "x";
+  std::ofstream(dir.file("scene.yaml")) << "x";
+  const std::string data = dir.file("data"), scene = dir.file("scene.yaml");
+  EXPECT_TRUE(writes_over(dir.file("data/office_s1/samples.csv"), data));
+  EXPECT_TRUE(writes_over(dir.file("data/../data/new.csv"), data + "/"));
+  EXPECT_TRUE(writes_over(dir.file("./scene.yaml"), scene));
+  EXPECT_TRUE(writes_over(dir.file("out.csv"), dir.file("./out.csv"))) << "neither exists yet";
+  EXPECT_FALSE(writes_over(dir.file("data2/x.csv"), data)) << "a sibling that shares the folder's prefix";
+  EXPECT_FALSE(writes_over(dir.file("causes.csv"), data));
+  EXPECT_FALSE(writes_over(dir.file("causes.csv"), scene));
+  EXPECT_FALSE(writes_over("", data));
+  const auto here = std::filesystem::current_path();
+  std::filesystem::current_path(dir.path());
+  EXPECT_TRUE(writes_over("c.csv", "./c.csv")) << "relative, neither exists yet";
+  EXPECT_TRUE(writes_over("data/office_s1/new.csv", "./data"));
+  std::filesystem::current_path(here);
 }
 
 TEST(CommonOptions, HeartbeatsGoToProcessStatusUnlessTheFlagNamesAnotherChannel) {

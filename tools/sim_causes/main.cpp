@@ -421,7 +421,7 @@ void add_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--out", opt.out, "CSV to write: one row per FP/FN cell (session, utime, cell, ..., causes)")
       ->required();
   app.add_option("--scene", opt.scene_file, "scene file (default: <scene-dir>/<the logged scene name>.yaml)")
-      ->check(CLI::ExistingFile);
+      ->check(ivoa::input_file());
   app.add_option("--scene-dir", opt.scene_dir, "where the logged scenes' files are")->capture_default_str();
   app.add_option("--rate", opt.timing.rate_hz,
                  "the simulator driver's --rate (frames per second of session time; default: from the frames' times)")
@@ -433,10 +433,10 @@ void add_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--dataset", opt.dataset,
                  "take the failure cells from this dataset's sessions (named like the logs) instead of the logs' "
                  "labels: e.g. the dense detector's, labelled offline by ivoa-dataset")
-      ->check(CLI::ExistingDirectory);
+      ->check(ivoa::input_folder());
   app.add_option("logs", cl.logs, "simulated session logs with recorded INTROSPECTION_LABELS, one session each")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(ivoa::input_file());
   app.add_option("--jobs", cl.jobs, "sessions explained at once (each on one core)")
       ->check(ivoa::positive_number())
       ->capture_default_str();
@@ -504,20 +504,21 @@ bool sessions_named_once(const std::vector<std::string>& logs) {
   return true;
 }
 
-// An output that is one of the logs (or the other output) would be
-// truncated before it is read: said before anything is opened.
+// An output that is one of the inputs (a log, a file of the dataset or of
+// the scenes) or the other output would be truncated before it is read:
+// said before anything is opened.
 bool outputs_apart_from_inputs(const CommandLine& cl) {
   std::vector<std::string> inputs = cl.logs;
-  if (!cl.opt.dataset.empty()) inputs.push_back(cl.opt.dataset);
-  for (const std::string* out : {&cl.opt.out, &cl.opt.variants_out}) {
-    if (const std::string input = same_file_among(*out, inputs); !input.empty()) {
-      spdlog::error("{} is the input {}: it would be written over", *out, input);
-      return false;
-    }
-  }
-  if (!cl.opt.variants_out.empty() &&
-      (cl.opt.out == cl.opt.variants_out || !same_file_among(cl.opt.out, {cl.opt.variants_out}).empty())) {
-    spdlog::error("--out and --variants-out are both {}", cl.opt.out);
+  for (const std::string& input : {cl.opt.dataset, cl.opt.scene_file.empty() ? cl.opt.scene_dir : cl.opt.scene_file})
+    if (!input.empty()) inputs.push_back(input);
+  for (const std::string* out : {&cl.opt.out, &cl.opt.variants_out})
+    for (const std::string& input : inputs)
+      if (writes_over(*out, input)) {
+        spdlog::error("{} is (or is inside) the input {}: it would be written over", *out, input);
+        return false;
+      }
+  if (writes_over(cl.opt.variants_out, cl.opt.out)) {
+    spdlog::error("--out {} and --variants-out {} are the same file", cl.opt.out, cl.opt.variants_out);
     return false;
   }
   return true;

@@ -144,7 +144,7 @@ int parse_command_line(CLI::App& app, int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e) == 0 ? kExitOk : kExitUsage;  // --help
     explain_parse_error(app, e, argc, argv);
-    return kExitUsage;
+    return is_missing_input(e) ? kExitBadInput : kExitUsage;
   }
   return -1;
 }
@@ -208,6 +208,20 @@ std::string same_file_among(const std::string& path, const std::vector<std::stri
     if (::stat(file.c_str(), &in) == 0 && in.st_dev == out.st_dev && in.st_ino == out.st_ino) return file;
   }
   return "";
+}
+
+bool writes_over(const std::string& path, const std::string& input) {
+  if (path.empty() || input.empty()) return false;
+  if (!same_file_among(path, {input}).empty()) return true;
+  std::error_code error;
+  // Absolute first: a relative path none of whose folders exists stays relative.
+  const auto out = std::filesystem::weakly_canonical(std::filesystem::absolute(path), error);
+  const auto in = std::filesystem::weakly_canonical(std::filesystem::absolute(input), error);
+  if (error) return false;
+  if (out == in) return true;
+  if (!std::filesystem::is_directory(in, error)) return false;
+  const auto inside = out.lexically_relative(in);  // "../x" when outside
+  return !inside.empty() && *inside.begin() != "..";
 }
 
 std::string why_not_a_file(const std::string& path) {

@@ -69,6 +69,11 @@ std::string why_cannot_write(const std::string& path);
 // one of a tool's inputs (`--json run.lcmlog.0*` in a shell) is refused.
 std::string same_file_among(const std::string& path, const std::vector<std::string>& files);
 
+// Whether writing `path` would write over `input`: the same file (by any
+// spelling, also before either exists), or a file inside the folder
+// `input` (a dataset, a folder of scene files).
+bool writes_over(const std::string& path, const std::string& input);
+
 // Why `path` cannot be read as a file ("no such file", "is a folder", "is a
 // pipe, device or socket, not a file"), or "" if it is a regular file: a
 // reader that opened a named pipe would wait for a writer for ever.
