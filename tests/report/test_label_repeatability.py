@@ -188,6 +188,21 @@ class LabelRepeatabilityTest(unittest.TestCase):
         self.assertEqual(proc.returncode, 3)
         self.assertIn("session office_s31 is labelled from different detectors ('jppc' in", proc.stderr)
 
+    def test_the_json_is_never_written_into_an_input_dataset(self):
+        target = os.path.join(self.data[1], "office_s31", "samples.csv")
+        with open(target) as f:
+            before = f.read()
+        proc = subprocess.run([sys.executable, TOOL, *self.data[:2], "--json", target], capture_output=True,
+                              text=True, timeout=60)
+        self.assertEqual(proc.returncode, 2, proc.stderr)
+        self.assertIn(f"is inside the dataset {self.data[1]}", proc.stderr)
+        with open(target) as f:
+            self.assertEqual(f.read(), before)
+        proc = subprocess.run([sys.executable, TOOL, *self.data[:2], "--evidence-threshold", "nan"],
+                              capture_output=True, text=True, timeout=60)
+        self.assertEqual(proc.returncode, 2, proc.stderr)
+        self.assertIn("--evidence-threshold must be a finite cost", proc.stderr)
+
 
 def write_evidence_dataset(root, cells, realisation, detector="jppc"):
     """One session whose samples carry JPP-C-like evidence: cells are

@@ -30,6 +30,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
 import os
 import sys
 from typing import Dict, List, Optional, Tuple
@@ -345,6 +346,13 @@ def main(argv=None) -> int:
         if os.path.realpath(d) in seen:
             ap.error(f"{d} is given twice (as {seen[os.path.realpath(d)]} too): give each realisation once")
         seen[os.path.realpath(d)] = d
+    if not math.isfinite(args.evidence_threshold):
+        ap.error(f"--evidence-threshold must be a finite cost, not {args.evidence_threshold}")
+    if args.json:
+        out = os.path.realpath(args.json)
+        for d in args.datasets:  # written over, a dataset's own dataset.json would break it
+            if os.path.commonpath([out, os.path.realpath(d)]) == os.path.realpath(d):
+                ap.error(f"--json {args.json} is inside the dataset {d}: write it elsewhere")
     if args.json and (why := _why_cannot_write(args.json)):  # before the analysis, not after
         print(f"ivoa_label_repeatability: cannot write {args.json}: {why}", file=sys.stderr)
         return EXIT_CANNOT_WRITE
