@@ -292,8 +292,8 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Record LCM channels into standard LCM log files (replay: lcm-logplayer; browse: lcm-spy).\n"
       "On SIGINT, SIGTERM or SIGHUP everything received is written before exiting. Exit codes: 0 ok, 1 LCM failure,\n"
-      "2 bad flags, 4 the log could not be written, or not all of it: messages were LOST (what was written stays\n"
-      "readable)."};
+      "2 bad flags, 3 a damaged file:// log to read, 4 the log could not be written, or not all of it: messages\n"
+      "were LOST (what was written stays readable)."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
   ivoa::add_status_channel_option(app, common.status_channel);

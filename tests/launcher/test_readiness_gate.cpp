@@ -44,17 +44,21 @@ struct GateTest : ::testing::Test {
   Clock::time_point now = Clock::now();
 };
 
-TEST(RunsIvoaProgram, FindsAnIvoaProgramAnywhereInTheCommandLine) {
-  EXPECT_TRUE(runs_ivoa_program("/build/bin/ivoa-stereo-detector --model jppc"));
-  EXPECT_TRUE(runs_ivoa_program("ivoa-logger logs/x.lcmlog"));
-  EXPECT_TRUE(runs_ivoa_program("sleep 2; exec '/build/bin/ivoa-viewer' --every 1"));
-  EXPECT_TRUE(runs_ivoa_program("LCM_DEFAULT_URL=udpm://x ivoa-depth-monitor"));
-  EXPECT_TRUE(runs_ivoa_program("cd /tmp && ivoa-logger x"));
-  EXPECT_FALSE(runs_ivoa_program("lcm-logplayer --speed=1 logs/ivoa-session.lcmlog"));
-  EXPECT_FALSE(runs_ivoa_program("echo ivoa-stereo-detector"));
-  EXPECT_FALSE(runs_ivoa_program("cat logs/a | lcm-logplayer -e ivoa-x"));
-  EXPECT_FALSE(runs_ivoa_program("/opt/bin/my-ivoa-tool"));
-  EXPECT_FALSE(runs_ivoa_program(""));
+TEST(RunsAnnouncingProgram, FindsAnIvoaProcessAnywhereInTheCommandLine) {
+  EXPECT_TRUE(runs_announcing_program("/build/bin/ivoa-stereo-detector --model jppc"));
+  EXPECT_TRUE(runs_announcing_program("ivoa-logger logs/x.lcmlog"));
+  EXPECT_TRUE(runs_announcing_program("sleep 2; exec '/build/bin/ivoa-viewer' --every 1"));
+  EXPECT_TRUE(runs_announcing_program("LCM_DEFAULT_URL=udpm://x ivoa-depth-monitor"));
+  EXPECT_TRUE(runs_announcing_program("cd /tmp && ivoa-logger x"));
+  EXPECT_FALSE(runs_announcing_program("lcm-logplayer --speed=1 logs/ivoa-session.lcmlog"));
+  EXPECT_FALSE(runs_announcing_program("echo ivoa-stereo-detector"));
+  EXPECT_FALSE(runs_announcing_program("cat logs/a | lcm-logplayer -e ivoa-x"));
+  EXPECT_FALSE(runs_announcing_program("/opt/bin/my-ivoa-tool"));
+  EXPECT_FALSE(runs_announcing_program(""));
+  // ivoa programs that send no heartbeat are not waited for.
+  EXPECT_FALSE(runs_announcing_program("build/bin/ivoa-lcm-stats --expect STEREO_IMAGES"));
+  EXPECT_FALSE(runs_announcing_program("exec ivoa-fake-gige-rig --genicam rig.xml"));
+  EXPECT_TRUE(runs_announcing_program("ivoa-log-play logs/x.lcmlog"));
 }
 
 TEST_F(GateTest, AnIvoaProgramIsReadyOnceItsHeartbeatOfThisRunArrives) {

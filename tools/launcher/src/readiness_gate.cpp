@@ -2,10 +2,18 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <set>
 
 namespace ivoa::launcher {
 
 namespace {
+
+// The programs that send PROCESS_STATUS heartbeats: the drivers, the
+// processes and the log player. The offline tools, ivoa-lcm-stats and the
+// simulated camera send none.
+const std::set<std::string> kAnnouncingPrograms{"ivoa-aravis-stereo",   "ivoa-openni2-kinect", "ivoa-sim-driver",
+                                                "ivoa-stereo-detector", "ivoa-depth-monitor",  "ivoa-introspection",
+                                                "ivoa-logger",          "ivoa-viewer",         "ivoa-log-play"};
 
 // A word that leaves the next one in command position: `exec` or VAR=value.
 bool keeps_command_position(const std::string& word) {
@@ -15,14 +23,14 @@ bool keeps_command_position(const std::string& word) {
 
 }  // namespace
 
-bool runs_ivoa_program(const std::string& shell_command) {
+bool runs_announcing_program(const std::string& shell_command) {
   static const std::string separators = ";&|()\n", blanks = " \t", quotes = "'\"";
   bool command_position = true;
   std::string word;
   const auto end_word = [&] {
     if (word.empty()) return false;
     const bool program = command_position && !keeps_command_position(word);
-    if (program && std::filesystem::path(word).filename().string().rfind("ivoa-", 0) == 0) return true;
+    if (program && kAnnouncingPrograms.count(std::filesystem::path(word).filename().string())) return true;
     if (program) command_position = false;
     word.clear();
     return false;
@@ -42,7 +50,7 @@ bool runs_ivoa_program(const std::string& shell_command) {
 ReadinessGate::ReadinessGate(const std::vector<LaunchCommand>& commands, double timeout_s, EventHandler on_event)
     : timeout_s_(timeout_s), on_event_(std::move(on_event)) {
   for (const auto& c : commands)
-    if (runs_ivoa_program(c.shell_command)) announcing_.insert(c.spec.name);
+    if (runs_announcing_program(c.shell_command)) announcing_.insert(c.spec.name);
 }
 
 bool ReadinessGate::ready(const CommandStatus& status, const std::optional<HeartbeatMonitor::Latest>& heartbeat,

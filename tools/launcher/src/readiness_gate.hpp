@@ -2,11 +2,11 @@
 // When a script's `wait "running"` holds for a command. For procman a
 // command runs once its process exists, but a process that exists is not
 // yet listening: a source started right after it (a log player, the
-// simulator) publishes its first frames into the void. Every ivoa program
-// announces itself on PROCESS_STATUS once it has subscribed, so for a
-// command that runs one the wait also needs that command's first heartbeat of its
-// current run, or timeout_s of running without one; then the gate says so
-// once and lets the script go on.
+// simulator) publishes its first frames into the void. Every ivoa driver
+// and process announces itself on PROCESS_STATUS once it has subscribed, so
+// for a command that runs one the wait also needs that command's first
+// heartbeat of its current run, or timeout_s of running without one; then
+// the gate says so once and lets the script go on.
 #include <chrono>
 #include <optional>
 #include <set>
@@ -19,9 +19,10 @@
 
 namespace ivoa::launcher {
 
-// Whether a command line runs an ivoa program: a program (the first word of
-// a command, after `exec` and VAR=value) whose file name starts with "ivoa-".
-bool runs_ivoa_program(const std::string& shell_command);
+// Whether a command line runs an ivoa program that sends heartbeats: a
+// program (the first word of a command, after `exec` and VAR=value) whose
+// file name is one of the drivers', the processes' or ivoa-log-play's.
+bool runs_announcing_program(const std::string& shell_command);
 
 class ReadinessGate {
  public:
