@@ -523,6 +523,18 @@ TEST(DatasetFormat, SplitFileBySessionRejectsOverlap) {
   } catch (const DatasetError& e) {
     EXPECT_NE(std::string(e.what()).find("split 'test' is given twice"), std::string::npos) << e.what();
   }
+  // A path names the same session twice unseen (./b and b), or another dataset's.
+  for (const char* path : {"./b", "../other/b", "..", ""}) {
+    std::ofstream(dir.file("path.yaml")) << "train: [a, '" << path << "']\nval: [b]\n";
+    try {
+      load_split(dir.file("path.yaml"));
+      FAIL() << path;
+    } catch (const DatasetError& e) {
+      EXPECT_NE(std::string(e.what()).find("split 'train': '" + std::string(path) + "' is not a session name"),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 // What a split file names must be there: the split in the file, its sessions

@@ -567,6 +567,10 @@ std::map<std::string, std::vector<std::string>> load_split(const std::string& pa
       throw DatasetError(path + ": split '" + name + "' must be a list of session names");
     }
     for (const auto& s : sessions) {
+      // A path would reach another folder, or the same session by another name.
+      if (s.empty() || s == "." || s == ".." || s.find('/') != std::string::npos)
+        throw DatasetError(path + ": split '" + name + "': '" + s +
+                           "' is not a session name (a folder of the dataset, such as office_s31, not a path)");
       if (owner.count(s))
         throw DatasetError(path + ": session '" + s + "' is in both '" + owner[s] + "' and '" + name + "'");
       owner[s] = name;
