@@ -1,5 +1,6 @@
 // `ivoa-dataset` as a user runs it. info: sessions, splits and class counts;
 // a folder that is not a dataset is bad input. build: flags checked up front.
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -97,6 +98,39 @@ TEST(DatasetBuild, AnOutputFolderThatCannotBeWrittenIsAWriteError) {
   EXPECT_EQ(r.exit_code, kExitIoError) << r.output;
   EXPECT_TRUE(contains(r.output, "cannot write the dataset folder " + dir.file("a_file/data") + ": ")) << r.output;
   EXPECT_FALSE(contains(r.output, "never read")) << r.output;
+}
+
+// Logs are grouped into sessions by name; only split parts of one recording
+// may share one. Two recordings of one name (another folder, or not split)
+// were built as one session, labels paired with the other log's frames.
+TEST(DatasetBuild, LogsOfOneNameMustBeOneRecording) {
+  test::TempDir dir;
+  std::filesystem::create_directories(dir.file("other"));
+  for (const char* log :
+       {"s.lcmlog", "s.lcmlog.01", "other/s.lcmlog", "t.lcmlog.00", "t.lcmlog.01", "other/t.lcmlog.02"})
+    std::ofstream(dir.file(log)) << "not read";
+  const auto build = [&](const std::string& logs) {
+    return test::run_command("cd " + dir.path().string() + " && timeout 60 " IVOA_DATASET_EXE " build --out data " +
+                             logs);
+  };
+  auto r = build("s.lcmlog other/s.lcmlog");
+  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+  EXPECT_TRUE(contains(r.output, "s.lcmlog and other/s.lcmlog are both session s")) << r.output;
+  r = build("s.lcmlog t.lcmlog.00 ./s.lcmlog");
+  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+  EXPECT_TRUE(contains(r.output, "s.lcmlog and ./s.lcmlog are the same log")) << r.output;
+  r = build("t.lcmlog.00 t.lcmlog.01 other/t.lcmlog.02");
+  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+  EXPECT_TRUE(contains(r.output, "t.lcmlog.00 and other/t.lcmlog.02 are both session t")) << r.output;
+  r = build("s.lcmlog t.lcmlog.00 s.lcmlog.01");
+  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+  EXPECT_TRUE(contains(r.output, "s.lcmlog and s.lcmlog.01 are both session s")) << r.output;
+  // Split parts of one folder go together (and are then read: these are no logs).
+  r = build("t.lcmlog.00 t.lcmlog.01");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_FALSE(contains(r.output, "are both session")) << r.output;
+  r = build("--session joined s.lcmlog other/s.lcmlog");  // on purpose
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
 }
 
 }  // namespace

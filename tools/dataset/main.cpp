@@ -4,9 +4,11 @@
 //   ivoa-dataset build --out data/ --labels jppc session1.lcmlog session2.lcmlog
 //   ivoa-dataset build --out data/ --labels recorded --session s7 s7.lcmlog.00 s7.lcmlog.01
 //   ivoa-dataset info data/ [--split split.yaml]
+#include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -90,6 +92,50 @@ int build_session(const std::string& out, const std::string& session, const std:
   return kExitOk;
 }
 
+using SessionLogs = std::vector<std::pair<std::string, std::vector<std::string>>>;
+
+// lcm-logger's split files: NAME.lcmlog.00, .01, ...
+bool is_split_part(const std::string& log) {
+  const std::string ext = fs::path(log).extension().string();
+  return ext.size() == 3 && std::isdigit(static_cast<unsigned char>(ext[1])) &&
+         std::isdigit(static_cast<unsigned char>(ext[2]));
+}
+
+// Whether the logs grouped by name are each one recording: a file given
+// twice, or two logs of one name that are not split parts from one folder
+// (a scene's session recorded twice, in two folders), were merged into one
+// session whose labels were paired with the other log's frames. --session
+// joins logs on purpose; a file twice is refused even then.
+bool sessions_are_recordings(const SessionLogs& sessions, const std::vector<std::string>& logs, bool named_by_flag) {
+  for (size_t i = 0; i < logs.size(); ++i)
+    if (const std::string same = same_file_among(logs[i], {logs.begin(), logs.begin() + static_cast<long>(i)});
+        !same.empty()) {
+      spdlog::error("{} and {} are the same log: give each log once", same, logs[i]);
+      return false;
+    }
+  if (named_by_flag) return true;
+  std::map<std::string, std::string> first_log_of;
+  const auto folder = [](const std::string& f) { return fs::path(f).parent_path(); };
+  for (const auto& [name, files] : sessions) {
+    std::string earlier = files.front(), other;  // two logs of this name that are not one recording
+    if (const auto it = first_log_of.find(name); it != first_log_of.end()) {
+      earlier = it->second, other = files.front();  // the name again, after another session's logs
+    } else if (files.size() > 1) {
+      for (const auto& f : files)
+        if (other.empty() && (!is_split_part(f) || folder(f) != folder(files.front()))) other = f;
+      if (other == files.front()) other = files[1];
+    }
+    first_log_of.emplace(name, files.front());
+    if (other.empty()) continue;
+    spdlog::error(
+        "{} and {} are both session {}: give each session's log once (split parts NAME.lcmlog.NN of one folder, in "
+        "order, go together; --session NAME joins other logs on purpose)",
+        earlier, other, name);
+    return false;
+  }
+  return true;
+}
+
 int run_build(const std::string& out, const std::string& session, const std::vector<std::string>& logs,
               const dataset::BuildOptions& options) {
   // The dataset folder is made and probed first: one that cannot be written
@@ -102,12 +148,13 @@ int run_build(const std::string& out, const std::string& session, const std::vec
     return kExitIoError;
   }
   // Logs of one session (explicit --session, or split files name.NN) go together.
-  std::vector<std::pair<std::string, std::vector<std::string>>> sessions;
+  SessionLogs sessions;
   for (const auto& log : logs) {
     const std::string name = session.empty() ? logio::session_name_of(log) : session;
     if (sessions.empty() || sessions.back().first != name) sessions.push_back({name, {}});
     sessions.back().second.push_back(log);
   }
+  if (!sessions_are_recordings(sessions, logs, !session.empty())) return kExitUsage;
   int worst = kExitOk;
   for (const auto& [name, files] : sessions) {
     try {
