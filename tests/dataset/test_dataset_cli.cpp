@@ -80,6 +80,13 @@ TEST(DatasetBuild, DetectorFlagOutOfRangeIsAUsageError) {
   EXPECT_TRUE(contains(r.output, "rect_scale must be in [0.05, 1]")) << r.output;
 }
 
+// A pairing tolerance near 2^63 overflowed and paired no frame (exit 0).
+TEST(DatasetBuild, AnOverflowingSyncToleranceIsAUsageError) {
+  const auto r = build_refused_before_reading("--labels jppc --sync-tolerance-us 9223372036854775807");
+  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+  EXPECT_TRUE(contains(r.output, "--sync-tolerance-us")) << r.output;
+}
+
 // A misspelt --labels is a usage error listing what it takes.
 TEST(DatasetBuild, UnknownLabelSourceIsAUsageErrorListingTheChoices) {
   const auto r = build_refused_before_reading("--labels jpcc");

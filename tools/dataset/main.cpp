@@ -277,9 +277,10 @@ void add_build_command(CLI::App& app, BuildCommand& b) {
   build->add_flag("--no-evidence", b.no_evidence,
                   "do not store the detector's per-sample evidence (JPP-C's window costs, re-run on each frame; "
                   "ivoa-train learns them as a side task)");
+  // Capped as the monitor's: utime arithmetic near 2^63 overflowed and paired nothing.
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::number_in(0, 60e6));
   build->add_option("logs", b.logs, "LCM log files, in order")->required()->check(ivoa::input_file());
   const size_t before_relabel_flags = build->get_options().size();
   add_query_grid_options(*build, options.grid);
