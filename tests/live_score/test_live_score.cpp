@@ -254,6 +254,44 @@ TEST_F(LiveScoreTool, ALogWithoutIntrospectionIsRefusedByName) {
   EXPECT_NE(out.find("labels_only.lcmlog: no INTROSPECTION messages to score"), std::string::npos) << out;
 }
 
+// Frames that match but hold no cell to score printed n/a everywhere, exit 0.
+TEST_F(LiveScoreTool, FramesWithNothingToScoreAreRefused) {
+  for (const bool no_cells : {true, false}) {
+    const std::string log_path = (dir / (no_cells ? "no_cells.lcmlog" : "no_queries.lcmlog")).string();
+    {
+      logio::LogWriter log(log_path);
+      write(log, "INTROSPECTION_LABELS",
+            labels_message(1, no_cells ? std::vector<Cell>{} : std::vector<Cell>{{1.0f, 0.0f, kTN, kFree}}));
+      write(log, "INTROSPECTION",
+            prediction_message(
+                1, no_cells ? std::vector<Query>{{1.0f, 0.0f, kTN, 1, kFree, kTN, 1}} : std::vector<Query>{}));
+      log.close();
+    }
+    std::string out;
+    EXPECT_EQ(run(log_path, out), 3) << out;
+    EXPECT_NE(out.find("no labelled cell has a prediction in the 1 frames with both (" +
+                       std::string(no_cells ? "0" : "1") + " labelled cells"),
+              std::string::npos)
+        << out;
+  }
+}
+
+// A log whose INTROSPECTION messages were all left out as unusable says so,
+// not that ivoa-introspection was not running.
+TEST_F(LiveScoreTool, MessagesAllLeftOutAreNotCalledMissing) {
+  const std::string log_path = (dir / "bad_class.lcmlog").string();
+  {
+    logio::LogWriter log(log_path);
+    write(log, "INTROSPECTION_LABELS", labels_message(1, {{1.0f, 0.0f, kTN, kFree}}));
+    write(log, "INTROSPECTION", prediction_message(1, {{1.0f, 0.0f, 7, 1, kFree, kTN, 1}}));
+    log.close();
+  }
+  std::string out;
+  EXPECT_EQ(run(log_path, out), 3) << out;
+  EXPECT_NE(out.find("no INTROSPECTION messages that could be used (1 left out as unusable"), std::string::npos) << out;
+  EXPECT_EQ(out.find("was ivoa-introspection running"), std::string::npos) << out;
+}
+
 TEST_F(LiveScoreTool, ALogGivenTwiceIsRefusedRatherThanCountedTwice) {
   const std::string log_path = (dir / "live.lcmlog").string();
   {

@@ -183,10 +183,17 @@ bool score_logs(const ScoreCommandLine& cl, LiveScore& s, ReadCounts& counts) {
   }
   s = scorer.finish();
   if (s.predicted_frames > 0 && s.labelled_frames > 0) return true;
-  spdlog::error("{}: no {} messages to score{}", cl.logs(),
-                s.predicted_frames == 0 ? "INTROSPECTION" : "INTROSPECTION_LABELS",
-                s.predicted_frames == 0 ? " (was ivoa-introspection running when it was recorded?)"
-                                        : " (was ivoa-depth-monitor running, with a depth sensor?)");
+  // Messages left out as unusable are not missing ones: say which it was.
+  const std::string skipped =
+      counts.malformed || counts.undecodable
+          ? fmt::format(" that could be used ({} left out as unusable, {} undecodable: warnings above)",
+                        counts.malformed, counts.undecodable)
+          : "";
+  spdlog::error("{}: no {} messages{} to score{}", cl.logs(),
+                s.predicted_frames == 0 ? "INTROSPECTION" : "INTROSPECTION_LABELS", skipped,
+                !skipped.empty()          ? ""
+                : s.predicted_frames == 0 ? " (was ivoa-introspection running when it was recorded?)"
+                                          : " (was ivoa-depth-monitor running, with a depth sensor?)");
   return false;
 }
 
@@ -202,6 +209,11 @@ int report(const ScoreCommandLine& cl, const LiveScore& s, const ReadCounts& cou
   if (!write_text_file(cl.json_path, score_json(s))) return kExitIoError;
   if (s.scored_frames == 0) {
     spdlog::error("{}: no frame has both INTROSPECTION and INTROSPECTION_LABELS (their utimes never match)", cl.logs());
+    return kExitBadInput;
+  }
+  if (s.image.all.total() == 0) {  // frames matched, but no cell: every figure above is n/a
+    spdlog::error("{}: no labelled cell has a prediction in the {} frames with both ({} labelled cells; see above)",
+                  cl.logs(), s.scored_frames, s.labelled_cells);
     return kExitBadInput;
   }
   return kExitOk;
