@@ -51,6 +51,17 @@ introspection_labels_t recompute_labels(const RigCalibration& rig, const sim::Si
   return monitor::label_frame(stereo, depth);
 }
 
+// Sets cell i's label and the two verdicts that give it (Algorithm 1;
+// readers refuse a label its verdicts do not give).
+void set_label(introspection_labels_t& labels, size_t i, int8_t label) {
+  constexpr int8_t kFree = obstacle_grid_t::STATE_FREE, kObstacle = obstacle_grid_t::STATE_OBSTACLE;
+  labels.label[i] = label;
+  const bool stereo_obstacle = label == introspection_labels_t::LABEL_TP || label == introspection_labels_t::LABEL_FP;
+  const bool depth_obstacle = label == introspection_labels_t::LABEL_TP || label == introspection_labels_t::LABEL_FN;
+  labels.stereo_state[i] = label < 0 ? obstacle_grid_t::STATE_UNKNOWN : stereo_obstacle ? kObstacle : kFree;
+  labels.depth_state[i] = depth_obstacle ? kObstacle : kFree;
+}
+
 // A 5-frame log whose recorded labels are a recognisable pattern (cell
 // index mod 4 where the cell is in the image), so a builder that relabels
 // shows; returns (utime, cell) -> label.
@@ -60,7 +71,7 @@ std::map<std::pair<int64_t, int>, int> write_patterned_labels_log(const std::str
     const QueryGrid grid(QueryGridConfig{}, RigGeometry(sim::make_sim_rig()).left);
     introspection_labels_t labels = recompute_labels(sim::make_sim_rig(), frame, f.utime, f.depth_utime);
     for (size_t i = 0; i < labels.label.size(); ++i) {
-      labels.label[i] = static_cast<int8_t>(grid.cell(static_cast<int>(i)).in_image ? i % 4 : -1);
+      set_label(labels, i, static_cast<int8_t>(grid.cell(static_cast<int>(i)).in_image ? i % 4 : -1));
       if (labels.label[i] >= 0) recorded[{f.utime, static_cast<int>(i)}] = labels.label[i];
     }
     bus.publish(channels::kIntrospectionLabels, labels);
@@ -138,6 +149,7 @@ TEST(DatasetBuilder, StoresTheDetectorsEvidenceAndNaNWhereTheRecordedVerdictDiff
       expected[{f.utime, static_cast<int>(i)}] = jppc.evidence(labels.x[i], labels.y[i], labels.safety_radius).values;
       if (flipped.first < 0) {  // as if recorded with other settings
         labels.stereo_state[i] = static_cast<int8_t>(1 - labels.stereo_state[i]);
+        labels.label[i] = label_of_verdicts(labels.stereo_state[i], labels.depth_state[i]);
         flipped = {f.utime, static_cast<int>(i)};
       }
     }
@@ -213,23 +225,27 @@ TEST(DatasetBuilder, RecordedLabelsAreUsedAsRecorded) {
 
 // A recorded labels message the session cannot store is skipped, named by
 // its byte offset, and the rest built: a label of 9 or a NaN position ended
-// the whole build; a patch_size of -64 wrote a session no reader opens.
+// the whole build; a patch_size of -64 wrote a session no reader opens; a
+// label its verdicts do not give (TP where both said free) was stored.
 TEST(DatasetBuilder, RecordedLabelsTheSessionCannotStoreAreSkipped) {
   test::TempDir dir;
   const std::string log_path = dir.file("rec.lcmlog");
   int frame = 0;
-  test::write_sim_log(log_path, kScene, 5, 4, [&](Bus& bus, const test::SimLogFrame& f, const sim::SimFrame& rendered) {
+  test::write_sim_log(log_path, kScene, 5, 5, [&](Bus& bus, const test::SimLogFrame& f, const sim::SimFrame& rendered) {
     introspection_labels_t labels = recompute_labels(sim::make_sim_rig(), rendered, f.utime, f.depth_utime);
     if (frame == 1) labels.label[3] = 9;
     if (frame == 2) labels.patch_size = -64;
     if (frame == 3) labels.x[0] = std::numeric_limits<float>::quiet_NaN();
+    if (frame == 4)
+      *std::find(labels.label.begin(), labels.label.end(), introspection_labels_t::LABEL_TN) =
+          introspection_labels_t::LABEL_TP;
     ++frame;
     bus.publish(channels::kIntrospectionLabels, labels);
   });
   SessionBuilder builder(dir.file("data"), "rec", BuildOptions{});
   builder.add_log(log_path);
   const BuildReport report = builder.finish();
-  EXPECT_EQ(report.bad_messages, 3);
+  EXPECT_EQ(report.bad_messages, 4) << fmt::format("{}", fmt::join(report.problems, "\n"));
   const auto said = [&](const std::string& what) {
     return std::any_of(report.problems.begin(), report.problems.end(),
                        [&](const std::string& p) { return p.find(what) != std::string::npos; });
@@ -237,6 +253,7 @@ TEST(DatasetBuilder, RecordedLabelsTheSessionCannotStoreAreSkipped) {
   EXPECT_TRUE(said("cell 3 has label 9, not -1..3, skipped"));
   EXPECT_TRUE(said("patch_size -64 is not 1-4096, skipped"));
   EXPECT_TRUE(said("cell 0 has no finite position, skipped"));
+  EXPECT_TRUE(said("has label 0, which its verdicts (stereo 0, depth 0) do not give, skipped"));
   EXPECT_TRUE(said("INTROSPECTION_LABELS at byte "));
   const SessionReader session(dir.file("data") + "/rec");
   EXPECT_EQ(session.info().frames, 1);

@@ -110,16 +110,49 @@ std::string grid_content_error(const obstacle_grid_t& msg) {
   return "";
 }
 
+int8_t label_of_verdicts(int8_t stereo_state, int8_t depth_state) {
+  using G = obstacle_grid_t;
+  using L = introspection_labels_t;
+  if (stereo_state == G::STATE_UNKNOWN || depth_state == G::STATE_UNKNOWN) return L::LABEL_NONE;
+  const bool stereo_free = stereo_state == G::STATE_FREE;  // O_S
+  const bool depth_free = depth_state == G::STATE_FREE;    // O_M
+  if (depth_free) return stereo_free ? L::LABEL_TN : L::LABEL_FP;
+  return stereo_free ? L::LABEL_FN : L::LABEL_TP;
+}
+
+namespace {
+
+bool is_state(int8_t s) {
+  return s == obstacle_grid_t::STATE_FREE || s == obstacle_grid_t::STATE_OBSTACLE ||
+         s == obstacle_grid_t::STATE_UNKNOWN;
+}
+
+// Cell i's label against its two verdicts (the arrays' lengths are checked).
+std::string cell_verdicts_error(const introspection_labels_t& m, size_t i) {
+  const std::string cell = "cell " + std::to_string(i);
+  if (!is_state(m.stereo_state[i]) || !is_state(m.depth_state[i]))
+    return cell + " has verdicts (stereo " + std::to_string(m.stereo_state[i]) + ", depth " +
+           std::to_string(m.depth_state[i]) + ") none of FREE 0, OBSTACLE 1, UNKNOWN 2";
+  if (m.label[i] != label_of_verdicts(m.stereo_state[i], m.depth_state[i]))
+    return cell + " has label " + std::to_string(m.label[i]) + ", which its verdicts (stereo " +
+           std::to_string(m.stereo_state[i]) + ", depth " + std::to_string(m.depth_state[i]) + ") do not give";
+  return "";
+}
+
+}  // namespace
+
 std::string labels_content_error(const introspection_labels_t& m) {
   const double geometry[] = {m.x_min, m.x_max, m.y_min, m.y_max, m.spacing, m.safety_radius};
   if (!std::all_of(std::begin(geometry), std::end(geometry), [](double v) { return std::isfinite(v); }) ||
       m.safety_radius < 0)
     return "its grid geometry or safety radius is not a finite distance";
+  const bool has_verdicts = m.stereo_state.size() == m.label.size() && m.depth_state.size() == m.label.size();
   for (size_t i = 0; i < m.label.size(); ++i) {
     if (m.label[i] < introspection_labels_t::LABEL_NONE || m.label[i] > introspection_labels_t::LABEL_FN)
       return "cell " + std::to_string(i) + " has label " + std::to_string(m.label[i]) + ", not -1..3";
     if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]))
       return "cell " + std::to_string(i) + " has no finite position";
+    if (const std::string error = has_verdicts ? cell_verdicts_error(m, i) : ""; !error.empty()) return error;
   }
   return "";
 }

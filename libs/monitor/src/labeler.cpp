@@ -8,15 +8,7 @@
 
 namespace ivoa::monitor {
 
-int8_t label_for(int8_t stereo_state, int8_t depth_state) {
-  using G = obstacle_grid_t;
-  using L = introspection_labels_t;
-  if (stereo_state == G::STATE_UNKNOWN || depth_state == G::STATE_UNKNOWN) return L::LABEL_NONE;
-  const bool stereo_free = stereo_state == G::STATE_FREE;  // O_S
-  const bool depth_free = depth_state == G::STATE_FREE;    // O_M
-  if (depth_free) return stereo_free ? L::LABEL_TN : L::LABEL_FP;
-  return stereo_free ? L::LABEL_FN : L::LABEL_TP;
-}
+int8_t label_for(int8_t stereo_state, int8_t depth_state) { return label_of_verdicts(stereo_state, depth_state); }
 
 introspection_labels_t label_frame(const obstacle_grid_t& stereo, const obstacle_grid_t& depth) {
   const auto near = [](const std::vector<float>& a, const std::vector<float>& b) {

@@ -27,8 +27,16 @@ obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& det
 std::string grid_content_error(const obstacle_grid_t& msg);
 
 // The same for a labels message: a grid geometry or safety radius that is
-// not a finite distance, a label none of LABEL_*, a position not finite.
+// not a finite distance, a label none of LABEL_*, a position not finite, a
+// verdict none of STATE_*, or a label its two verdicts do not give.
 std::string labels_content_error(const introspection_labels_t& msg);
+
+// Algorithm 1 of the IVOA paper, the label of a cell from the stereo
+// detector's verdict and the depth monitor's (O = "obstacle free"):
+//   O_M &  O_S -> TN      O_M & !O_S -> FP
+//  !O_M &  O_S -> FN     !O_M & !O_S -> TP
+// and LABEL_NONE for a cell either could not judge (UNKNOWN).
+int8_t label_of_verdicts(int8_t stereo_state, int8_t depth_state);
 
 // Cell positions are floats made from the same doubles on every machine,
 // but a compiler may round a last bit differently: 0.1 mm is "the same".

@@ -11,7 +11,7 @@
 
 namespace ivoa::monitor {
 
-int8_t label_for(int8_t stereo_state, int8_t depth_state);
+int8_t label_for(int8_t stereo_state, int8_t depth_state);  // ivoa::label_of_verdicts, which readers check with
 
 class LabelError : public std::runtime_error {
  public:
