@@ -318,6 +318,11 @@ TEST(Training, AnOutputThatIsAnInputOrNotAFileIsRefused) {
   EXPECT_EQ(refusal(dir.file("data")),
             "--out " + dir.file("data") + " exists and is not a file (a device, folder or pipe)");
   EXPECT_EQ(test::read_file(c.split_file), split);
+  std::ofstream(dir.file("start.pt")) << "the model fine-tuned from";
+  c.init = dir.file("start.pt");
+  EXPECT_EQ(refusal(dir.file("./start.pt")),
+            "--out " + dir.file("./start.pt") + " is the --init model: it would be written over");
+  EXPECT_EQ(test::read_file(dir.file("start.pt")), "the model fine-tuned from");
 }
 
 TEST(Training, ADiskThatFillsDuringACheckpointKeepsTheLastOneForResume) {

@@ -633,6 +633,21 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         self.assertIn("Clustering not possible", report)
         self.assertIn("absent from the truth: FN", report)
 
+    def test_sessions_the_model_was_trained_on_are_warned_of(self):
+        """eval.json names the model's training and validation sessions: an
+        evaluated one among them is not held out, and the report says so."""
+        def trained_on(meta):
+            meta["metadata"]["training"] = {"train_sessions": ["lab_s3", "office_s1"], "val_sessions": ["x_s2"]}
+            return meta
+        d = self.eval_with_meta("trained_on_test", trained_on)
+        out = os.path.join(self.root, "report_trained_on")
+        code, _, stderr = run_main(["--eval", d, "--dataset", self.f.data2, "--out", out])
+        self.assertEqual(code, 0, stderr)
+        warning = "its model was trained on 1 of the 1 sessions evaluated (lab_s3): their figures are not held out"
+        self.assertIn(warning, stderr)
+        self.assertIn(warning, read_text(os.path.join(out, "report.md")))
+        self.assertNotIn("validated on", stderr)
+
     def test_evidence_is_optional_and_checked_against_the_labels(self):
         """No evidence: the report says so. Evidence that does not give the
         labels' verdicts at the threshold (here: a wrong --evidence-threshold)

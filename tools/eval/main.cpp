@@ -21,6 +21,7 @@
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
+#include <yaml-cpp/yaml.h>
 
 #include "ivoa/core/calibration.hpp"
 #include "ivoa/core/channels.hpp"
@@ -428,9 +429,33 @@ void remove_old_overlays(const std::string& folder) {
   if (removed > 0) spdlog::info("removed {} overlay figures of an earlier run from {}", removed, folder);
 }
 
+// Evaluated sessions the model was trained or validated on (its training
+// summary names them; the report warns of them too): not held out.
+void warn_of_sessions_seen_in_training(const SessionList& sessions, const std::string& training_summary) {
+  YAML::Node training;
+  try {
+    training = YAML::Load(training_summary);  // JSON, which YAML reads
+  } catch (const YAML::Exception&) {
+    return;  // an older or foreign model: nothing to compare
+  }
+  for (const auto& [key, how] :
+       {std::pair{"train_sessions", "trained on"}, std::pair{"val_sessions", "validated on"}}) {
+    if (!training.IsMap() || !training[key].IsSequence()) continue;
+    std::set<std::string> used;
+    for (const auto& name : training[key]) used.insert(name.as<std::string>(""));
+    std::vector<std::string> seen;
+    for (const auto& [split, session] : sessions)
+      if (used.count(session)) seen.push_back(session);
+    if (!seen.empty())
+      spdlog::warn("the model was {} {} of the {} sessions evaluated ({}): their figures are not held out", how,
+                   seen.size(), sessions.size(), fmt::join(seen, ", "));
+  }
+}
+
 int evaluate(const Options& o) {
   auto model = introspection::IntrospectionModel::load(o.model, o.inference);
   const SessionList sessions = list_sessions(o);
+  warn_of_sessions_seen_in_training(sessions, model->info().training_summary);
   const Evaluated evaluated = describe_sessions(o, sessions, model->info());
   std::error_code error;
   fs::create_directories(o.out, error);

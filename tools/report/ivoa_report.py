@@ -53,7 +53,7 @@ import report_metrics as metrics  # noqa: E402
 from report_clustering import ClusterOptions, cluster_failures  # noqa: E402
 from report_inputs import (Dataset, EvalRun, InputError, attach_causes, attach_dataset, evidence_margin,  # noqa: E402
                            load_causes, load_eval, load_repeatability, load_variants, make_names, patch_scale,
-                           patch_sides, patch_size, query_grid)
+                           patch_sides, patch_size, query_grid, seen_in_training)
 
 
 def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
@@ -135,6 +135,7 @@ def load_inputs(args: argparse.Namespace):
         if key not in datasets:
             datasets[key] = Dataset(path)
         warnings += attach_dataset(run, datasets[key])
+        warnings += seen_in_training(run)
     causes = [load_causes(path) for path in args.causes or []]
     if causes:
         for run in runs:

@@ -650,6 +650,24 @@ def query_grid(run: EvalRun) -> dict:
     return {}
 
 
+def seen_in_training(run: EvalRun) -> List[str]:
+    """Warnings for evaluated sessions the model was trained or validated on
+    (eval.json's metadata.training): their figures are not held out."""
+    md = run.meta.get("metadata") if isinstance(run.meta.get("metadata"), dict) else {}
+    training = md.get("training") if isinstance(md.get("training"), dict) else {}
+    evaluated = set(run.session.tolist())
+    warnings = []
+    for key, how in (("train_sessions", "trained on"),
+                     ("val_sessions", "validated on (they chose its kept step and set its gate)")):
+        names = training.get(key)
+        seen = sorted(evaluated & {str(n) for n in names}) if isinstance(names, list) else []
+        if seen:
+            listed = ", ".join(seen[:5]) + (f" and {len(seen) - 5} more" if len(seen) > 5 else "")
+            warnings.append(f"{run.name}: its model was {how} {len(seen)} of the {len(evaluated)} sessions "
+                            f"evaluated ({listed}): their figures are not held out")
+    return warnings
+
+
 def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
     """Links an eval to the dataset it ran on and checks that they agree.
 

@@ -54,9 +54,11 @@ void add_data_options(CLI::App& app, introspection::TrainConfig& c) {
 void add_optimiser_options(CLI::App& app, TrainCommandLine& cl) {
   auto& c = cl.config;
   app.add_option("--steps", c.steps, "optimiser steps")->capture_default_str()->check(ivoa::positive_number());
+  // Bounds for the numbers below: past them LibTorch fails far into the run
+  // (bad_alloc, a float overflow naming no flag, a divergence blamed on --lr).
   app.add_option("--batch-size", c.batch_size, "patches per step, drawn class-balanced")
       ->capture_default_str()
-      ->check(ivoa::positive_number());
+      ->check(ivoa::number_in(1, 65536));
   app.add_option("--optimizer", cl.optimizer, "adamw or sgd (the paper's)")
       ->check(CLI::IsMember({"adamw", "sgd"}))
       ->capture_default_str();
@@ -64,14 +66,14 @@ void add_optimiser_options(CLI::App& app, TrainCommandLine& cl) {
       app.add_option("--lr", cl.learning_rate,
                      fmt::format("learning rate (default: AdamW {}, SGD {}, the paper's)",
                                  introspection::kAdamWLearningRate, introspection::kSgdLearningRate))
-          ->check(ivoa::positive_number());
+          ->check(ivoa::number_in(1e-9, 10));
   app.add_option("--momentum", c.momentum, "SGD momentum (paper: 0.9)")
       ->capture_default_str()
       ->check(ivoa::number_in(0.0, 1.0));
   cl.weight_decay_option = app.add_option("--weight-decay", cl.weight_decay,
                                           fmt::format("weight decay (default: AdamW {}, decoupled; SGD {}, as L2)",
                                                       introspection::kAdamWWeightDecay, introspection::kSgdWeightDecay))
-                               ->check(ivoa::non_negative_number());
+                               ->check(ivoa::number_in(0, 10));
   app.add_option("--warmup-steps", c.warmup_steps, "linear warm-up, then cosine decay")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
@@ -93,7 +95,7 @@ void add_model_options(CLI::App& app, TrainCommandLine& cl) {
   app.add_option("--evidence-weight", c.evidence_weight,
                  "weight of the side task: regress the detector's evidence stored with each sample (JPP-C's window "
                  "costs) from the trunk's features; 0: off")
-      ->check(ivoa::non_negative_number())
+      ->check(ivoa::number_in(0, 1000))
       ->capture_default_str();
   app.add_flag("--no-augment", cl.no_augment, "no photometric augmentation");
   app.add_option("--augment-noise", c.augment_noise_max,

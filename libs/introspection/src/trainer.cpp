@@ -385,8 +385,8 @@ std::string saved_bytes(const Value& value) {
 }
 
 // An existing --out that is not a model file to replace: a device, folder
-// or pipe (as root, /dev/full became a model), the split file, or a file of
-// the dataset (patches.bin was replaced).
+// or pipe (as root, /dev/full became a model), the split file, a file of
+// the dataset (patches.bin was replaced), or the --init model.
 void check_output_is_not_an_input(const TrainConfig& c) {
   namespace fs = std::filesystem;
   std::error_code error;
@@ -396,11 +396,11 @@ void check_output_is_not_an_input(const TrainConfig& c) {
     throw std::invalid_argument("--out " + c.output + " exists and is not a file (a device, folder or pipe)");
   if (!same_file_among(c.output, {c.split_file}).empty())
     throw std::invalid_argument("--out " + c.output + " is the split file: it would be written over");
-  const fs::path out = fs::weakly_canonical(c.output, error), data = fs::weakly_canonical(c.dataset, error);
-  if (!c.dataset.empty() && !error &&
-      std::mismatch(data.begin(), data.end(), out.begin(), out.end()).first == data.end())
+  if (writes_over(c.output, c.dataset))
     throw std::invalid_argument("--out " + c.output + " is a file of the dataset " + c.dataset +
                                 ": it would be written over");
+  if (writes_over(c.output, c.init))  // the model fine-tuned from would be lost
+    throw std::invalid_argument("--out " + c.output + " is the --init model: it would be written over");
 }
 
 // The model file's folder, created if need be, before any training.
