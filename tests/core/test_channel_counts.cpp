@@ -29,5 +29,16 @@ TEST(ChannelCounts, AnythingElseIsRefusedByName) {
   }
 }
 
+// The last of two counts for one channel silently won (ivoa-log-check
+// --expect A=4 A=3 passed a log of 3).
+TEST(ChannelCounts, AChannelGivenTwiceIsRefused) {
+  try {
+    parse_channel_counts({"STEREO_IMAGES=4", "DEPTH_IMAGE=4", "STEREO_IMAGES=3"}, "--expect");
+    ADD_FAILURE() << "accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "--expect STEREO_IMAGES is given twice (=4 and =3)");
+  }
+}
+
 }  // namespace
 }  // namespace ivoa

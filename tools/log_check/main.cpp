@@ -198,6 +198,7 @@ bool sequences_complete(const LogSummary& summary) {
 
 struct CheckCommandLine {
   std::vector<std::string> files, expect;
+  std::map<std::string, int64_t> expected;  // expect, parsed
   std::string json_path;
   bool resync = false, no_gaps = false;
 };
@@ -234,7 +235,7 @@ int check_logs(const CheckCommandLine& cl) {
   std::printf("\n%s", summary.table().c_str());
   if (const std::string table = heartbeats.table(); !table.empty()) std::printf("\n%s", table.c_str());
   if (!ivoa::write_text_file(cl.json_path, results_json(results, summary, heartbeats))) return ivoa::kExitIoError;
-  const bool expected = expectations_hold(ivoa::parse_channel_counts(cl.expect, "--expect"), summary);
+  const bool expected = expectations_hold(cl.expected, summary);
   const bool complete = !cl.no_gaps || sequences_complete(summary);
   if (damaged) return ivoa::kExitBadInput;
   return expected && complete ? ivoa::kExitOk : ivoa::kExitFailure;
@@ -255,6 +256,12 @@ int main(int argc, char** argv) {
   add_check_options(app, cl);
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("log-check", common.log_level);
+  try {  // each CHANNEL=N was checked while parsing; a channel given twice only here
+    cl.expected = ivoa::parse_channel_counts(cl.expect, "--expect");
+  } catch (const std::invalid_argument& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitUsage;
+  }
   if (const std::string log = ivoa::same_file_among(cl.json_path, cl.files); !log.empty()) {
     spdlog::error("--json {} is the log {}: it would be written over", cl.json_path, log);
     return ivoa::kExitUsage;

@@ -17,7 +17,9 @@ std::map<std::string, int64_t> parse_channel_counts(const std::vector<std::strin
     if (eq == 0 || count.empty() || *end != '\0' || errno == ERANGE || n < 0)
       throw std::invalid_argument((option.empty() ? "" : option + " ") + arg +
                                   ": use CHANNEL=N, N a whole number of messages");
-    counts[arg.substr(0, eq)] = n;
+    if (const auto [it, added] = counts.emplace(arg.substr(0, eq), n); !added)  // the last silently won
+      throw std::invalid_argument((option.empty() ? "" : option + " ") + it->first +
+                                  " is given twice (=" + std::to_string(it->second) + " and =" + count + ")");
   }
   return counts;
 }
