@@ -54,4 +54,10 @@ code=0
 "$B/bin/ivoa-sim-causes" --out c2.csv --variants-out ./c2.csv office_s5.lcmlog >said.txt 2>&1 || code=$?
 [ "$code" = 2 ] && grep -qF -- "--out c2.csv and --variants-out ./c2.csv are the same file" said.txt ||
   { cat said.txt; echo "FAIL: --out c2.csv --variants-out ./c2.csv: exit $code" >&2; exit 1; }
-echo "OK: a log given twice, another scene, a wrong start and an output over an input or the other output refused by name"
+# A --rate that is not the log's gives other frame indices, so other noise: said.
+"$B/bin/ivoa-sim-driver" --scene "$S/libs/sim/scenes/indoor_office.yaml" --frames 2 --rate 10 --as-fast-as-possible \
+  --log-level warn --lcm-url "file://$out/office_s7.lcmlog?mode=w"
+"$B/bin/ivoa-dataset" build --labels jppc --out "$out/data" "$out/office_s7.lcmlog" >/dev/null
+"$B/bin/ivoa-sim-causes" --no-variants --dataset data --rate 20 --out c7.csv office_s7.lcmlog >said.txt 2>&1
+grep -qF "office_s7: --rate 20, but its frames' times read as 10 Hz" said.txt || { cat said.txt; echo "FAIL: --rate 20" >&2; exit 1; }
+echo "OK: a log given twice, another scene, a wrong start and an output over an input or the other output refused by name; another --rate said"

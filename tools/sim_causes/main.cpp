@@ -309,6 +309,11 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
   if (timing.rate_hz == 0) {
     timing.rate_hz = session_rate(log, timing.start_utime);
     spdlog::info("{}: recorded at {:.6g} Hz", session, timing.rate_hz);
+  } else if (const double read = session_rate(log, timing.start_utime);
+             log.truth.size() > 1 && std::abs(read - timing.rate_hz) > 1e-6 * timing.rate_hz) {
+    // Another rate gives other frame indices, so other sensor noise: verdicts go "not reproduced".
+    spdlog::warn("{}: --rate {:.6g}, but its frames' times read as {:.6g} Hz: is --rate the driver's?", session,
+                 timing.rate_hz, read);
   }
   causes::CauseFinder finder(scene, static_cast<uint64_t>(first.seed), *log.rig, timing, log.labels.front().detector,
                              opt.detector, opt.variants);
@@ -425,7 +430,7 @@ void add_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--scene-dir", opt.scene_dir, "where the logged scenes' files are")->capture_default_str();
   app.add_option("--rate", opt.timing.rate_hz,
                  "the simulator driver's --rate (frames per second of session time; default: from the frames' times)")
-      ->check(ivoa::positive_number());
+      ->check(ivoa::number_in(0.01, 1000.0));  // the driver's range
   app.add_option("--noise-seed", opt.timing.noise_seed, "the simulator driver's --noise-seed")->capture_default_str();
   app.add_option("--start-utime", opt.start_utime,
                  "utime of the session's frame 0 (default: the logged frame with seq 0)")
