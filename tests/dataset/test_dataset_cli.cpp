@@ -58,6 +58,20 @@ TEST(DatasetInfo, FolderWithoutADatasetIsBadInput) {
   EXPECT_TRUE(contains(r.output, "not a dataset")) << r.output;
 }
 
+// An empty index gave yaml-cpp's bare "bad conversion"; a session listed
+// twice was counted twice.
+TEST(DatasetInfo, ABrokenIndexIsNamed) {
+  test::TempDir dir;
+  std::ofstream(dir.file("dataset.json")) << "";
+  auto r = dataset_info(dir.path().string());
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "dataset.json: not a dataset index")) << r.output;
+  std::ofstream(dir.file("dataset.json")) << R"({"sessions": ["a", "b", "a"]})";
+  r = dataset_info(dir.path().string());
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "dataset.json: session 'a' is listed twice")) << r.output;
+}
+
 TEST(DatasetInfo, WithoutAFolderAsksForOneAsTheArgumentOrTheFlag) {
   const auto r = dataset_info("");
   EXPECT_EQ(r.exit_code, kExitUsage) << r.output;

@@ -501,11 +501,21 @@ cv::Mat SessionReader::patch(size_t i) const {
 std::vector<std::string> list_sessions(const std::string& dataset_root) {
   const std::string path = dataset_root + "/dataset.json";
   if (!fs::exists(path)) return {};
+  std::vector<std::string> sessions;
   try {
-    return load_yaml_file(path)["sessions"].as<std::vector<std::string>>();
+    const YAML::Node root = load_yaml_file(path);
+    if (!root.IsMap() || !root["sessions"].IsSequence())
+      throw DatasetError(path +
+                         ": not a dataset index (an object with a \"sessions\" list; rebuild it with "
+                         "ivoa-dataset build)");
+    sessions = root["sessions"].as<std::vector<std::string>>();
   } catch (const YAML::Exception& e) {
     throw DatasetError(path + ": " + e.what());
   }
+  std::set<std::string> seen;  // listed twice, a session's samples were counted twice
+  for (const auto& s : sessions)
+    if (!seen.insert(s).second) throw DatasetError(path + ": session '" + s + "' is listed twice");
+  return sessions;
 }
 
 namespace {
