@@ -139,7 +139,7 @@ TEST(DatasetBuild, LogsOfOneNameMustBeOneRecording) {
   EXPECT_TRUE(contains(r.output, "s.lcmlog and other/s.lcmlog are both session s")) << r.output;
   r = build("s.lcmlog t.lcmlog.00 ./s.lcmlog");
   EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
-  EXPECT_TRUE(contains(r.output, "s.lcmlog and ./s.lcmlog are the same log")) << r.output;
+  EXPECT_TRUE(contains(r.output, "./s.lcmlog is given twice: give each log once")) << r.output;
   r = build("t.lcmlog.00 t.lcmlog.01 other/t.lcmlog.02");
   EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
   EXPECT_TRUE(contains(r.output, "t.lcmlog.00 and other/t.lcmlog.02 are both session t")) << r.output;

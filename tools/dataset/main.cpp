@@ -107,12 +107,10 @@ bool is_split_part(const std::string& log) {
 // session whose labels were paired with the other log's frames. --session
 // joins logs on purpose; a file twice is refused even then.
 bool sessions_are_recordings(const SessionLogs& sessions, const std::vector<std::string>& logs, bool named_by_flag) {
-  for (size_t i = 0; i < logs.size(); ++i)
-    if (const std::string same = same_file_among(logs[i], {logs.begin(), logs.begin() + static_cast<long>(i)});
-        !same.empty()) {
-      spdlog::error("{} and {} are the same log: give each log once", same, logs[i]);
-      return false;
-    }
+  if (const std::string twice = file_given_twice(logs); !twice.empty()) {
+    spdlog::error("{} is given twice: give each log once", twice);
+    return false;
+  }
   if (named_by_flag) return true;
   std::map<std::string, std::string> first_log_of;
   const auto folder = [](const std::string& f) { return fs::path(f).parent_path(); };

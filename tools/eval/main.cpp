@@ -481,6 +481,10 @@ int main(int argc, char** argv) {
   add_options(app, o);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("eval", common.log_level);
+  if (const std::string twice = file_given_twice(o.logs); !twice.empty()) {
+    spdlog::error("--logs {} is given twice: its overlays would be drawn twice", twice);
+    return kExitUsage;
+  }
   while (o.out.size() > 1 && o.out.back() == '/') o.out.pop_back();  // "eval/" prints as eval/x, not eval//x
   try {
     return evaluate(o);

@@ -141,17 +141,6 @@ std::string score_json(const LiveScore& s) {
       counts_json(s.given_verdict.announced), s.compute.frames, s.compute.median, s.compute.p90, s.compute.max);
 }
 
-// A file among `files` given twice (under any name), or "".
-std::string named_twice(const std::vector<std::string>& files) {
-  std::set<std::string> seen;
-  for (const auto& f : files) {
-    std::error_code error;
-    const auto canonical = std::filesystem::weakly_canonical(f, error);
-    if (!seen.insert(error ? f : canonical.string()).second) return f;
-  }
-  return "";
-}
-
 struct ScoreCommandLine {
   std::vector<std::string> files;
   std::string json_path;
@@ -235,7 +224,7 @@ int main(int argc, char** argv) {
   init_logging("live-score", common.log_level);
   LiveScore s;
   ReadCounts counts;
-  if (const std::string twice = named_twice(cl.files); !twice.empty()) {
+  if (const std::string twice = file_given_twice(cl.files); !twice.empty()) {
     spdlog::error("{} is given twice: its frames would count twice", twice);
     return kExitUsage;
   }

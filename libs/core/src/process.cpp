@@ -210,6 +210,13 @@ std::string same_file_among(const std::string& path, const std::vector<std::stri
   return "";
 }
 
+std::string file_given_twice(const std::vector<std::string>& files) {
+  for (size_t i = 1; i < files.size(); ++i)
+    if (!same_file_among(files[i], {files.begin(), files.begin() + static_cast<std::ptrdiff_t>(i)}).empty())
+      return files[i];
+  return "";
+}
+
 bool writes_over(const std::string& path, const std::string& input) {
   if (path.empty() || input.empty()) return false;
   if (!same_file_among(path, {input}).empty()) return true;

@@ -69,6 +69,10 @@ std::string why_cannot_write(const std::string& path);
 // one of a tool's inputs (`--json run.lcmlog.0*` in a shell) is refused.
 std::string same_file_among(const std::string& path, const std::vector<std::string>& files);
 
+// The first of `files` that is an earlier one again (by any name, as
+// same_file_among sees it), or "": an input given twice would count twice.
+std::string file_given_twice(const std::vector<std::string>& files);
+
 // Whether writing `path` would write over `input`: the same file (by any
 // spelling, also before either exists), or a file inside the folder
 // `input` (a dataset, a folder of scene files).
