@@ -68,6 +68,7 @@ bool jpeg_cut_short(const std::string& path) {
 
 cv::Mat read_image(const std::string& path, int imread_flags) {
   if (!std::filesystem::exists(path)) throw DisparityFileError(path + ": no such file");
+  if (std::filesystem::is_directory(path)) throw DisparityFileError(path + ": a folder, not an image");
   if (jpeg_cut_short(path)) throw DisparityFileError(path + ": a JPEG cut short (no end-of-image marker)");
   cv::Mat image = cv::imread(path, imread_flags);
   if (image.empty()) throw DisparityFileError(path + ": cannot read the image");
@@ -129,6 +130,7 @@ void write_pfm(const std::string& path, const cv::Mat& disparity) {
 cv::Mat load_disparity(const std::string& path, double divisor) {
   if (!(divisor > 0)) throw DisparityFileError("disparity divisor must be positive");
   if (!std::filesystem::exists(path)) throw DisparityFileError(path + ": no such file");
+  if (std::filesystem::is_directory(path)) throw DisparityFileError(path + ": a folder, not an image");
   cv::Mat disparity;
   const std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
   if (ext == ".pfm" || ext == ".PFM") {

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 namespace ivoa::stereo_eval {
@@ -91,8 +92,10 @@ ModelScore score(PointCheckModel& model, const cv::Mat& left_gray, const cv::Mat
 namespace {
 
 void json_rate(std::ostringstream& out, const char* key, const Rate& r) {
-  out << "\"" << key << "\": {\"tested\": " << r.tested << ", \"confirmed\": " << r.confirmed
-      << ", \"rate\": " << r.value() << "}";
+  out << "\"" << key << "\": {\"tested\": " << r.tested << ", \"confirmed\": " << r.confirmed << ", \"rate\": ";
+  if (r.tested > 0) out << r.value();
+  else out << "null";  // nothing tested: no rate
+  out << "}";
 }
 
 void json_class(std::ostringstream& out, const char* key, const TextureClassScore& c) {
@@ -102,7 +105,12 @@ void json_class(std::ostringstream& out, const char* key, const TextureClassScor
   json_rate(out, "wrong", c.wrong);
   out << ", ";
   json_rate(out, "truth_cheaper", c.truth_cheaper);
-  out << ", \"mean_cost_truth\": " << c.mean_cost_truth() << ", \"mean_cost_wrong\": " << c.mean_cost_wrong();
+  out << ", \"mean_cost_truth\": ";
+  if (c.cost_count_truth) out << c.mean_cost_truth();
+  else out << "null";
+  out << ", \"mean_cost_wrong\": ";
+  if (c.cost_count_wrong) out << c.mean_cost_wrong();
+  else out << "null";
   out << ", \"by_offset\": {";
   bool first = true;
   for (const auto& [offset, rate] : c.by_offset) {
@@ -138,16 +146,22 @@ std::string to_table(const std::vector<ModelScore>& scores) {
   std::snprintf(line, sizeof(line), "%-6s %-11s %8s %16s %16s %14s %11s  %s\n", "model", "pixels", "count",
                 "truth confirmed", "wrong confirmed", "truth cheaper", "mean cost", "wrong confirmed by offset");
   out << line;
+  // A rate nothing was tested for (every wrong offset off the image) is n/a, not 0 %.
+  const auto percent = [](const Rate& r) {
+    char cell[16];
+    if (r.tested == 0) return std::string("n/a");
+    std::snprintf(cell, sizeof(cell), "%.1f%%", 100.0 * r.value());
+    return std::string(cell);
+  };
   auto row = [&](const std::string& model, const char* label, const TextureClassScore& c) {
     std::string by_offset;
-    for (const auto& [offset, rate] : c.by_offset) {
-      char cell[32];
-      std::snprintf(cell, sizeof(cell), "%+d:%.1f%% ", offset, 100.0 * rate.value());
-      by_offset += cell;
-    }
-    std::snprintf(line, sizeof(line), "%-6s %-11s %8lld %15.1f%% %15.1f%% %13.1f%% %5.2f/%5.2f  %s\n", model.c_str(),
-                  label, static_cast<long long>(c.pixels), 100.0 * c.at_truth.value(), 100.0 * c.wrong.value(),
-                  100.0 * c.truth_cheaper.value(), c.mean_cost_truth(), c.mean_cost_wrong(), by_offset.c_str());
+    for (const auto& [offset, rate] : c.by_offset) by_offset += fmt::format("{:+d}:{} ", offset, percent(rate));
+    const auto cost = [](int64_t n, double mean) { return n ? fmt::format("{:5.2f}", mean) : std::string("  n/a"); };
+    const std::string costs =
+        cost(c.cost_count_truth, c.mean_cost_truth()) + "/" + cost(c.cost_count_wrong, c.mean_cost_wrong());
+    std::snprintf(line, sizeof(line), "%-6s %-11s %8lld %16s %16s %14s %11s  %s\n", model.c_str(), label,
+                  static_cast<long long>(c.pixels), percent(c.at_truth).c_str(), percent(c.wrong).c_str(),
+                  percent(c.truth_cheaper).c_str(), costs.c_str(), by_offset.c_str());
     out << line;
   };
   for (const ModelScore& s : scores) {
