@@ -542,8 +542,8 @@ Learner make_learner(const TrainConfig& c, const SplitData& train, const ModelIn
     l.first_step = load_checkpoint(checkpoint, l.evidence.get(), c.evidence_weight, c.optimizer, *l.optimizer, report);
   if (resuming && l.first_step >= c.steps)  // nothing left to train: say so, not silently write the checkpoint
     spdlog::warn(
-        "the checkpoint is at step {}, at or past --steps {}: no step is trained, the model written is the "
-        "checkpoint's (give a larger --steps to train on)",
+        "the checkpoint is at step {}, at or past --steps {}: no step is trained (give a larger --steps to train "
+        "on)",
         l.first_step, c.steps);
   return l;
 }
