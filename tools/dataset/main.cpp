@@ -101,6 +101,16 @@ bool is_split_part(const std::string& log) {
          std::isdigit(static_cast<unsigned char>(ext[2]));
 }
 
+// A log among one session's `files` (in order) that is not a split part
+// from the first one's folder, or "" when they are one recording.
+std::string another_recording_among(const std::vector<std::string>& files) {
+  if (files.size() < 2) return "";
+  const fs::path folder = fs::path(files.front()).parent_path();
+  for (const auto& f : files)
+    if (!is_split_part(f) || fs::path(f).parent_path() != folder) return f == files.front() ? files[1] : f;
+  return "";
+}
+
 // Whether the logs grouped by name are each one recording: a file given
 // twice, or two logs of one name that are not split parts from one folder
 // (a scene's session recorded twice, in two folders), were merged into one
@@ -113,22 +123,15 @@ bool sessions_are_recordings(const SessionLogs& sessions, const std::vector<std:
   }
   if (named_by_flag) return true;
   std::map<std::string, std::string> first_log_of;
-  const auto folder = [](const std::string& f) { return fs::path(f).parent_path(); };
   for (const auto& [name, files] : sessions) {
-    std::string earlier = files.front(), other;  // two logs of this name that are not one recording
-    if (const auto it = first_log_of.find(name); it != first_log_of.end()) {
-      earlier = it->second, other = files.front();  // the name again, after another session's logs
-    } else if (files.size() > 1) {
-      for (const auto& f : files)
-        if (other.empty() && (!is_split_part(f) || folder(f) != folder(files.front()))) other = f;
-      if (other == files.front()) other = files[1];
-    }
-    first_log_of.emplace(name, files.front());
+    // The name again after another session's logs, or logs of two recordings in one group.
+    const auto [first, new_name] = first_log_of.emplace(name, files.front());
+    const std::string other = new_name ? another_recording_among(files) : files.front();
     if (other.empty()) continue;
     spdlog::error(
         "{} and {} are both session {}: give each session's log once (split parts NAME.lcmlog.NN of one folder, in "
         "order, go together; --session NAME joins other logs on purpose)",
-        earlier, other, name);
+        new_name ? files.front() : first->second, other, name);
     return false;
   }
   return true;
