@@ -234,6 +234,18 @@ TEST(SessionRate, FramesSkippedInRealTimeDoNotSlowIt) {
   EXPECT_EQ(rate_from_frame_times({t0}), 1.0);
 }
 
+// A --rate given is checked against the frame times: whole periods of it,
+// to the microsecond rounding of 30 Hz stamps; a multiple fits too.
+TEST(SessionRate, AGivenRateFitsFrameTimesOfWholePeriods) {
+  const int64_t t0 = 1700000000000000;
+  std::vector<int64_t> at_30hz;
+  for (int k : {0, 1, 2, 4, 7, 8, 300}) at_30hz.push_back(t0 + std::llround(k * 1e6 / 30.0));
+  EXPECT_TRUE(frame_times_fit_rate(at_30hz, 30.0));
+  EXPECT_TRUE(frame_times_fit_rate(at_30hz, 60.0));
+  EXPECT_FALSE(frame_times_fit_rate(at_30hz, 15.0));
+  EXPECT_FALSE(frame_times_fit_rate(at_30hz, 29.99));
+}
+
 // A simulator too slow for its --rate publishes every second or third
 // frame: no gap is one period, and the shortest (two) would halve the rate.
 TEST(SessionRate, NoTwoFramesInARowStillGiveTheRate) {

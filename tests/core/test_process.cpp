@@ -97,7 +97,8 @@ TEST(WritesOver, TheSameFileByAnySpellingOrAFileInsideTheInputFolder) {
   std::ofstream(dir.file("scene.yaml")) << "x";
   const std::string data = dir.file("data"), scene = dir.file("scene.yaml");
   EXPECT_TRUE(writes_over(dir.file("data/office_s1/samples.csv"), data));
-  EXPECT_TRUE(writes_over(dir.file("data/../data/new.csv"), data + "/"));
+  EXPECT_TRUE(writes_over(dir.file("data/../data/office_s1/samples.csv"), data + "/"));
+  EXPECT_FALSE(writes_over(dir.file("data/new.csv"), data)) << "a new file writes over nothing";
   EXPECT_TRUE(writes_over(dir.file("./scene.yaml"), scene));
   EXPECT_TRUE(writes_over(dir.file("out.csv"), dir.file("./out.csv"))) << "neither exists yet";
   EXPECT_FALSE(writes_over(dir.file("data2/x.csv"), data)) << "a sibling that shares the folder's prefix";
@@ -107,7 +108,7 @@ TEST(WritesOver, TheSameFileByAnySpellingOrAFileInsideTheInputFolder) {
   const auto here = std::filesystem::current_path();
   std::filesystem::current_path(dir.path());
   EXPECT_TRUE(writes_over("c.csv", "./c.csv")) << "relative, neither exists yet";
-  EXPECT_TRUE(writes_over("data/office_s1/new.csv", "./data"));
+  EXPECT_TRUE(writes_over("data/office_s1/samples.csv", "./data"));
   std::filesystem::current_path(here);
 }
 

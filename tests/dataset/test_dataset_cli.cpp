@@ -146,8 +146,11 @@ TEST(DatasetBuild, LogsOfOneNameMustBeOneRecording) {
   r = build("s.lcmlog t.lcmlog.00 s.lcmlog.01");
   EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
   EXPECT_TRUE(contains(r.output, "s.lcmlog and s.lcmlog.01 are both session s")) << r.output;
-  // Split parts of one folder go together (and are then read: these are no logs).
-  r = build("t.lcmlog.00 t.lcmlog.01");
+  r = build("t.lcmlog.01 t.lcmlog.00");
+  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+  EXPECT_TRUE(contains(r.output, "t.lcmlog.01 and t.lcmlog.00 are both session t")) << r.output;
+  // Split parts of one folder go together, however it is spelt (and are then read: these are no logs).
+  r = build("t.lcmlog.00 ./t.lcmlog.01");
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
   EXPECT_FALSE(contains(r.output, "are both session")) << r.output;
   r = build("--session joined s.lcmlog other/s.lcmlog");  // on purpose

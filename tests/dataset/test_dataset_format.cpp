@@ -524,7 +524,7 @@ TEST(DatasetFormat, SplitFileBySessionRejectsOverlap) {
     EXPECT_NE(std::string(e.what()).find("split 'test' is given twice"), std::string::npos) << e.what();
   }
   // A path names the same session twice unseen (./b and b), or another dataset's.
-  for (const char* path : {"./b", "../other/b", "..", ""}) {
+  for (const char* path : {"./b", "../other/b", "..", "", ".b.partial"}) {
     std::ofstream(dir.file("path.yaml")) << "train: [a, '" << path << "']\nval: [b]\n";
     try {
       load_split(dir.file("path.yaml"));

@@ -18,7 +18,7 @@
 #  6. a damaged recording (its header's depth mode or field of view) is bad
 #     input, exit 3, named: it crashed the driver (SIGSEGV, SIGABRT);
 #  7. recording onto a disk that fills (a 300 kB tmpfs, where a mount
-#     namespace is permitted): said as it runs low and when full, exit 4;
+#     namespace is permitted): said when it is full, exit 4;
 #     OpenNI2 itself says nothing and the driver exited 0.
 . "$(dirname "$0")/driver_test_lib.sh"
 DRIVER="$B/bin/ivoa-openni2-kinect"
@@ -144,9 +144,9 @@ if unshare -m true 2>/dev/null; then
     "$1" --color --record "$2/clip.oni" --max-frames 90 >"$3/full.log" 2>&1 || code=$?
     "$1" --device "$2/clip.oni" --playback-speed 0 >"$3/full_replay.log" 2>&1
     exit $code' sh "$DRIVER" "$FULL" "$OUT" || code=$?
-  if [ "$code" != 4 ] || ! grep -q "clip.oni: .* MB left on its disk" "$OUT/full.log" ||
-    ! grep -qE "clip.oni: its disk is full \(0\.[0-9] MB left\) after [0-9]+ depth frames" "$OUT/full.log"; then
-    echo "FAILED: recording onto a full disk: exit $code (want 4), expected the low and full messages" >&2
+  # (the warning under 512 MB may not come first: a look once a second can find it full at once)
+  if [ "$code" != 4 ] || ! grep -qE "clip.oni: its disk is full \(0\.[0-9] MB left\) after [0-9]+ depth frames" "$OUT/full.log"; then
+    echo "FAILED: recording onto a full disk: exit $code (want 4), expected the full disk named" >&2
     cat "$OUT/full.log" >&2
     exit 1
   fi

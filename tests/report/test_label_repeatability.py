@@ -195,7 +195,7 @@ class LabelRepeatabilityTest(unittest.TestCase):
         proc = subprocess.run([sys.executable, TOOL, *self.data[:2], "--json", target], capture_output=True,
                               text=True, timeout=60)
         self.assertEqual(proc.returncode, 2, proc.stderr)
-        self.assertIn(f"is inside the dataset {self.data[1]}", proc.stderr)
+        self.assertIn(f"is a file of the dataset {self.data[1]}: it would be written over", proc.stderr)
         with open(target) as f:
             self.assertEqual(f.read(), before)
         proc = subprocess.run([sys.executable, TOOL, *self.data[:2], "--evidence-threshold", "nan"],

@@ -101,13 +101,24 @@ bool is_split_part(const std::string& log) {
          std::isdigit(static_cast<unsigned char>(ext[2]));
 }
 
-// A log among one session's `files` (in order) that is not a split part
-// from the first one's folder, or "" when they are one recording.
+// The folder a log is in, however it is spelt (./a, a/, a symlink to it).
+fs::path folder_of(const std::string& log) {
+  std::error_code error;
+  const fs::path folder = fs::weakly_canonical(fs::absolute(log).parent_path(), error);
+  return error ? fs::absolute(log).parent_path() : folder;
+}
+
+// A log among one session's `files` that is not the next split part from
+// the first one's folder (NAME.lcmlog.00, .01, ... in order), or "" when
+// they are one recording.
 std::string another_recording_among(const std::vector<std::string>& files) {
   if (files.size() < 2) return "";
-  const fs::path folder = fs::path(files.front()).parent_path();
-  for (const auto& f : files)
-    if (!is_split_part(f) || fs::path(f).parent_path() != folder) return f == files.front() ? files[1] : f;
+  const fs::path folder = folder_of(files.front());
+  for (size_t i = 0; i < files.size(); ++i) {
+    const std::string& f = files[i];
+    const bool in_order = i == 0 || fs::path(f).extension().string() > fs::path(files[i - 1]).extension().string();
+    if (!is_split_part(f) || folder_of(f) != folder || !in_order) return i == 0 ? files[1] : f;
+  }
   return "";
 }
 

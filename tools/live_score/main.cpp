@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <set>
+#include <type_traits>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,7 @@ struct ReadCounts {
   int64_t undecodable = 0;  // events on the scored channels that are not their type
   int64_t malformed = 0;    // of their type, with values the scorer cannot use
   int64_t damaged_files = 0;
+  int64_t skipped_predictions = 0, skipped_labels = 0;  // of the two above, INTROSPECTION's and the labels'
 };
 
 // Decodes the event as Msg for the scorer; one that does not decode, or
@@ -34,13 +36,19 @@ struct ReadCounts {
 template <class Msg>
 void feed(const std::string& path, const logio::LogEvent& e, tools::LiveScorer& scorer, ReadCounts& counts) {
   Msg m;
+  const auto skipped = [&counts] {
+    if constexpr (std::is_same_v<Msg, introspection_t>) ++counts.skipped_predictions;
+    if constexpr (std::is_same_v<Msg, introspection_labels_t>) ++counts.skipped_labels;
+  };
   if (!logio::decode(e, m)) {
     ++counts.undecodable;
+    skipped();
     spdlog::warn("{}: byte {}: a {} event that does not decode as its type, skipped", path, e.offset, e.channel);
     return;
   }
   if (const std::string why = scorer.add(m); !why.empty()) {
     ++counts.malformed;
+    skipped();
     spdlog::warn("{}: byte {}: {} utime {}: {}, skipped", path, e.offset, e.channel, m.utime, why);
   }
 }
@@ -173,11 +181,10 @@ bool score_logs(const ScoreCommandLine& cl, LiveScore& s, ReadCounts& counts) {
   s = scorer.finish();
   if (s.predicted_frames > 0 && s.labelled_frames > 0) return true;
   // Messages left out as unusable are not missing ones: say which it was.
+  const int64_t left_out = s.predicted_frames == 0 ? counts.skipped_predictions : counts.skipped_labels;
   const std::string skipped =
-      counts.malformed || counts.undecodable
-          ? fmt::format(" that could be used ({} left out as unusable, {} undecodable: warnings above)",
-                        counts.malformed, counts.undecodable)
-          : "";
+      left_out ? fmt::format(" that could be used ({} left out as unusable or undecodable: warnings above)", left_out)
+               : "";
   spdlog::error("{}: no {} messages{} to score{}", cl.logs(),
                 s.predicted_frames == 0 ? "INTROSPECTION" : "INTROSPECTION_LABELS", skipped,
                 !skipped.empty()          ? ""

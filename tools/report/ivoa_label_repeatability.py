@@ -348,11 +348,11 @@ def main(argv=None) -> int:
         seen[os.path.realpath(d)] = d
     if not math.isfinite(args.evidence_threshold):
         ap.error(f"--evidence-threshold must be a finite cost, not {args.evidence_threshold}")
-    if args.json:
+    if args.json and os.path.exists(args.json):
         out = os.path.realpath(args.json)
-        for d in args.datasets:  # written over, a dataset's own dataset.json would break it
+        for d in args.datasets:  # written over, a dataset's own file (dataset.json) would break it
             if os.path.commonpath([out, os.path.realpath(d)]) == os.path.realpath(d):
-                ap.error(f"--json {args.json} is inside the dataset {d}: write it elsewhere")
+                ap.error(f"--json {args.json} is a file of the dataset {d}: it would be written over")
     if args.json and (why := _why_cannot_write(args.json)):  # before the analysis, not after
         print(f"ivoa_label_repeatability: cannot write {args.json}: {why}", file=sys.stderr)
         return EXIT_CANNOT_WRITE

@@ -216,13 +216,32 @@ int64_t session_start(const SessionLog& log, const Options& opt, const std::stri
                            ": the log does not start at the session's first frame (no seq 0); give --start-utime");
 }
 
-// The driver's --rate from the times of the frames the log holds (frame 0's
-// and later ones; causes::rate_from_frame_times).
-double session_rate(const SessionLog& log, int64_t start_utime) {
+// The times of the frames the log holds, frame 0's and later ones.
+std::vector<int64_t> frame_times(const SessionLog& log, int64_t start_utime) {
   std::vector<int64_t> times{start_utime};
   for (const auto& [utime, truth] : log.truth)
     if (utime > start_utime) times.push_back(utime);
-  return causes::rate_from_frame_times(times);
+  return times;
+}
+
+// Says when a --rate given cannot be the driver's (its frames' times are not
+// whole periods of it), or may not be (they read as another rate): another
+// rate gives other frame indices, so other noise, and verdicts go "not
+// reproduced". Gaps all even numbers of periods read as half the rate.
+void check_rate_given(const std::string& session, const SessionLog& log, const causes::SessionTiming& timing) {
+  const std::vector<int64_t> times = frame_times(log, timing.start_utime);
+  if (times.size() < 2) return;
+  const double read = causes::rate_from_frame_times(times);
+  if (!causes::frame_times_fit_rate(times, timing.rate_hz))
+    spdlog::warn(
+        "{}: --rate {:.6g}, but its frames' times are not whole periods of it (they read as {:.6g} Hz): "
+        "is --rate the driver's?",
+        session, timing.rate_hz, read);
+  else if (std::abs(read - timing.rate_hz) > 1e-3 * timing.rate_hz)
+    spdlog::info(
+        "{}: --rate {:.6g}, and its frames' times read as {:.6g} Hz (every other frame missing, or "
+        "another --rate?)",
+        session, timing.rate_hz, read);
 }
 
 struct Tally {
@@ -307,13 +326,10 @@ void explain_session(const std::string& path, const Options& opt, SessionResult&
   causes::SessionTiming timing = opt.timing;
   timing.start_utime = session_start(log, opt, path);
   if (timing.rate_hz == 0) {
-    timing.rate_hz = session_rate(log, timing.start_utime);
+    timing.rate_hz = causes::rate_from_frame_times(frame_times(log, timing.start_utime));
     spdlog::info("{}: recorded at {:.6g} Hz", session, timing.rate_hz);
-  } else if (const double read = session_rate(log, timing.start_utime);
-             log.truth.size() > 1 && std::abs(read - timing.rate_hz) > 1e-6 * timing.rate_hz) {
-    // Another rate gives other frame indices, so other sensor noise: verdicts go "not reproduced".
-    spdlog::warn("{}: --rate {:.6g}, but its frames' times read as {:.6g} Hz: is --rate the driver's?", session,
-                 timing.rate_hz, read);
+  } else {
+    check_rate_given(session, log, timing);
   }
   causes::CauseFinder finder(scene, static_cast<uint64_t>(first.seed), *log.rig, timing, log.labels.front().detector,
                              opt.detector, opt.variants);
@@ -519,7 +535,7 @@ bool outputs_apart_from_inputs(const CommandLine& cl) {
   for (const std::string* out : {&cl.opt.out, &cl.opt.variants_out})
     for (const std::string& input : inputs)
       if (writes_over(*out, input)) {
-        spdlog::error("{} is (or is inside) the input {}: it would be written over", *out, input);
+        spdlog::error("{} is the input {} (or a file in it): it would be written over", *out, input);
         return false;
       }
   if (writes_over(cl.opt.variants_out, cl.opt.out)) {

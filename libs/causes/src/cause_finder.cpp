@@ -271,17 +271,21 @@ namespace {
 
 // Whether every gap is a whole number of `period`s, to the frame times'
 // rounding: each time is within 0.5 us, so a gap within 1 us, and n periods
-// taken from the shortest gap cut in `parts` are off by n / parts us more.
-bool gaps_are_whole_periods(const std::vector<int64_t>& utimes, double period, int parts) {
+// of a period known to `period_error_us` are off by n times that more.
+bool gaps_are_whole_periods(const std::vector<int64_t>& utimes, double period, double period_error_us) {
   for (size_t i = 1; i < utimes.size(); ++i) {
     const double gap = static_cast<double>(utimes[i] - utimes[i - 1]);
     const double n = std::round(gap / period);
-    if (n < 1 || std::abs(gap - n * period) > 1.5 + n / parts) return false;
+    if (n < 1 || std::abs(gap - n * period) > 1.5 + n * period_error_us) return false;
   }
   return true;
 }
 
 }  // namespace
+
+bool frame_times_fit_rate(const std::vector<int64_t>& utimes, double rate_hz) {
+  return gaps_are_whole_periods(utimes, 1e6 / rate_hz, 0.0);
+}
 
 double rate_from_frame_times(const std::vector<int64_t>& utimes) {
   int64_t shortest = 0;
@@ -295,7 +299,8 @@ double rate_from_frame_times(const std::vector<int64_t>& utimes) {
   constexpr int kMostPeriodsInTheShortestGap = 16;
   double period = static_cast<double>(shortest);
   for (int parts = 1; parts <= kMostPeriodsInTheShortestGap; ++parts)
-    if (gaps_are_whole_periods(utimes, static_cast<double>(shortest) / parts, parts)) {
+    // The shortest gap is within 1 us: cut in parts, each within 1 / parts.
+    if (gaps_are_whole_periods(utimes, static_cast<double>(shortest) / parts, 1.0 / parts)) {
       period = static_cast<double>(shortest) / parts;
       break;
     }

@@ -131,6 +131,8 @@ CLI::Validator input_path(bool folder) {
       [folder](std::string& text) {
         std::error_code error;
         const auto status = std::filesystem::status(text, error);
+        if (error && error != std::errc::no_such_file_or_directory)  // a folder on the way that cannot be read
+          return std::string(kMissingInput) + text + ": " + error.message();
         if (!std::filesystem::exists(status)) return std::string(kMissingInput) + "no such file or folder: " + text;
         if (folder && !std::filesystem::is_directory(status))
           return std::string(kMissingInput) + text + " is a file, not a folder";

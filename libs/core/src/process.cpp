@@ -226,7 +226,7 @@ bool writes_over(const std::string& path, const std::string& input) {
   const auto in = std::filesystem::weakly_canonical(std::filesystem::absolute(input), error);
   if (error) return false;
   if (out == in) return true;
-  if (!std::filesystem::is_directory(in, error)) return false;
+  if (!std::filesystem::is_directory(in, error) || !std::filesystem::exists(out, error)) return false;
   const auto inside = out.lexically_relative(in);  // "../x" when outside
   return !inside.empty() && *inside.begin() != "..";
 }

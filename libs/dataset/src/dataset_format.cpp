@@ -578,7 +578,7 @@ std::map<std::string, std::vector<std::string>> load_split(const std::string& pa
     }
     for (const auto& s : sessions) {
       // A path would reach another folder, or the same session by another name.
-      if (s.empty() || s == "." || s == ".." || s.find('/') != std::string::npos)
+      if (s.empty() || s.front() == '.' || s.find('/') != std::string::npos)  // .NAME: a build's work folder
         throw DatasetError(path + ": split '" + name + "': '" + s +
                            "' is not a session name (a folder of the dataset, such as office_s31, not a path)");
       if (owner.count(s))

@@ -58,6 +58,10 @@ struct SessionTiming {
 // multiples of the period cannot tell it from twice the period (the poses
 // agree then; the noise, drawn per frame index, does not).
 double rate_from_frame_times(const std::vector<int64_t>& utimes);
+// Whether every gap between the frame times is a whole number of periods
+// of `rate_hz` (to the microsecond rounding): a --rate that can be the
+// driver's, though a multiple of it fits too.
+bool frame_times_fit_rate(const std::vector<int64_t>& utimes, double rate_hz);
 
 // Other settings of the same detector to try on the factual frames, e.g.
 // "full resolution" (--rect_scale 1). At most 8.

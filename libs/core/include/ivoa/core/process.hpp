@@ -74,8 +74,9 @@ std::string same_file_among(const std::string& path, const std::vector<std::stri
 std::string file_given_twice(const std::vector<std::string>& files);
 
 // Whether writing `path` would write over `input`: the same file (by any
-// spelling, also before either exists), or a file inside the folder
-// `input` (a dataset, a folder of scene files).
+// spelling, also before either exists), or an existing file inside the
+// folder `input` (a dataset, a folder of scene files); a new file there
+// writes over nothing.
 bool writes_over(const std::string& path, const std::string& input);
 
 // Why `path` cannot be read as a file ("no such file", "is a folder", "is a
