@@ -2,6 +2,7 @@
 // a folder that is not a dataset is bad input. build: flags checked up front.
 #include <filesystem>
 #include <fstream>
+#include <utility>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -134,23 +135,19 @@ TEST(DatasetBuild, LogsOfOneNameMustBeOneRecording) {
     return test::run_command("cd " + dir.path().string() + " && timeout 60 " IVOA_DATASET_EXE " build --out data " +
                              logs);
   };
-  auto r = build("s.lcmlog other/s.lcmlog");
-  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
-  EXPECT_TRUE(contains(r.output, "s.lcmlog and other/s.lcmlog are both session s")) << r.output;
-  r = build("s.lcmlog t.lcmlog.00 ./s.lcmlog");
-  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
-  EXPECT_TRUE(contains(r.output, "./s.lcmlog is given twice: give each log once")) << r.output;
-  r = build("t.lcmlog.00 t.lcmlog.01 other/t.lcmlog.02");
-  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
-  EXPECT_TRUE(contains(r.output, "t.lcmlog.00 and other/t.lcmlog.02 are both session t")) << r.output;
-  r = build("s.lcmlog t.lcmlog.00 s.lcmlog.01");
-  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
-  EXPECT_TRUE(contains(r.output, "s.lcmlog and s.lcmlog.01 are both session s")) << r.output;
-  r = build("t.lcmlog.01 t.lcmlog.00");
-  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
-  EXPECT_TRUE(contains(r.output, "t.lcmlog.01 and t.lcmlog.00 are both session t")) << r.output;
+  const std::pair<const char*, const char*> refused[] = {
+      {"s.lcmlog other/s.lcmlog", "s.lcmlog and other/s.lcmlog are both session s"},
+      {"s.lcmlog t.lcmlog.00 ./s.lcmlog", "./s.lcmlog is given twice: give each log once"},
+      {"t.lcmlog.00 t.lcmlog.01 other/t.lcmlog.02", "t.lcmlog.00 and other/t.lcmlog.02 are both session t"},
+      {"s.lcmlog t.lcmlog.00 s.lcmlog.01", "s.lcmlog and s.lcmlog.01 are both session s"},
+      {"t.lcmlog.01 t.lcmlog.00", "t.lcmlog.01 and t.lcmlog.00 are both session t"}};
+  for (const auto& [logs, said] : refused) {
+    const auto r = build(logs);
+    EXPECT_EQ(r.exit_code, kExitUsage) << logs << "\n" << r.output;
+    EXPECT_TRUE(contains(r.output, said)) << logs << "\n" << r.output;
+  }
   // Split parts of one folder go together, however it is spelt (and are then read: these are no logs).
-  r = build("t.lcmlog.00 ./t.lcmlog.01");
+  auto r = build("t.lcmlog.00 ./t.lcmlog.01");
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
   EXPECT_FALSE(contains(r.output, "are both session")) << r.output;
   r = build("--session joined s.lcmlog other/s.lcmlog");  // on purpose
