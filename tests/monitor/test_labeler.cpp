@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include "ivoa/core/grid_messages.hpp"
 #include "ivoa/monitor/labeler.hpp"
 
 namespace ivoa::monitor {
@@ -29,16 +30,16 @@ obstacle_grid_t grid_with(std::vector<int8_t> states, const std::string& detecto
 
 TEST(Labeler, AlgorithmOneFourCases) {
   // O = obstacle free.  (stereo, depth)
-  EXPECT_EQ(label_for(G::STATE_FREE, G::STATE_FREE), L::LABEL_TN);          // O_M & O_S
-  EXPECT_EQ(label_for(G::STATE_OBSTACLE, G::STATE_FREE), L::LABEL_FP);      // O_M & !O_S
-  EXPECT_EQ(label_for(G::STATE_FREE, G::STATE_OBSTACLE), L::LABEL_FN);      // !O_M & O_S
-  EXPECT_EQ(label_for(G::STATE_OBSTACLE, G::STATE_OBSTACLE), L::LABEL_TP);  // !O_M & !O_S
+  EXPECT_EQ(label_of_verdicts(G::STATE_FREE, G::STATE_FREE), L::LABEL_TN);          // O_M & O_S
+  EXPECT_EQ(label_of_verdicts(G::STATE_OBSTACLE, G::STATE_FREE), L::LABEL_FP);      // O_M & !O_S
+  EXPECT_EQ(label_of_verdicts(G::STATE_FREE, G::STATE_OBSTACLE), L::LABEL_FN);      // !O_M & O_S
+  EXPECT_EQ(label_of_verdicts(G::STATE_OBSTACLE, G::STATE_OBSTACLE), L::LABEL_TP);  // !O_M & !O_S
 }
 
 TEST(Labeler, UnknownOnEitherSideGivesNoLabel) {
-  EXPECT_EQ(label_for(G::STATE_UNKNOWN, G::STATE_FREE), L::LABEL_NONE);
-  EXPECT_EQ(label_for(G::STATE_OBSTACLE, G::STATE_UNKNOWN), L::LABEL_NONE);
-  EXPECT_EQ(label_for(G::STATE_UNKNOWN, G::STATE_UNKNOWN), L::LABEL_NONE);
+  EXPECT_EQ(label_of_verdicts(G::STATE_UNKNOWN, G::STATE_FREE), L::LABEL_NONE);
+  EXPECT_EQ(label_of_verdicts(G::STATE_OBSTACLE, G::STATE_UNKNOWN), L::LABEL_NONE);
+  EXPECT_EQ(label_of_verdicts(G::STATE_UNKNOWN, G::STATE_UNKNOWN), L::LABEL_NONE);
 }
 
 TEST(Labeler, LabelsAFrameCellByCell) {

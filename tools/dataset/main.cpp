@@ -4,7 +4,6 @@
 //   ivoa-dataset build --out data/ --labels jppc session1.lcmlog session2.lcmlog
 //   ivoa-dataset build --out data/ --labels recorded --session s7 s7.lcmlog.00 s7.lcmlog.01
 //   ivoa-dataset info data/ [--split split.yaml]
-#include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -94,13 +93,6 @@ int build_session(const std::string& out, const std::string& session, const std:
 
 using SessionLogs = std::vector<std::pair<std::string, std::vector<std::string>>>;
 
-// lcm-logger's split files: NAME.lcmlog.00, .01, ...
-bool is_split_part(const std::string& log) {
-  const std::string ext = fs::path(log).extension().string();
-  return ext.size() == 3 && std::isdigit(static_cast<unsigned char>(ext[1])) &&
-         std::isdigit(static_cast<unsigned char>(ext[2]));
-}
-
 // The folder a log is in, however it is spelt (./a, a/, a symlink to it).
 fs::path folder_of(const std::string& log) {
   std::error_code error;
@@ -117,7 +109,7 @@ std::string another_recording_among(const std::vector<std::string>& files) {
   for (size_t i = 0; i < files.size(); ++i) {
     const std::string& f = files[i];
     const bool in_order = i == 0 || fs::path(f).extension().string() > fs::path(files[i - 1]).extension().string();
-    if (!is_split_part(f) || folder_of(f) != folder || !in_order) return i == 0 ? files[1] : f;
+    if (!logio::is_split_part(f) || folder_of(f) != folder || !in_order) return i == 0 ? files[1] : f;
   }
   return "";
 }

@@ -11,13 +11,13 @@
 namespace ivoa::logio {
 namespace {
 
-// LCM reads up to a last event the file ends inside, then stops as at the
-// end: nothing is lost that any reader could play.
 // The log file `lcm_url` replays (the default URL if empty), or "".
 std::string log_replayed_by(const std::string& lcm_url) {
   return replayed_log(lcm_url.empty() ? default_lcm_url() : lcm_url);
 }
 
+// LCM reads up to a last event the file ends inside, then stops as at the
+// end: nothing is lost that any reader could play.
 bool only_the_last_event_is_cut_short(const std::vector<LogProblem>& problems) {
   return problems.size() == 1 && problems.front().to_end && problems.front().cut_short;
 }

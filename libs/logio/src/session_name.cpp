@@ -5,12 +5,15 @@
 
 namespace ivoa::logio {
 
+bool is_split_part(const std::string& log_path) {
+  const std::string ext = std::filesystem::path(log_path).extension().string();
+  return ext.size() == 3 && std::isdigit(static_cast<unsigned char>(ext[1])) &&
+         std::isdigit(static_cast<unsigned char>(ext[2]));
+}
+
 std::string session_name_of(const std::string& log_path) {
   std::string name = std::filesystem::path(log_path).filename().string();
-  const auto dot = name.rfind('.');
-  if (dot != std::string::npos && name.size() - dot == 3 && std::isdigit(static_cast<unsigned char>(name[dot + 1])) &&
-      std::isdigit(static_cast<unsigned char>(name[dot + 2])))
-    name = name.substr(0, dot);
+  if (is_split_part(name)) name = name.substr(0, name.size() - 3);
   for (const std::string ext : {".lcmlog", ".lcm", ".log"})
     if (name.size() > ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0)
       name = name.substr(0, name.size() - ext.size());

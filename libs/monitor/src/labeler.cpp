@@ -8,8 +8,6 @@
 
 namespace ivoa::monitor {
 
-int8_t label_for(int8_t stereo_state, int8_t depth_state) { return label_of_verdicts(stereo_state, depth_state); }
-
 introspection_labels_t label_frame(const obstacle_grid_t& stereo, const obstacle_grid_t& depth) {
   const auto near = [](const std::vector<float>& a, const std::vector<float>& b) {
     return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(),
@@ -39,7 +37,7 @@ introspection_labels_t label_frame(const obstacle_grid_t& stereo, const obstacle
   out.patch_size = stereo.patch_size;
   const size_t n = stereo.state.size();
   out.label.resize(n);
-  for (size_t i = 0; i < n; ++i) out.label[i] = label_for(stereo.state[i], depth.state[i]);
+  for (size_t i = 0; i < n; ++i) out.label[i] = label_of_verdicts(stereo.state[i], depth.state[i]);
   out.stereo_state = stereo.state;
   out.depth_state = depth.state;
   out.x = stereo.x;

@@ -6,8 +6,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "ivoa/core/grid_messages.hpp"
 #include "ivoa/figures/paper_figure.hpp"
-#include "ivoa/monitor/labeler.hpp"
 
 namespace ivoa::viewer {
 namespace {
@@ -99,7 +99,7 @@ std::vector<CellMark> cell_marks(const FrameSet& f) {
     if (!one->in_image[i]) continue;
     CellMark m{one->u[i], one->v[i], -1, -1, false};
     if (both) {
-      m.ring_label = monitor::label_for(f.stereo->state[i], f.depth->state[i]);
+      m.ring_label = label_of_verdicts(f.stereo->state[i], f.depth->state[i]);
       m.none_label = m.ring_label < 0;
     } else {
       m.ring_verdict = one->state[i];

@@ -9,4 +9,8 @@ namespace ivoa::logio {
 
 std::string session_name_of(const std::string& log_path);
 
+// Whether the file is a split part (its name ends in .NN, as lcm-logger's
+// and ivoa-logger's --split parts do).
+bool is_split_part(const std::string& log_path);
+
 }  // namespace ivoa::logio

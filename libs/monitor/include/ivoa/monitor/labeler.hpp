@@ -1,17 +1,14 @@
 #pragma once
-// Algorithm 1 of the IVOA paper: label each query cell by comparing the
-// stereo detector's verdict with the depth monitor's. O = "obstacle free":
-//   O_M &  O_S -> TN      O_M & !O_S -> FP
-//  !O_M &  O_S -> FN     !O_M & !O_S -> TP
-// A cell either side could not judge (UNKNOWN) gets LABEL_NONE.
+// Algorithm 1 of the IVOA paper over a frame: each query cell labelled by
+// comparing the stereo detector's verdict with the depth monitor's
+// (per cell: ivoa::label_of_verdicts, core/grid_messages.hpp, which the
+// readers of recorded labels check them with).
 #include <stdexcept>
 
 #include "ivoa/introspection_labels_t.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
 
 namespace ivoa::monitor {
-
-int8_t label_for(int8_t stereo_state, int8_t depth_state);  // ivoa::label_of_verdicts, which readers check with
 
 class LabelError : public std::runtime_error {
  public:
