@@ -205,6 +205,17 @@ TEST_F(EvalCli, OverlaysComeOnlyFromALogOfTheSessionsSceneAndSeed) {
   EXPECT_TRUE(contains(r.output, "a log of scene lobby seed 31")) << r.output;
 }
 
+// A log the logger split (t.lcmlog.00, .01, ...) is the session "t", as
+// ivoa-dataset names it.
+TEST_F(EvalCli, APartOfASplitLogIsItsSessionsLog) {
+  std::filesystem::create_directories(dir_.file("own"));
+  write_simulated_log(dir_.file("own/t.lcmlog.00"), "office", 31);
+  const auto r = eval("test", "--logs " + dir_.file("own/t.lcmlog.00"));
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(out() + "/overlays/t_0.png")) << r.output;
+  EXPECT_FALSE(contains(r.output, "no session")) << r.output;
+}
+
 TEST_F(EvalCli, ASplitWithoutSessionsIsBadInput) {
   const auto r = eval("empty");
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;

@@ -36,6 +36,7 @@
 #include "ivoa/figures/paper_figure.hpp"
 #include "ivoa/introspection/model.hpp"
 #include "ivoa/logio/log_reader.hpp"
+#include "ivoa/logio/session_name.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
 #include "ivoa/rig_calibration_t.hpp"
 #include "ivoa/sim_ground_truth_t.hpp"
@@ -145,14 +146,6 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
   }
 }
 
-std::string session_of_log(const std::string& path) {
-  std::string name = fs::path(path).filename().string();
-  for (const std::string ext : {".lcmlog", ".lcm", ".log"})
-    if (name.size() > ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0)
-      return name.substr(0, name.size() - ext.size());
-  return name;
-}
-
 // The prediction for each labelled cell, as ivoa-introspection makes it
 // (a footprint-scaled model's near cells from the squares the dataset
 // recorded); given_verdict: conditioned on the cell's recorded verdict where
@@ -248,7 +241,8 @@ std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection
     if (it == frames.end() || index++ % o.overlay_every != 0) continue;
     if (model.info().views == 2 && !warp)
       throw dataset::DatasetError(log + ": no rig calibration before the first frame (a two-view model needs it)");
-    const std::string path = o.out + "/overlays/" + session_of_log(log) + "_" + std::to_string(msg.utime) + ".png";
+    const std::string path =
+        o.out + "/overlays/" + logio::session_name_of(log) + "_" + std::to_string(msg.utime) + ".png";
     from_log.push_back(prepare_overlay(o, model, msg, warp.get(), it->second, path));
   }
   if (const std::string why = in.not_a_log(); !why.empty()) spdlog::warn("{}: {}: no overlays from it", log, why);
@@ -270,7 +264,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
   std::vector<PendingOverlay> held;
   size_t written = 0;
   for (const auto& log : o.logs) {
-    const std::string session = session_of_log(log);
+    const std::string session = logio::session_name_of(log);
     const std::string dir = o.dataset + "/" + session;
     if (!fs::exists(dir + "/session.json")) {
       spdlog::warn("{}: no session '{}' in {}: no labels for its overlays, skipped", log, session, o.dataset);
