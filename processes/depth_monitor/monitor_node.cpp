@@ -89,8 +89,7 @@ void MonitorNode::on_stereo(const obstacle_grid_t& msg) {
 
 void MonitorNode::publish(std::vector<monitor::PipelineOutcome> outcomes) {
   for (auto& o : outcomes) {
-    if (!o.labeled) {
-      ++unmatched_;
+    if (!o.labeled) {  // counted by the pairer
       spdlog::debug("stereo frame {} has no depth frame within the pairing tolerance", o.stereo_utime);
       continue;
     }
@@ -110,7 +109,7 @@ void MonitorNode::update_counters() {
   monitor::PairingCounters c = earlier_pipelines_;  // the counts of the whole run
   c += pipeline_->counters();
   heartbeat_.set_counter("frames_labelled", c.paired);
-  heartbeat_.set_counter("stereo_unmatched", unmatched_);
+  heartbeat_.set_counter("stereo_unmatched", c.unmatched_stereo);
   heartbeat_.set_counter("stereo_duplicates", c.duplicate_stereo);
   heartbeat_.set_counter("depth_duplicates", c.duplicate_depth);
   heartbeat_.set_counter("depth_late", c.late_depth);

@@ -49,7 +49,7 @@ class MonitorNode {
   SeqGaps missed_;                          // of the depth frames
   std::vector<uint8_t> calibration_bytes_;  // the calibration the pipeline was built for
   std::unique_ptr<monitor::LabelingPipeline> pipeline_;
-  int64_t unmatched_ = 0, labelled_cells_ = 0;
+  int64_t labelled_cells_ = 0;
   monitor::ClockCounters depth_clock_seen_, stereo_clock_seen_;  // what update_counters last reported
   monitor::PairingCounters earlier_pipelines_;                   // of the pipelines a calibration change replaced
 };

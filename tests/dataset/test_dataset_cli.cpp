@@ -2,6 +2,7 @@
 // a folder that is not a dataset is bad input. build: flags checked up front.
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <utility>
 #include <string>
 
@@ -100,6 +101,26 @@ TEST(DatasetBuild, AnOverflowingSyncToleranceIsAUsageError) {
   const auto r = build_refused_before_reading("--labels jppc --sync-tolerance-us 9223372036854775807");
   EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
   EXPECT_TRUE(contains(r.output, "--sync-tolerance-us")) << r.output;
+}
+
+// The live detector's settings file relabels offline as it is: its keys,
+// outside any section, are build's (CLI11 wanted them under [build] and
+// refused the file); a bad value in it is named.
+TEST(DatasetBuild, TheDetectorsConfigFileSetsBuildsFlags) {
+  test::TempDir dir;
+  std::ifstream shipped(IVOA_DETECTOR_INI);
+  std::string text((std::istreambuf_iterator<char>(shipped)), std::istreambuf_iterator<char>());
+  ASSERT_TRUE(contains(text, "\nrect_scale = 0.5\n"));
+  std::ofstream(dir.file("bad.ini")) << text.replace(text.find("\nrect_scale = 0.5\n"), 18, "\nrect_scale = -1\n");
+  const std::string bad_config = "--config " + dir.file("bad.ini");
+  for (const std::string& flags : {"--labels jppc " + bad_config, bad_config + " --labels jppc"}) {
+    const auto r = build_refused_before_reading(flags);
+    EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+    EXPECT_TRUE(contains(r.output, "rect_scale must be in [0.05, 1]")) << flags << ": " << r.output;
+  }
+  const auto r = build_refused_before_reading("--labels jppc --config " IVOA_DETECTOR_INI);
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;  // past the flags, to the log that is not one
+  EXPECT_FALSE(contains(r.output, "--config")) << r.output;
 }
 
 // A misspelt --labels is a usage error listing what it takes.

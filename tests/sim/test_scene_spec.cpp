@@ -108,6 +108,29 @@ TEST(SimSceneSpec, ErrorsNameFileAndKey) {
   EXPECT_NE(error_of("elements:\n  - {type: wall, from: [0, 0]}\n").find("wall needs from and to"), std::string::npos);
 }
 
+// An obstacle kind is one the generator can shape, from a file or from code
+// (a misspelt kind once became a plain box without a word).
+TEST(SimSceneSpec, UnknownObstacleKindsAreRefused) {
+  EXPECT_NE(error_of("obstacles: {kinds: {box: 1, cone: 2}}\n").find("test.yaml:1: obstacles.kinds.cone: unknown key"),
+            std::string::npos)
+      << error_of("obstacles: {kinds: {box: 1, cone: 2}}\n");
+  SceneSpec spec = parse_scene_spec("name: x\nobstacles: {count: 3}\n", "inline");
+  spec.obstacles.kinds = {{"box", 1.0}, {"chiar", 1.0}};
+  try {
+    validate(spec);
+    ADD_FAILURE() << "an unknown kind was accepted";
+  } catch (const SceneSpecError& e) {
+    EXPECT_NE(std::string(e.what()).find("obstacles.kinds: unknown kind 'chiar' (one of: bench, bin,"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(generate_scene(spec, 1), SceneSpecError);
+  for (const auto& kind : obstacle_kinds()) {  // each has a shape
+    spec.obstacles.kinds = {{kind, 1.0}};
+    EXPECT_NO_THROW(generate_scene(spec, 1)) << kind;
+  }
+}
+
 // Values that parse but do not make a scene (unknown materials, ranges out of
 // bounds) are placed by line too, down to the list entry.
 TEST(SimSceneSpec, ValidationErrorsGiveTheLine) {

@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -18,6 +19,7 @@
 
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/labels.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
 #include "ivoa/dataset/builder.hpp"
@@ -46,7 +48,7 @@ const CLI::Option* ignored_with_recorded_labels(const std::vector<CLI::Option*>&
 std::string class_counts(const std::array<int64_t, dataset::kNumClasses>& c) {
   std::string out;
   for (int k = 0; k < dataset::kNumClasses; ++k)
-    out += (k ? "  " : "") + dataset::kLabelNames[static_cast<size_t>(k)] + " " +
+    out += std::string(k ? "  " : "") + kLabelNames[static_cast<size_t>(k)] + " " +
            std::to_string(c[static_cast<size_t>(k)]);
   return out;
 }
@@ -237,6 +239,26 @@ std::vector<std::string> label_sources() {
   return sources;
 }
 
+// A --config file's keys outside any section that name no option of
+// ivoa-dataset itself are build's when build runs, so the live detector's
+// file (stereo_detector.ini) relabels offline as it is. CLI11 reads a
+// config file for the main app only, and would want them under [build].
+class BuildKeysConfig : public CLI::ConfigINI {
+ public:
+  BuildKeysConfig(const CLI::App& app, const CLI::App& build) : app_(app), build_(build) {}
+  std::vector<CLI::ConfigItem> from_config(std::istream& input) const override {
+    std::vector<CLI::ConfigItem> items = CLI::ConfigINI::from_config(input);
+    if (!build_.parsed()) return items;
+    for (CLI::ConfigItem& item : items)
+      if (item.parents.empty() && !app_.get_option_no_throw("--" + item.name)) item.parents = {build_.get_name()};
+    return items;
+  }
+
+ private:
+  const CLI::App& app_;
+  const CLI::App& build_;
+};
+
 struct BuildCommand {
   CLI::App* command = nullptr;
   std::string out, session;
@@ -248,6 +270,8 @@ struct BuildCommand {
 
 void add_build_command(CLI::App& app, BuildCommand& b) {
   CLI::App* build = b.command = app.add_subcommand("build", "logs -> dataset sessions");
+  build->fallthrough();  // --config and --log-level after "build" too
+  app.config_formatter(std::make_shared<BuildKeysConfig>(app, *build));
   auto& options = b.options;
   build->add_option("--out", b.out, "dataset folder (created; sessions are added to it)")->required();
   build
@@ -331,6 +355,7 @@ int main(int argc, char** argv) {
   BuildCommand build;
   add_build_command(app, build);
   auto* info = app.add_subcommand("info", "sessions, class counts and splits of a dataset");
+  info->fallthrough();  // --config and --log-level after "info" too
   std::string root, split;
   // Not ->required(): CLI11 would name only "--dataset" as missing.
   info->add_option("dataset,--dataset", root, "dataset folder: the argument, or --dataset as ivoa-train takes it")

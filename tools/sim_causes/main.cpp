@@ -31,6 +31,7 @@
 #include "ivoa/causes/cause_finder.hpp"
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/flag_checks.hpp"
+#include "ivoa/core/labels.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
@@ -296,8 +297,6 @@ void write_rows(std::ostream& csv, const std::string& session, const Labels& lab
     }
   }
 }
-
-constexpr const char* kLabelNames[] = {"TP", "TN", "FP", "FN"};
 
 void write_variant_rows(std::ostream& csv, const std::string& session, const std::string& detector,
                         const std::vector<causes::DetectorVariant>& variants,

@@ -31,10 +31,4 @@ std::optional<int32_t> ivoa_pixelformat_from_genicam(uint32_t arv_pixel_format) 
   return std::nullopt;
 }
 
-std::optional<uint32_t> genicam_pixelformat_from_ivoa(int32_t ivoa_pixel_format) {
-  for (const auto& m : kMappings)
-    if (m.ivoa == ivoa_pixel_format) return m.genicam;
-  return std::nullopt;
-}
-
 }  // namespace ivoa::aravis_stereo

@@ -350,7 +350,6 @@ bool OpenNiCamera::depth_fov_intrinsics(PinholeIntrinsics* out) const {
 int OpenNiCamera::depth_width() const { return impl_->depth.getVideoMode().getResolutionX(); }
 int OpenNiCamera::depth_height() const { return impl_->depth.getVideoMode().getResolutionY(); }
 bool OpenNiCamera::registered() const { return impl_->registered; }
-bool OpenNiCamera::is_recording_file() const { return impl_->file; }
 std::string OpenNiCamera::description() const { return impl_->description; }
 std::string OpenNiCamera::record_path() const { return impl_->recorder.isValid() ? impl_->options.record_path : ""; }
 

@@ -13,10 +13,6 @@ cv::Mat extract_patch(const cv::Mat& image, double u, double v, int patch_size) 
   return cut_patch(image, 1, u, v, patch_size, patch_size);
 }
 
-cv::Mat extract_views(const cv::Mat& stacked, int views, double u, double v, int patch_size) {
-  return cut_patch(stacked, views, u, v, patch_size, patch_size);
-}
-
 PatchTruth summarize_truth(const cv::Mat& phenomena, const cv::Mat& surface, double u, double v, int patch_size) {
   PatchTruth t;
   const cv::Rect centre = patch_rect(u, v, patch_size / 2) & cv::Rect(0, 0, phenomena.cols, phenomena.rows);

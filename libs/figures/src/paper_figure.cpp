@@ -5,11 +5,12 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "ivoa/core/labels.hpp"
+
 namespace ivoa::figures {
 namespace {
 
 constexpr int kRingRadius = 15, kDotRadius = 8;
-const char* const kClassNames[] = {"TP", "TN", "FP", "FN"};
 
 }  // namespace
 
@@ -47,8 +48,8 @@ void draw_caption_and_legend(cv::Mat& image, const std::string& caption) {
   const int middle = kCaptionHeight + kLegendHeight / 2;
   for (int k = 0, x = 12; k < 4; ++k, x += 100) {
     cv::circle(image, {x + 10, middle}, 9, class_colour(k), cv::FILLED, cv::LINE_AA);
-    cv::putText(image, kClassNames[k], {x + 26, middle + 10}, cv::FONT_HERSHEY_SIMPLEX, 0.8, {255, 255, 255}, 2,
-                cv::LINE_AA);
+    cv::putText(image, kLabelNames[static_cast<size_t>(k)], {x + 26, middle + 10}, cv::FONT_HERSHEY_SIMPLEX, 0.8,
+                {255, 255, 255}, 2, cv::LINE_AA);
   }
 }
 

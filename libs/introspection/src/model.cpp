@@ -162,7 +162,7 @@ class NativeIntrospectionModel : public IntrospectionModel {
           patches.begin() + static_cast<long>(std::min(patches.size(), begin + kPatchBatch)));
       const auto features = patch_features(batch);
       const McStats s = head(features);
-      append_predictions(s, threshold(), out.predictions);
+      append_predictions(s, uncertainty_threshold(), out.predictions);
       if (with_embeddings) {
         const auto e = model_.net->embedding(features).to(torch::kCPU).contiguous();
         for (int64_t i = 0; i < e.size(0); ++i)
@@ -221,7 +221,7 @@ class ScriptedIntrospectionModel : public IntrospectionModel {
     if (with_embeddings) throw ModelError(info_.id + ": scripted models do not provide embeddings");
     const McStats s = stats(patches);
     PatchOutputs out;
-    append_predictions(s, threshold(), out.predictions);
+    append_predictions(s, uncertainty_threshold(), out.predictions);
     return out;
   }
 
@@ -294,7 +294,7 @@ std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& 
   return load_scripted(path, config);
 }
 
-double IntrospectionModel::threshold() const {
+double IntrospectionModel::uncertainty_threshold() const {
   return config_.uncertainty_threshold >= 0 ? config_.uncertainty_threshold : info().uncertainty_threshold;
 }
 
@@ -359,7 +359,7 @@ Prediction IntrospectionModel::predict_at(const Heatmaps& h, double u, double v)
     vmean[k] = read(h.verdict_error[k]);
     vvar[k] = read(h.verdict_error_variance[k]);
   }
-  return prediction_of(mean.data(), var.data(), vmean.data(), vvar.data(), threshold());
+  return prediction_of(mean.data(), var.data(), vmean.data(), vvar.data(), uncertainty_threshold());
 }
 
 VerdictPrediction given_verdict(const Prediction& p, bool said_obstacle, double threshold) {

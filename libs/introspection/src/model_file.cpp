@@ -117,7 +117,7 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
   } catch (const YAML::Exception& e) {
     throw ModelError(where + ": malformed model metadata: " + e.what());
   }
-  const std::vector<std::string> expected{"TP", "TN", "FP", "FN"};
+  const std::vector<std::string> expected{kLabelNames.begin(), kLabelNames.end()};
   if (i.classes != expected) throw ModelError(where + ": the model's classes are not TP, TN, FP, FN in that order");
   if (i.patch_size <= 0 || i.stride <= 0 || i.input_size <= 0 || !(i.dropout > 0 && i.dropout < 1))
     throw ModelError(where + ": patch_size, stride, input_size must be positive and dropout in (0, 1)");

@@ -338,7 +338,7 @@ std::vector<int> classes_present(const SplitData& train, TrainReport& report) {
     if (!train.by_class[static_cast<size_t>(k)].empty()) classes.push_back(k);
     else
       spdlog::warn("training split has no {} samples: the model cannot learn that class",
-                   dataset::kLabelNames[static_cast<size_t>(k)]);
+                   kLabelNames[static_cast<size_t>(k)]);
   }
   if (classes.size() < 2) throw std::runtime_error("training split has fewer than two classes");
   return classes;
@@ -658,7 +658,8 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   Learner learner = make_learner(c, train, info, device, report);
   const int64_t first_step = learner.first_step;
 
-  // Every random stream continues from the step (a resumed run does not replay the first batches).
+  // Every random stream continues from the step (a resumed run does not replay the first batches);
+  // the sampler's and the augmenter's seeds are the run's times two primes, so no two streams coincide.
   BalancedSampler sampler(train, classes, c.fn_weight, c.seed * 7919 + static_cast<uint64_t>(first_step));
   auto generator = at::detail::createCPUGenerator(c.seed + static_cast<uint64_t>(first_step));
   PhotometricRanges ranges;

@@ -150,12 +150,6 @@ const Material& builtin_material(const std::string& name) {
 
 bool has_builtin_material(const std::string& name) { return library().count(name) > 0; }
 
-std::vector<std::string> builtin_material_names() {
-  std::vector<std::string> names;
-  for (const auto& [name, m] : library()) names.push_back(name);
-  return names;
-}
-
 Pattern pattern_from_string(const std::string& name) {
   for (const auto& [p, n] : kPatternNames)
     if (name == n) return p;

@@ -97,7 +97,6 @@ Environment Scene::environment() const { return data_->environment; }
 Pose2D Scene::start_pose() const { return data_->start; }
 Eigen::AlignedBox2d Scene::bounds() const { return data_->bounds; }
 int Scene::num_solids() const { return static_cast<int>(data_->prisms.size()); }
-int Scene::num_lights() const { return static_cast<int>(data_->lights.size()); }
 int Scene::num_pits() const {
   return static_cast<int>(std::count_if(data_->floor_features.begin(), data_->floor_features.end(),
                                         [](const FloorFeature& f) { return f.kind == FloorFeature::kPit; }));

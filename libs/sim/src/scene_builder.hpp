@@ -84,7 +84,6 @@ class SceneBuilder {
   Rng rng_;
   std::shared_ptr<SceneData> data_;
   std::vector<Panel> panels_;
-  std::vector<size_t> wall_prisms_;
 };
 
 // The procedural layouts (scene_layouts.cpp).

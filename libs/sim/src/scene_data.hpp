@@ -118,7 +118,6 @@ struct SceneData {
   bool has_ceiling = false;
   float ceiling_height = 3.0f;
   RadianceMap ceiling_radiance;  // what the ceiling looks like (panels glow), mip-mapped
-  Rgbf ceiling_radiance_outside;
   SkyData sky;
   float light_level = 1;  // scene brightness factor (low-light sessions < 1)
   float max_exposure_scale = 1;
@@ -130,7 +129,7 @@ struct SceneData {
 // Precomputes prism lighting, the floor light map, sun visibility and the
 // ceiling's radiance map (scene_lighting.cpp).
 void compute_lighting(SceneData& scene);
-// Builds the plan grid (scene_queries.cpp).
+// Builds the plan grid (scene.cpp).
 void build_plan_grid(SceneData& scene);
 
 }  // namespace ivoa::sim::detail

@@ -2,6 +2,8 @@
 // their obstacles, floor details (rugs, wet patches, puddles, pits) and lights.
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "geometry.hpp"
 #include "ivoa/sim_ground_truth_t.hpp"
@@ -254,7 +256,7 @@ Kind make_kind(SceneBuilder& b, const std::string& kind) {
               b.add_curb(p - axis * len / 2, p + axis * len / 2, 0.15, h, "curb_concrete");
             }};
   }
-  return {0.3, [&b, jitter, mat = palette()](const V2& p) { b.add_box(p, {0.4, 0.4, 0.5}, 0, 0, mat, jitter); }};
+  throw std::logic_error("make_kind: no shape for obstacle kind '" + kind + "' (validate() checks the kinds)");
 }
 
 // A free spot for a circle of radius r: away from everything by min_gap, or
@@ -507,7 +509,6 @@ void build_ceiling(SceneBuilder& b) {
       values[static_cast<size_t>(j) * nx + i] = v;
     }
   d.ceiling_radiance = RadianceMap(x0, y0, cell, nx, ny, std::move(values), 8);
-  d.ceiling_radiance_outside = tex.mean() * irradiance;
 }
 
 }  // namespace ivoa::sim::detail

@@ -53,9 +53,10 @@ class Reader {
 
   // Every key is one of `keys`, a plain name, and given once (YAML would
   // silently keep the first of two).
-  void allow(std::initializer_list<const char*> keys) const {
+  void allow(std::initializer_list<const char*> keys) const { allow(std::set<std::string>(keys.begin(), keys.end())); }
+  void allow(const std::set<std::string>& ok) const {
     if (!node_.IsMap()) fail("expected a mapping");
-    std::set<std::string> ok(keys.begin(), keys.end()), seen;
+    std::set<std::string> seen;
     for (const auto& kv : node_) {
       if (!kv.first.IsScalar()) Reader(kv.first, path_, file_).fail("a key must be a plain name");
       const std::string key = kv.first.Scalar();
@@ -326,24 +327,25 @@ ElementSpec parse_element(const Reader& r) {
   return e;
 }
 
-void parse_kinds(const Reader& r, std::vector<std::pair<std::string, double>>& kinds) {
-  static const std::set<std::string> kKnown = {"box",   "cylinder", "chair", "table",   "bin",       "pole", "bollard",
-                                               "bench", "planter",  "car",   "cabinet", "lamp_post", "curb"};
-  if (!r.is_map()) r.fail("expected a mapping of kind: weight");
-  kinds.clear();
-  // Iterate through the reader's keys via allow() + lookups.
+std::string kind_list() {
   std::string list;
-  for (const auto& k : kKnown) list += (list.empty() ? "" : ", ") + k;
-  for (const auto& k : kKnown)
+  for (const auto& k : obstacle_kinds()) list += (list.empty() ? "" : ", ") + k;
+  return list;
+}
+
+// The kinds in name order, not the file's: a scene's draws do not depend on
+// how its file lists them.
+void parse_kinds(const Reader& r, std::vector<std::pair<std::string, double>>& kinds) {
+  if (!r.is_map()) r.fail("expected a mapping of kind: weight");
+  r.allow(obstacle_kinds());  // anything else is a typo
+  kinds.clear();
+  for (const auto& k : obstacle_kinds())
     if (r.has(k)) {
       const double w = r[k].number();
       if (w < 0) r[k].fail("weights must be >= 0");
       kinds.emplace_back(k, w);
     }
-  // Anything else is a typo.
-  r.allow({"box", "cylinder", "chair", "table", "bin", "pole", "bollard", "bench", "planter", "car", "cabinet",
-           "lamp_post", "curb"});
-  if (kinds.empty()) r.fail("no kinds given (one of: " + list + ")");
+  if (kinds.empty()) r.fail("no kinds given (one of: " + kind_list() + ")");
 }
 
 void parse_layout(const Reader& r, LayoutSpec& out) {
@@ -523,6 +525,9 @@ void check_surfaces(const SceneSpec& spec) {
 }
 
 void check_contents(const SceneSpec& spec) {
+  for (const auto& [kind, weight] : spec.obstacles.kinds)
+    if (!obstacle_kinds().count(kind))
+      throw InvalidKey{"obstacles.kinds", "unknown kind '" + kind + "' (one of: " + kind_list() + ")"};
   check_materials(spec, "obstacles.materials", spec.obstacles.materials);
   check_range("obstacles.count", spec.obstacles.count, 0, 5000);
   check_range("obstacles.box_size", spec.obstacles.box_size, 0.02, 20);
@@ -589,6 +594,12 @@ std::string line_of(const YAML::Node& root, const std::string& key) {
 }
 
 }  // namespace
+
+const std::set<std::string>& obstacle_kinds() {
+  static const std::set<std::string> kinds = {"bench", "bin",      "bollard",   "box",     "cabinet", "car",  "chair",
+                                              "curb",  "cylinder", "lamp_post", "planter", "pole",    "table"};
+  return kinds;
+}
 
 const char* ElementSpec::type_name(Type type) {
   switch (type) {

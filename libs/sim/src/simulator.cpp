@@ -157,7 +157,6 @@ SimFrame Simulator::render(const RenderRequest& req) const {
   const int w = s.left.width(), h = s.left.height();
   SimFrame f;
   double clock = thread_cpu_ms();
-  const double start = clock;
   auto lap = [&clock](double& into) {
     const double now = thread_cpu_ms();
     into = now - clock;
@@ -197,7 +196,6 @@ SimFrame Simulator::render(const RenderRequest& req) const {
   f.depth_mm = s.config.render_depth ? render_depth(data, s.depth, s.config, req.depth_pose, noise_key)
                                      : cv::Mat::zeros(s.depth.height(), s.depth.width(), CV_16UC1);
   lap(f.timings.depth_ms);
-  f.timings.total_ms = clock - start;
   return f;
 }
 

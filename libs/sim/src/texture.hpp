@@ -17,11 +17,6 @@
 
 namespace ivoa::sim {
 
-inline int floor_to_int(float x) {
-  const int i = static_cast<int>(x);
-  return i - (x < static_cast<float>(i));
-}
-
 // floor(log2(x)) for a positive normal float, from its exponent bits.
 inline int floor_log2(float x) {
   uint32_t bits;

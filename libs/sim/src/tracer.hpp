@@ -49,7 +49,6 @@ class Tracer {
   // while they are still in cache.
   void shade_image(Shaded* out, const std::function<void(int, int)>& rows_done) const;
   Ranged range(int pixel) const;
-  size_t num_candidates() const { return candidates_.size(); }
 
  private:
   struct Candidate {

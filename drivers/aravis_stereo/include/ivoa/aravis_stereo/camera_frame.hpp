@@ -9,7 +9,6 @@ namespace ivoa::aravis_stereo {
 
 enum class Side { kLeft = 0, kRight = 1 };
 inline const char* side_name(Side side) { return side == Side::kLeft ? "left" : "right"; }
-inline Side other_side(Side side) { return side == Side::kLeft ? Side::kRight : Side::kLeft; }
 
 struct CameraFrame {
   Side side = Side::kLeft;

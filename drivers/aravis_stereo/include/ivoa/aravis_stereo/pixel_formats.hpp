@@ -11,7 +11,5 @@ inline constexpr const char* kMappedPixelFormats = "BayerRG8, BayerBG8, BayerGB8
 
 // ARV_PIXEL_FORMAT_* -> image_t::PIXEL_FORMAT_*; nothing if unmapped.
 std::optional<int32_t> ivoa_pixelformat_from_genicam(uint32_t arv_pixel_format);
-// image_t::PIXEL_FORMAT_* -> ARV_PIXEL_FORMAT_*; nothing if unmapped.
-std::optional<uint32_t> genicam_pixelformat_from_ivoa(int32_t ivoa_pixel_format);
 
 }  // namespace ivoa::aravis_stereo

@@ -84,7 +84,6 @@ class OpenNiCamera {
   int depth_width() const;
   int depth_height() const;
   bool registered() const;
-  bool is_recording_file() const;
   std::string description() const;
   // The file being recorded to (a numbered name if the one given existed); "" if none.
   std::string record_path() const;

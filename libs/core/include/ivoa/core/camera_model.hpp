@@ -29,7 +29,6 @@ class CameraModel {
   Eigen::Vector3d origin() const { return camera_to_robot_.translation(); }
   bool in_image(const Eigen::Vector2d& pixel, double margin = 0.0) const;
   const CameraIntrinsics& intrinsics() const { return intrinsics_; }
-  bool has_distortion() const { return has_distortion_; }
 
  private:
   Eigen::Vector2d distort(const Eigen::Vector2d& normalized) const;

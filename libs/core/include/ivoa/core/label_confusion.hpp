@@ -6,11 +6,12 @@
 #include <array>
 #include <cstdint>
 
+#include "ivoa/core/labels.hpp"
+
 namespace ivoa {
 
 struct LabelConfusion {
-  // introspection_labels_t's LABEL_TP, LABEL_TN, LABEL_FP, LABEL_FN.
-  static constexpr int kLabels = 4;
+  static constexpr int kLabels = kNumLabels;  // kLabelNames' order
 
   std::array<std::array<int64_t, kLabels>, kLabels> counts{};  // [true label][predicted]
 

@@ -26,14 +26,15 @@ std::optional<std::string_view> payload_type_name(const void* data, size_t size)
 // unknown types included.
 bool ivoa_payload_damaged(const void* data, size_t size);
 
-// Every ivoa type starts with utime; stereo and depth images follow it with
-// seq. Read straight from the payload of an ivoa message (no decoding);
-// empty if the payload is too short or the type has no such field.
+// Whether the type carries a seq (stereo and depth images, after utime).
 bool type_has_seq(std::string_view type_name);
 // Types every process publishes on one channel (the PROCESS_STATUS
 // heartbeats): their utimes interleave by sender, so a channel's utime
 // order says nothing about them.
 bool type_has_many_senders(std::string_view type_name);
+// Every ivoa type starts with utime; stereo and depth images follow it with
+// seq. Read straight from the payload of an ivoa message (no decoding);
+// empty if the payload is too short or the type has no such field.
 std::optional<int64_t> payload_utime(const void* data, size_t size);
 std::optional<int64_t> payload_seq(std::string_view type_name, const void* data, size_t size);
 

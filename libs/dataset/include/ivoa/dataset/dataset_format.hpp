@@ -12,12 +12,12 @@
 
 #include <opencv2/core.hpp>
 
+#include "ivoa/core/labels.hpp"
 #include "ivoa/core/query_grid.hpp"
 
 namespace ivoa::dataset {
 
-inline constexpr int kNumClasses = 4;
-inline const std::array<std::string, kNumClasses> kLabelNames = {"TP", "TN", "FP", "FN"};
+inline constexpr int kNumClasses = kNumLabels;  // kLabelNames' order
 inline constexpr int kUnknownSurface = 255;
 
 class DatasetError : public std::runtime_error {

@@ -10,9 +10,6 @@ namespace ivoa::dataset {
 // The patch_size square centred on (u, v) (core's patch_rect), copied; empty
 // if it does not lie fully inside the image.
 cv::Mat extract_patch(const cv::Mat& image, double u, double v, int patch_size);
-// The same square from each of `views` images stacked in `stacked` (views
-// x image height rows), stacked in the same order; empty if it leaves the image.
-cv::Mat extract_views(const cv::Mat& stacked, int views, double u, double v, int patch_size);
 
 struct PatchTruth {
   int32_t phenomena = 0;   // OR of the phenomenon bits in the patch centre

@@ -20,11 +20,12 @@
 
 #include <opencv2/core.hpp>
 
+#include "ivoa/core/labels.hpp"
 #include "ivoa/core/patch_square.hpp"
 
 namespace ivoa::introspection {
 
-inline constexpr int kNumClasses = 4;  // TP, TN, FP, FN (introspection_labels_t.LABEL_*)
+inline constexpr int kNumClasses = kNumLabels;  // kLabelNames' order
 
 class ModelError : public std::runtime_error {
  public:
@@ -50,7 +51,7 @@ struct ModelInfo {
   double dropout = 0.5;
   std::array<float, 3> mean{0.485f, 0.456f, 0.406f};  // RGB, on [0, 1]
   std::array<float, 3> std{0.229f, 0.224f, 0.225f};
-  std::vector<std::string> classes{"TP", "TN", "FP", "FN"};
+  std::vector<std::string> classes{kLabelNames.begin(), kLabelNames.end()};
   double uncertainty_threshold = 0.01;  // recommended gate (predicted-class variance)
   // Gate of the predictions given the detector's verdict (given_verdict):
   // the variance of P(wrong | verdict) calibrated like uncertainty_threshold;
@@ -85,7 +86,6 @@ struct Heatmaps {
   // Prediction::verdict_error and its variance: [0] P(FP | obstacle), [1] P(FN | free).
   std::array<cv::Mat, 2> verdict_error, verdict_error_variance;
   double compute_ms = 0;
-  cv::Point2d cell_centre(int r, int c) const { return {c * stride + patch_size / 2.0, r * stride + patch_size / 2.0}; }
 };
 
 struct Prediction {
@@ -141,7 +141,9 @@ class IntrospectionModel {
   virtual ~IntrospectionModel() = default;
 
   virtual const ModelInfo& info() const = 0;
-  double threshold() const;
+  // The gate of the four-class predictions: the configured threshold if set,
+  // else the model's uncertainty_threshold.
+  double uncertainty_threshold() const;
   // The gate of given_verdict(): the configured threshold if set, else the
   // model's verdict_uncertainty_threshold, else its uncertainty_threshold.
   double verdict_threshold() const;

@@ -68,7 +68,7 @@ struct TrainConfig {
   // The uncertainty gate stored in the model: the predicted-class variance
   // below which this fraction of validation samples is retained.
   double threshold_retain = 0.7;
-  int threshold_passes = 20;
+  int threshold_passes = 20;  // MC-dropout passes for it: as InferenceConfig::mc_passes will run it
 };
 
 // The optimiser with its default learning rate and weight decay.

@@ -52,7 +52,6 @@ struct Material {
 // The built-in library. Throws std::out_of_range naming the material.
 const Material& builtin_material(const std::string& name);
 bool has_builtin_material(const std::string& name);
-std::vector<std::string> builtin_material_names();
 
 Pattern pattern_from_string(const std::string& name);  // throws std::invalid_argument
 const char* to_string(Pattern pattern);

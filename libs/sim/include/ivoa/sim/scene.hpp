@@ -51,7 +51,6 @@ class Scene {
 
   int num_solids() const;
   int num_pits() const;
-  int num_lights() const;
   const detail::SceneData& data() const { return *data_; }
 
  private:

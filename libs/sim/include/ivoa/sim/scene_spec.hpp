@@ -5,6 +5,7 @@
 // hand-made situations). Loaded from a YAML scene file (libs/sim/scenes/README.md)
 // or filled in code.
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -110,8 +111,7 @@ struct WallSpec {
 
 struct ObstacleSpec {
   Range count{0, 0};
-  // Relative weights of kinds: box, cylinder, chair, table, bin, pole, bollard,
-  // bench, planter, car, cone, lamp_post, curb.
+  // Relative weights of kinds (obstacle_kinds()).
   std::vector<std::pair<std::string, double>> kinds{{"box", 1.0}};
   std::vector<std::string> materials{"cardboard"};  // for boxes, bins, ... (chairs and poles have defaults)
   double color_jitter = 0.15;                       // per-object random tint of the material colour (fraction)
@@ -176,8 +176,14 @@ struct SceneSpec {
 SceneSpec load_scene_spec(const std::string& yaml_path);
 SceneSpec parse_scene_spec(const std::string& yaml_text, const std::string& source_name);
 
-// Checks ranges and that every material name resolves; throws SceneSpecError.
+// Checks ranges, that every material name resolves and every obstacle kind
+// is one of obstacle_kinds(); throws SceneSpecError.
 void validate(const SceneSpec& spec);
+
+// The obstacle kinds the generator can place, in name order: bench, bin,
+// bollard, box, cabinet, car, chair, curb, cylinder, lamp_post, planter,
+// pole, table.
+const std::set<std::string>& obstacle_kinds();
 
 // A spec with no layout, no random content and steady lighting: a floor of
 // `floor_material` to which tests add explicit elements.

@@ -30,7 +30,6 @@ struct SimFrame {
     double left_ms = 0, right_ms = 0;  // ray casting and shading per camera
     double sensor_ms = 0;              // exposure, blur, noise, demosaic, truth flags
     double depth_ms = 0;               // depth sensor: ray casting and its model
-    double total_ms = 0;
   } timings;
 };
 

@@ -2,8 +2,10 @@
 // Parameters of the stereo obstacle detectors, as plain structs. JPP-C keeps
 // JPP's own key names (its libconfig .cfg, amrl.cfg defaults) so a JPP user
 // recognises them; units are the project's: metres and pixels (JPP's config
-// file is in millimetres). Every field is settable by a flag of the same name
-// and from a --config file (see options.hpp).
+// file is in millimetres). Every field is settable by a flag and from a
+// --config file (see options.hpp): JPP's own keys by their name (--daisy_R),
+// the project's additions with a prefix (--jpp_footprint, --sgbm_p2,
+// --dense_max_range).
 #include <string>
 
 namespace ivoa::stereo {
@@ -64,13 +66,13 @@ struct SgbmConfig {
   int min_disparity = 0;      // pixels
   int num_disparities = 96;   // pixels, multiple of 16; 96 at 480x300 sees the ground down to 0.38 m (0.12 m baseline)
   int block_size = 5;         // pixels, odd
-  int p1 = 0;                 // smoothness penalties; 0 = 8*block^2 and 32*block^2
-  int p2 = 0;
-  int uniqueness_ratio = 10;      // percent
+  int p1 = 0;                 // penalty of a 1-disparity change between neighbours; 0 = 8*block^2
+  int p2 = 0;                 // penalty of a larger change; 0 = 32*block^2
+  int uniqueness_ratio = 10;  // percent
   int speckle_window_size = 100;  // pixels
   int speckle_range = 2;          // disparity units
   int disp12_max_diff = 1;        // left-right check, pixels (< 0 disables)
-  int pre_filter_cap = 63;
+  int pre_filter_cap = 63;        // x-derivative prefilter clipped to [-cap, cap], gray levels
 };
 
 // Dense detector: SGBM points in the robot frame, classified by height.

@@ -1,6 +1,8 @@
 #pragma once
 // Command-line flags (and so --config file keys) for the detector
-// parameters; each flag has the name of its config field.
+// parameters. A JPP key's flag has its field's name (--daisy_R); the
+// project's JPP fields take --jpp_ (--jpp_footprint for `footprint`), SGBM's
+// --sgbm_ and the dense detector's --dense_.
 namespace CLI {
 class App;
 }
