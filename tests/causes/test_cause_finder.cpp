@@ -60,6 +60,7 @@ LabelledFrame label_frame(const sim::SceneSpec& spec) {
   LabelledFrame out;
   out.pose = request.stereo_pose;
   Labels& l = out.labels;
+  l = Labels{};  // lcm-gen types leave numbers uninitialised
   l.utime = kStart;
   l.detector = "jppc";
   l.safety_radius = grid_config.safety_radius;
@@ -76,7 +77,8 @@ LabelledFrame label_frame(const sim::SceneSpec& spec) {
     l.u.push_back(static_cast<float>(c.u));
     l.v.push_back(static_cast<float>(c.v));
   }
-  l.num_cells = static_cast<int32_t>(l.label.size());
+  l.num_cells = l.num_x = static_cast<int32_t>(l.label.size());  // the in-image cells, as a 1 x n grid
+  l.num_y = 1;
   return out;
 }
 

@@ -26,11 +26,16 @@ introspection_labels_t labels_message(int64_t utime, const std::vector<Cell>& ce
   introspection_labels_t m{};
   m.utime = utime;
   m.detector = "jppc";
-  m.num_cells = static_cast<int32_t>(cells.size());
+  m.num_cells = m.num_x = static_cast<int32_t>(cells.size());
+  m.num_y = 1;
   for (const auto& c : cells) {
     m.label.push_back(c.label);
     m.stereo_state.push_back(c.stereo_state);
-    m.depth_state.push_back(kFree);
+    // the monitor's verdict that gives the label (Algorithm 1)
+    const bool occupied = c.label == introspection_labels_t::LABEL_TP || c.label == introspection_labels_t::LABEL_FN;
+    m.depth_state.push_back(c.label == introspection_labels_t::LABEL_NONE ? obstacle_grid_t::STATE_UNKNOWN
+                            : occupied                                    ? obstacle_grid_t::STATE_OBSTACLE
+                                                                          : kFree);
     m.x.push_back(c.x);
     m.y.push_back(c.y);
     m.u.push_back(0);
@@ -138,21 +143,29 @@ TEST(LiveScorer, MessagesWithValuesItCannotScoreAreLeftOutAndSaidWhy) {
   const std::vector<Cell> cells = {{1.0f, 0.0f, kTN, kFree}, {1.25f, 0.0f, kFP, kObstacle}};
   EXPECT_EQ(scorer.add(labels_message(5, cells)), "");
   EXPECT_EQ(scorer.add(prediction_message(5, {{1.0f, 0.0f, 7, 1, kFree, kTN, 1}})),
-            "query 0: class 7 is none of the four");
+            "query 0: class 7 is none of TP 0, TN 1, FP 2, FN 3");
   EXPECT_EQ(scorer.add(prediction_message(5, {{std::nanf(""), 0.0f, kTN, 1, kFree, kTN, 1}})),
-            "query 0: position is not finite or over 1000 km away");
+            "query 0: position is not finite");
   // Finite but far: millimetre keys overflowed and every cell became one.
   EXPECT_EQ(scorer.add(prediction_message(5, {{1e20f, 0.0f, kTN, 1, kFree, kTN, 1}})),
-            "query 0: position is not finite or over 1000 km away");
-  EXPECT_EQ(scorer.add(labels_message(7, {{0.0f, -3e19f, kTN, kFree}})),
-            "cell 0: position is not finite or over 1000 km away");
+            "query 0: position is over 1000 km away");
+  EXPECT_EQ(scorer.add(labels_message(7, {{0.0f, -3e19f, kTN, kFree}})), "cell 0: position is over 1000 km away");
   EXPECT_EQ(scorer.add(prediction_message(5, {{1.0f, 0.0f, kTN, 1, kFree, 9, 1}})),
-            "query 0: class given the verdict 9 is none of the four");
+            "query 0: class given the verdict 9 is none of -1..3");
   EXPECT_EQ(scorer.add(prediction_message(5, {}, std::nan(""))).rfind("compute_ms nan", 0), 0u);
-  EXPECT_EQ(scorer.add(prediction_message(5, {}, -1e9)).rfind("compute_ms -1000000000", 0), 0u);
+  EXPECT_EQ(scorer.add(prediction_message(5, {}, -1e9)).rfind("compute_ms -1e+09", 0), 0u);
   introspection_labels_t bad_label = labels_message(6, cells);
   bad_label.label[1] = 5;
-  EXPECT_EQ(scorer.add(bad_label), "cell 1: label 5 is no class");
+  EXPECT_EQ(scorer.add(bad_label), "cell 1 has label 5, not -1..3");
+  introspection_labels_t bad_shape = labels_message(6, cells);
+  bad_shape.num_x = 11;  // 11 x 1 declared for 2 cells: its cells dropped out of the score unsaid
+  EXPECT_EQ(scorer.add(bad_shape), "num_x 11 by num_y 1 is not its 2 cells");
+  introspection_t nan_heatmap = prediction_message(5, {});
+  nan_heatmap.rows = nan_heatmap.cols = nan_heatmap.num_cells = 1;
+  nan_heatmap.prob_tp = nan_heatmap.prob_tn = nan_heatmap.prob_fp = {0.25f};
+  nan_heatmap.prob_fn = {std::nanf("")};
+  nan_heatmap.uncertainty = nan_heatmap.class_variance = {0.0f};
+  EXPECT_EQ(scorer.add(nan_heatmap), "heatmap cell 0: prob_fn nan is not a probability");
   obstacle_grid_t grid{};
   grid.utime = 5;
   grid.num_cells = grid.num_x = grid.num_y = 1;

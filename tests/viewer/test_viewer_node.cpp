@@ -3,6 +3,7 @@
 // without a display no window is tried.
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -76,9 +77,36 @@ TEST(ViewerNode, MalformedIntrospectionIsCountedAndTheRestDrawn) {
   node.finish();
   EXPECT_EQ(heartbeat.bad_input_count(), 1);
   EXPECT_EQ(node.figures(), 1);
-  EXPECT_NE(heartbeat.snapshot().last_error.find("INTROSPECTION utime 2000: heatmap 3x16 but 160 cells"),
+  EXPECT_NE(heartbeat.snapshot().last_error.find("INTROSPECTION utime 2000: heatmap 3x16 is not its 160 cells"),
             std::string::npos)
       << heartbeat.snapshot().last_error;
+}
+
+// Values no model gives were drawn as if valid: NaN probabilities as a solid
+// "certainly fine" blue, label 9 and state 7 in grey. Each such message is
+// bad input now, named, and the frame drawn without it.
+TEST(ViewerNode, ContentNoProcessGivesIsCountedNotDrawn) {
+  ivoa::test::TempDir dir;
+  Bus bus("memq://");
+  Heartbeat heartbeat(bus, "viewer", "VIEWER_TEST_STATUS", 3600);
+  ViewerOptions o;
+  o.output.out_dir = dir.path().string();
+  ViewerNode node(bus, heartbeat, o);
+  publish_frame(bus, 3000, false);
+  auto nan_heatmap = introspection(3000);
+  nan_heatmap.prob_fp[5] = std::numeric_limits<float>::quiet_NaN();
+  bus.publish("INTROSPECTION", nan_heatmap);
+  auto bad_label = labels(3000, {1, 1, 1, 1});
+  bad_label.label[2] = 9;
+  bus.publish("INTROSPECTION_LABELS", bad_label);
+  auto bad_state = grid(3000, {0, 7, 0, 0});
+  bus.publish("OBSTACLES_STEREO", bad_state);
+  handle_all(bus);
+  node.finish();
+  EXPECT_EQ(heartbeat.bad_input_count(), 3);
+  EXPECT_EQ(node.figures(), 1);
+  const std::string error = heartbeat.snapshot().last_error;
+  EXPECT_NE(error.find("OBSTACLES_STEREO utime 3000: cell 1: state 7 is none of"), std::string::npos) << error;
 }
 
 TEST(ViewerNode, UndecodableImageIsBadInput) {

@@ -39,14 +39,22 @@ inline obstacle_grid_t grid(int64_t utime, std::vector<int8_t> states, const cha
   return g;
 }
 
+// The labels of a 1 x n grid, each with the two verdicts that give it.
 inline introspection_labels_t labels(int64_t utime, std::vector<int8_t> label) {
+  using L = introspection_labels_t;
+  using G = obstacle_grid_t;
   introspection_labels_t l{};
   l.utime = utime;
-  l.num_cells = static_cast<int32_t>(label.size());
+  l.num_x = 1;
+  l.num_cells = l.num_y = static_cast<int32_t>(label.size());
   l.label = label;
   for (size_t i = 0; i < label.size(); ++i) {
-    l.stereo_state.push_back(0);
-    l.depth_state.push_back(0);
+    const int8_t k = label[i];
+    const bool none = k == L::LABEL_NONE;
+    l.stereo_state.push_back(none ? G::STATE_UNKNOWN
+                                  : (k == L::LABEL_TP || k == L::LABEL_FP ? G::STATE_OBSTACLE : G::STATE_FREE));
+    l.depth_state.push_back(none ? G::STATE_UNKNOWN
+                                 : (k == L::LABEL_TP || k == L::LABEL_FN ? G::STATE_OBSTACLE : G::STATE_FREE));
     l.x.push_back(1.0f);
     l.y.push_back(static_cast<float>(i));
     l.u.push_back(kCellU[i]);

@@ -5,15 +5,15 @@
 #include <string>
 #include <utility>
 
+#include <fmt/format.h>
+
 #include "ivoa/core/grid_messages.hpp"
+#include "ivoa/core/introspection_content.hpp"
 
 namespace ivoa::tools {
 namespace {
 
 bool is_class(int c) { return c >= 0 && c < LabelConfusion::kLabels; }
-bool is_class_or_none(int c) { return is_class(c) || c == introspection_labels_t::LABEL_NONE; }
-
-std::string cell_text(int i) { return "cell " + std::to_string(i) + ": "; }
 
 // Labels and queries come from grids of the same geometry: a cell is the
 // same cell when its position agrees to the millimetre.
@@ -30,10 +30,9 @@ bool sane_position(float x, float y) {
 }  // namespace
 
 std::string LiveScorer::add(const introspection_labels_t& m) {
-  for (int i = 0; i < m.num_cells; ++i) {
-    if (!sane_position(m.x[i], m.y[i])) return cell_text(i) + "position is not finite or over 1000 km away";
-    if (!is_class_or_none(m.label[i])) return cell_text(i) + "label " + std::to_string(m.label[i]) + " is no class";
-  }
+  if (std::string why = labels_content_error(m); !why.empty()) return why;
+  for (int i = 0; i < m.num_cells; ++i)
+    if (!sane_position(m.x[i], m.y[i])) return "cell " + std::to_string(i) + ": position is over 1000 km away";
   detectors_.insert(m.detector);
   repeated_messages_ += labels_.count(m.utime);
   auto& cells = labels_[m.utime];
@@ -45,15 +44,11 @@ std::string LiveScorer::add(const introspection_labels_t& m) {
 
 std::string LiveScorer::add(const introspection_t& m) {
   if (!(std::isfinite(m.compute_ms) && m.compute_ms >= 0))
-    return "compute_ms " + std::to_string(m.compute_ms) + " is no duration";
-  for (int i = 0; i < m.num_queries; ++i) {
-    const std::string query = "query " + std::to_string(i) + ": ";
-    if (!sane_position(m.query_x[i], m.query_y[i])) return query + "position is not finite or over 1000 km away";
-    if (!is_class(m.query_class[i]))
-      return query + "class " + std::to_string(m.query_class[i]) + " is none of the four";
-    if (!is_class_or_none(m.query_verdict_class[i]))
-      return query + "class given the verdict " + std::to_string(m.query_verdict_class[i]) + " is none of the four";
-  }
+    return fmt::format("compute_ms {:g} is no duration", m.compute_ms);
+  if (std::string why = introspection_content_error(m); !why.empty()) return why;
+  for (int i = 0; i < m.num_queries; ++i)
+    if (!sane_position(m.query_x[i], m.query_y[i]))
+      return "query " + std::to_string(i) + ": position is over 1000 km away";
   models_.insert(m.model_id);
   repeated_messages_ += predictions_.count(m.utime);
   compute_ms_[m.utime] = m.compute_ms;

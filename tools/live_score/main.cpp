@@ -185,9 +185,11 @@ bool score_logs(const ScoreCommandLine& cl, LiveScore& s, ReadCounts& counts) {
   const std::string skipped =
       left_out ? fmt::format(" that could be used ({} left out as unusable or undecodable: warnings above)", left_out)
                : "";
+  const bool cut_short = counts.damaged_files > 0 && !cl.resync;
   spdlog::error("{}: no {} messages{} to score{}", cl.logs(),
                 s.predicted_frames == 0 ? "INTROSPECTION" : "INTROSPECTION_LABELS", skipped,
                 !skipped.empty()          ? ""
+                : cut_short               ? " in what was read before the damage (--resync reads on past it)"
                 : s.predicted_frames == 0 ? " (was ivoa-introspection running when it was recorded?)"
                                           : " (was ivoa-depth-monitor running, with a depth sensor?)");
   return false;
@@ -220,7 +222,8 @@ int report(const ScoreCommandLine& cl, const LiveScore& s, const ReadCounts& cou
 int main(int argc, char** argv) {
   CLI::App app{
       "Score the introspection a log recorded against the depth monitor's labels of the same frames, and "
-      "how long it took per frame. Exit codes: 0 scored, 2 bad flags (a --json that is one of the logs), 3 a log is "
+      "how long it took per frame. Exit codes: 0 scored, 2 bad flags (a --json that is one of the logs, a log given "
+      "twice), 3 a log is "
       "unreadable or has nothing to score, 4 the "
       "JSON cannot be written."};
   CommonOptions common;

@@ -146,6 +146,9 @@ std::string labels_content_error(const introspection_labels_t& m) {
   if (!std::all_of(std::begin(geometry), std::end(geometry), [](double v) { return std::isfinite(v); }) ||
       m.safety_radius < 0)
     return "its grid geometry or safety radius is not a finite distance";
+  if (m.num_x < 0 || m.num_y < 0 || int64_t{m.num_x} * m.num_y != m.num_cells)
+    return "num_x " + std::to_string(m.num_x) + " by num_y " + std::to_string(m.num_y) + " is not its " +
+           std::to_string(m.num_cells) + " cells";
   const bool has_verdicts = m.stereo_state.size() == m.label.size() && m.depth_state.size() == m.label.size();
   for (size_t i = 0; i < m.label.size(); ++i) {
     if (m.label[i] < introspection_labels_t::LABEL_NONE || m.label[i] > introspection_labels_t::LABEL_FN)

@@ -2,7 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/image_convert.hpp"
+#include "ivoa/core/introspection_content.hpp"
 #include "ivoa/core/time.hpp"
 #include "ivoa/stereo_image_t.hpp"
 
@@ -40,29 +42,39 @@ void ViewerNode::subscribe() {
     if (!seen_image_) heartbeat_.set_state("drawing");
     seen_image_ = true;
   });
-  bus_.subscribe<obstacle_grid_t>(options_.stereo_grid_channel, [this](const obstacle_grid_t& msg, const ReceiveInfo&) {
-    heartbeat_.count_in();
-    matcher_.add_stereo_grid(msg, monotonic_ms());
-  });
-  bus_.subscribe<obstacle_grid_t>(options_.depth_grid_channel, [this](const obstacle_grid_t& msg, const ReceiveInfo&) {
-    heartbeat_.count_in();
-    matcher_.add_depth_grid(msg, monotonic_ms());
-  });
+  bus_.subscribe<obstacle_grid_t>(options_.stereo_grid_channel,
+                                  [this](const obstacle_grid_t& msg, const ReceiveInfo& info) {
+                                    if (usable(info, msg.utime, grid_content_error(msg)))
+                                      matcher_.add_stereo_grid(msg, monotonic_ms());
+                                  });
+  bus_.subscribe<obstacle_grid_t>(options_.depth_grid_channel,
+                                  [this](const obstacle_grid_t& msg, const ReceiveInfo& info) {
+                                    if (usable(info, msg.utime, grid_content_error(msg)))
+                                      matcher_.add_depth_grid(msg, monotonic_ms());
+                                  });
   bus_.subscribe<introspection_labels_t>(options_.labels_channel,
-                                         [this](const introspection_labels_t& msg, const ReceiveInfo&) {
-                                           heartbeat_.count_in();
-                                           matcher_.add_labels(msg, monotonic_ms());
+                                         [this](const introspection_labels_t& msg, const ReceiveInfo& info) {
+                                           if (usable(info, msg.utime, labels_content_error(msg)))
+                                             matcher_.add_labels(msg, monotonic_ms());
                                          });
-  bus_.subscribe<introspection_t>(
-      options_.introspection_channel, [this](const introspection_t& msg, const ReceiveInfo& info) {
-        heartbeat_.count_in();
-        if (const std::string problem = check_introspection(msg); !problem.empty()) {
-          heartbeat_.bad_input(info.channel + " utime " + std::to_string(msg.utime) + ": " + problem);
-          return;
-        }
-        matcher_.add_introspection(msg, monotonic_ms());
-      });
+  bus_.subscribe<introspection_t>(options_.introspection_channel,
+                                  [this](const introspection_t& msg, const ReceiveInfo& info) {
+                                    std::string problem = introspection_content_error(msg);
+                                    if (problem.empty()) problem = check_introspection(msg);
+                                    if (usable(info, msg.utime, problem))
+                                      matcher_.add_introspection(msg, monotonic_ms());
+                                  });
   bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
+}
+
+// Counts the message in; one whose content cannot be drawn (`problem`) is
+// bad input, not drawn as if it were valid (NaN probabilities looked like
+// certain free cells).
+bool ViewerNode::usable(const ReceiveInfo& info, int64_t utime, const std::string& problem) {
+  heartbeat_.count_in();
+  if (problem.empty()) return true;
+  heartbeat_.bad_input(info.channel + " utime " + std::to_string(utime) + ": " + problem);
+  return false;
 }
 
 void ViewerNode::hand_out(FrameSet frame) {

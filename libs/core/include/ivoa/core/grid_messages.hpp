@@ -27,7 +27,7 @@ obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& det
 std::string grid_content_error(const obstacle_grid_t& msg);
 
 // The same for a labels message: a grid geometry or safety radius that is
-// not a finite distance, a label none of LABEL_*, a position not finite, a
+// not a finite distance, num_x by num_y not its cells, a label none of LABEL_*, a position not finite, a
 // verdict none of STATE_*, or a label its two verdicts do not give.
 std::string labels_content_error(const introspection_labels_t& msg);
 

@@ -53,6 +53,7 @@ class ViewerNode {
 
  private:
   void subscribe();
+  bool usable(const ReceiveInfo& info, int64_t utime, const std::string& problem);
   void work();
   void draw(const FrameSet& frame);
   void hand_out(FrameSet frame);

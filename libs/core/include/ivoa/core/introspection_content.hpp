@@ -1,0 +1,16 @@
+#pragma once
+// Checks a received introspection_t before anything draws or scores it.
+#include <string>
+
+#include "ivoa/introspection_t.hpp"
+
+namespace ivoa {
+
+// Empty if the message's content can be used, otherwise the first thing
+// wrong: a heatmap whose rows x cols is not its cells, a class probability
+// that is not a number in [0, 1], a variance that is not finite and >= 0, a
+// query whose position is not finite, or whose class, verdict or class
+// given the verdict is none of the labels or states.
+std::string introspection_content_error(const introspection_t& msg);
+
+}  // namespace ivoa
