@@ -25,16 +25,19 @@ TEST(SeqGaps, AFarJumpCountsOnceTheNextFrameFollowsIt) {
   EXPECT_EQ(gaps.add(5103), 0);
 }
 
+// Far either way or a little back: a seq -7 between 100 and 101 once
+// counted 107 frames missed when 101 came.
 TEST(SeqGaps, OneWrongSeqIsForgotten) {
   SeqGaps gaps;
   gaps.add(100);
-  for (const int64_t wrong : {INT64_MAX, INT64_MIN, int64_t{-5000}, int64_t{1'000'000}}) {
+  int64_t next = 101;
+  for (const int64_t wrong : {INT64_MAX, INT64_MIN, int64_t{-5000}, int64_t{1'000'000}, int64_t{-7}, int64_t{97}}) {
     EXPECT_EQ(gaps.add(wrong), 0) << wrong;
-    EXPECT_EQ(gaps.add(101), 0) << "after " << wrong << ": the next frame continues from 100";
-    gaps.add(100);  // (back to 100: a small step back restarts the count there)
+    EXPECT_EQ(gaps.add(next), 0) << "after " << wrong << ": the next frame continues from " << next - 1;
+    ++next;
   }
   EXPECT_EQ(gaps.add(INT64_MAX), 0);
-  EXPECT_EQ(gaps.add(103), 2) << "a gap right after the wrong seq still counts";
+  EXPECT_EQ(gaps.add(next + 2), 2) << "a gap right after the wrong seq still counts";
 }
 
 TEST(SeqGaps, AFarStepBackThatContinuesIsARestart) {

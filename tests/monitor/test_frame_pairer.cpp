@@ -155,6 +155,33 @@ TEST(FramePairer, AGapInBothStreamsIsFollowed) {
   EXPECT_EQ(p.counters().depth_clock.restarts + p.counters().stereo_clock.restarts, 0);
 }
 
+// Frames 1.5 s apart step more than a jump (1 s) every time: each was held,
+// then ignored because the next did not come within a jump of it, so
+// nothing was ever labelled. The stream's own step now sets how far ahead
+// its next frame may come; a single wrong utime is still ignored.
+TEST(FramePairer, AStreamSlowerThanOneFrameAJumpIsPaired) {
+  Pairer p;
+  Results out;
+  const auto slow = [&](int from, int to) {
+    for (int i = from; i < to; ++i) {
+      const int64_t t = 1'000'000 + i * int64_t{1'500'000};
+      append(out, p.add_depth(t + 2'000, "slow"));
+      append(out, p.add_stereo(t, "slow"));
+    }
+  };
+  slow(0, 8);
+  append(out, p.flush());
+  EXPECT_EQ(out.size(), 8u);
+  EXPECT_EQ(paired(out), 8u);
+  EXPECT_EQ(p.counters().depth_clock.outliers + p.counters().stereo_clock.outliers, 0);
+
+  append(out, p.add_depth(900'000'000, "wrong clock"));  // 888 s ahead
+  slow(8, 12);
+  append(out, p.flush());
+  EXPECT_EQ(paired(out), 12u);
+  EXPECT_EQ(p.counters().depth_clock.outliers, 1);
+}
+
 TEST(FramePairer, ALogPlayedAgainIsPairedAgain) {
   Pairer p;
   Results out;

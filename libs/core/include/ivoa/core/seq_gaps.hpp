@@ -19,10 +19,12 @@ class SeqGaps {
   // 30 Hz): one damaged seq must not add billions to the count.
   static constexpr uint64_t kHoldBeyond = 1000;
 
-  // How many frames are newly known to be missing: 0 for the first; 0 when
-  // seq goes back (the publisher restarted; counting starts again); for a
-  // far jump, 0 until the next frame follows it (then the jump's gap
-  // counts) or does not (then the jumped seq was wrong and is forgotten).
+  // How many frames are newly known to be missing: 0 for the first; for a
+  // seq that goes back or jumps far ahead, 0 until the next frame says
+  // which it was: if it follows that seq rather than the last one, the
+  // publisher restarted (counting starts again there) or its numbering
+  // jumped (the jump's gap counts); if not, the one seq was wrong and is
+  // forgotten (a damaged seq 2 back once counted the gap back up to it).
   int64_t add(int64_t seq) {
     if (!last_) {
       last_ = seq;
@@ -31,10 +33,9 @@ class SeqGaps {
     int64_t missing = 0;
     if (holding_) {
       holding_ = false;
-      const int64_t held = held_;
-      if (seq > held && distance(seq, held) <= kHoldBeyond) missing = step(held);  // it followed: a real jump
+      if (follows(seq, held_) && !follows(seq, *last_)) missing = step(held_);
     }
-    if (distance(seq, *last_) > kHoldBeyond) {
+    if (seq <= *last_ || distance(seq, *last_) > kHoldBeyond) {
       holding_ = true;
       held_ = seq;
       return missing;
@@ -47,6 +48,8 @@ class SeqGaps {
     return a > b ? static_cast<uint64_t>(a) - static_cast<uint64_t>(b)
                  : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
   }
+
+  static bool follows(int64_t seq, int64_t before) { return seq > before && distance(seq, before) <= kHoldBeyond; }
 
   int64_t step(int64_t seq) {
     const uint64_t missing = seq > *last_ ? distance(seq, *last_) - 1 : 0;

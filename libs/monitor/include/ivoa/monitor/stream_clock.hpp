@@ -6,7 +6,15 @@
 // log played again, a sensor's clock reset) that starts a new epoch; if not,
 // the held frame is ignored as an outlier. One wrong utime then cannot move
 // the stream's time away from every frame after it.
+//
+// A stream slower than one frame a jump (a depth sensor throttled to
+// 0.5 Hz) steps more than a jump every frame. So ahead of the newest frame
+// a jump is also at most twice the stream's own step (the median of its
+// last steps), and a held frame ahead is followed by a next frame that
+// steps on from it by no more than twice as far as it stepped.
+#include <algorithm>
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 #include <utility>
@@ -38,7 +46,7 @@ class StreamClock {
   std::vector<Admitted> admit(int64_t utime, Frame frame, ClockCounters& counters, std::string& event) {
     std::vector<Admitted> out;
     if (held_) {
-      if (near(utime, held_->first) && !near(utime, *newest_)) take_held(counters, event, out);
+      if (follows(utime, held_->first) && !near(utime, *newest_)) take_held(counters, event, out);
       else drop_held(counters, event);
     }
     if (newest_ && !near(utime, *newest_)) {
@@ -63,11 +71,35 @@ class StreamClock {
   int epoch() const { return epoch_; }
 
  private:
+  static constexpr size_t kSteps = 8;  // the steps a stream's own step is the median of
+
   // Unsigned: utimes of opposite sign and far apart (INT64_MIN) do not overflow.
-  bool near(int64_t a, int64_t b) const {
-    const uint64_t apart = a > b ? static_cast<uint64_t>(a) - static_cast<uint64_t>(b)
-                                 : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
-    return apart <= static_cast<uint64_t>(jump_us_);
+  static uint64_t apart(int64_t a, int64_t b) {
+    return a > b ? static_cast<uint64_t>(a) - static_cast<uint64_t>(b)
+                 : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
+  }
+
+  // Within a jump of `from`, or ahead of it by at most twice the stream's step.
+  bool near(int64_t utime, int64_t from) const {
+    const uint64_t d = apart(utime, from);
+    return d <= static_cast<uint64_t>(jump_us_) || (utime > from && d <= twice(own_step()));
+  }
+
+  // The frame after a held one: near it, or, the held one being ahead of
+  // the newest, on from it by at most twice that step (a slow stream whose
+  // step is not known yet).
+  bool follows(int64_t utime, int64_t held) const {
+    if (near(utime, held)) return true;
+    return held > *newest_ && utime > held && apart(utime, held) <= twice(apart(held, *newest_));
+  }
+
+  static uint64_t twice(uint64_t d) { return d > UINT64_MAX / 2 ? UINT64_MAX : 2 * d; }
+
+  uint64_t own_step() const {
+    if (steps_.empty()) return 0;
+    std::vector<uint64_t> sorted(steps_.begin(), steps_.end());
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+    return sorted[sorted.size() / 2];
   }
 
   // Signed seconds from `from` to `to`, cut (not rounded) to a tenth; in
@@ -94,6 +126,10 @@ class StreamClock {
   }
 
   void take(int64_t utime, Frame frame, std::vector<Admitted>& out) {
+    if (newest_ && utime > *newest_) {
+      steps_.push_back(apart(utime, *newest_));
+      if (steps_.size() > kSteps) steps_.pop_front();
+    }
     if (!newest_ || utime > *newest_) newest_ = utime;
     out.push_back({utime, std::move(frame), epoch_});
   }
@@ -102,6 +138,7 @@ class StreamClock {
   int64_t jump_us_;
   int epoch_ = 0;
   std::optional<int64_t> newest_;
+  std::deque<uint64_t> steps_;  // the last forward steps between frames taken
   std::optional<std::pair<int64_t, Frame>> held_;
 };
 
