@@ -114,6 +114,12 @@ TEST(Calibration, IntrinsicsNoLensHasAreRejected) {
   refused([](CameraIntrinsics& c) { c.K(0, 2) = 1e300; }, "principal point (1000000");
   refused([](CameraIntrinsics& c) { c.K(1, 2) = -5; }, "must lie in the image");
   refused([](CameraIntrinsics& c) { c.D[0] = 1e6; }, "distortion coefficients must be finite and within +-100");
+  // off the diagonal: a damaged matrix, not a lens (the grid's pixels went to 1e9, K[1][0] was ignored)
+  refused([](CameraIntrinsics& c) { c.K(0, 1) = 1e9; }, "skew K[0][1] = 1000000000.000000 is over 0.2 of");
+  refused([](CameraIntrinsics& c) { c.K(1, 0) = 1e9; }, "K[1][0] must be 0");
+  RigCalibration rig = test::make_test_rig();
+  rig.right.K(0, 1) = 0.01 * rig.right.K(0, 0);  // a real skew: accepted
+  EXPECT_NO_THROW(validate(rig, "test"));
 }
 
 // The file's matrices as OpenCV writes them or as plain lists; anything

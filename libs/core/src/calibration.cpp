@@ -15,6 +15,7 @@ namespace ivoa {
 namespace {
 
 constexpr double kMaxDistortion = 100;  // plumb-bob k1..k3, p1, p2: real lenses stay within a few units
+constexpr double kMaxSkew = 0.2;        // |K[0][1]| / fx: see validate_camera
 
 void check(bool ok, const std::string& where, const std::string& what) {
   if (!ok) throw CalibrationError(where + ": " + what);
@@ -40,6 +41,11 @@ void validate_camera(const CameraIntrinsics& cam, const std::string& where, cons
   check(cam.K.allFinite() && cam.K(0, 0) > 0 && cam.K(1, 1) > 0, where,
         key + " focal lengths must be positive and finite");
   check(cam.K(2, 0) == 0 && cam.K(2, 1) == 0 && cam.K(2, 2) == 1, where, key + " last row must be [0 0 1]");
+  check(cam.K(1, 0) == 0, where, key + " K[1][0] must be 0 (a camera matrix is upper triangular)");
+  // Skew is fx / tan of the angle between the pixel axes: 0.2 fx is 11 degrees
+  // off square, far past any sensor; larger values are damage.
+  check(std::abs(cam.K(0, 1)) <= kMaxSkew * cam.K(0, 0), where,
+        key + " skew K[0][1] = " + std::to_string(cam.K(0, 1)) + " is over 0.2 of the focal length fx");
   // Past these no lens is described, and the simulator's rays and the
   // rectification maps leave the image (the renderer crashed on them).
   check(cam.K(0, 0) >= kMinFocalPx && cam.K(1, 1) >= kMinFocalPx && cam.K(0, 0) <= kMaxFocalPx &&
