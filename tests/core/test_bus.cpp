@@ -90,7 +90,25 @@ TEST(Bus, AMessageDamagedInsideIsAnErrorAndTheNextOneArrives) {
   ASSERT_TRUE(handle_until(bus, [&] { return got.size() == 1; }));
   EXPECT_EQ(got, std::vector<int64_t>{2});
   ASSERT_EQ(errors.size(), 1u);
-  EXPECT_NE(errors[0].find("does not decode as ivoa.stereo_image_t"), std::string::npos) << errors[0];
+  EXPECT_NE(errors[0].find("does not decode as ivoa.stereo_image_t: truncated or damaged inside"), std::string::npos)
+      << errors[0];
+}
+
+// The fingerprint says which it was: another type on the channel, or a
+// payload of no ivoa type.
+TEST(Bus, AnUndecodableMessageIsSaidToBeAnotherTypeOrDamaged) {
+  depth_image_t depth{};
+  set_counts(depth);
+  std::vector<uint8_t> bytes(static_cast<size_t>(depth.getEncodedSize()));
+  ASSERT_GT(depth.encode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+  EXPECT_EQ(Bus::decode_error_text("STEREO_IMAGES", "ivoa.stereo_image_t", bytes.data(), bytes.size()),
+            "channel STEREO_IMAGES: " + std::to_string(bytes.size()) +
+                "-byte message does not decode as ivoa.stereo_image_t: it is an ivoa.depth_image_t (another type on "
+                "this channel)");
+  bytes[0] ^= 0xff;
+  EXPECT_NE(Bus::decode_error_text("STEREO_IMAGES", "ivoa.stereo_image_t", bytes.data(), bytes.size())
+                .find("an unknown type's fingerprint"),
+            std::string::npos);
 }
 
 TEST(Bus, LogWrittenAndReplayedThroughTheSameInterface) {

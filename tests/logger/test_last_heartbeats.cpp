@@ -70,6 +70,23 @@ TEST(LastHeartbeats, ShowsEachProcessesOwnCounters) {
       << digest.json();
 }
 
+// Text from the log reaches the terminal without its control bytes: an
+// escape sequence in a process name cleared the screen.
+TEST(LastHeartbeats, ControlBytesInHeartbeatTextAreNotPrinted) {
+  LastHeartbeats digest;
+  process_status_t s = heartbeat("evil\x1b[2J", 10, 1000, "run\ning", 1);
+  s.counter_names = {"x\x07"};
+  s.counter_values = {1};
+  s.num_counters = 1;
+  digest.add(event_of("PROCESS_STATUS", s));
+  const std::string table = digest.table();
+  EXPECT_EQ(table.find('\x1b'), std::string::npos) << table;
+  EXPECT_NE(table.find("evil?[2J"), std::string::npos) << table;
+  EXPECT_NE(table.find("run?ing"), std::string::npos) << table;
+  EXPECT_NE(table.find("x? 1"), std::string::npos) << table;
+  EXPECT_NE(digest.json().find("\"evil\\u001b[2J\""), std::string::npos) << digest.json();
+}
+
 TEST(LastHeartbeats, ALogWithoutHeartbeatsHasNoTable) {
   LastHeartbeats digest;
   stereo_image_t frame{};

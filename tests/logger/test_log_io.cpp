@@ -374,15 +374,28 @@ TEST(LogSummary, UnknownPayloadsAreCountedButNotDecoded) {
   EXPECT_NE(channel_json(s).find("\"type\": \"unknown\""), std::string::npos);
 }
 
+// Named by type; a channel's 255-byte name keeps its row whole.
 TEST(LogSummary, MessagesOfAnotherTypeOnAChannelAreSaidUnderTheTable) {
   LogSummary summary;
   const auto stereo = encoded_stereo(0, 100);
   summary.add("STEREO_IMAGES", 1, stereo.data(), stereo.size());
   const auto blob = numbered_bytes(64, 3);
   summary.add("STEREO_IMAGES", 2, blob.data(), blob.size());
-  EXPECT_NE(summary.table().find("STEREO_IMAGES: 1 of its 2 messages are of another type than ivoa.stereo_image_t"),
-            std::string::npos)
+  depth_image_t depth{};
+  set_counts(depth);
+  std::vector<uint8_t> depth_bytes(static_cast<size_t>(depth.getEncodedSize()));
+  depth.encode(depth_bytes.data(), 0, static_cast<int>(depth_bytes.size()));
+  summary.add("STEREO_IMAGES", 3, depth_bytes.data(), depth_bytes.size());
+  EXPECT_NE(
+      summary.table().find("STEREO_IMAGES: 2 of its 3 messages are not ivoa.stereo_image_t (1 ivoa.depth_image_t, "
+                           "1 no ivoa type: another program's, or damaged before the fingerprint)"),
+      std::string::npos)
       << summary.table();
+  EXPECT_EQ(summary.channels().at("STEREO_IMAGES").typed, 1);
+  const std::string long_name(255, 'C');
+  summary.add(long_name, 4, stereo.data(), stereo.size());
+  EXPECT_NE(summary.table().find(long_name + " ivoa.stereo_image_t"), std::string::npos);
+  EXPECT_NE(summary.table().find("\nSTEREO_IMAGES "), std::string::npos) << "the next row starts on its own line";
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/channel_counts.hpp"
@@ -171,14 +172,17 @@ std::string results_json(const std::vector<FileResult>& files, const LogSummary&
   return out + "},\n\"processes\": " + heartbeats.json() + "}\n";
 }
 
-// False (with a message) if a channel's count is not the one expected.
+// False (with a message) if a channel's count of messages of its own type
+// is not the one expected: a frame replaced by another type is a frame lost.
 bool expectations_hold(const std::map<std::string, int64_t>& expect, const LogSummary& summary) {
   bool ok = true;
   for (const auto& [channel, want] : expect) {
     const auto it = summary.channels().find(channel);
-    const long long got = it == summary.channels().end() ? 0 : it->second.count;
+    const int64_t got = it == summary.channels().end() ? 0 : it->second.typed;
     if (got != want) {
-      spdlog::error("{}: expected {} messages, the log has {}", channel, want, got);
+      const int64_t others = it == summary.channels().end() ? 0 : it->second.other_fingerprints;
+      spdlog::error("{}: expected {} messages, the log has {}{}", channel, want, got,
+                    others ? fmt::format(" of {} (and {} of other types)", it->second.type, others) : "");
       ok = false;
     }
   }
@@ -207,7 +211,7 @@ void add_check_options(CLI::App& app, CheckCommandLine& cl) {
   app.add_option("files", cl.files, "log files, in recording order (a split session is checked as one)")->required();
   app.add_flag("--resync", cl.resync, "skip damaged parts and read on (default: stop at the first damage)");
   app.add_option("--json", cl.json_path, "also write the results as JSON to this file");
-  app.add_option("--expect", cl.expect, "CHANNEL=N: fail unless the log has exactly N messages on CHANNEL")
+  app.add_option("--expect", cl.expect, "CHANNEL=N: fail unless the log has exactly N messages of CHANNEL's type on it")
       ->delimiter(',')
       ->check([](const std::string& s) {
         try {
@@ -245,7 +249,8 @@ int check_logs(const CheckCommandLine& cl) {
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "Check LCM log files: per-channel counts, types, sequence gaps; the byte offset of any damage, messages "
+      "Check LCM log files: per-channel counts, types, sequence gaps, utime< (messages older than the one before); the "
+      "byte offset of any damage, messages "
       "that do not decode as their type; each process's last heartbeat.\n"
       "Exit codes: 0 intact (and expectations met), 1 an expectation failed, 2 bad flags (a --json that is one of "
       "the logs), 3 a log is damaged or "

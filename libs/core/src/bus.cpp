@@ -9,6 +9,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/message_registry.hpp"
+
 namespace ivoa {
 
 std::string with_receive_buffer(const std::string& url) {
@@ -123,6 +125,15 @@ std::string replayed_log(const std::string& url) {
 bool Bus::reads_a_log() const { return !replayed_log(url_).empty(); }
 
 int Bus::handle(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }
+
+std::string Bus::decode_error_text(const std::string& channel, const std::string& type, const void* data, size_t size) {
+  std::string why;
+  if (const auto other = payload_type_name(data, size); other && *other != type)
+    why = "it is an " + std::string(*other) + " (another type on this channel)";
+  else if (other) why = "truncated or damaged inside";
+  else why = "an unknown type's fingerprint (another program's type, or damaged at its start)";
+  return "channel " + channel + ": " + std::to_string(size) + "-byte message does not decode as " + type + ": " + why;
+}
 
 void Bus::report_decode_error(const std::string& what) {
   if (decode_error_handler_) decode_error_handler_(what);

@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include <fmt/format.h>
+
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/message_registry.hpp"
 #include "ivoa/logio/log_reader.hpp"
@@ -41,6 +43,8 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
   // if that one was of none (damaged at its start, or foreign).
   if (s.count == 1 || (s.type == "unknown" && type)) {
     s.other_fingerprints = s.count - 1;
+    s.other_types.clear();
+    if (s.other_fingerprints > 0) s.other_types[kNoIvoaType] = s.other_fingerprints;
     s.fingerprint = fingerprint;
     s.type = std::string(type.value_or("unknown"));
     s.has_seq = type_has_seq(s.type);
@@ -48,6 +52,7 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
   }
   if (fingerprint != s.fingerprint) {
     ++s.other_fingerprints;
+    ++s.other_types[type ? std::string(*type) : kNoIvoaType];
     return;
   }
   ++s.typed;
@@ -60,23 +65,24 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
 }
 
 std::string LogSummary::table() const {
-  std::string out;
-  char line[320];
-  std::snprintf(line, sizeof(line), "%-24s %-28s %8s %10s %9s %9s %8s %8s\n", "channel", "type", "count", "MB",
-                "first seq", "last seq", "missing", "utime<");
-  out += line;
+  // fmt, not a fixed buffer: channel names run to 255 bytes
+  std::string out = fmt::format("{:<24} {:<28} {:>8} {:>10} {:>9} {:>9} {:>8} {:>8}\n", "channel", "type", "count",
+                                "MB", "first seq", "last seq", "missing", "utime<");
   for (const auto& [name, s] : channels_) {
     const auto seq = [&s](int64_t v) { return s.has_seq ? std::to_string(v) : std::string("-"); };
     const std::string regressions = s.utime_ordered ? std::to_string(s.utime_regressions) : "-";
-    std::snprintf(line, sizeof(line), "%-24s %-28s %8lld %10.1f %9s %9s %8s %8s\n", name.c_str(), s.type.c_str(),
-                  static_cast<long long>(s.count), static_cast<double>(s.bytes) / 1e6, seq(s.first_seq).c_str(),
-                  seq(s.last_seq).c_str(), seq(s.missing_seq).c_str(), regressions.c_str());
-    out += line;
+    out += fmt::format("{:<24} {:<28} {:>8} {:>10.1f} {:>9} {:>9} {:>8} {:>8}\n", name, s.type, s.count,
+                       static_cast<double>(s.bytes) / 1e6, seq(s.first_seq), seq(s.last_seq), seq(s.missing_seq),
+                       regressions);
   }
-  for (const auto& [name, s] : channels_)  // one type per channel: a reader of the first skips these
-    if (s.other_fingerprints > 0)
-      out += name + ": " + std::to_string(s.other_fingerprints) + " of its " + std::to_string(s.count) +
-             " messages are of another type than " + s.type + ", or damaged before the fingerprint\n";
+  for (const auto& [name, s] : channels_) {  // one type per channel: a reader of the first skips these
+    if (s.other_fingerprints == 0) continue;
+    std::string which;
+    for (const auto& [type, n] : s.other_types) which += fmt::format("{}{} {}", which.empty() ? "" : ", ", n, type);
+    if (s.other_types.count(kNoIvoaType)) which += ": another program's, or damaged before the fingerprint";
+    out +=
+        fmt::format("{}: {} of its {} messages are not {} ({})\n", name, s.other_fingerprints, s.count, s.type, which);
+  }
   return out;
 }
 

@@ -17,13 +17,22 @@ void LastHeartbeats::add(const logio::LogEvent& event) {
 
 namespace {
 
+// A heartbeat's text as the terminal may show it: control bytes (an escape
+// sequence in a process name cleared the screen) become '?'.
+std::string shown(const std::string& text) {
+  std::string out = text;
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  return out;
+}
+
 // A process's own counters that are not 0 ("frames_missed 7, ..."): what
 // IN/OUT/DROP/BAD do not say, such as frames that never arrived.
 std::string nonzero_counters(const process_status_t& s) {
   std::string out;
   for (size_t i = 0; i < s.counter_names.size() && i < s.counter_values.size(); ++i)
     if (s.counter_values[i] != 0)
-      out += fmt::format("{}{} {}", out.empty() ? "" : ", ", s.counter_names[i], s.counter_values[i]);
+      out += fmt::format("{}{} {}", out.empty() ? "" : ", ", shown(s.counter_names[i]), s.counter_values[i]);
   return out;
 }
 
@@ -42,8 +51,8 @@ std::string LastHeartbeats::table() const {
                                 "PID", "RUNS", "STATE", "IN", "OUT", "DROP", "BAD", "COUNTERS (not 0)");
   for (const auto& [name, p] : processes_) {
     const process_status_t& s = p.status;
-    out += fmt::format("{:<24} {:>8} {:>4} {:<26} {:>8} {:>8} {:>6} {:>6}  {}\n", name, s.pid, p.pids.size(), s.state,
-                       s.messages_in, s.messages_out, s.dropped, s.bad_input, nonzero_counters(s));
+    out += fmt::format("{:<24} {:>8} {:>4} {:<26} {:>8} {:>8} {:>6} {:>6}  {}\n", shown(name), s.pid, p.pids.size(),
+                       shown(s.state), s.messages_in, s.messages_out, s.dropped, s.bad_input, nonzero_counters(s));
   }
   // The logger closes the log before it (and the launcher above it) stops,
   // so their final heartbeats can never be in it: not a fault.

@@ -82,9 +82,7 @@ class Bus {
     subscribe_raw(channel, [this, type, handler](const void* data, size_t size, const ReceiveInfo& info) {
       Msg msg;
       if (!decode_message(msg, data, size)) {
-        report_decode_error("channel " + info.channel + ": " + std::to_string(size) +
-                            "-byte message does not decode as " + type +
-                            " (another type on this channel, truncated or damaged)");
+        report_decode_error(decode_error_text(info.channel, type, data, size));
         return;
       }
       handler(msg, info);
@@ -104,6 +102,9 @@ class Bus {
   // log has ended, and a process should finish as it would at a stop.
   bool reads_a_log() const;
   lcm::LCM& lcm() { return *lcm_; }
+  // What a payload that did not decode as `type` is, by its fingerprint.
+  static std::string decode_error_text(const std::string& channel, const std::string& type, const void* data,
+                                       size_t size);
 
  private:
   struct Subscription;

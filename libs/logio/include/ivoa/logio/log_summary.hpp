@@ -21,8 +21,9 @@ struct ChannelSummary {
   int64_t fingerprint = 0;       // of that type
   int64_t count = 0;
   uint64_t bytes = 0;
-  int64_t other_fingerprints = 0;  // messages of another type than the channel's (one type per channel!)
-  int64_t typed = 0;               // messages of the channel's type
+  int64_t other_fingerprints = 0;              // messages of another type than the channel's (one type per channel!)
+  std::map<std::string, int64_t> other_types;  // those by type name; kNoIvoaType for the rest
+  int64_t typed = 0;                           // messages of the channel's type
   int64_t first_timestamp = 0, last_timestamp = 0;  // log (receive) time
   int64_t first_utime = 0, last_utime = 0;          // message utime, ivoa types only
   int64_t utime_regressions = 0;                    // message utime went backwards
@@ -35,6 +36,8 @@ struct ChannelSummary {
 };
 
 inline constexpr size_t kMaxGapsListed = 20;
+// other_types' key of payloads whose fingerprint is no ivoa type's.
+inline constexpr const char* kNoIvoaType = "no ivoa type";
 
 // JSON for tools and sidecars (strings: ivoa::json_quote): a channel as
 // one object; a fingerprint as a "0x..." string (JSON readers lose
