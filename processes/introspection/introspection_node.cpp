@@ -65,7 +65,7 @@ void RecentGrids::put(const obstacle_grid_t& grid) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     grids_.push_back(grid);
-    if (grids_.size() > kKept) grids_.pop_front();
+    if (grids_.size() > kept_) grids_.pop_front();
   }
   arrived_.notify_all();
 }
@@ -120,7 +120,7 @@ introspection_t make_introspection_message(const introspection::IntrospectionMod
   msg.utime = utime;
   msg.model_id = model.info().id;
   msg.mc_passes = mc_passes;
-  msg.uncertainty_threshold = static_cast<float>(model.threshold());
+  msg.uncertainty_threshold = static_cast<float>(model.uncertainty_threshold());
   msg.verdict_uncertainty_threshold = static_cast<float>(model.verdict_threshold());
   msg.image_width = image_width;
   msg.image_height = image_height;
@@ -155,7 +155,13 @@ double warm_up(introspection::IntrospectionModel& model, cv::Size image_size, in
 IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
                                      std::unique_ptr<introspection::IntrospectionModel> model,
                                      IntrospectionNodeOptions options, int mc_passes)
-    : bus_(bus), heartbeat_(heartbeat), model_(std::move(model)), options_(std::move(options)), mc_passes_(mc_passes) {
+    : bus_(bus),
+      heartbeat_(heartbeat),
+      model_(std::move(model)),
+      options_(std::move(options)),
+      mc_passes_(mc_passes),
+      frames_(static_cast<size_t>(std::max(options_.queue_frames, 1))),
+      grids_(static_cast<size_t>(std::max(options_.queue_frames, 1)) + 16) {
   bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
   heartbeat_.set_counter(kFramesMissed, 0);
   bus_.subscribe<stereo_image_t>(options_.stereo_channel, [this](const stereo_image_t& m, const ReceiveInfo&) {

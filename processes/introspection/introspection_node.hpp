@@ -2,7 +2,8 @@
 // The introspection process's logic: newest left image in, heatmaps and
 // per-query-cell predictions out. A receive handler drops each stereo frame
 // into a latest-value mailbox; a worker thread runs the CNN on the newest
-// one, so a slow CPU skips frames (counted) instead of falling behind.
+// one, so a slow CPU skips frames (counted) instead of falling behind
+// (IntrospectionNodeOptions::queue_frames holds more, oldest first).
 // The query cells' predictions are also given the detector's verdict of the
 // same frame, from its obstacle grid; the CNN is slower than the detector,
 // so that grid is normally in by the time the CNN is done, and the worker
@@ -12,7 +13,7 @@
 // model knows when its own detector errs, not another's.
 // A two-view model also needs the rig calibration, to warp the right image
 // onto the ground plane; frames before the first calibration are skipped
-// (counted as bad input).
+// (counted apart, as frames_without_calibration: CalibrationWait).
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -48,11 +49,17 @@ struct IntrospectionNodeOptions {
   // Before the first frame, run the model once on a blank frame of this
   // size (the camera's) on the worker thread; the constructor returns after.
   std::optional<cv::Size> warm_up;
+  // Frames held while the CNN is busy: 1 keeps only the newest (live); more
+  // keeps that many, oldest first (a log read with ?speed=0, a burst).
+  int queue_frames = 1;
 };
 
 // The detector's most recent obstacle grids, by utime (thread-safe).
 class RecentGrids {
  public:
+  // Keeps the newest `kept` grids: at least the frames queued for the CNN
+  // and a second more, so a queued frame still finds its own grid.
+  explicit RecentGrids(size_t kept = 16) : kept_(kept) {}
   void put(const obstacle_grid_t& grid);
   std::optional<obstacle_grid_t> latest() const;
   // The grid of the frame `utime`, waiting up to `wait` for it to arrive
@@ -62,7 +69,7 @@ class RecentGrids {
   void close();
 
  private:
-  static constexpr size_t kKept = 16;  // about a second of frames
+  const size_t kept_;
   mutable std::mutex mutex_;
   std::condition_variable arrived_;
   std::deque<obstacle_grid_t> grids_;  // oldest first

@@ -51,7 +51,7 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--model", cl.model_path, "model file (ivoa-train, or a scripted model)")->capture_default_str();
   app.add_option("--mc-passes", config.mc_passes, "T, Monte-Carlo dropout passes (1-1000)")
       ->capture_default_str()
-      ->check(CLI::Range(1, 1000));
+      ->check(ivoa::number_in(1, 1000));
   app.add_option("--threshold", config.uncertainty_threshold,
                  "announce a prediction when its class variance is at most this (< 0: the model's value)")
       ->capture_default_str()
@@ -63,17 +63,22 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--grid-wait-ms", cl.grid_wait_ms,
                  "after the CNN, how long to wait for the detector's grid of the frame (its verdicts)")
       ->capture_default_str()
-      ->check(CLI::Range(0, 60000));
+      ->check(ivoa::number_in(0, 60000));
+  app.add_option("--queue-frames", cl.options.queue_frames,
+                 "frames held while the CNN is busy: 1 keeps only the newest (live); more keeps that many, oldest "
+                 "first (a log read with ?speed=0); each as received, 1.2 MB a 960x600 Bayer pair")
+      ->capture_default_str()
+      ->check(ivoa::number_in(1, 1000));
   app.add_option("--mean-filter", config.mean_filter,
                  "odd window of the heatmap mean filter, cells (1 = off; at most 99)")
       ->capture_default_str()
-      ->check(ivoa::odd_positive_integer() & CLI::Range(1, 99));
+      ->check(ivoa::odd_positive_integer() & ivoa::number_in(1, 99));
   app.add_option("--lookup", cl.lookup, "query cell -> heatmap: nearest cell or bilinear")
       ->capture_default_str()
       ->check(CLI::IsMember({"nearest", "bilinear"}));
   app.add_option("--threads", config.threads, "LibTorch threads (1-256)")
       ->capture_default_str()
-      ->check(CLI::Range(1, 256));
+      ->check(ivoa::number_in(1, 256));
   app.add_option("--device", config.device, "cpu or cuda")
       ->capture_default_str()
       ->check(CLI::IsMember({"cpu", "cuda"}));
@@ -116,7 +121,7 @@ void log_model(const ivoa::introspection::IntrospectionModel& model, int mc_pass
                info.detector, info.patch_size, info.stride,
                info.patch_scale > 0 ? fmt::format(", query cells from footprint-scaled patches (x{})", info.patch_scale)
                                     : std::string(),
-               mc_passes, model.threshold());
+               mc_passes, model.uncertainty_threshold());
 }
 
 }  // namespace

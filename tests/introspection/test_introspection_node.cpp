@@ -151,6 +151,35 @@ TEST(IntrospectionNode, FramesSkippedWhileBusyAreCountedAsDropped) {
   EXPECT_GE(s.dropped, 1) << "the burst arrived while the first frame was still being processed";
 }
 
+// With a queue every frame of a burst is run, in order (a log read as fast
+// as it can be, with ?speed=0).
+TEST(IntrospectionNode, WithAQueueEveryFrameOfABurstIsRun) {
+  test::TempDir dir;
+  Bus bus("memq://");
+  Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
+  introspection::InferenceConfig config;
+  config.mc_passes = 2;
+  config.seed = 1;
+  IntrospectionNodeOptions options;
+  options.grid_channel = "";
+  options.queue_frames = 6;
+  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 1), config), options,
+                         2);
+  std::vector<int64_t> published;
+  bus.subscribe<introspection_t>(channels::kIntrospection,
+                                 [&](const introspection_t& m, const ReceiveInfo&) { published.push_back(m.utime); });
+  const RigCalibration rig = test::make_test_rig();
+  constexpr int kBurst = 6;
+  for (int i = 0; i < kBurst; ++i) {
+    stereo_image_t frame = stereo_frame(rig, 1000 * (i + 1));
+    bus.publish(channels::kStereoImages, frame);
+  }
+  for (int i = 0; i < kBurst; ++i) bus.handle(5);  // the whole burst, far faster than one inference
+  ASSERT_TRUE(deliver_until(bus, [&] { return published.size() == kBurst; })) << published.size() << " published";
+  for (int i = 0; i < kBurst; ++i) EXPECT_EQ(published[static_cast<size_t>(i)], 1000 * (i + 1));
+  EXPECT_EQ(heartbeat.snapshot().dropped, 0);
+}
+
 // Stopped right after a burst, the node still runs the frame waiting in its
 // mailbox: every frame received is either published or counted as dropped
 // in the final heartbeat, none silently left behind; frames that never
