@@ -289,7 +289,10 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
   const double shared_max = figures::uncertainty_scale_top(maps);
   for (const auto& p : held) write_overlay(o, p, shared_max);
   written += held.size();
-  spdlog::info("wrote {} overlay figures to {}/overlays", written, o.out);
+  spdlog::info("wrote {} overlay figures to {}/overlays{}", written, o.out,
+               written >= static_cast<size_t>(o.max_overlays)
+                   ? fmt::format(" (at most --max-overlays {}: give more for more)", o.max_overlays)
+                   : "");
   return static_cast<int>(written);
 }
 
@@ -370,7 +373,8 @@ void write_eval_json(const Options& o, const introspection::IntrospectionModel& 
   const std::string path = o.out + "/eval.json";
   std::ofstream json(path);
   json << "{\"model\": " << json_quote(info.id) << ", \"dataset\": " << json_quote(fs::absolute(o.dataset).string())
-       << ", \"mc_passes\": " << o.inference.mc_passes << ", \"uncertainty_threshold\": " << model.threshold()
+       << ", \"mc_passes\": " << o.inference.mc_passes
+       << ", \"uncertainty_threshold\": " << model.uncertainty_threshold()
        << ", \"verdict_uncertainty_threshold\": " << model.verdict_threshold() << ", \"overlay_dots\": \""
        << (o.dots_given_verdict ? "given_verdict" : "image") << "\", \"samples\": " << samples << ", \"sessions\": ["
        << evaluated << "], \"metadata\": {\"detector\": " << json_quote(info.detector)
@@ -410,7 +414,7 @@ void add_options(CLI::App& app, Options& o) {
 
 // The figures of an earlier run into the same --out would pass for this
 // model's (the report shows every overlay it finds there): those named as
-// write_log_overlays names them, <session>_<utime>.png, are removed.
+// prepare_log_overlays names them, <session>_<utime>.png, are removed.
 void remove_old_overlays(const std::string& folder) {
   static const std::regex kOverlayName(R"(.+_[0-9]{10,}\.png)");
   std::error_code error;
