@@ -89,9 +89,8 @@ void add_output_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--pixel-format", cl.pixel_format, "published pixel format")
       ->capture_default_str()
       ->check(CLI::IsMember(pixel_format_names()));
-  app.add_option("--depth-offset-ms", config.depth_offset_ms, "depth image utime minus stereo utime (-1000 to 1000)")
+  app.add_option("--depth-offset-ms", config.depth_offset_ms, "depth image utime minus stereo utime")
       ->capture_default_str()
-      ->check(ivoa::finite_number())
       ->check(ivoa::number_in(-1000.0, 1000.0));
   app.add_option("--calibration-period", config.calibration_period_s,
                  "seconds between RIG_CALIBRATION messages (0: with every frame; at most a day)")

@@ -18,7 +18,7 @@ void add_monitor_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
   auto& m = o.monitor;
   app.add_option("--pixel-step", m.pixel_step, "use every n-th depth pixel (1-64)")
       ->capture_default_str()
-      ->check(CLI::Range(1, 64))
+      ->check(ivoa::number_in(1, 64))
       ->group(g);
   app.add_option("--voxel-size", m.voxel_size, "voxel grid leaf, m")
       ->capture_default_str()

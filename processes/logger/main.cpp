@@ -226,7 +226,7 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
                  "memory for messages waiting for the disk; beyond it new ones are "
                  "dropped and counted")
       ->capture_default_str()
-      ->check(ivoa::positive_number() & ivoa::number_in(0.0, kMaxMb));
+      ->check((ivoa::positive_number() & ivoa::number_in(0.0, kMaxMb)).description("NUMBER in (0, 1e+09]"));
   app.add_option("--max-write-mb-s", f.max_write_mb_s,
                  "cap the disk write rate while recording (0 = none; a stop "
                  "writes the queue out at full speed)")

@@ -69,7 +69,7 @@ void add_matching_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   app.add_option("--match-frames", o.matcher.max_frames, "frames kept waiting for their parts")
       ->capture_default_str()
       ->group(g)
-      ->check(CLI::Range(1, 256));
+      ->check(ivoa::number_in(1, 256));
 }
 
 void add_channel_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {

@@ -56,18 +56,28 @@ from report_inputs import (Dataset, EvalRun, InputError, attach_causes, attach_d
                            patch_sides, patch_size, query_grid, seen_in_training)
 
 
+class _ShowDefaults(argparse.ArgumentDefaultsHelpFormatter):
+    """--help shows each option's default, where it has one."""
+
+    def _get_help_string(self, action):
+        if action.required or action.default in (None, argparse.SUPPRESS, False):
+            return action.help
+        return super()._get_help_string(action)
+
+
 def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     """Command line; usage errors exit with argparse's code 2."""
     p = argparse.ArgumentParser(
         prog="ivoa_report.py",
         description="IVOA analysis report: metrics, failure detection, uncertainty sweep, failure clustering, "
-                    "model comparison, as PNG figures and report.md.")
+                    "model comparison, as PNG figures and report.md.",
+        formatter_class=_ShowDefaults)
     p.add_argument("--eval", action="append", required=True, metavar="EVAL_DIR",
                    help="an ivoa-eval output folder (repeat for several models)")
     p.add_argument("--dataset", action="append", required=True, metavar="DATASET_DIR",
                    help="the dataset the eval ran on: once for all evals, or once per --eval in the same order")
     p.add_argument("--out", required=True, metavar="REPORT_DIR", help="report folder (created)")
-    p.add_argument("--title", default="IVOA introspection report")
+    p.add_argument("--title", default="IVOA introspection report", help="the report's heading")
     p.add_argument("--clusters", type=int, default=2, metavar="K", help="k-means clusters (paper: 2)")
     p.add_argument("--select", choices=("confidence-per-class", "confidence", "variance"),
                    default="confidence-per-class",
@@ -79,7 +89,8 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
                    help="where k-means runs: normalised 256-d embeddings (paper) or their PCA scores")
     p.add_argument("--tsne-max", type=int, default=3000, help="subsample t-SNE input to this many points")
     p.add_argument("--tsne-iterations", type=int, default=500, help="t-SNE iterations (>= 250)")
-    p.add_argument("--perplexity", type=float, default=40.0)
+    p.add_argument("--perplexity", type=float, default=40.0,
+                   help="t-SNE perplexity: about how many neighbours each point keeps close")
     p.add_argument("--seed", type=int, default=0, help="k-means, t-SNE, subsampling and mosaic seed")
     p.add_argument("--threads", type=int, default=1,
                    help="OpenMP threads for t-SNE and k-means (1 is fastest on a busy shared machine)")

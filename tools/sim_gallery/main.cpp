@@ -57,7 +57,7 @@ void add_gallery_options(CLI::App& app, GalleryOptions& o) {
   app.add_option("--output", o.output, "PNG to write")->capture_default_str();
   app.add_option("--tile-width", o.tile_width, "width of each picture in pixels")
       ->capture_default_str()
-      ->check(CLI::Range(16, 4000));
+      ->check(ivoa::number_in(16, 4000));
   app.add_option("--time", o.start_time, "seconds into the drive to start looking for a frame")
       ->capture_default_str()
       ->check(ivoa::number_in(0, 3600));  // the drive is stepped to it: 1e5 s took 30 s and 600 MB

@@ -83,7 +83,7 @@ void add_transport_options(CLI::App& app, Flags& f) {
   app.add_option("--packet-size", c.packet_size,
                  "GigE packet size, bytes: 9000 with jumbo frames (MTU 9000), 1400 without; 0 = negotiate")
       ->capture_default_str()
-      ->check(CLI::Range(0, 16384))
+      ->check(ivoa::number_in(0, 16384))
       ->group(g);
   app.add_option("--packet-delay-ns", c.packet_delay_ns, "GigE inter-packet delay, ns (0 = keep the camera's)")
       ->capture_default_str()
@@ -97,7 +97,7 @@ void add_transport_options(CLI::App& app, Flags& f) {
       ->group(g);
   app.add_option("--buffers", c.buffers, "stream buffers per camera")
       ->capture_default_str()
-      ->check(CLI::Range(2, 64))
+      ->check(ivoa::number_in(2, 64))
       ->group(g);
   app.add_option("--timestamps", f.timestamps,
                  "pair by: mapped (each camera's clock mapped onto the host's: no receive jitter), host (receive "

@@ -84,7 +84,7 @@ void add_bench_options(CLI::App& app, BenchOptions& o) {
   app.add_option("--seed", o.seed, "scene and trajectory seed")->capture_default_str();
   app.add_option("--cpu", o.cpu, "core to pin to (-1: do not pin)")
       ->capture_default_str()
-      ->check(CLI::Range(-1, CPU_SETSIZE - 1));
+      ->check(ivoa::number_in(-1, CPU_SETSIZE - 1));
   app.add_option("--budget-ms", o.budget_ms, "per-frame budget the worst scene's median is compared with, ms")
       ->capture_default_str()
       ->check(ivoa::positive_number());
