@@ -34,17 +34,16 @@ bool MonitorNode::has_calibration(const std::string& where) {
 }
 
 void MonitorNode::on_calibration(const rig_calibration_t& msg) {
-  std::vector<uint8_t> bytes = calibration_content(msg);
-  if (bytes == calibration_bytes_) return;
   try {
-    const RigCalibration rig = from_message(msg);
+    const std::optional<RigCalibration> new_rig = calibrations_.take_if_new(msg);
+    if (!new_rig) return;
+    const RigCalibration& rig = *new_rig;
     if (pipeline_) {
       spdlog::info("rig calibration changed: rebuilding the monitor");
       publish(pipeline_->flush());
       earlier_pipelines_ += pipeline_->counters();
     }
     pipeline_ = std::make_unique<monitor::LabelingPipeline>(rig, options_.grid, options_.monitor, options_.pairing);
-    calibration_bytes_ = std::move(bytes);
     calibration_wait_.end();
     spdlog::info("calibration '{}': depth {}x{}, {} query cells ({} with a full patch in the left image)", rig.rig_name,
                  rig.depth.width, rig.depth.height, pipeline_->grid().size(), pipeline_->grid().count_in_image());

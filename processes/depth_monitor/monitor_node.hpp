@@ -46,8 +46,8 @@ class MonitorNode {
   Heartbeat& heartbeat_;
   MonitorNodeOptions options_;
   CalibrationWait calibration_wait_;
-  SeqGaps missed_;                          // of the depth frames
-  std::vector<uint8_t> calibration_bytes_;  // the calibration the pipeline was built for
+  SeqGaps missed_;                   // of the depth frames
+  CalibrationChanges calibrations_;  // to tell a new one from the same one again
   std::unique_ptr<monitor::LabelingPipeline> pipeline_;
   int64_t labelled_cells_ = 0;
   monitor::ClockCounters depth_clock_seen_, stereo_clock_seen_;  // what update_counters last reported

@@ -226,16 +226,12 @@ void IntrospectionNode::work() {
 }
 
 void IntrospectionNode::on_calibration(const rig_calibration_t& msg) {
-  std::vector<uint8_t> bytes = calibration_content(msg);
   std::lock_guard<std::mutex> lock(calibration_mutex_);
-  if (bytes == calibration_bytes_) return;
   try {
-    new_rig_ = from_message(msg);
+    if (std::optional<RigCalibration> rig = calibrations_.take_if_new(msg)) new_rig_ = std::move(rig);
   } catch (const CalibrationError& e) {
     heartbeat_.bad_input(options_.calibration_channel + ": " + e.what());
-    return;
   }
-  calibration_bytes_ = std::move(bytes);
 }
 
 void IntrospectionNode::on_grid(obstacle_grid_t grid) {

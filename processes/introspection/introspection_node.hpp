@@ -139,9 +139,9 @@ class IntrospectionNode {
   SeqGaps missed_;                                   // LCM thread only
   std::optional<CalibrationWait> calibration_wait_;  // two-view models; worker thread only
   std::mutex calibration_mutex_;
-  std::vector<uint8_t> calibration_bytes_;  // the newest calibration's content (utime zeroed)
-  std::optional<RigCalibration> new_rig_;   // handed to the worker, which builds the warp
-  std::unique_ptr<GroundWarp> warp_;        // worker thread only
+  CalibrationChanges calibrations_;        // to tell a new one from the same one again
+  std::optional<RigCalibration> new_rig_;  // handed to the worker, which builds the warp
+  std::unique_ptr<GroundWarp> warp_;       // worker thread only
   std::atomic<int64_t> frames_done_{0};
   std::thread worker_;
 };

@@ -45,7 +45,7 @@ StereoDetectorNode::~StereoDetectorNode() { stop(); }
 void StereoDetectorNode::set_calibration(const RigCalibration& rig) {
   std::lock_guard<std::mutex> lock(calibration_mutex_);
   calibration_ = rig;
-  calibration_bytes_ = calibration_content(to_message(rig, 0));
+  calibrations_.take(rig);
   ++calibration_version_;
 }
 
@@ -72,16 +72,15 @@ void StereoDetectorNode::on_stereo(const stereo_image_t& msg) {
 }
 
 void StereoDetectorNode::on_calibration(const rig_calibration_t& msg) {
-  std::vector<uint8_t> bytes = calibration_content(msg);
   std::lock_guard<std::mutex> lock(calibration_mutex_);
-  if (bytes == calibration_bytes_) return;
   try {
-    calibration_ = from_message(msg);  // validates
+    std::optional<RigCalibration> rig = calibrations_.take_if_new(msg);
+    if (!rig) return;
+    calibration_ = std::move(rig);
   } catch (const CalibrationError& e) {
     heartbeat_.bad_input(std::string("ignoring calibration: ") + e.what());
     return;
   }
-  calibration_bytes_ = std::move(bytes);
   ++calibration_version_;
 }
 

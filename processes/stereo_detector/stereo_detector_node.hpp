@@ -90,7 +90,7 @@ class StereoDetectorNode {
 
   std::mutex calibration_mutex_;
   std::optional<RigCalibration> calibration_;  // newest valid calibration
-  std::vector<uint8_t> calibration_bytes_;     // its message, utime zeroed, to detect changes
+  CalibrationChanges calibrations_;            // to tell a new one from the same one again
   uint64_t calibration_version_ = 0;
 
   // Worker-thread state.

@@ -194,5 +194,25 @@ TEST(Calibration, OpticalAxesMapToTheRobotFrame) {
   EXPECT_NEAR(axis.z(), -0.5, 1e-12);
 }
 
+// Calibrations come every second: the same content at another time is not
+// new; another rig is; an invalid one is refused each time it comes.
+TEST(CalibrationChanges, TellsANewCalibrationFromTheSameOneAgain) {
+  CalibrationChanges changes;
+  const RigCalibration rig = test::make_test_rig();
+  ASSERT_TRUE(changes.take_if_new(to_message(rig, 1000)).has_value());
+  EXPECT_FALSE(changes.take_if_new(to_message(rig, 2000)).has_value()) << "republished: not new";
+  RigCalibration moved = rig;
+  moved.left.K(0, 2) += 1.0;
+  const auto taken = changes.take_if_new(to_message(moved, 3000));
+  ASSERT_TRUE(taken.has_value());
+  EXPECT_DOUBLE_EQ(taken->left.K(0, 2), moved.left.K(0, 2));
+  rig_calibration_t broken = to_message(rig, 4000);
+  broken.left.width = 0;
+  EXPECT_THROW(changes.take_if_new(broken), CalibrationError);
+  EXPECT_THROW(changes.take_if_new(broken), CalibrationError) << "not taken: checked again";
+  changes.take(rig);  // from a file
+  EXPECT_FALSE(changes.take_if_new(to_message(rig, 5000)).has_value());
+}
+
 }  // namespace
 }  // namespace ivoa

@@ -247,6 +247,9 @@ void save_rig_calibration(const RigCalibration& rig, const std::string& path) {
   fs << "depth_min_range" << rig.depth_min_range << "depth_max_range" << rig.depth_max_range;
 }
 
+namespace {
+
+// The message's bytes without its publication time.
 std::vector<uint8_t> calibration_content(rig_calibration_t msg) {
   msg.utime = 0;
   set_counts(msg);
@@ -254,6 +257,18 @@ std::vector<uint8_t> calibration_content(rig_calibration_t msg) {
   msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   return bytes;
 }
+
+}  // namespace
+
+std::optional<RigCalibration> CalibrationChanges::take_if_new(const rig_calibration_t& msg) {
+  std::vector<uint8_t> content = calibration_content(msg);
+  if (content == content_) return std::nullopt;
+  RigCalibration rig = from_message(msg);
+  content_ = std::move(content);
+  return rig;
+}
+
+void CalibrationChanges::take(const RigCalibration& rig) { content_ = calibration_content(to_message(rig, 0)); }
 
 rig_calibration_t to_message(const RigCalibration& rig, int64_t utime) {
   rig_calibration_t msg;

@@ -66,7 +66,7 @@ struct SessionBuilder::Impl {
   std::unique_ptr<SessionWriter> writer;
   SessionInfo info;
 
-  std::vector<uint8_t> calibration_bytes;
+  CalibrationChanges calibrations;
   std::optional<RigCalibration> rig;
   std::unique_ptr<stereo::ObstacleDetector> detector;
   std::unique_ptr<monitor::LabelingPipeline> pipeline;
@@ -135,14 +135,13 @@ void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
   if (!logio::decode(e, msg))
     return bad(e.channel + " at byte " + std::to_string(e.offset) +
                ": does not decode as ivoa.rig_calibration_t (another type, truncated or damaged)");
-  std::vector<uint8_t> bytes = calibration_content(msg);
-  if (bytes == calibration_bytes) return;
   try {
-    rig = from_message(msg);
+    std::optional<RigCalibration> new_rig = calibrations.take_if_new(msg);
+    if (!new_rig) return;
+    rig = std::move(new_rig);
   } catch (const CalibrationError& err) {
     return bad(std::string("unusable calibration: ") + err.what());
   }
-  calibration_bytes = std::move(bytes);
   info.rig_name = rig->rig_name;
   if (options.views == 2) warp = std::make_unique<GroundWarp>(*rig);
   evidence_detector.reset();  // remade for the new rig

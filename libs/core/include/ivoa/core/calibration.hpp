@@ -7,6 +7,8 @@
 // Frames: robot x forward, y left, z up, ground z = 0, metres. Camera frames
 // are optical (x right, y down, z forward) for the raw, unrectified image.
 #include <array>
+#include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -66,8 +68,20 @@ void save_rig_calibration(const RigCalibration& rig, const std::string& path);
 
 rig_calibration_t to_message(const RigCalibration& rig, int64_t utime);
 RigCalibration from_message(const rig_calibration_t& msg);  // validates
-// The message's bytes without its publication time: calibrations are
-// re-published every second, and equal content means the same calibration.
-std::vector<uint8_t> calibration_content(rig_calibration_t msg);
+
+// Tells a new calibration from the same one re-published (every second) by
+// its content, the publication time left out.
+class CalibrationChanges {
+ public:
+  // The rig of `msg` if its content is not the last one taken, else empty.
+  // Throws CalibrationError for an invalid one, which is not taken: each
+  // re-publication of it is checked, and reported, again.
+  std::optional<RigCalibration> take_if_new(const rig_calibration_t& msg);
+  // Takes a rig from elsewhere (a calibration file), as if it had come.
+  void take(const RigCalibration& rig);
+
+ private:
+  std::vector<uint8_t> content_;
+};
 
 }  // namespace ivoa
