@@ -64,8 +64,9 @@ void add_monitor_options(CLI::App& app, ivoa::MonitorNodeOptions& o) {
       ->check(ivoa::non_negative_number())
       ->group(g);
   app.add_option("--time-jump-us", o.pairing.time_jump_us,
-                 "a frame this far from its stream's time is held until the next says whether the clock moved "
-                 "(a gap, a log played again) or the frame is wrong (ignored), us")
+                 "a frame this far from its stream's time (ahead: and over 1.5 of the stream's own steps) is held "
+                 "until the next says whether the clock moved (a gap, a log played again) or the frame is wrong "
+                 "(ignored), us")
       ->capture_default_str()
       ->check(ivoa::positive_number())
       ->group(g);

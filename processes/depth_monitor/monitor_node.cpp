@@ -38,12 +38,14 @@ void MonitorNode::on_calibration(const rig_calibration_t& msg) {
     const std::optional<RigCalibration> new_rig = calibrations_.take_if_new(msg);
     if (!new_rig) return;
     const RigCalibration& rig = *new_rig;
+    // Built first: one that cannot be built leaves the running one as it is.
+    auto next = std::make_unique<monitor::LabelingPipeline>(rig, options_.grid, options_.monitor, options_.pairing);
     if (pipeline_) {
       spdlog::info("rig calibration changed: rebuilding the monitor");
       publish(pipeline_->flush());
       earlier_pipelines_ += pipeline_->counters();
     }
-    pipeline_ = std::make_unique<monitor::LabelingPipeline>(rig, options_.grid, options_.monitor, options_.pairing);
+    pipeline_ = std::move(next);
     calibration_wait_.end();
     spdlog::info("calibration '{}': depth {}x{}, {} query cells ({} with a full patch in the left image)", rig.rig_name,
                  rig.depth.width, rig.depth.height, pipeline_->grid().size(), pipeline_->grid().count_in_image());

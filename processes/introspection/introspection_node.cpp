@@ -210,8 +210,8 @@ void IntrospectionNode::warm_up_worker() {
   }
 }
 
-// Once closed, the mailbox's last frame is still run (take() returns at
-// once): a frame received is published or counted as dropped, never lost.
+// Once closed, the frames left in the mailbox are still run (take() returns
+// at once): a frame received is published or counted as dropped, never lost.
 void IntrospectionNode::work() {
   while (true) {
     update_warp();  // as soon as a calibration is in, so the first frame does not wait for it

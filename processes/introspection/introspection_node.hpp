@@ -106,8 +106,9 @@ class IntrospectionNode {
   IntrospectionNode(Bus& bus, Heartbeat& heartbeat, std::unique_ptr<introspection::IntrospectionModel> model,
                     IntrospectionNodeOptions options, int mc_passes);
   ~IntrospectionNode();  // stops the worker
-  // Lets the frame in hand and the one waiting finish, then stops the
-  // worker (before the final heartbeat, so it counts them). Idempotent.
+  // Lets the frame in hand and those waiting (one, or --queue-frames)
+  // finish, then stops the worker (before the final heartbeat, so it counts
+  // them). Idempotent.
   void stop();
 
   int64_t frames_done() const { return frames_done_.load(); }

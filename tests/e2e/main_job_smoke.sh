@@ -24,6 +24,10 @@ for detector in jppc dense; do  # the smaller scales keep the final step's model
     { echo "FAILED: $detector's training did not keep its final model:" >&2; cat "$OUT/train_$detector.txt" >&2; exit 1; }
 done
 ls "$OUT"/viewer/*/*.png > /dev/null || { echo "FAILED: the viewer wrote no figures" >&2; exit 1; }
+for detector in jppc dense; do  # causes of both models' failures, from the logs and from the dense dataset
+  [ "$(wc -l < "$OUT/causes_$detector.csv")" -gt 1 ] ||
+    { echo "FAILED: causes_$detector.csv has no rows" >&2; cat "$OUT/causes_$detector.txt" >&2; exit 1; }
+done
 
 /usr/bin/python3 - "$OUT" <<'PY'
 import json, sys, pathlib

@@ -374,6 +374,26 @@ TEST(LogSummary, UnknownPayloadsAreCountedButNotDecoded) {
   EXPECT_NE(channel_json(s).find("\"type\": \"unknown\""), std::string::npos);
 }
 
+// A channel whose first message is of no ivoa type takes the first ivoa
+// type after it; what was counted of the first is not counted as that type.
+TEST(LogSummary, AChannelWhoseFirstMessageIsDamagedCountsItsTypeFromTheNext) {
+  LogSummary summary;
+  const auto blob = numbered_bytes(64, 3);
+  summary.add("STEREO_IMAGES", 1, blob.data(), blob.size());
+  for (const int64_t seq : {5, 6, 7}) {
+    const auto bytes = encoded_stereo(seq, 100 + seq);
+    summary.add("STEREO_IMAGES", 2, bytes.data(), bytes.size());
+  }
+  const ChannelSummary& s = summary.channels().at("STEREO_IMAGES");
+  EXPECT_EQ(s.type, "ivoa.stereo_image_t");
+  EXPECT_EQ(s.count, 4);
+  EXPECT_EQ(s.typed, 3) << "--expect STEREO_IMAGES=3 holds";
+  EXPECT_EQ(s.other_fingerprints, 1);
+  EXPECT_EQ(s.first_seq, 5);
+  EXPECT_EQ(s.missing_seq, 0);
+  EXPECT_EQ(s.first_utime, 105);
+}
+
 // Named by type; a channel's 255-byte name keeps its row whole.
 TEST(LogSummary, MessagesOfAnotherTypeOnAChannelAreSaidUnderTheTable) {
   LogSummary summary;

@@ -182,6 +182,54 @@ TEST(FramePairer, AStreamSlowerThanOneFrameAJumpIsPaired) {
   EXPECT_EQ(p.counters().depth_clock.outliers, 1);
 }
 
+// The step that lets a slow stream through must not let one wrong utime
+// through with it: not when the stream speeds up (a frame 3.5 s ahead,
+// taken, made the next frames a "restart" that paired nothing again), nor
+// 2.9 s ahead of a stream of 1.5 s steps (it was taken, the good frame after
+// it dropped).
+TEST(FramePairer, AWrongUtimeIsStillIgnoredWhenTheStreamIsSlowOrSpeedsUp) {
+  Pairer p;
+  Results out;
+  const auto both = [&](int64_t t) {
+    append(out, p.add_depth(t + 2'000, "d"));
+    append(out, p.add_stereo(t, "s"));
+  };
+  for (int i = 0; i < 5; ++i) both(1'000'000 + i * int64_t{2'000'000});  // 0.5 Hz
+  for (int i = 1; i <= 3; ++i) both(9'000'000 + i * 33'333);             // then 30 Hz
+  append(out, p.add_depth(12'600'000, "wrong clock"));
+  for (int i = 4; i <= 6; ++i) both(9'000'000 + i * 33'333);
+  append(out, p.flush());
+  EXPECT_EQ(paired(out), 11u);
+  EXPECT_EQ(p.counters().depth_clock.restarts, 0);
+  EXPECT_EQ(p.counters().depth_clock.outliers, 1);
+
+  Pairer slow;
+  Results slow_out;
+  for (int i = 0; i < 8; ++i) {
+    const int64_t t = 1'000'000 + i * int64_t{1'500'000};
+    append(slow_out, slow.add_depth(t + 2'000, "d"));
+    append(slow_out, slow.add_stereo(t, "s"));
+  }
+  append(slow_out, slow.add_depth(14'400'000, "wrong clock"));  // 2.9 s after the newest, 11.5 s
+  for (int i = 8; i < 10; ++i) {
+    const int64_t t = 1'000'000 + i * int64_t{1'500'000};
+    append(slow_out, slow.add_depth(t + 2'000, "d"));
+    append(slow_out, slow.add_stereo(t, "s"));
+  }
+  append(slow_out, slow.flush());
+  EXPECT_EQ(paired(slow_out), 10u);
+  EXPECT_EQ(slow.counters().depth_clock.outliers, 1);
+
+  // 30 Hz: a wrong utime 4.3 s ahead, then a real 9.3 s gap in the stream
+  Pairer fast;
+  Results fast_out;
+  for (int i = 0; i < 6; ++i) append(fast_out, fast.add_depth(1'000'000 + i * 33'333, "d"));
+  append(fast_out, fast.add_depth(5'466'665, "wrong clock"));
+  for (int i = 0; i < 3; ++i) append(fast_out, fast.add_depth(10'466'665 + i * 33'333, "after the gap"));
+  EXPECT_EQ(fast.counters().depth_clock.outliers, 1);
+  EXPECT_EQ(fast.counters().depth_clock.restarts, 0);
+}
+
 TEST(FramePairer, ALogPlayedAgainIsPairedAgain) {
   Pairer p;
   Results out;

@@ -182,7 +182,7 @@ void labels_from_dataset(const std::string& root, const std::string& session, Se
   for (const dataset::SampleRecord& s : reader.samples()) {
     if (s.label == Labels::LABEL_NONE) continue;
     if (log.labels.empty() || log.labels.back().utime != s.utime) {
-      Labels l;
+      Labels l{};  // lcm-gen types leave numbers uninitialised
       l.utime = s.utime;
       l.detector = info.detector;
       l.safety_radius = info.grid.safety_radius;
@@ -194,7 +194,8 @@ void labels_from_dataset(const std::string& root, const std::string& session, Se
     l.stereo_state.push_back(static_cast<int8_t>(s.stereo_state));
     l.depth_state.push_back(static_cast<int8_t>(s.depth_state));
     l.x.push_back(s.x), l.y.push_back(s.y), l.u.push_back(s.u), l.v.push_back(s.v);
-    l.num_cells = static_cast<int32_t>(l.label.size());
+    l.num_cells = l.num_x = static_cast<int32_t>(l.label.size());  // the frame's labelled cells, as a 1 x n grid
+    l.num_y = 1;
     log.cell_ids.back().push_back(s.cell);
   }
 }
@@ -572,6 +573,11 @@ int explain(const CommandLine& cl) {
     return kExitIoError;
   }
   if (failed == results.size()) return worst;  // no session explained: no tables of zeros
+  if (tally.frames == 0 && tally.skipped_frames > 0) {
+    // Every frame refused (warnings above): an empty table is not a result.
+    spdlog::error("no frame could be replayed: all {} were skipped (warnings above)", tally.skipped_frames);
+    return kExitBadInput;
+  }
   print_summary(tally);
   print_variants(tally, opt.variants);
   return worst;

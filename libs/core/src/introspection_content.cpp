@@ -17,7 +17,8 @@ using Labels = introspection_labels_t;
 constexpr float kRounding = 1e-4f;
 
 bool is_probability(float p) { return std::isfinite(p) && p >= -kRounding && p <= 1.0f + kRounding; }
-bool is_variance(float v) { return std::isfinite(v) && v >= 0.0f; }
+// A variance of 0 smoothed by a box filter may come out a hair under 0.
+bool is_variance(float v) { return std::isfinite(v) && v >= -1e-6f; }
 bool is_label(int8_t c) { return c >= Labels::LABEL_TP && c <= Labels::LABEL_FN; }
 
 std::string heatmap_error(const introspection_t& m) {

@@ -42,6 +42,11 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
   // The channel's type is its first message's, or the first ivoa type on it
   // if that one was of none (damaged at its start, or foreign).
   if (s.count == 1 || (s.type == "unknown" && type)) {
+    const int64_t count = s.count;
+    const uint64_t bytes = s.bytes;
+    const int64_t first_timestamp = s.first_timestamp;
+    s = ChannelSummary{};  // what was counted of the first type was not of this one
+    s.count = count, s.bytes = bytes, s.first_timestamp = first_timestamp, s.last_timestamp = timestamp;
     s.other_fingerprints = s.count - 1;
     s.other_types.clear();
     if (s.other_fingerprints > 0) s.other_types[kNoIvoaType] = s.other_fingerprints;

@@ -14,9 +14,10 @@ inline constexpr const char* kFramesMissed = "frames_missed";
 
 class SeqGaps {
  public:
-  // A seq this far from the last, either way, is held until the next frame
-  // says whether the publisher's numbering really jumped (about 30 s at
-  // 30 Hz): one damaged seq must not add billions to the count.
+  // A seq this far ahead of the last (about 30 s at 30 Hz), or any seq not
+  // ahead of it, is held until the next frame says whether the publisher's
+  // numbering really jumped or restarted: one damaged seq must not add
+  // billions to the count.
   static constexpr uint64_t kHoldBeyond = 1000;
 
   // How many frames are newly known to be missing: 0 for the first; for a

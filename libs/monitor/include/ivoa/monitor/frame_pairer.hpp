@@ -13,6 +13,8 @@
 // moved (a gap; or, going back, a log played again, whose frames are then
 // paired only with the other stream's frames after its own restart); if not,
 // the one frame was wrong and is ignored, so it cannot stop the pairing.
+// Ahead, a stream slower than a frame a jump is followed by its own step
+// (StreamClock).
 #include <algorithm>
 #include <cstdint>
 #include <map>
@@ -33,6 +35,7 @@ struct PairingConfig {
   int64_t depth_history_us = 2'000'000;
   int64_t max_wait_us = 500'000;     // decide a pending stereo frame once stereo time moves this far past it
   int64_t time_jump_us = 1'000'000;  // a utime this far from its stream's newest, either way, is a jump
+                                     // (ahead: and over 1.5 of the stream's own steps)
   // Depth restarts kept beyond the stereo stream's, newest first: a depth log
   // looping while the detector is silent would otherwise keep depth_history_us
   // of frames for every play. Stereo frames of a dropped play go unmatched.

@@ -9,9 +9,12 @@
 //
 // A stream slower than one frame a jump (a depth sensor throttled to
 // 0.5 Hz) steps more than a jump every frame. So ahead of the newest frame
-// a jump is also at most twice the stream's own step (the median of its
-// last steps), and a held frame ahead is followed by a next frame that
-// steps on from it by no more than twice as far as it stepped.
+// a jump is also more than 1.5 times the stream's own step: the shortest of
+// its last three steps between frames taken as they came (a jump followed
+// is no step). Until three are known, a held frame ahead is followed by a
+// next frame that steps on from it by no more than 1.5 times as far as it
+// stepped. A wrong utime ahead by under 1.5 steps is then taken as a frame
+// (it pairs with nothing), as one within a jump always was.
 #include <algorithm>
 #include <cstdint>
 #include <deque>
@@ -46,8 +49,12 @@ class StreamClock {
   std::vector<Admitted> admit(int64_t utime, Frame frame, ClockCounters& counters, std::string& event) {
     std::vector<Admitted> out;
     if (held_) {
-      if (follows(utime, held_->first) && !near(utime, *newest_)) take_held(counters, event, out);
-      else drop_held(counters, event);
+      if (follows(utime, held_->first) && !near(utime, *newest_)) {
+        take_held(counters, event, out);
+        take(utime, std::move(frame), out);  // it follows the held one: a step of the stream
+        return out;
+      }
+      drop_held(counters, event);
     }
     if (newest_ && !near(utime, *newest_)) {
       held_.emplace(utime, std::move(frame));
@@ -71,7 +78,7 @@ class StreamClock {
   int epoch() const { return epoch_; }
 
  private:
-  static constexpr size_t kSteps = 8;  // the steps a stream's own step is the median of
+  static constexpr size_t kSteps = 3;  // the steps a stream's own step is the shortest of
 
   // Unsigned: utimes of opposite sign and far apart (INT64_MIN) do not overflow.
   static uint64_t apart(int64_t a, int64_t b) {
@@ -79,27 +86,27 @@ class StreamClock {
                  : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
   }
 
-  // Within a jump of `from`, or ahead of it by at most twice the stream's step.
+  // Within a jump of `from`, or ahead of it by at most 1.5 of the stream's steps.
   bool near(int64_t utime, int64_t from) const {
     const uint64_t d = apart(utime, from);
-    return d <= static_cast<uint64_t>(jump_us_) || (utime > from && d <= twice(own_step()));
+    const uint64_t step = own_step();
+    return d <= static_cast<uint64_t>(jump_us_) || (utime > from && d <= step + step / 2);
   }
 
   // The frame after a held one: near it, or, the held one being ahead of
-  // the newest, on from it by at most twice that step (a slow stream whose
-  // step is not known yet).
+  // the newest, on from it by at most 1.5 times that step (a slow stream
+  // whose step is not known yet).
   bool follows(int64_t utime, int64_t held) const {
     if (near(utime, held)) return true;
-    return held > *newest_ && utime > held && apart(utime, held) <= twice(apart(held, *newest_));
+    if (steps_.size() >= kSteps) return false;
+    const uint64_t step = std::min(apart(held, *newest_), UINT64_MAX / 4);
+    return held > *newest_ && utime > held && apart(utime, held) <= step + step / 2;
   }
 
-  static uint64_t twice(uint64_t d) { return d > UINT64_MAX / 2 ? UINT64_MAX : 2 * d; }
-
+  // 0 until kSteps are known; at most a quarter of the range, so 1.5 steps cannot overflow.
   uint64_t own_step() const {
-    if (steps_.empty()) return 0;
-    std::vector<uint64_t> sorted(steps_.begin(), steps_.end());
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
-    return sorted[sorted.size() / 2];
+    if (steps_.size() < kSteps) return 0;
+    return std::min(*std::min_element(steps_.begin(), steps_.end()), UINT64_MAX / 4);
   }
 
   // Signed seconds from `from` to `to`, cut (not rounded) to a tenth; in
@@ -122,11 +129,12 @@ class StreamClock {
           stream_, seconds(utime, *newest_), *newest_, utime);
       newest_ = utime;
     }
-    take(utime, std::move(frame), out);
+    take(utime, std::move(frame), out, /*a_step=*/false);
   }
 
-  void take(int64_t utime, Frame frame, std::vector<Admitted>& out) {
-    if (newest_ && utime > *newest_) {
+  // `a_step`: the frame came as the stream's next, not after a jump.
+  void take(int64_t utime, Frame frame, std::vector<Admitted>& out, bool a_step = true) {
+    if (a_step && newest_ && utime > *newest_) {
       steps_.push_back(apart(utime, *newest_));
       if (steps_.size() > kSteps) steps_.pop_front();
     }
@@ -138,7 +146,7 @@ class StreamClock {
   int64_t jump_us_;
   int epoch_ = 0;
   std::optional<int64_t> newest_;
-  std::deque<uint64_t> steps_;  // the last forward steps between frames taken
+  std::deque<uint64_t> steps_;  // the last forward steps between frames taken as they came
   std::optional<std::pair<int64_t, Frame>> held_;
 };
 
