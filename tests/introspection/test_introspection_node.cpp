@@ -57,12 +57,14 @@ bool deliver_until(Bus& bus, Done done) {
 }
 
 // A node with T = 2 passes that publishes heatmaps only (no obstacle grids).
-std::unique_ptr<IntrospectionNode> image_only_node(Bus& bus, Heartbeat& heartbeat, const std::string& model_path) {
+std::unique_ptr<IntrospectionNode> image_only_node(Bus& bus, Heartbeat& heartbeat, const std::string& model_path,
+                                                   int queue_frames = 1) {
   introspection::InferenceConfig config;
   config.mc_passes = 2;
   config.seed = 1;
   IntrospectionNodeOptions options;
   options.grid_channel = "";
+  options.queue_frames = queue_frames;
   return std::make_unique<IntrospectionNode>(bus, heartbeat,
                                              introspection::IntrospectionModel::load(model_path, config), options, 2);
 }
@@ -122,6 +124,17 @@ TEST(IntrospectionNode, TwoViewModelWaitsForTheCalibrationThenRuns) {
   EXPECT_EQ(out[1].utime, 4000);
 }
 
+// `n` stereo frames (utimes 1000, 2000, ...) delivered at once, far faster
+// than one inference.
+void publish_burst(Bus& bus, int n) {
+  const RigCalibration rig = test::make_test_rig();
+  for (int i = 0; i < n; ++i) {
+    stereo_image_t frame = stereo_frame(rig, 1000 * (i + 1));
+    bus.publish(channels::kStereoImages, frame);
+  }
+  for (int i = 0; i < n; ++i) bus.handle(5);
+}
+
 // A burst of frames while the network is busy: the mailbox keeps only the
 // newest, and each frame it replaces is counted as dropped in the heartbeat
 // (the launcher's DROP column), so every frame received is accounted for.
@@ -133,13 +146,8 @@ TEST(IntrospectionNode, FramesSkippedWhileBusyAreCountedAsDropped) {
   int published = 0;
   bus.subscribe<introspection_t>(channels::kIntrospection,
                                  [&](const introspection_t&, const ReceiveInfo&) { ++published; });
-  const RigCalibration rig = test::make_test_rig();
   constexpr int kBurst = 6;
-  for (int i = 0; i < kBurst; ++i) {
-    stereo_image_t frame = stereo_frame(rig, 1000 * (i + 1));
-    bus.publish(channels::kStereoImages, frame);
-  }
-  for (int i = 0; i < kBurst; ++i) bus.handle(5);  // the whole burst, far faster than one inference
+  publish_burst(bus, kBurst);
   const auto accounted = [&] {
     const process_status_t s = heartbeat.snapshot();
     return s.messages_out + s.dropped == kBurst && published == s.messages_out;  // and each output delivered
@@ -157,24 +165,12 @@ TEST(IntrospectionNode, WithAQueueEveryFrameOfABurstIsRun) {
   test::TempDir dir;
   Bus bus("memq://");
   Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
-  introspection::InferenceConfig config;
-  config.mc_passes = 2;
-  config.seed = 1;
-  IntrospectionNodeOptions options;
-  options.grid_channel = "";
-  options.queue_frames = 6;
-  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 1), config), options,
-                         2);
+  constexpr int kBurst = 6;
+  const auto node = image_only_node(bus, heartbeat, write_model(dir, 1), kBurst);
   std::vector<int64_t> published;
   bus.subscribe<introspection_t>(channels::kIntrospection,
                                  [&](const introspection_t& m, const ReceiveInfo&) { published.push_back(m.utime); });
-  const RigCalibration rig = test::make_test_rig();
-  constexpr int kBurst = 6;
-  for (int i = 0; i < kBurst; ++i) {
-    stereo_image_t frame = stereo_frame(rig, 1000 * (i + 1));
-    bus.publish(channels::kStereoImages, frame);
-  }
-  for (int i = 0; i < kBurst; ++i) bus.handle(5);  // the whole burst, far faster than one inference
+  publish_burst(bus, kBurst);
   ASSERT_TRUE(deliver_until(bus, [&] { return published.size() == kBurst; })) << published.size() << " published";
   for (int i = 0; i < kBurst; ++i) EXPECT_EQ(published[static_cast<size_t>(i)], 1000 * (i + 1));
   EXPECT_EQ(heartbeat.snapshot().dropped, 0);

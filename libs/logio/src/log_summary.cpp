@@ -48,7 +48,6 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
     s = ChannelSummary{};  // what was counted of the first type was not of this one
     s.count = count, s.bytes = bytes, s.first_timestamp = first_timestamp, s.last_timestamp = timestamp;
     s.other_fingerprints = s.count - 1;
-    s.other_types.clear();
     if (s.other_fingerprints > 0) s.other_types[kNoIvoaType] = s.other_fingerprints;
     s.fingerprint = fingerprint;
     s.type = std::string(type.value_or("unknown"));
