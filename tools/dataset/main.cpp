@@ -240,7 +240,7 @@ std::vector<std::string> label_sources() {
 }
 
 // A --config file's keys outside any section that name no option of
-// ivoa-dataset itself are build's when build runs, so the live detector's
+// ivoa-dataset itself are build's when build runs, so a detector settings
 // file (stereo_detector.ini) relabels offline as it is. CLI11 reads a
 // config file for the main app only, and would want them under [build].
 class BuildKeysConfig : public CLI::ConfigINI {
