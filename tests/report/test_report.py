@@ -1335,28 +1335,64 @@ class MetricUnitTest(unittest.TestCase):
         self.assertFalse(s["accuracy_rises_as_threshold_falls"])
         self.assertLess(s["at_70"]["overall_accuracy"], s["unfiltered"]["overall_accuracy"])
 
-    def test_the_frame_bootstrap_interval_resamples_whole_frames(self):
+    def test_the_bootstrap_interval_resamples_whole_frames(self):
         """40 frames of 4 cells, one of each class. Where every frame has the same right and wrong cells, any
         resample of frames scores the same; where whole frames are right or wrong, the interval widens around
         the figure; kept rows only count."""
         load_tool()
-        from report_metrics import class_metrics, frame_bootstrap_interval, frame_ids
+        from report_metrics import bootstrap_interval, class_metrics, frame_ids
         frames, label = np.repeat(np.arange(40), 4), np.tile(np.arange(4), 40)
         run = types.SimpleNamespace(session=np.array(["s"] * 160), utime=frames * 1000)
         ids = frame_ids(run)
         self.assertEqual(list(ids), list(frames))
         same = np.where(label == FN, TN, label)  # FN wrong in every frame: 0.75 whatever is drawn
-        self.assertEqual(frame_bootstrap_interval(label, same, ids), [0.75, 0.75])
+        self.assertEqual(bootstrap_interval(label, same, ids), [0.75, 0.75])
         predicted = np.where(frames < 10, (label + 1) % 4, label)  # frames 0-9 wholly wrong: 0.75 again
-        low, high = frame_bootstrap_interval(label, predicted, ids)
+        low, high = bootstrap_interval(label, predicted, ids)
         self.assertLess(low, 0.75)
         self.assertGreater(high, 0.75)
         self.assertLess(high - low, 0.35)
         self.assertAlmostEqual(class_metrics(label, predicted)["mean_per_class_accuracy"], 0.75)
-        self.assertEqual(frame_bootstrap_interval(label, predicted, ids, keep=frames >= 10), [1.0, 1.0])
+        self.assertEqual(bootstrap_interval(label, predicted, ids, keep=frames >= 10), [1.0, 1.0])
         # frames are (session, utime): 0-19 in session a and 20-39 in b, with the same utimes, are 40 frames
         run = types.SimpleNamespace(session=np.where(frames < 20, "a", "b"), utime=(frames % 20) * 1000)
         self.assertEqual(list(frame_ids(run)), list(frames))
+
+    def test_the_session_interval_counts_which_sessions_were_tested(self):
+        """Six sessions of 10 frames of 4 cells, the first two wholly wrong: resampling frames draws about a third
+        wrong frames every time, resampling sessions draws anywhere from none to most of them, so its interval is
+        wider around the same figure. Under MIN_SESSIONS_FOR_INTERVAL sessions there is none."""
+        load_tool()
+        from report_metrics import MIN_SESSIONS_FOR_INTERVAL, headline_intervals
+        session, frame = np.repeat(np.arange(6), 40), np.tile(np.repeat(np.arange(10), 4), 6)
+        label = np.tile(np.arange(4), 60)
+        predicted = np.where(session < 2, (label + 1) % 4, label)
+        run = types.SimpleNamespace(label=label, predicted=predicted, var_predicted=np.zeros(240), verdict=None,
+                                    session=np.array([f"s{i}" for i in session]), utime=frame * 1000)
+        sweep = {"at_70": {"threshold": 0.0}}
+        ci = headline_intervals(run, sweep, None)
+        self.assertEqual(ci["sessions"], 6)
+        frames_low, frames_high = ci["mean_per_class_accuracy"]
+        low, high = ci["by_session"]["mean_per_class_accuracy"]
+        self.assertLess(low, frames_low)
+        self.assertGreater(high, frames_high)
+        self.assertLess(low, 2 / 3)
+        self.assertGreater(high, 2 / 3)
+        self.assertIn("mpca_at_70", ci["by_session"])
+        few = session < MIN_SESSIONS_FOR_INTERVAL - 1
+        run = types.SimpleNamespace(label=label[few], predicted=predicted[few], var_predicted=np.zeros(few.sum()),
+                                    verdict=None, session=run.session[few], utime=run.utime[few])
+        ci = headline_intervals(run, sweep, None)
+        self.assertIsNone(ci["by_session"])
+        self.assertIsNotNone(ci["mean_per_class_accuracy"])
+
+    def test_a_purity_target_one_cluster_meets_says_nothing(self):
+        load_tool()
+        from report_markdown import _purity_target_text
+        self.assertTrue(_purity_target_text(0.95, 0.60).endswith(": met"))
+        self.assertIn("says nothing", _purity_target_text(0.95, 0.82))
+        self.assertTrue(_purity_target_text(0.70, 0.50).endswith("not met"))
+        self.assertTrue(_purity_target_text(None, None).endswith("not met"))
 
     def test_clusters_that_are_only_the_predicted_fp_and_fn_are_called_so(self):
         load_tool()

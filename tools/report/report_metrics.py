@@ -76,22 +76,23 @@ def frame_ids(run: EvalRun) -> np.ndarray:
     return np.unique(np.stack([session, run.utime]), axis=1, return_inverse=True)[1].reshape(-1)
 
 
-def frame_bootstrap_interval(label: np.ndarray, predicted: np.ndarray, frames: np.ndarray,
-                             keep: Optional[np.ndarray] = None, resamples: int = BOOTSTRAP_RESAMPLES,
-                             seed: int = 0) -> Optional[List[float]]:
+def bootstrap_interval(label: np.ndarray, predicted: np.ndarray, groups: np.ndarray,
+                       keep: Optional[np.ndarray] = None, resamples: int = BOOTSTRAP_RESAMPLES,
+                       seed: int = 0) -> Optional[List[float]]:
     """95 % interval of the mean per-class accuracy of `predicted` over the
-    rows in `keep` (all by default), resampling whole frames (`frame_ids`)
-    with replacement: the cells of a frame share its image and its noise, so
-    they are not independent draws and a per-cell interval would be too
-    narrow. None with fewer than two frames."""
+    rows in `keep` (all by default), resampling whole groups with replacement
+    (`groups` numbers each row's group 0..: its frame, `frame_ids`, or its
+    session): the cells of a frame share its image and its noise, so they
+    are not independent draws and a per-cell interval would be too narrow.
+    None with fewer than two groups."""
     keep = np.ones(len(label), bool) if keep is None else keep
-    n_frames = int(frames.max()) + 1 if len(frames) else 0
-    if n_frames < 2:
+    n_groups = int(groups.max()) + 1 if len(groups) else 0
+    if n_groups < 2:
         return None
     pair = label * N_CLASSES + predicted
-    counts = np.zeros((n_frames, N_CLASSES * N_CLASSES))
-    np.add.at(counts, (frames[keep], pair[keep]), 1)
-    weights = np.random.default_rng(seed).multinomial(n_frames, np.full(n_frames, 1.0 / n_frames), size=resamples)
+    counts = np.zeros((n_groups, N_CLASSES * N_CLASSES))
+    np.add.at(counts, (groups[keep], pair[keep]), 1)
+    weights = np.random.default_rng(seed).multinomial(n_groups, np.full(n_groups, 1.0 / n_groups), size=resamples)
     cm = (weights @ counts).reshape(resamples, N_CLASSES, N_CLASSES)
     support = cm.sum(axis=2)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -101,20 +102,38 @@ def frame_bootstrap_interval(label: np.ndarray, predicted: np.ndarray, frames: n
     return [float(low), float(high)]
 
 
-def headline_intervals(run: EvalRun, sweep: dict, verdict_sweep: Optional[dict]) -> dict:
-    """Frame-bootstrap intervals of the headline figures, from the image alone
-    and given the verdict: unfiltered and at the ≥ 70 % point (its threshold
-    held fixed)."""
-    frames = frame_ids(run)
-    out = {"resamples": BOOTSTRAP_RESAMPLES,
-           "mean_per_class_accuracy": frame_bootstrap_interval(run.label, run.predicted, frames),
-           "mpca_at_70": frame_bootstrap_interval(run.label, run.predicted, frames,
-                                                  run.var_predicted <= sweep["at_70"]["threshold"])}
+# Fewer sessions than this give no session interval: a percentile bootstrap
+# over a handful of units says more about the handful than about the spread.
+MIN_SESSIONS_FOR_INTERVAL = 5
+
+
+def _intervals(run: EvalRun, groups: np.ndarray, sweep: dict, verdict_sweep: Optional[dict]) -> dict:
+    """The headline figures' intervals resampling `groups` whole: from the
+    image alone and given the verdict, unfiltered and at the ≥ 70 % point
+    (its threshold held fixed)."""
+    out = {"mean_per_class_accuracy": bootstrap_interval(run.label, run.predicted, groups),
+           "mpca_at_70": bootstrap_interval(run.label, run.predicted, groups,
+                                            run.var_predicted <= sweep["at_70"]["threshold"])}
     if run.verdict is not None and verdict_sweep is not None:
         v = run.verdict
-        out["verdict_mean_per_class_accuracy"] = frame_bootstrap_interval(run.label, v.predicted, frames)
-        out["verdict_mpca_at_70"] = frame_bootstrap_interval(run.label, v.predicted, frames,
-                                                             v.var_wrong <= verdict_sweep["at_70"]["threshold"])
+        out["verdict_mean_per_class_accuracy"] = bootstrap_interval(run.label, v.predicted, groups)
+        out["verdict_mpca_at_70"] = bootstrap_interval(run.label, v.predicted, groups,
+                                                       v.var_wrong <= verdict_sweep["at_70"]["threshold"])
+    return out
+
+
+def headline_intervals(run: EvalRun, sweep: dict, verdict_sweep: Optional[dict]) -> dict:
+    """Bootstrap intervals of the headline figures. Resampling frames says how
+    much chance in the test frames moves them; resampling whole sessions
+    (`by_session`, with MIN_SESSIONS_FOR_INTERVAL or more) also how much
+    which sessions, and so which scenes, were tested does: wider, since a
+    scene's cells fail together."""
+    out = {"resamples": BOOTSTRAP_RESAMPLES, **_intervals(run, frame_ids(run), sweep, verdict_sweep)}
+    sessions = np.unique(run.session, return_inverse=True)[1].reshape(-1)
+    n_sessions = int(sessions.max()) + 1 if len(sessions) else 0
+    out["sessions"] = n_sessions
+    out["by_session"] = (_intervals(run, sessions, sweep, verdict_sweep)
+                         if n_sessions >= MIN_SESSIONS_FOR_INTERVAL else None)
     return out
 
 
