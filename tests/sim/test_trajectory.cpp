@@ -88,5 +88,31 @@ TEST(SimTrajectory, Deterministic) {
   EXPECT_TRUE(pc.x != late.x || pc.y != late.y);
 }
 
+TEST(SimTrajectory, HoldsAMinuteOfThePlanAndPlansAnEarlierTimeAgain) {
+  const Scene scene = shipped("indoor_office", 2);
+  Trajectory asked(scene, 5);
+  // A long session held only its last minute (it held every 20 ms step
+  // before: 7 MB an hour of a simulated session).
+  const Pose2D late = asked.pose_at(600.0);
+  const std::size_t minute = static_cast<std::size_t>(60.0 / asked.config().step);
+  EXPECT_LE(asked.steps_held(), minute + 2);
+  // Within that minute, and before it (planned again from the start): the
+  // answers of a trajectory that plans up to that time only.
+  for (double t : {590.0, 541.0, 3.3, 120.0, 600.0}) {
+    SCOPED_TRACE(t);
+    Trajectory fresh(scene, 5);
+    const Pose2D want = fresh.pose_at(t);
+    EXPECT_EQ(asked.pose_at(t).x, want.x);
+    EXPECT_EQ(asked.pose_at(t).y, want.y);
+    EXPECT_EQ(asked.pose_at(t).yaw, want.yaw);
+    EXPECT_EQ(asked.twist_at(t).v, fresh.twist_at(t).v);
+  }
+  EXPECT_EQ(asked.pose_at(600.0).yaw, late.yaw);
+  Trajectory whole(scene, 5);
+  whole.pose_at(600.0);
+  asked.pose_at(1.0);  // planned again from the start, up to 1 s
+  EXPECT_EQ(asked.min_clearance(), whole.min_clearance()) << "over every step planned, not since the restart";
+}
+
 }  // namespace
 }  // namespace ivoa::sim

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 
 #include "rng.hpp"
 
@@ -19,11 +20,24 @@ enum class Mode { kCruise, kApproach, kTurnAway };
 
 }  // namespace
 
+// How much of the planned path is kept behind the latest time asked for.
+// An older time is planned again from the start (the plan is deterministic),
+// so a session of hours holds a minute of samples, not all of them.
+constexpr double kKeptSeconds = 60.0;
+
 struct Trajectory::Impl {
   Impl(Scene s, uint64_t seed, TrajectoryConfig c, Pose2D start)
-      : scene(std::move(s)), config(c), rng(hash_combine(seed, hash_string("trajectory"))) {
-    samples.push_back({start, {}});
+      : scene(std::move(s)), config(c), rng_seed(hash_combine(seed, hash_string("trajectory"))), start_pose(start) {
+    restart();
     min_clearance = clearance(start);
+  }
+
+  // Back to the start of the plan: every field the plan changes as it goes
+  // is set here, so planning again gives the same path.
+  void restart() {
+    rng = Rng(rng_seed);
+    samples.assign(1, {start_pose, {}});
+    first_step = 0;
     start_cruise();
   }
 
@@ -150,9 +164,11 @@ struct Trajectory::Impl {
     t = std::max(0.0, t);
     const double pos = t / config.step;
     const size_t i = static_cast<size_t>(pos);
-    while (samples.size() < i + 2) step();
-    const Sample& a = samples[i];
-    const Sample& b = samples[i + 1];
+    if (i < first_step) restart();
+    while (first_step + samples.size() < i + 2) step();
+    forget_before(i);
+    const Sample& a = samples[i - first_step];
+    const Sample& b = samples[i - first_step + 1];
     const double f = pos - static_cast<double>(i);
     Sample s;
     s.pose.x = a.pose.x + (b.pose.x - a.pose.x) * f;
@@ -163,11 +179,23 @@ struct Trajectory::Impl {
     return s;
   }
 
+  // Drops the samples more than kKeptSeconds before step i.
+  void forget_before(size_t i) {
+    const size_t kept = static_cast<size_t>(kKeptSeconds / config.step);
+    while (first_step + kept < i) {
+      samples.pop_front();
+      ++first_step;
+    }
+  }
+
   Scene scene;
   TrajectoryConfig config;
-  Rng rng;
-  std::vector<Sample> samples;
-  double min_clearance = 1e9;
+  uint64_t rng_seed;
+  Pose2D start_pose;
+  Rng rng{0};
+  std::deque<Sample> samples;  // samples[k] is step first_step + k
+  size_t first_step = 0;
+  double min_clearance = 1e9;  // over every step planned, so not reset by restart()
   Mode mode = Mode::kCruise;
   double leg_time = 0, target_speed = 0, target_yaw_rate = 0, gap = 0.4;
   bool approach_pending = false;
@@ -186,6 +214,7 @@ Trajectory& Trajectory::operator=(Trajectory&&) noexcept = default;
 Pose2D Trajectory::pose_at(double t) { return impl_->at(t).pose; }
 Twist2D Trajectory::twist_at(double t) { return impl_->at(t).twist; }
 double Trajectory::min_clearance() const { return impl_->min_clearance; }
+std::size_t Trajectory::steps_held() const { return impl_->samples.size(); }
 const TrajectoryConfig& Trajectory::config() const { return impl_->config; }
 
 }  // namespace ivoa::sim

@@ -3,6 +3,7 @@
 // headings, often steers at an obstacle or wall, stops 0.3-0.5 m short of it
 // and turns away. Collision-free (the footprint never comes closer than
 // min_clearance to anything) and deterministic for a scene and seed.
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -36,11 +37,15 @@ class Trajectory {
   Trajectory& operator=(Trajectory&&) noexcept;
 
   // Pose and velocity t seconds after the start (t >= 0). Plans ahead as far
-  // as needed; the same t always gives the same answer.
+  // as needed and holds the last minute of the plan before t: a t earlier
+  // than that is planned again from the start, so the same t always gives
+  // the same answer and a session of hours holds a minute of samples.
   Pose2D pose_at(double t);
   Twist2D twist_at(double t);
   // Smallest footprint clearance (metres) over the path planned so far.
   double min_clearance() const;
+  // How many planned steps are held (one each TrajectoryConfig::step).
+  std::size_t steps_held() const;
   const TrajectoryConfig& config() const;
 
  private:
