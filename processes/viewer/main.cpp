@@ -31,7 +31,8 @@ void add_output_options(CLI::App& app, ivoa::viewer::ViewerOptions& o) {
   app.add_option("--every-seconds", out.every_seconds, "and at least S seconds apart")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
-  app.add_option("--max-images", out.max_images, "keep only the newest N PNGs this run wrote (0: all)")
+  app.add_option("--max-images", out.max_images,
+                 "keep only the newest N frame_*.png in --out-dir, an earlier run's too (0: all)")
       ->capture_default_str()
       ->check(ivoa::non_negative_number());
   app.add_option("--video", out.video, "also write every figure to this video (.avi, MJPG)");

@@ -1,5 +1,6 @@
 // Where figures go: PNGs every N figures / S seconds with only the newest
 // kept, and an MJPG .avi video.
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 
@@ -32,6 +33,36 @@ TEST(ViewerFigureWriter, WritesEveryNthFigureAndKeepsTheNewest) {
   for (int64_t t = 1; t <= 6; ++t) w.write(figure(), t * 100, static_cast<double>(t));
   EXPECT_EQ(w.images_written(), 3);
   EXPECT_EQ(files_in(o.out_dir), (std::vector<std::string>{"frame_400.png", "frame_600.png"}));
+}
+
+TEST(ViewerFigureWriter, AnEarlierRunsFiguresCountTowardsTheNewestKept) {
+  ivoa::test::TempDir dir;
+  OutputOptions o;
+  o.out_dir = dir.path().string();
+  o.max_images = 3;
+  // A respawned viewer: the first run's figures stay in the folder, oldest
+  // first by time written; a file the viewer does not name is not its own.
+  std::ofstream(dir.file("notes.txt")) << "mine";
+  std::ofstream(dir.file("frame_12.png.bak")) << "mine";
+  {
+    FigureWriter first(o);
+    for (int64_t t = 1; t <= 3; ++t) first.write(figure(), t, 0.0);
+    EXPECT_EQ(first.earlier_figures(), 0);
+  }
+  fs::last_write_time(dir.file("frame_1.png"), fs::file_time_type::clock::now() - std::chrono::hours(3));
+  fs::last_write_time(dir.file("frame_3.png"), fs::file_time_type::clock::now() - std::chrono::hours(2));
+  fs::last_write_time(dir.file("frame_2.png"), fs::file_time_type::clock::now() - std::chrono::hours(1));
+  FigureWriter second(o);
+  EXPECT_EQ(second.earlier_figures(), 3);
+  second.write(figure(), 7, 0.0);
+  EXPECT_EQ(files_in(o.out_dir),
+            (std::vector<std::string>{"frame_12.png.bak", "frame_2.png", "frame_3.png", "frame_7.png", "notes.txt"}));
+  // The same utime written again (a log played twice) is the newest now:
+  // the cap removes the older figures, not the file just written.
+  second.write(figure(), 3, 0.0);
+  second.write(figure(), 8, 0.0);
+  EXPECT_EQ(files_in(o.out_dir),
+            (std::vector<std::string>{"frame_12.png.bak", "frame_3.png", "frame_7.png", "frame_8.png", "notes.txt"}));
 }
 
 TEST(ViewerFigureWriter, WritesAtMostOnePngPerPeriod) {

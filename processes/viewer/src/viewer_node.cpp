@@ -20,6 +20,9 @@ ViewerNode::ViewerNode(Bus& bus, Heartbeat& heartbeat, ViewerOptions options)
         return m;
       }()),
       writer_(options_.output) {
+  if (writer_.earlier_figures() > 0)
+    spdlog::info("{} figures an earlier run left in {} count towards --max-images {}", writer_.earlier_figures(),
+                 options_.output.out_dir, options_.output.max_images);
   std::string why_not;
   if (options_.window && !window_possible(&why_not)) {
     spdlog::warn("not opening a window: {}", why_not);

@@ -1,6 +1,6 @@
 #pragma once
 // Where figures go: PNG files (--out-dir; one every N figures and/or every
-// S seconds; only the newest --max-images kept) and an MJPG .avi video. The
+// S seconds; only the newest --max-images in the folder kept) and an MJPG .avi video. The
 // live window is FigureWindow (figure_window.hpp).
 #include <cstdint>
 #include <deque>
@@ -16,7 +16,7 @@ struct OutputOptions {
   std::string out_dir;       // "" = no PNG files
   int every_frames = 1;      // a PNG every N figures ...
   double every_seconds = 0;  // ... and at least S seconds apart
-  int max_images = 100;      // keep the newest N PNGs written (0 = all)
+  int max_images = 100;      // keep the newest N frame_*.png in out_dir, an earlier run's too (0 = all)
   std::string video;         // "" = no video; an .avi file (MJPG)
   double video_fps = 5;
 };
@@ -36,15 +36,19 @@ class FigureWriter {
   void write(const cv::Mat& figure, int64_t utime, double now_ms);
 
   int64_t images_written() const { return images_written_; }
+  // frame_*.png an earlier run left in out_dir, counted towards max_images.
+  int64_t earlier_figures() const { return earlier_figures_; }
   int64_t video_frames() const { return video_frames_; }
 
  private:
+  void adopt_earlier_figures();
   void write_png(const cv::Mat& figure, int64_t utime);
+  void keep_newest();
   void write_video(const cv::Mat& figure);
 
   OutputOptions options_;
   std::deque<std::string> written_;
-  int64_t figures_since_png_ = 0, images_written_ = 0, video_frames_ = 0;
+  int64_t figures_since_png_ = 0, images_written_ = 0, video_frames_ = 0, earlier_figures_ = 0;
   double last_png_ms_ = -1e18;
   struct Video;
   std::unique_ptr<Video> video_;
