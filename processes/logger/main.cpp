@@ -201,7 +201,8 @@ int record(const ivoa::CommonOptions& common, RecorderOptions options, const std
 // The flags, in the units a user types (MB, MB/s); RecorderOptions holds bytes.
 struct LoggerFlags {
   std::string file = "ivoa-%Y%m%d-%H%M%S.lcmlog", ready_file;
-  double split_mb = 0, max_queue_mb = 1024, max_write_mb_s = 0, socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
+  double split_mb = 0, max_queue_mb = 1024, max_write_mb_s = 0, min_free_mb = 1000,
+         socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
   bool force = false, increment = false, no_sidecar = false;
   RecorderOptions options;
 };
@@ -230,6 +231,11 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
   app.add_option("--max-write-mb-s", f.max_write_mb_s,
                  "cap the disk write rate while recording (0 = none; a stop "
                  "writes the queue out at full speed)")
+      ->check(ivoa::number_in(0.0, kMaxMb));
+  app.add_option("--min-free-mb", f.min_free_mb,
+                 "stop recording (exit 4) while this much is still free on the log's disk, and do not start with "
+                 "less: the system needs it more than the log (0 = fill the disk)")
+      ->capture_default_str()
       ->check(ivoa::number_in(0.0, kMaxMb));
   ivoa::add_socket_buffer_option(app, f.socket_buffer_mb);
   auto* force = app.add_flag("-f,--force", f.force, "overwrite existing files");
@@ -283,6 +289,7 @@ bool fill_recorder_options(LoggerFlags& f) {
   o.log.identity = {"ivoa-logger", IVOA_VERSION, IVOA_GIT_DESCRIBE, hostname(), "", o.channels, o.exclude};
   o.max_queue_bytes = static_cast<uint64_t>(f.max_queue_mb * 1e6);
   o.max_write_bytes_per_s = f.max_write_mb_s * 1e6;
+  o.disk_reserve.min_free_bytes = static_cast<uint64_t>(f.min_free_mb * 1e6);
   return true;
 }
 

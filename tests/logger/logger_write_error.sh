@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # ivoa-logger on a disk that refuses writes, first over a file-size limit
 # (RLIMIT_FSIZE, which gives the same short writes and errors a full disk
-# does), then on a really full tmpfs where mounting one is permitted. Each
-# time it must exit with code 4 (kExitIoError) saying why, and leave a log
+# does), then on a really full tmpfs where mounting one is permitted, and
+# there also stopping short of --min-free-mb (refusing to start below it).
+# Each time it must exit with code 4 (kExitIoError) saying why, and leave a log
 # that ends with its last whole event: intact for ivoa-log-check and
 # replayable by lcm-logplayer, with a sidecar that records the error.
 # Input comes from a log (file:// URL), so no network is needed.
@@ -32,12 +33,14 @@ print(f"OK ({reason}): exit 4, {events} whole events kept and replayable, sideca
 PY
 }
 
-# run_logger DIR WORK [PREFIX...]: records the input log into DIR/out.lcmlog.
+# run_logger DIR WORK [PREFIX...]: records the input log into DIR/out.lcmlog,
+# with $LOGGER_ARGS.
 run_logger() {
   local dir=$1 work=$2
   shift 2
   set +e
-  "$@" "$B/bin/ivoa-logger" --lcm-url "file://$input?speed=0" "$dir/out.lcmlog" 2>"$work/stderr"
+  # shellcheck disable=SC2086 # LOGGER_ARGS is a list of flags
+  "$@" "$B/bin/ivoa-logger" --lcm-url "file://$input?speed=0" ${LOGGER_ARGS:-} "$dir/out.lcmlog" 2>"$work/stderr"
   echo $? >"$work/code"
   set -e
 }
@@ -45,8 +48,21 @@ run_logger() {
 if [ "${1:-}" = --on-full-tmpfs ]; then  # the second half, in a private mount namespace
   input=$2 dir=$3 work=$4
   mount -t tmpfs -o size=30m tmpfs "$dir"
-  run_logger "$dir" "$work"
+  # Without a reserve: filled to the last block.
+  LOGGER_ARGS="--min-free-mb 0" run_logger "$dir" "$work"
   check_failed_log "$dir" "$work" "No space left on device"
+  # With one (the default 1000 MB is more than this disk): no file at all.
+  rm -f "$dir"/out.lcmlog*
+  run_logger "$dir" "$work"
+  [ "$(cat "$work/code")" = 4 ] && grep -q "under --min-free-mb 1000: not recording" "$work/stderr" &&
+    [ -z "$(ls -A "$dir")" ] || { echo "FAIL: a disk below the reserve at start"; cat "$work/stderr"; ls "$dir"; exit 1; }
+  echo "OK: a disk already below --min-free-mb: exit 4, no file created"
+  # A reserve of 12 MB: the log stops whole with about that much still free.
+  LOGGER_ARGS="--min-free-mb 12" run_logger "$dir" "$work"
+  check_failed_log "$dir" "$work" "under --min-free-mb 12"
+  free_mb=$(df -m --output=avail "$dir" | tail -1 | tr -d " ")
+  [ "$free_mb" -ge 8 ] || { echo "FAIL: only $free_mb MB left free with a 12 MB reserve"; exit 1; }
+  echo "OK: stopped with $free_mb MB free"
   exit 0
 fi
 

@@ -4,6 +4,7 @@
 // counted, and a refused write leaves a readable log and says why.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <future>
@@ -242,6 +243,47 @@ TEST(Recorder, AWriteErrorLeavesAReadableLogAndSaysWhy) {
   const std::string sidecar = read_file(sidecar_path(path));
   EXPECT_NE(sidecar.find("\"complete\": false"), std::string::npos) << sidecar;
   EXPECT_NE(sidecar.find(std::strerror(EFBIG)), std::string::npos) << sidecar;
+}
+
+TEST(Recorder, StopsShortOfFillingTheDiskWithAWholeLog) {
+  test::TempDir dir;
+  const std::string path = dir.file("rec.lcmlog");
+  RecorderOptions o = options_in(dir);
+  std::atomic<uint64_t> free{5'000'000'000};
+  o.disk_reserve = {2'000'000'000, 0.0, [&] { return std::optional<uint64_t>(free.load()); }};
+  Recorder recorder(o);
+  const auto blob = numbered_bytes(1000, 3);
+  for (int i = 0; i < 3; ++i) offer(recorder, "BLOB", blob);
+  // bounded wait for the writer: the three are on disk before the disk fills
+  for (int i = 0; i < 2000 && recorder.status().written < 3; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  free = 1'500'000'000;
+  for (int i = 0; i < 4; ++i) offer(recorder, "BLOB", blob);
+  EXPECT_FALSE(recorder.finish());
+  const RecorderStatus s = recorder.status();
+  EXPECT_TRUE(s.failed);
+  EXPECT_EQ(s.written, 3);
+  EXPECT_EQ(s.unwritten, 4);
+  EXPECT_NE(s.error.find("only 1500 MB free on the disk of " + path + ", under --min-free-mb 2000"), std::string::npos)
+      << s.error;
+  const auto r = read_back(path);
+  EXPECT_TRUE(r.problems.empty());
+  EXPECT_EQ(r.events.size(), 3u);
+  EXPECT_NE(read_file(sidecar_path(path)).find("--min-free-mb"), std::string::npos);
+}
+
+TEST(Recorder, RefusesToStartWithoutRoomAndCreatesNoFile) {
+  test::TempDir dir;
+  RecorderOptions o = options_in(dir);
+  o.disk_reserve = {2'000'000'000, 1.0, [] { return std::optional<uint64_t>(1'999'999'999); }};
+  EXPECT_THROW(Recorder{o}, logio::LogWriteError);
+  EXPECT_FALSE(std::filesystem::exists(o.log.path));
+  // No reserve, or a disk that cannot say how full it is: recording goes on.
+  o.disk_reserve.min_free_bytes = 0;
+  EXPECT_NO_THROW(Recorder{o});
+  RecorderOptions unknown = options_in(dir, "other.lcmlog");
+  unknown.disk_reserve = {2'000'000'000, 1.0, [] { return std::optional<uint64_t>(); }};
+  EXPECT_NO_THROW(Recorder{unknown});
 }
 
 }  // namespace

@@ -1,31 +1,15 @@
 #include "ivoa/openni2_kinect/recording_disk_watch.hpp"
 
-#include <unistd.h>
-
-#include <filesystem>
-#include <system_error>
 #include <utility>
 
+#include "ivoa/core/disk_space.hpp"
+
 namespace ivoa::openni2_kinect {
-namespace {
-
-RecordingDiskWatch::FreeBytes free_bytes_of_folder(const std::string& recording) {
-  std::filesystem::path folder = std::filesystem::path(recording).parent_path();
-  if (folder.empty()) folder = ".";
-  return [folder]() -> std::optional<uint64_t> {
-    std::error_code error;
-    const auto space = std::filesystem::space(folder, error);
-    if (error) return std::nullopt;
-    return static_cast<uint64_t>(geteuid() == 0 ? space.free : space.available);
-  };
-}
-
-}  // namespace
 
 RecordingDiskWatch::RecordingDiskWatch(std::string recording, DiskWatchLimits limits, FreeBytes free_bytes)
     : recording_(std::move(recording)),
       limits_(limits),
-      free_bytes_(free_bytes ? std::move(free_bytes) : free_bytes_of_folder(recording_)) {}
+      free_bytes_(free_bytes ? std::move(free_bytes) : [path = recording_] { return free_bytes_for(path); }) {}
 
 RecordingDiskWatch::Event RecordingDiskWatch::check(double now_s) {
   if (full_ || (last_look_s_ && now_s - *last_look_s_ < limits_.period_s)) return Event::kNone;

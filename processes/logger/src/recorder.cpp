@@ -25,6 +25,7 @@ double mb(int64_t bytes) { return static_cast<double>(bytes) / 1e6; }
 Recorder::Recorder(RecorderOptions options)
     : options_(std::move(options)),
       filter_(options_.channels, options_.exclude, always_recorded(options_)),
+      reserve_(options_.log.path, options_.disk_reserve),
       log_(options_.log, counters_),
       queue_(options_.max_queue_bytes) {
   writer_ = std::thread([this] { write_loop(); });
@@ -57,6 +58,7 @@ void Recorder::write_loop() {
   while (queue_.pop(event)) {
     if (failed_.load()) continue;  // the log is closed; finish() reports these as unwritten
     try {
+      reserve_.check(monotonic_ms(), static_cast<uint64_t>(counters_.bytes_written.load()));
       log_.write(event);
       counters_.written.fetch_add(1);
     } catch (const logio::LogWriteError& e) {

@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "ivoa/logger/disk_reserve.hpp"
 #include "ivoa/logger/event_queue.hpp"
 #include "ivoa/logger/session_counters.hpp"
 #include "ivoa/logger/split_log.hpp"
@@ -25,6 +26,7 @@ struct RecorderOptions {
   std::string exclude = "LCM_SELF_TEST";  // exclude regex, empty = none; LCM_SELF_TEST is LCM's start-up probe
   uint64_t max_queue_bytes = 1024ull << 20;
   double max_write_bytes_per_s = 0;  // cap on the disk write rate, 0 = none
+  DiskReserveOptions disk_reserve;   // stop short of filling the disk
   // Warn if no calibration arrived this long after the first message that is
   // not a heartbeat: the loggers of the pmd files start seconds before the
   // drivers, and the processes' heartbeats come first.
@@ -44,8 +46,8 @@ struct RecorderStatus {
 class Recorder {
  public:
   // Opens the first file and starts the writer thread. Throws
-  // logio::LogWriteError (cannot create the log) or std::invalid_argument
-  // (bad regex).
+  // logio::LogWriteError (cannot create the log, or the disk is already
+  // down to its reserve) or std::invalid_argument (bad regex).
   explicit Recorder(RecorderOptions options);
   ~Recorder();
   Recorder(const Recorder&) = delete;
@@ -82,6 +84,7 @@ class Recorder {
   RecorderOptions options_;
   logio::ChannelFilter filter_;
   SessionCounters counters_;
+  DiskReserve reserve_;  // before log_: no file is created on a disk without room
   SplitLog log_;
   EventQueue queue_;
   std::atomic<bool> failed_{false};
