@@ -304,8 +304,9 @@ def summary_section(runs: List[EvalRun], numbers: Dict[str, dict]) -> str:
            "obstacle it reports where there is none, FN = an obstacle it misses. The introspection model predicts "
            "that label from the image; FP and FN are the detector's failures. \"FP x %, FN y % kept\": the share of "
            "the true FP and FN whose prediction the uncertainty gate still passes at that point. [a, b]: the 95 % "
-           "interval over 1000 resamples of whole frames (a frame's cells share its image and noise); each model's §1 "
-           "and §3 also give the wider one resampling whole test sessions, which counts which scenes were tested.\n\n")
+           "interval over 1000 resamples of whole frames (a frame's cells share its image and noise); each model's "
+           "sections 1, 3 and 4 also give the one over whole test sessions where there are enough (wider: it also "
+           "counts which scenes were tested).\n\n")
     return key + md.table(["model", "detector", "samples", "mean per-class acc.", "overall acc.", "failure AUROC",
                      "≥70 % retained → mean per-class acc.", "given the detector's verdict: mean per-class acc.; "
                      "≥70 % retained →", "cluster purity by dominant phenomenon (one cluster)",

@@ -115,11 +115,16 @@ def intervals_text(ci: dict, key: str) -> str:
     if not ci.get(key):
         return ""
     parts = [f"{ci[key][0]:.3f}–{ci[key][1]:.3f} over {ci['resamples']} resamples of whole frames"]
-    by_session = (ci.get("by_session") or {}).get(key)
-    if by_session:
-        parts.append(f"{by_session[0]:.3f}–{by_session[1]:.3f} over the {ci['sessions']} sessions resampled whole, "
-                     "which also counts which scenes were tested")
-    return f" (95 % interval {'; '.join(parts)})"
+    n = ci.get("sessions")
+    if ci.get("by_session") is None:
+        parts.append(f"none over whole sessions: {n} are too few" if n else "")
+    elif ci["by_session"].get(key):
+        low, high = ci["by_session"][key]
+        parts.append(f"{low:.3f}–{high:.3f} over the {n} sessions resampled whole, which also counts which scenes "
+                     "were tested")
+    else:
+        parts.append(f"none over the {n} sessions resampled whole: a class is in too few of them")
+    return f" (95 % interval {'; '.join(p for p in parts if p)})"
 
 
 def distance_table(rm: dict) -> str:

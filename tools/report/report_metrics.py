@@ -68,6 +68,7 @@ def class_metrics(label: np.ndarray, predicted: np.ndarray) -> dict:
 
 
 BOOTSTRAP_RESAMPLES = 1000
+MAX_SHARE_LACKING_A_CLASS = 0.025  # of the resamples: more, and bootstrap_interval gives none
 
 
 def frame_ids(run: EvalRun) -> np.ndarray:
@@ -84,7 +85,8 @@ def bootstrap_interval(label: np.ndarray, predicted: np.ndarray, groups: np.ndar
     (`groups` numbers each row's group 0..: its frame, `frame_ids`, or its
     session): the cells of a frame share its image and its noise, so they
     are not independent draws and a per-cell interval would be too narrow.
-    None with fewer than two groups."""
+    None with fewer than two groups, or where more than
+    MAX_SHARE_LACKING_A_CLASS of the resamples lack a class the rows have."""
     keep = np.ones(len(label), bool) if keep is None else keep
     n_groups = int(groups.max()) + 1 if len(groups) else 0
     if n_groups < 2:
@@ -95,6 +97,12 @@ def bootstrap_interval(label: np.ndarray, predicted: np.ndarray, groups: np.ndar
     weights = np.random.default_rng(seed).multinomial(n_groups, np.full(n_groups, 1.0 / n_groups), size=resamples)
     cm = (weights @ counts).reshape(resamples, N_CLASSES, N_CLASSES)
     support = cm.sum(axis=2)
+    # A resample without a class the figure has is a mean over fewer classes:
+    # another figure. Where that is more than a rare draw (a class in one
+    # session only), the interval would mix the two, so there is none.
+    present = counts.reshape(n_groups, N_CLASSES, N_CLASSES).sum(axis=(0, 2)) > 0
+    if np.mean((support[:, present] == 0).any(axis=1)) > MAX_SHARE_LACKING_A_CLASS:
+        return None
     with np.errstate(invalid="ignore", divide="ignore"):
         per_class = np.diagonal(cm, axis1=1, axis2=2) / support
     mean = np.nanmean(np.where(support > 0, per_class, np.nan), axis=1)
