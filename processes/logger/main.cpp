@@ -233,8 +233,9 @@ void add_logger_options(CLI::App& app, LoggerFlags& f) {
                  "writes the queue out at full speed)")
       ->check(ivoa::number_in(0.0, kMaxMb));
   app.add_option("--min-free-mb", f.min_free_mb,
-                 "stop recording (exit 4) while this much is still free on the log's disk, and do not start with "
-                 "less: the system needs it more than the log (0 = fill the disk)")
+                 "stop recording (exit 4) before an event would leave less than this free on the log's disk, and do "
+                 "not start with less than a quarter more: the system needs it more than the log (0 = fill the "
+                 "disk)")
       ->capture_default_str()
       ->check(ivoa::number_in(0.0, kMaxMb));
   ivoa::add_socket_buffer_option(app, f.socket_buffer_mb);
@@ -299,8 +300,8 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Record LCM channels into standard LCM log files (replay: lcm-logplayer; browse: lcm-spy).\n"
       "On SIGINT, SIGTERM or SIGHUP everything received is written before exiting. Exit codes: 0 ok, 1 LCM failure,\n"
-      "2 bad flags, 3 a damaged file:// log to read, 4 the log could not be written, or not all of it: messages\n"
-      "were LOST (what was written stays readable)."};
+      "2 bad flags, 3 a damaged file:// log to read, 4 the log could not be written, or not all of it (a write\n"
+      "error, or --min-free-mb reached): messages were LOST (what was written stays readable)."};
   ivoa::CommonOptions common;
   ivoa::add_common_options(app, common);
   ivoa::add_status_channel_option(app, common.status_channel);

@@ -54,15 +54,15 @@ if [ "${1:-}" = --on-full-tmpfs ]; then  # the second half, in a private mount n
   # With one (the default 1000 MB is more than this disk): no file at all.
   rm -f "$dir"/out.lcmlog*
   run_logger "$dir" "$work"
-  [ "$(cat "$work/code")" = 4 ] && grep -q "under --min-free-mb 1000: not recording" "$work/stderr" &&
+  [ "$(cat "$work/code")" = 4 ] && grep -q "under the 1250 MB a start needs (--min-free-mb 1000" "$work/stderr" &&
     [ -z "$(ls -A "$dir")" ] || { echo "FAIL: a disk below the reserve at start"; cat "$work/stderr"; ls "$dir"; exit 1; }
   echo "OK: a disk already below --min-free-mb: exit 4, no file created"
   # A reserve of 12 MB: the log stops whole with about that much still free.
   LOGGER_ARGS="--min-free-mb 12" run_logger "$dir" "$work"
-  check_failed_log "$dir" "$work" "under --min-free-mb 12"
-  free_mb=$(df -m --output=avail "$dir" | tail -1 | tr -d " ")
-  [ "$free_mb" -ge 8 ] || { echo "FAIL: only $free_mb MB left free with a 12 MB reserve"; exit 1; }
-  echo "OK: stopped with $free_mb MB free"
+  check_failed_log "$dir" "$work" "event would leave less than --min-free-mb 12"
+  free_bytes=$(($(stat -f -c '%a * %S' "$dir")))
+  [ "$free_bytes" -ge 12000000 ] || { echo "FAIL: only $free_bytes bytes left free with a 12 MB reserve"; exit 1; }
+  echo "OK: stopped with $free_bytes bytes free"
   exit 0
 fi
 

@@ -12,6 +12,8 @@
 
 #include "ivoa/core/calibration.hpp"
 #include "ivoa/core/message_counts.hpp"
+#include "ivoa/core/time.hpp"
+#include "ivoa/logger/disk_reserve.hpp"
 #include "ivoa/logger/recorder.hpp"
 #include "ivoa/logger/sidecar.hpp"
 #include "ivoa/process_status_t.hpp"
@@ -264,7 +266,9 @@ TEST(Recorder, StopsShortOfFillingTheDiskWithAWholeLog) {
   EXPECT_TRUE(s.failed);
   EXPECT_EQ(s.written, 3);
   EXPECT_EQ(s.unwritten, 4);
-  EXPECT_NE(s.error.find("only 1500 MB free on the disk of " + path + ", under --min-free-mb 2000"), std::string::npos)
+  EXPECT_NE(s.error.find("only 1500 MB free on the disk of " + path +
+                         ": the next 1004-byte event would leave less than --min-free-mb 2000"),
+            std::string::npos)
       << s.error;
   const auto r = read_back(path);
   EXPECT_TRUE(r.problems.empty());
@@ -275,15 +279,55 @@ TEST(Recorder, StopsShortOfFillingTheDiskWithAWholeLog) {
 TEST(Recorder, RefusesToStartWithoutRoomAndCreatesNoFile) {
   test::TempDir dir;
   RecorderOptions o = options_in(dir);
-  o.disk_reserve = {2'000'000'000, 1.0, [] { return std::optional<uint64_t>(1'999'999'999); }};
-  EXPECT_THROW(Recorder{o}, logio::LogWriteError);
+  // Room for the reserve but not a quarter more: a logger respawned now
+  // would stop again at once.
+  o.disk_reserve = {2'000'000'000, 1.0, [] { return std::optional<uint64_t>(2'499'999'999); }};
+  try {
+    Recorder refused(o);
+    ADD_FAILURE() << "started with too little room";
+  } catch (const logio::LogWriteError& e) {
+    EXPECT_NE(std::string(e.what()).find("only 2499 MB free on the disk of " + o.log.path +
+                                         ", under the 2500 MB a start needs (--min-free-mb 2000"),
+              std::string::npos)
+        << e.what();
+  }
   EXPECT_FALSE(std::filesystem::exists(o.log.path));
+  o.disk_reserve.free_bytes = [] { return std::optional<uint64_t>(2'500'000'000); };
+  EXPECT_NO_THROW(Recorder{o});
+  std::filesystem::remove(o.log.path);
   // No reserve, or a disk that cannot say how full it is: recording goes on.
   o.disk_reserve.min_free_bytes = 0;
   EXPECT_NO_THROW(Recorder{o});
   RecorderOptions unknown = options_in(dir, "other.lcmlog");
   unknown.disk_reserve = {2'000'000'000, 1.0, [] { return std::optional<uint64_t>(); }};
   EXPECT_NO_THROW(Recorder{unknown});
+}
+
+TEST(DiskReserve, LooksOncePeriodOrAQuarterOfTheReserveWrittenOrWhenTheNextEventMightNotFit) {
+  int looks = 0;
+  uint64_t free = 10'000;
+  DiskReserve reserve("/x/rec.lcmlog", {1000, 10.0, [&] {
+                                          ++looks;
+                                          return std::optional<uint64_t>(free);
+                                        }});
+  EXPECT_EQ(looks, 1);
+  const double t0 = monotonic_ms();
+  reserve.check(t0 + 1, 100, 10);
+  EXPECT_EQ(looks, 1) << "nothing due yet";
+  reserve.check(t0 + 1, 250, 10);
+  EXPECT_EQ(looks, 2) << "a quarter of the reserve written";
+  reserve.check(t0 + 20'000, 260, 10);
+  EXPECT_EQ(looks, 3) << "the period passed";
+  // 10000 free at the last look and 8700 written since: 400 more might leave
+  // 900, so it looks again; the disk now says 1300, which does not hold them
+  free = 1300;
+  EXPECT_THROW(reserve.check(t0 + 20'001, 260 + 8700, 400), logio::LogWriteError);
+  EXPECT_EQ(looks, 4) << "looked again before refusing";
+  EXPECT_EQ(reserve.last_free_bytes(), 1300u);
+  EXPECT_NO_THROW(reserve.check(t0 + 20'002, 260 + 8700, 300)) << "1300 holds 300 and the 1000";
+  // A disk that cannot say how full it is: nothing to go by.
+  DiskReserve blind("/x/rec.lcmlog", {1000, 0.0, [] { return std::optional<uint64_t>(); }});
+  EXPECT_NO_THROW(blind.check(t0, 1'000'000, 1'000'000));
 }
 
 }  // namespace

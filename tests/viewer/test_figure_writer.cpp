@@ -23,6 +23,13 @@ std::vector<std::string> files_in(const fs::path& dir) {
   return out;
 }
 
+// The sorted names of both lists.
+std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  std::sort(a.begin(), a.end());
+  return a;
+}
+
 TEST(ViewerFigureWriter, WritesEveryNthFigureAndKeepsTheNewest) {
   ivoa::test::TempDir dir;
   OutputOptions o;
@@ -42,8 +49,12 @@ TEST(ViewerFigureWriter, AnEarlierRunsFiguresCountTowardsTheNewestKept) {
   o.max_images = 3;
   // A respawned viewer: the first run's figures stay in the folder, oldest
   // first by time written; a file the viewer does not name is not its own.
-  std::ofstream(dir.file("notes.txt")) << "mine";
-  std::ofstream(dir.file("frame_12.png.bak")) << "mine";
+  // Nor one another tool names alike (ffmpeg's frame_%04d.png), nor a link.
+  for (const char* theirs : {"notes.txt", "frame_12.png.bak", "frame_0012.png", "frame_-0.png", "frame_.png"})
+    std::ofstream(dir.file(theirs)) << "mine";
+  fs::create_symlink(dir.file("notes.txt"), dir.file("frame_99.png"));
+  const std::vector<std::string> theirs = {"frame_-0.png",     "frame_.png",   "frame_0012.png",
+                                           "frame_12.png.bak", "frame_99.png", "notes.txt"};
   {
     FigureWriter first(o);
     for (int64_t t = 1; t <= 3; ++t) first.write(figure(), t, 0.0);
@@ -55,14 +66,12 @@ TEST(ViewerFigureWriter, AnEarlierRunsFiguresCountTowardsTheNewestKept) {
   FigureWriter second(o);
   EXPECT_EQ(second.earlier_figures(), 3);
   second.write(figure(), 7, 0.0);
-  EXPECT_EQ(files_in(o.out_dir),
-            (std::vector<std::string>{"frame_12.png.bak", "frame_2.png", "frame_3.png", "frame_7.png", "notes.txt"}));
+  EXPECT_EQ(files_in(o.out_dir), with(theirs, {"frame_2.png", "frame_3.png", "frame_7.png"}));
   // The same utime written again (a log played twice) is the newest now:
   // the cap removes the older figures, not the file just written.
   second.write(figure(), 3, 0.0);
   second.write(figure(), 8, 0.0);
-  EXPECT_EQ(files_in(o.out_dir),
-            (std::vector<std::string>{"frame_12.png.bak", "frame_3.png", "frame_7.png", "frame_8.png", "notes.txt"}));
+  EXPECT_EQ(files_in(o.out_dir), with(theirs, {"frame_3.png", "frame_7.png", "frame_8.png"}));
 }
 
 TEST(ViewerFigureWriter, WritesAtMostOnePngPerPeriod) {

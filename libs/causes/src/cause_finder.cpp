@@ -114,7 +114,7 @@ sim::RenderRequest CauseFinder::Impl::request_for(const Labels& labels, const si
     throw ReplayError("frame " + std::to_string(labels.utime) + " is before the session's start utime " +
                       std::to_string(timing.start_utime));
   // The trajectory is stepped from the start to the frame: a utime far
-  // beyond any session would take it hours and gigabytes.
+  // beyond any session would take it hours.
   if (index / timing.rate_hz > kLongestSessionS)
     throw ReplayError("frame " + std::to_string(labels.utime) + " is " +
                       std::to_string(static_cast<int64_t>(index / timing.rate_hz)) +

@@ -39,6 +39,8 @@ struct Trajectory::Impl {
     samples.assign(1, {start_pose, {}});
     first_step = 0;
     start_cruise();
+    approach_heading = turn_target = turn_time = 0;
+    turn_direction = 1;
   }
 
   double clearance(const Pose2D& p) const { return scene.clearance({p.x, p.y}) - config.robot_radius; }
@@ -165,8 +167,10 @@ struct Trajectory::Impl {
     const double pos = t / config.step;
     const size_t i = static_cast<size_t>(pos);
     if (i < first_step) restart();
-    while (first_step + samples.size() < i + 2) step();
-    forget_before(i);
+    while (first_step + samples.size() < i + 2) {
+      step();
+      forget_before(i);  // as it goes: planning hours ahead holds a minute too
+    }
     const Sample& a = samples[i - first_step];
     const Sample& b = samples[i - first_step + 1];
     const double f = pos - static_cast<double>(i);
@@ -179,10 +183,11 @@ struct Trajectory::Impl {
     return s;
   }
 
-  // Drops the samples more than kKeptSeconds before step i.
+  // Drops the samples more than kKeptSeconds before step i, but never the
+  // newest, which the next step starts from.
   void forget_before(size_t i) {
     const size_t kept = static_cast<size_t>(kKeptSeconds / config.step);
-    while (first_step + kept < i) {
+    while (first_step + kept < i && samples.size() > 1) {
       samples.pop_front();
       ++first_step;
     }

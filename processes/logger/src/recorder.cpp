@@ -58,7 +58,8 @@ void Recorder::write_loop() {
   while (queue_.pop(event)) {
     if (failed_.load()) continue;  // the log is closed; finish() reports these as unwritten
     try {
-      reserve_.check(monotonic_ms(), static_cast<uint64_t>(counters_.bytes_written.load()));
+      reserve_.check(monotonic_ms(), static_cast<uint64_t>(counters_.bytes_written.load()),
+                     event.channel.size() + event.data.size());
       log_.write(event);
       counters_.written.fetch_add(1);
     } catch (const logio::LogWriteError& e) {

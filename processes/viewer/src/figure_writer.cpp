@@ -1,11 +1,14 @@
 #include "ivoa/viewer/figure_writer.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <string_view>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -27,16 +30,22 @@ struct FigureWriter::Video {
 
 namespace {
 
-// A figure this writer names (frame_<utime>.png), as an earlier run wrote it.
-bool is_figure_name(const std::string& name) {
-  constexpr std::string_view prefix = "frame_", suffix = ".png";
-  if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0 ||
-      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
-    return false;
-  const std::string_view number(name.data() + prefix.size(), name.size() - prefix.size() - suffix.size());
-  const size_t digits_from = number.front() == '-' ? 1 : 0;
-  return number.size() > digits_from &&
-         std::all_of(number.begin() + digits_from, number.end(), [](char c) { return c >= '0' && c <= '9'; });
+std::string figure_name(int64_t utime) {
+  char name[64];
+  std::snprintf(name, sizeof(name), "frame_%" PRId64 ".png", utime);
+  return name;
+}
+
+// The utime of a file named as this writer names its figures, exactly
+// (frame_0012.png, as ffmpeg numbers frames, is not one of them).
+std::optional<int64_t> figure_utime(const std::string& name) {
+  constexpr std::string_view prefix = "frame_";
+  if (name.rfind(prefix, 0) != 0) return std::nullopt;
+  int64_t utime = 0;
+  const char* first = name.data() + prefix.size();
+  const auto [end, error] = std::from_chars(first, name.data() + name.size(), utime);
+  if (error != std::errc() || figure_name(utime) != name) return std::nullopt;
+  return utime;
 }
 
 }  // namespace
@@ -78,26 +87,33 @@ void FigureWriter::write(const cv::Mat& figure, int64_t utime, double now_ms) {
 // the same folder every run, still holds the folder to N figures.
 void FigureWriter::adopt_earlier_figures() {
   namespace fs = std::filesystem;
-  std::vector<std::pair<fs::file_time_type, std::string>> found;
+  struct Found {
+    fs::file_time_type time;
+    int64_t utime;
+    std::string path;
+  };
+  std::vector<Found> found;
   std::error_code ec;
   for (fs::directory_iterator it(options_.out_dir, ec), end; !ec && it != end; it.increment(ec)) {
     std::error_code entry_ec;
-    if (!it->is_regular_file(entry_ec) || !is_figure_name(it->path().filename().string())) continue;
+    // Not a link: the cap removes what it counts, and a link's target is not the viewer's.
+    if (!fs::is_regular_file(it->symlink_status(entry_ec))) continue;
+    const std::optional<int64_t> utime = figure_utime(it->path().filename().string());
     const fs::file_time_type time = it->last_write_time(entry_ec);
-    if (!entry_ec) found.emplace_back(time, it->path().string());
+    if (utime && !entry_ec) found.push_back({time, *utime, it->path().string()});
   }
-  std::sort(found.begin(), found.end());
-  for (auto& [time, path] : found) written_.push_back(std::move(path));
+  std::sort(found.begin(), found.end(),
+            [](const Found& a, const Found& b) { return std::tie(a.time, a.utime) < std::tie(b.time, b.utime); });
+  for (Found& f : found) written_.push_back(std::move(f.path));
   earlier_figures_ = static_cast<int64_t>(written_.size());
   keep_newest();
 }
 
 void FigureWriter::write_png(const cv::Mat& figure, int64_t utime) {
-  char name[64];
-  std::snprintf(name, sizeof(name), "frame_%" PRId64 ".png", utime);
-  const std::string path = (std::filesystem::path(options_.out_dir) / name).string();
+  const std::string path = (std::filesystem::path(options_.out_dir) / figure_name(utime)).string();
   if (std::string error; !write_image_file(path, figure, error)) throw OutputError(error);
   ++images_written_;
+  if (options_.max_images == 0) return;  // every figure kept: nothing to count
   // A utime written again (a log played twice) is the newest now, not the
   // oldest: removing the older entry would delete the file just written.
   written_.erase(std::remove(written_.begin(), written_.end(), path), written_.end());
