@@ -216,6 +216,17 @@ fi
 
 # ------------------------------------------------------------------ full loop
 mkdir -p "$out/logs" "$out/process_logs"
+# Said before anything is recorded: a disk that fills part-way stops the
+# loggers (their --min-free-mb) and the run fails late. What a fresh run
+# writes into $out, measured on 2026-12-05, and the loggers' reserve.
+case "$scale/$shipped_only" in
+  full/0) need_gb=57 ;; full/1) need_gb=3 ;; default/0) need_gb=7 ;; *) need_gb=1 ;;
+esac
+free_gb=$(df -Pk "$out" | awk 'NR == 2 { print int($4 / 1048576) }')
+if [ -n "$free_gb" ] && [ "$free_gb" -lt $((need_gb + 2)) ]; then
+  echo "ivoa-main-job: warning: $free_gb GB free for $out, and a fresh run of this scale writes about $need_gb GB" \
+    "(its loggers stop with 1.25 GB left); a rerun in the same folder needs less" >&2
+fi
 split_file=$out/split.yaml
 declare -a train=() val=() test=()
 # The detectors whose introspection this run trains: none with --shipped-only.
