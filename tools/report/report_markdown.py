@@ -117,14 +117,15 @@ def intervals_text(ci: dict, key: str) -> str:
     parts = [f"{ci[key][0]:.3f}–{ci[key][1]:.3f} over {ci['resamples']} resamples of whole frames"]
     n = ci.get("sessions")
     if ci.get("by_session") is None:
-        parts.append(f"none over whole sessions: {n} are too few" if n else "")
+        if n:  # an older metrics.json says nothing of sessions
+            parts.append(f"none over whole sessions: {n} are too few")
     elif ci["by_session"].get(key):
         low, high = ci["by_session"][key]
         parts.append(f"{low:.3f}–{high:.3f} over the {n} sessions resampled whole, which also counts which scenes "
                      "were tested")
     else:
         parts.append(f"none over the {n} sessions resampled whole: a class is in too few of them")
-    return f" (95 % interval {'; '.join(p for p in parts if p)})"
+    return f" (95 % interval {'; '.join(parts)})"
 
 
 def distance_table(rm: dict) -> str:
