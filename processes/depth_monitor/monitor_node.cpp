@@ -3,6 +3,7 @@
 #include <cmath>
 #include <utility>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/image_convert.hpp"
@@ -10,6 +11,15 @@
 #include "ivoa/monitor/labeler.hpp"
 
 namespace ivoa {
+namespace {
+
+// Stereo frames in a row without a depth partner before it is said: one or
+// two at a start, or where a depth frame was lost, are not worth a warning.
+constexpr int64_t kUnpairedRunToSay = 5;
+constexpr double kUnpairedWarningIntervalMs = 10'000;
+constexpr const char* kUnpairedState = "unpaired: no depth frame near the stereo frames";
+
+}  // namespace
 
 MonitorNode::MonitorNode(Bus& bus, Heartbeat& heartbeat, MonitorNodeOptions options)
     : bus_(bus),
@@ -91,9 +101,10 @@ void MonitorNode::on_stereo(const obstacle_grid_t& msg) {
 void MonitorNode::publish(std::vector<monitor::PipelineOutcome> outcomes) {
   for (auto& o : outcomes) {
     if (!o.labeled) {  // counted by the pairer
-      spdlog::debug("stereo frame {} has no depth frame within the pairing tolerance", o.stereo_utime);
+      note_unpaired(o);
       continue;
     }
+    note_paired();
     // Only what LCM took counts as out; the rest is counted as refused.
     const int published = int{bus_.publish(options_.depth_out_channel, o.labeled->depth_grid)} +
                           int{bus_.publish(options_.labels_out_channel, o.labeled->labels)};
@@ -103,6 +114,33 @@ void MonitorNode::publish(std::vector<monitor::PipelineOutcome> outcomes) {
     for (int8_t l : o.labeled->labels.label) labelled_cells_ += l != introspection_labels_t::LABEL_NONE;
   }
   update_counters();
+}
+
+void MonitorNode::note_unpaired(const monitor::PipelineOutcome& o) {
+  spdlog::debug("stereo frame {} has no depth frame within the pairing tolerance", o.stereo_utime);
+  if (++unpaired_in_a_row_ < kUnpairedRunToSay) return;
+  heartbeat_.set_state(kUnpairedState);
+  const double now = monotonic_ms();
+  if (now - last_unpaired_warning_ms_ < kUnpairedWarningIntervalMs) return;
+  last_unpaired_warning_ms_ = now;
+  monitor::PairingCounters c = earlier_pipelines_;
+  c += pipeline_->counters();
+  const std::string nearest = o.nearest_depth_us ? fmt::format("the nearest {:.1f} ms away", *o.nearest_depth_us / 1e3)
+                                                 : "none received in the last seconds";
+  spdlog::warn(
+      "{} stereo frames in a row have no depth frame within {:.1f} ms (utime {}: {}); {} of {} unlabelled so far. "
+      "A depth camera slower than the stereo one, or on another clock? --sync-tolerance-us half the depth frame "
+      "period pairs them, with depth up to that much older or newer",
+      unpaired_in_a_row_, options_.pairing.tolerance_us / 1e3, o.stereo_utime, nearest, c.unmatched_stereo,
+      c.unmatched_stereo + c.paired);
+}
+
+void MonitorNode::note_paired() {
+  if (unpaired_in_a_row_ >= kUnpairedRunToSay) {
+    spdlog::info("stereo frames are paired with depth frames again, after {} unpaired", unpaired_in_a_row_);
+    heartbeat_.set_state("running");
+  }
+  unpaired_in_a_row_ = 0;
 }
 
 void MonitorNode::update_counters() {

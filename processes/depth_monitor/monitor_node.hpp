@@ -39,6 +39,10 @@ class MonitorNode {
   // False (counted, warned about once) while no calibration has arrived.
   bool has_calibration(const std::string& where);
   void publish(std::vector<monitor::PipelineOutcome> outcomes);
+  // A run of unpaired stereo frames is said (state, a rate-limited warning
+  // with the nearest depth frame's distance); a pair ends it.
+  void note_unpaired(const monitor::PipelineOutcome& outcome);
+  void note_paired();
   void update_counters();
   void report_clock_events(const monitor::ClockCounters& now, monitor::ClockCounters& seen, const std::string& channel);
 
@@ -50,6 +54,8 @@ class MonitorNode {
   CalibrationChanges calibrations_;  // to tell a new one from the same one again
   std::unique_ptr<monitor::LabelingPipeline> pipeline_;
   int64_t labelled_cells_ = 0;
+  int64_t unpaired_in_a_row_ = 0;
+  double last_unpaired_warning_ms_ = -1e18;
   monitor::ClockCounters depth_clock_seen_, stereo_clock_seen_;  // what update_counters last reported
   monitor::PairingCounters earlier_pipelines_;                   // of the pipelines a calibration change replaced
 };

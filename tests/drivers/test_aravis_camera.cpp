@@ -10,6 +10,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "ivoa/aravis_stereo/aravis_buffer.hpp"
 #include "ivoa/aravis_stereo/aravis_camera.hpp"
 #include "ivoa/aravis_stereo/stereo_message.hpp"
 #include "ivoa/core/image_convert.hpp"
@@ -94,6 +95,15 @@ class AravisCameraTest : public ::testing::Test {
     return collector.frames();
   }
 };
+
+// A buffer the stream hands back unfilled is no frame and no lost frame:
+// counting it as incomplete reported frames lost at every start.
+TEST(AravisBuffer, AnUnfilledBufferIsNotAFrame) {
+  ArvBuffer* buffer = arv_buffer_new_allocate(64);
+  EXPECT_EQ(arv_buffer_get_status(buffer), ARV_BUFFER_STATUS_CLEARED);
+  EXPECT_FALSE(buffer_was_filled(buffer));
+  g_object_unref(buffer);
+}
 
 TEST_F(AravisCameraTest, BayerRG8FramesAreTheServedPixelsLabelledRGGB) {
   const auto frames = grab(config("BayerRG8"));

@@ -340,6 +340,26 @@ TEST(LogSummary, CountsSequenceGapsRepeatsAndUtimeRegressions) {
   EXPECT_EQ(s.utime_regressions, 1);
 }
 
+// A respawned driver numbers its frames from 0 again: that run lost
+// nothing by its numbers, and the table says the numbers started again.
+TEST(LogSummary, APublisherThatStartsAgainAtZeroIsARestartNotARegression) {
+  LogSummary summary;
+  for (const int64_t seq : {0, 1, 2, 0, 1, 3, 3}) {
+    const auto bytes = encoded_stereo(seq, 100);
+    summary.add("STEREO_IMAGES", 7, bytes.data(), bytes.size());
+  }
+  const ChannelSummary& s = summary.channels().at("STEREO_IMAGES");
+  EXPECT_EQ(s.seq_restarts, 1);
+  EXPECT_EQ(s.seq_regressions, 1) << "3 again";
+  EXPECT_EQ(s.missing_seq, 1) << "2 of the second run";
+  const std::string table = summary.table();
+  EXPECT_NE(table.find("STEREO_IMAGES: its sequence started again at 0 1 time (a publisher restarted)"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("STEREO_IMAGES: 1 message repeated or out of order"), std::string::npos) << table;
+  EXPECT_NE(channel_json(s).find("\"seq_restarts\": 1"), std::string::npos);
+}
+
 TEST(LogSummary, HeartbeatsOfManySendersAreNotCountedAsUtimeRegressions) {
   LogSummary summary;
   for (const int64_t utime : {200, 100, 300, 250}) {  // two processes' heartbeats, interleaved

@@ -50,6 +50,7 @@ TEST(FramePairer, MissingPartnerIsUnmatchedNotPairedWithAFarFrame) {
   EXPECT_EQ(out[0].depth, nullptr);
   EXPECT_EQ(p.counters().unmatched_stereo, 1);
   EXPECT_EQ(p.counters().paired, 0);
+  EXPECT_EQ(out[0].nearest_depth_us, 50000) << "says how far the nearest depth frame was";
 }
 
 TEST(FramePairer, DepthStreamStallDecidesPendingFramesEventually) {

@@ -207,5 +207,26 @@ TEST(MonitorNode, UnmatchedStereoFramesAreCountedNotLabelled) {
   EXPECT_EQ(f.heartbeat.counter("stereo_unmatched"), 1);
 }
 
+// A depth camera at 5 Hz beside a free-running stereo pair: no stereo frame
+// has a depth frame within the default 16.7 ms. That must show in the
+// state, not only in a counter, and end when frames pair again.
+TEST(MonitorNode, ARunOfUnpairedStereoFramesShowsInTheStateUntilOnePairs) {
+  NodeFixture f;
+  f.send_calibration();
+  const cv::Mat ground = test::render_depth(f.rig, {});
+  for (int i = 1; i <= 6; ++i) {
+    f.send_depth(i * 200'000, ground, i);
+    f.send_stereo(i * 200'000 - 60'000, 0);  // 60 ms before its depth frame
+    if (i == 4) {
+      EXPECT_EQ(f.heartbeat.snapshot().state, "running") << "four unpaired: not yet a run";
+    }
+  }
+  EXPECT_TRUE(f.labels.empty());
+  EXPECT_EQ(f.heartbeat.snapshot().state, "unpaired: no depth frame near the stereo frames");
+  f.send_stereo(1'200'000, 0);  // on depth frame 6's utime
+  ASSERT_EQ(f.labels.size(), 1u);
+  EXPECT_EQ(f.heartbeat.snapshot().state, "running");
+}
+
 }  // namespace
 }  // namespace ivoa

@@ -221,7 +221,9 @@ void add_check_options(CLI::App& app, CheckCommandLine& cl) {
           return std::string(e.what());
         }
       });
-  app.add_flag("--no-gaps", cl.no_gaps, "fail if a sequence-numbered channel misses or repeats a message");
+  app.add_flag("--no-gaps", cl.no_gaps,
+               "fail if a sequence-numbered channel misses or repeats a message (a publisher that started again at "
+               "0, respawned, is neither)");
 }
 
 // Reads and prints every file, then the summary, the JSON and the verdict

@@ -38,6 +38,8 @@ const char* buffer_status_name(ArvBufferStatus status) {
   }
 }
 
+bool buffer_was_filled(ArvBuffer* buffer) { return arv_buffer_get_status(buffer) != ARV_BUFFER_STATUS_CLEARED; }
+
 FrameResult buffer_to_frame(ArvBuffer* buffer, Side side) {
   const uint64_t frame_id = arv_buffer_get_frame_id(buffer);
   const ArvBufferStatus status = arv_buffer_get_status(buffer);

@@ -225,6 +225,11 @@ struct AravisCamera::Impl {
   static void on_new_buffer(ArvStream* stream, gpointer self_ptr) {
     auto* self = static_cast<Impl*>(self_ptr);
     while (ArvBuffer* buffer = arv_stream_try_pop_buffer(stream)) {
+      if (!buffer_was_filled(buffer)) {
+        spdlog::debug("{}: a buffer handed back unfilled", self->description);
+        arv_stream_push_buffer(stream, buffer);
+        continue;
+      }
       FrameResult result = buffer_to_frame(buffer, self->side);
       arv_stream_push_buffer(stream, buffer);
       if (self->on_frame) self->on_frame(std::move(result));

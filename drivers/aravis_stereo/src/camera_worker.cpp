@@ -99,8 +99,11 @@ bool CameraWorker::open_camera() {
   }
   connected_ = true;
   last_frame_ms_ = monotonic_ms();
-  if (lost_at_ms_ >= 0)
-    spdlog::info("{}: reconnected after {:.1f} s", source_->describe(), (monotonic_ms() - lost_at_ms_) / 1000.0);
+  if (lost_at_ms_ >= 0) {
+    ++reconnects_;
+    spdlog::info("{}: reconnected, {:.1f} s after its last frame", source_->describe(),
+                 (monotonic_ms() - lost_at_ms_) / 1000.0);
+  }
   lost_at_ms_ = -1;
   backoff_.succeeded();
   events_.push(status_event(CameraEvent::Type::kConnected, side_, source_->describe()));
@@ -111,8 +114,7 @@ void CameraWorker::close_camera(const std::string& reason) {
   spdlog::warn("{}: {}; closing it and reconnecting", source_->describe(), reason);
   events_.push(status_event(CameraEvent::Type::kDisconnected, side_, reason));
   connected_ = false;
-  ++reconnects_;
-  lost_at_ms_ = monotonic_ms();
+  lost_at_ms_ = last_frame_ms_;  // the images stopped then, not now
   source_->abandon();
 }
 

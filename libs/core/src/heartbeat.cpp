@@ -57,8 +57,10 @@ void Heartbeat::bad_input(const std::string& full_text) {
     ++suppressed_warnings_;
     return;
   }
+  // The ones held back were of any kind, not necessarily this one's.
   if (suppressed_warnings_ > 0)
-    spdlog::warn("bad input (skipped): {} [{} similar warnings suppressed]", what, suppressed_warnings_);
+    spdlog::warn("bad input (skipped): {} [and {} more since the last warning, counted, not shown]", what,
+                 suppressed_warnings_);
   else spdlog::warn("bad input (skipped): {}", what);
   suppressed_warnings_ = 0;
   last_warning_ms_ = now;

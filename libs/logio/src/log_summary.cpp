@@ -14,6 +14,8 @@ namespace {
 void add_seq(ChannelSummary& s, int64_t seq) {
   if (s.typed == 1) {
     s.first_seq = seq;
+  } else if (seq == 0 && s.last_seq > 0) {  // a new run of its publisher: nothing lost by seq
+    ++s.seq_restarts;
   } else if (seq <= s.last_seq) {
     ++s.seq_regressions;
   } else if (seq > s.last_seq + 1) {
@@ -79,6 +81,16 @@ std::string LogSummary::table() const {
                        static_cast<double>(s.bytes) / 1e6, seq(s.first_seq), seq(s.last_seq), seq(s.missing_seq),
                        regressions);
   }
+  for (const auto& [name, s] : channels_) {  // the table's seq columns span every run of the publisher
+    if (s.seq_restarts > 0)
+      out += fmt::format(
+          "{}: its sequence started again at 0 {} time{} (a publisher restarted); \"missing\" counts "
+          "within each run\n",
+          name, s.seq_restarts, s.seq_restarts == 1 ? "" : "s");
+    if (s.seq_regressions > 0)
+      out += fmt::format("{}: {} message{} repeated or out of order by sequence number\n", name, s.seq_regressions,
+                         s.seq_regressions == 1 ? "" : "s");
+  }
   for (const auto& [name, s] : channels_) {  // one type per channel: a reader of the first skips these
     if (s.other_fingerprints == 0) continue;
     std::string which;
@@ -107,7 +119,8 @@ std::string channel_json(const ChannelSummary& s) {
   if (s.has_seq) {
     out += ", \"first_seq\": " + std::to_string(s.first_seq) + ", \"last_seq\": " + std::to_string(s.last_seq) +
            ", \"missing_seq\": " + std::to_string(s.missing_seq) +
-           ", \"seq_regressions\": " + std::to_string(s.seq_regressions) + ", \"gaps\": [";
+           ", \"seq_regressions\": " + std::to_string(s.seq_regressions) +
+           ", \"seq_restarts\": " + std::to_string(s.seq_restarts) + ", \"gaps\": [";
     for (size_t i = 0; i < s.gaps.size(); ++i)
       out += (i ? ", [" : "[") + std::to_string(s.gaps[i].after) + ", " + std::to_string(s.gaps[i].next) + "]";
     out += "]";

@@ -39,6 +39,7 @@ std::vector<PipelineOutcome> LabelingPipeline::finish(
     PipelineOutcome o;
     o.stereo_utime = r.stereo_utime;
     o.stereo_grid = std::move(r.stereo);
+    o.nearest_depth_us = r.nearest_depth_us;
     if (r.depth) {
       LabeledFrame f;
       const double start = monotonic_ms();

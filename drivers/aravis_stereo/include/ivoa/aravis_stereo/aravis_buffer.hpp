@@ -13,6 +13,11 @@ namespace ivoa::aravis_stereo {
 // receive time until the driver chooses otherwise.
 FrameResult buffer_to_frame(ArvBuffer* buffer, Side side);
 
+// False for a buffer the stream handed back without filling it (status
+// "cleared": Aravis 0.8 does so as a stream starts): no frame is behind
+// it, so it is neither a frame nor a lost one.
+bool buffer_was_filled(ArvBuffer* buffer);
+
 // "missing packets", "timeout", ... for log lines.
 const char* buffer_status_name(ArvBufferStatus status);
 

@@ -39,7 +39,7 @@ class CameraWorker {
   void trigger();
 
   bool connected() const { return connected_; }
-  int64_t reconnects() const { return reconnects_; }
+  int64_t reconnects() const { return reconnects_; }  // closed and opened again
 
  private:
   void run();

@@ -17,6 +17,7 @@
 // (StreamClock).
 #include <algorithm>
 #include <cstdint>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <set>
@@ -70,6 +71,9 @@ class FramePairer {
     Stereo stereo;
     std::optional<int64_t> depth_utime;  // empty: unmatched
     const Depth* depth = nullptr;        // valid until the next add_* / flush call
+    // Unmatched: how far (us) the nearest depth frame held was, to say why;
+    // empty when none of its restart is held.
+    std::optional<int64_t> nearest_depth_us;
   };
 
   explicit FramePairer(PairingConfig config = {})
@@ -143,7 +147,7 @@ class FramePairer {
   }
 
   Result match(int epoch, int64_t t, Stereo stereo) {
-    Result r{t, std::move(stereo), std::nullopt, nullptr};
+    Result r{t, std::move(stereo), std::nullopt, nullptr, std::nullopt};
     const Depth* best = nullptr;
     int64_t best_utime = 0, best_dt = 0;
     for (auto it = depth_.lower_bound({epoch, t - config_.tolerance_us});
@@ -163,8 +167,20 @@ class FramePairer {
       ++counters_.paired;
     } else {
       ++counters_.unmatched_stereo;
+      r.nearest_depth_us = nearest_depth_gap(epoch, t);
     }
     return r;
+  }
+
+  std::optional<int64_t> nearest_depth_gap(int epoch, int64_t t) const {
+    std::optional<int64_t> gap;
+    const auto after = depth_.lower_bound({epoch, t});
+    if (after != depth_.end() && after->first.first == epoch) gap = after->first.second - t;
+    if (after != depth_.begin()) {
+      const auto before = std::prev(after);
+      if (before->first.first == epoch && (!gap || t - before->first.second < *gap)) gap = t - before->first.second;
+    }
+    return gap;
   }
 
   // Within a restart, the depth frames of the last depth_history_us (at least
