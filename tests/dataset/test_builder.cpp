@@ -115,6 +115,7 @@ TEST(DatasetBuilder, RerunLabelsMatchAnIndependentRecomputationAndPatchesTheFram
   EXPECT_TRUE(report.problems.empty());
   EXPECT_EQ(report.stereo_frames, 8);
   EXPECT_EQ(report.frames_unmatched, 0);
+  EXPECT_EQ(pairing_warning(report, options.pairing), "");
 
   const SessionReader session(dir.file("data") + "/office_s3");
   EXPECT_EQ(session.info().detector, "jppc");
@@ -282,6 +283,35 @@ TEST(DatasetBuilder, AFrameGivenTwiceIsStoredOnce) {
       EXPECT_EQ(session.size(), recorded.size());
     }
   }
+}
+
+// Re-run labels beside a depth camera slower than the stereo one: most
+// frames unpaired was said only as a count, and the session came out tiny.
+TEST(DatasetBuilder, MostFramesUnpairedIsSaidWithTheFlagThatPairsThem) {
+  BuildReport report;
+  report.stereo_frames = 441, report.frames_labelled = 1, report.frames_unmatched = 440;
+  monitor::PairingConfig pairing;
+  const std::string said = pairing_warning(report, pairing);
+  EXPECT_NE(said.find("440 of its 441 stereo frames have no depth frame within 16.7 ms (--sync-tolerance-us)"),
+            std::string::npos)
+      << said;
+  report.frames_labelled = 437, report.frames_unmatched = 4;  // a start-up's few
+  EXPECT_EQ(pairing_warning(report, pairing), "");
+}
+
+// session.json names every log read: a split recording's later parts
+// were left out, since the session was opened on the first part's samples.
+TEST(DatasetBuilder, EveryLogReadIsNamedInTheSession) {
+  test::TempDir dir;
+  const std::string first = dir.file("rec.lcmlog"), second = dir.file("rec.lcmlog.01");
+  write_patterned_labels_log(first);
+  std::filesystem::copy_file(first, second);
+  SessionBuilder builder(dir.file("data"), "parts", BuildOptions{});
+  builder.add_log(first);
+  builder.add_log(second);
+  builder.finish();
+  const SessionReader session(dir.file("data") + "/parts");
+  EXPECT_EQ(session.info().logs, (std::vector<std::string>{first, second}));
 }
 
 TEST(DatasetBuilder, KeepTnStoresAFractionOfTnCellsTheSameOnesEveryBuild) {

@@ -175,5 +175,20 @@ TEST(DatasetBuild, LogsOfOneNameMustBeOneRecording) {
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
 }
 
+// A part left out of a split recording (a glob that missed it) is said:
+// the session was built with a hole in it and nothing said so.
+TEST(DatasetBuild, ASplitPartNotGivenIsSaid) {
+  test::TempDir dir;
+  for (const char* log : {"t.lcmlog.01", "t.lcmlog.03", "u.lcmlog.00", "u.lcmlog.01"})
+    std::ofstream(dir.file(log)) << "not read";
+  const auto r = test::run_command("cd " + dir.path().string() +
+                                   " && timeout 60 " IVOA_DATASET_EXE
+                                   " build --out data t.lcmlog.01 t.lcmlog.03 u.lcmlog.00 u.lcmlog.01");
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;  // (no logs: read and refused after the warning)
+  EXPECT_TRUE(contains(r.output, "session t: 2 split parts not given (the first: t.lcmlog.00): its frames are not in"))
+      << r.output;
+  EXPECT_EQ(r.output.find("not given"), r.output.rfind("not given")) << "u's parts are whole\n" << r.output;
+}
+
 }  // namespace
 }  // namespace ivoa

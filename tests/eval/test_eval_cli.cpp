@@ -216,6 +216,18 @@ TEST_F(EvalCli, APartOfASplitLogIsItsSessionsLog) {
   EXPECT_FALSE(contains(r.output, "no session")) << r.output;
 }
 
+// One overlay every N labelled frames of the session, counted across its
+// split parts: the count started again at each part.
+TEST_F(EvalCli, OverlaySpacingRunsAcrossASessionsSplitParts) {
+  std::filesystem::create_directories(dir_.file("own"));
+  write_simulated_log(dir_.file("own/t.lcmlog.00"), "office", 31);
+  write_simulated_log(dir_.file("own/t.lcmlog.01"), "office", 31);  // its one labelled frame again
+  const auto r =
+      eval("test", "--overlay-every 2 --logs " + dir_.file("own/t.lcmlog.00") + " " + dir_.file("own/t.lcmlog.01"));
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_TRUE(contains(r.output, "wrote 1 overlay figures")) << r.output;
+}
+
 TEST_F(EvalCli, ASplitWithoutSessionsIsBadInput) {
   const auto r = eval("empty");
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;

@@ -164,6 +164,21 @@ TEST(Training, KeepLastWritesTheFinalStepsModelWhateverItsValidation) {
   EXPECT_NE(summary.find("\"best_step\": \"20\""), std::string::npos) << summary;
 }
 
+// The summary names the data by absolute path, quoted: a folder whose name
+// held a '"' wrote a model that no program could read.
+TEST(Training, TheModelNamesItsDataWhateverTheFolderIsCalled) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 5);
+  std::filesystem::rename(dir.file("data"), dir.file("my \"best\" data"));
+  c.dataset = dir.file("my \"best\" data");
+  train_model(c);
+  InferenceConfig ic;
+  ic.mc_passes = 2;
+  const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
+  EXPECT_NE(summary.find(R"("dataset": ")" + dir.path().string() + R"(/my \"best\" data")"), std::string::npos)
+      << summary;
+}
+
 // A loss that is no number would leave NaN weights and gates, reported as a success.
 TEST(Training, ADivergedTrainingStopsAndSaysSo) {
   test::TempDir dir;

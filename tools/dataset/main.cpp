@@ -79,6 +79,8 @@ int build_session(const std::string& out, const std::string& session, const std:
   if (r.frames_repeated > 0)
     std::printf("%-28s %lld frames already stored skipped (a log given twice, or frames recorded twice)\n", "",
                 static_cast<long long>(r.frames_repeated));
+  if (const std::string why = dataset::pairing_warning(r, options.pairing); !why.empty())
+    spdlog::warn("{}: {}", session, why);
   if (r.samples == 0 && r.patches_outside > 0)
     spdlog::warn("{}: no samples: every labelled cell's patch leaves the image (a smaller --patch-size?)", session);
   if (r.evidence_mismatches > 0)
@@ -142,6 +144,24 @@ bool sessions_are_recordings(const SessionLogs& sessions, const std::vector<std:
   return true;
 }
 
+// The split parts a session's run of them skips (.01 given .00 and .02;
+// .00 given only from .01 on), or "" when none: a glob that missed a file
+// built a session with a hole in it, silently.
+std::string parts_not_given(const std::vector<std::string>& files) {
+  int next = 0, missing = 0;
+  std::string first;
+  for (const auto& f : files) {
+    if (!logio::is_split_part(f)) return "";
+    const int part = std::stoi(fs::path(f).extension().string().substr(1));
+    if (part > next && first.empty()) first = fs::path(f).replace_extension(fmt::format(".{:02d}", next)).string();
+    missing += std::max(0, part - next);
+    next = part + 1;
+  }
+  return missing == 0
+             ? ""
+             : fmt::format("{} split part{} not given (the first: {})", missing, missing == 1 ? "" : "s", first);
+}
+
 int run_build(const std::string& out, const std::string& session, const std::vector<std::string>& logs,
               const dataset::BuildOptions& options) {
   // The dataset folder is made and probed first: one that cannot be written
@@ -161,6 +181,9 @@ int run_build(const std::string& out, const std::string& session, const std::vec
     sessions.back().second.push_back(log);
   }
   if (!sessions_are_recordings(sessions, logs, !session.empty())) return kExitUsage;
+  for (const auto& [name, files] : sessions)
+    if (const std::string gap = parts_not_given(files); !gap.empty())
+      spdlog::warn("session {}: {}: its frames are not in the session", name, gap);
   int worst = kExitOk;
   for (const auto& [name, files] : sessions) {
     try {

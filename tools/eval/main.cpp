@@ -210,13 +210,15 @@ std::string other_scene(const logio::LogEvent& e, const dataset::SessionInfo& se
 
 // At most `room` overlays of one session's log, every overlay_every-th
 // labelled frame; none if a simulated log turns out to be of another scene.
+// `labelled_seen` counts the session's labelled frames on from its earlier
+// split parts, so the spacing runs across them.
 std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection::IntrospectionModel& model,
                                                  const std::string& log, const dataset::SessionReader& session,
-                                                 size_t room) {
+                                                 size_t room, int64_t& labelled_seen) {
   const LabelledFrames frames = labelled_frames(session);
   logio::LogReader in(log, {/*resync=*/true});
   logio::LogEvent e;
-  int64_t index = 0;
+  int64_t& index = labelled_seen;
   // The simulator publishes a frame's truth after its images: read on past
   // a full budget until the truth has been checked.
   bool scene_checked = session.info().scene.empty();
@@ -263,6 +265,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
   const bool fixed_scale = o.uncertainty_max >= 0;
   std::vector<PendingOverlay> held;
   size_t written = 0;
+  std::map<std::string, int64_t> labelled_seen;  // by session, over its split parts
   for (const auto& log : o.logs) {
     const std::string session = logio::session_name_of(log);
     const std::string dir = o.dataset + "/" + session;
@@ -275,7 +278,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
                    log, session);
     const size_t room = static_cast<size_t>(o.max_overlays) - std::min<size_t>(o.max_overlays, written + held.size());
     if (room == 0) continue;
-    for (auto& p : prepare_log_overlays(o, model, log, dataset::SessionReader(dir), room)) {
+    for (auto& p : prepare_log_overlays(o, model, log, dataset::SessionReader(dir), room, labelled_seen[session])) {
       if (!fixed_scale) {
         held.push_back(std::move(p));
         continue;

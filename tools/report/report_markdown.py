@@ -118,7 +118,7 @@ def intervals_text(ci: dict, key: str) -> str:
     n = ci.get("sessions")
     if ci.get("by_session") is None:
         if n:  # an older metrics.json says nothing of sessions
-            parts.append(f"none over whole sessions: {n} are too few")
+            parts.append(f"none over whole sessions: {n} {'is' if n == 1 else 'are'} too few")
     elif ci["by_session"].get(key):
         low, high = ci["by_session"][key]
         parts.append(f"{low:.3f}–{high:.3f} over the {n} sessions resampled whole, which also counts which scenes "

@@ -20,9 +20,9 @@ using namespace ivoa;
 namespace {
 
 void print_gates(const introspection::TrainReport& r, const introspection::TrainConfig& c) {
-  std::printf("uncertainty gate %.5f keeps %.0f%% of validation at mean per-class accuracy %.3f\n",
+  std::printf("uncertainty gate %.3g keeps %.0f%% of validation at mean per-class accuracy %.3f\n",
               r.uncertainty_threshold, 100 * c.threshold_retain, r.val_accuracy_retained);
-  std::printf("given the detector's verdict: gate %.5f keeps %.0f%% of validation at mean per-class accuracy %.3f\n",
+  std::printf("given the detector's verdict: gate %.3g keeps %.0f%% of validation at mean per-class accuracy %.3f\n",
               r.verdict_uncertainty_threshold, 100 * c.threshold_retain, r.val_verdict_accuracy_retained);
 }
 

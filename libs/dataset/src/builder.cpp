@@ -9,6 +9,7 @@
 #include <optional>
 #include <utility>
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include "ivoa/core/camera_model.hpp"
@@ -426,6 +427,14 @@ SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::strin
   impl_->info.labels_from = impl_->rerun() ? "rerun" : "recorded";
 }
 
+std::string pairing_warning(const BuildReport& r, const monitor::PairingConfig& pairing) {
+  if (r.frames_unmatched < 5 || r.frames_unmatched <= r.frames_labelled) return "";
+  return fmt::format(
+      "{} of its {} stereo frames have no depth frame within {:.1f} ms (--sync-tolerance-us): a depth camera slower "
+      "than the stereo one, or on another clock? Half the depth frame period pairs them",
+      r.frames_unmatched, r.stereo_frames, static_cast<double>(pairing.tolerance_us) / 1e3);
+}
+
 // Destroyed before finish() (a log that could not be read, an error part-way):
 // what was written stays unregistered.
 SessionBuilder::~SessionBuilder() {
@@ -434,7 +443,9 @@ SessionBuilder::~SessionBuilder() {
 
 void SessionBuilder::add_log(const std::string& path, const ProgressCallback& progress) {
   Impl& m = *impl_;
-  m.info.logs.push_back(std::filesystem::absolute(path).lexically_normal().string());  // found again from any folder
+  const std::string source = std::filesystem::absolute(path).lexically_normal().string();  // found from any folder
+  m.info.logs.push_back(source);
+  if (m.writer) m.writer->add_source_log(source);  // opened with the logs read before this one
   // Damage is skipped to the next good event (reported in problems): what follows it is still the session's.
   logio::LogReader reader(path, {/*resync=*/true});  // throws LogReadError for a missing file
   logio::LogEvent e;

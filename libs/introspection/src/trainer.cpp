@@ -195,8 +195,12 @@ std::string training_summary(const TrainConfig& c, const SplitData& train, const
                              int64_t step) {
   std::ostringstream o;
   o.precision(5);
-  o << "{\"dataset\": \"" << c.dataset << "\", \"split_file\": \"" << c.split_file
-    << "\", \"train_sessions\": " << json_list(train.names) << ", \"val_sessions\": " << json_list(val.names)
+  // Absolute, as a dataset session names its logs: the model is read from other folders.
+  const auto where = [](const std::string& path) {
+    return json_quote(std::filesystem::absolute(path).lexically_normal().string());
+  };
+  o << "{\"dataset\": " << where(c.dataset) << ", \"split_file\": " << where(c.split_file)
+    << ", \"train_sessions\": " << json_list(train.names) << ", \"val_sessions\": " << json_list(val.names)
     << ", \"train_class_counts\": [" << r.train_class_counts[0] << ", " << r.train_class_counts[1] << ", "
     << r.train_class_counts[2] << ", " << r.train_class_counts[3] << "], \"steps\": " << step
     << ", \"steps_planned\": " << c.steps << ", \"kept\": \"" << (c.keep_last ? "last" : "best_validated")

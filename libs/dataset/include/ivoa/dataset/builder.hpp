@@ -70,6 +70,11 @@ struct BuildReport {
   std::array<int64_t, kNumClasses> class_counts{};
 };
 
+// Says so when most stereo frames found no depth frame within the pairing
+// tolerance (a depth camera slower than the stereo one, or on another
+// clock), naming the flag that widens it; "" otherwise.
+std::string pairing_warning(const BuildReport& report, const monitor::PairingConfig& pairing);
+
 // Called with (bytes done, bytes total) while reading.
 using ProgressCallback = std::function<void(uint64_t, uint64_t)>;
 

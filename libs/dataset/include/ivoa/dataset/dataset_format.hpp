@@ -101,6 +101,8 @@ class SessionWriter {
   void add_sample(SampleRecord sample, const cv::Mat& patch, const std::vector<float>& evidence = {});
   // A TN cell of the current frame left out (SessionInfo::tn_kept < 1).
   void count_dropped_tn() { ++info_.tn_dropped; }
+  // A log read after the first sample was written (a split recording's later parts).
+  void add_source_log(std::string path) { info_.logs.push_back(std::move(path)); }
   void close();
   // Closes and removes what was written without registering it: a build
   // that failed part-way leaves the dataset as it was (a session of that
