@@ -13,8 +13,11 @@
 namespace ivoa {
 namespace {
 
-// Stereo frames in a row without a depth partner before it is said: one or
-// two at a start, or where a depth frame was lost, are not worth a warning.
+// Stereo frames without a depth partner for this long (stream time), and at
+// least this many, before it is said: a depth camera slower than the stereo
+// one pairs some frames every period, so only a stream that pairs none (or
+// a depth stream gone) is meant. Stream time: a log replayed fast says the same.
+constexpr int64_t kUnpairedSpanToSayUs = 2'000'000;
 constexpr int64_t kUnpairedRunToSay = 5;
 constexpr double kUnpairedWarningIntervalMs = 10'000;
 constexpr const char* kUnpairedState = "unpaired: no depth frame near the stereo frames";
@@ -52,10 +55,11 @@ void MonitorNode::on_calibration(const rig_calibration_t& msg) {
     auto next = std::make_unique<monitor::LabelingPipeline>(rig, options_.grid, options_.monitor, options_.pairing);
     if (pipeline_) {
       spdlog::info("rig calibration changed: rebuilding the monitor");
-      publish(pipeline_->flush());
+      publish(pipeline_->flush(), Pairing::kFlushed);
       earlier_pipelines_ += pipeline_->counters();
     }
     pipeline_ = std::move(next);
+    unpaired_run_ = {};
     calibration_wait_.end();
     spdlog::info("calibration '{}': depth {}x{}, {} query cells ({} with a full patch in the left image)", rig.rig_name,
                  rig.depth.width, rig.depth.height, pipeline_->grid().size(), pipeline_->grid().count_in_image());
@@ -98,13 +102,14 @@ void MonitorNode::on_stereo(const obstacle_grid_t& msg) {
   }
 }
 
-void MonitorNode::publish(std::vector<monitor::PipelineOutcome> outcomes) {
+void MonitorNode::publish(std::vector<monitor::PipelineOutcome> outcomes, Pairing pairing) {
   for (auto& o : outcomes) {
     if (!o.labeled) {  // counted by the pairer
-      note_unpaired(o);
+      spdlog::debug("stereo frame {} has no depth frame within the pairing tolerance", o.stereo_utime);
+      if (pairing == Pairing::kLive) note_unpaired(o);
       continue;
     }
-    note_paired();
+    if (pairing == Pairing::kLive) note_paired();
     // Only what LCM took counts as out; the rest is counted as refused.
     const int published = int{bus_.publish(options_.depth_out_channel, o.labeled->depth_grid)} +
                           int{bus_.publish(options_.labels_out_channel, o.labeled->labels)};
@@ -117,36 +122,44 @@ void MonitorNode::publish(std::vector<monitor::PipelineOutcome> outcomes) {
 }
 
 void MonitorNode::note_unpaired(const monitor::PipelineOutcome& o) {
-  spdlog::debug("stereo frame {} has no depth frame within the pairing tolerance", o.stereo_utime);
-  if (++unpaired_in_a_row_ < kUnpairedRunToSay) return;
+  if (unpaired_run_.frames++ == 0) unpaired_run_.first_utime = o.stereo_utime;
+  if (unpaired_run_.frames < kUnpairedRunToSay || o.stereo_utime - unpaired_run_.first_utime < kUnpairedSpanToSayUs)
+    return;
   heartbeat_.set_state(kUnpairedState);
+  unpaired_run_.said = true;
   const double now = monotonic_ms();
   if (now - last_unpaired_warning_ms_ < kUnpairedWarningIntervalMs) return;
   last_unpaired_warning_ms_ = now;
-  monitor::PairingCounters c = earlier_pipelines_;
-  c += pipeline_->counters();
-  const std::string nearest = o.nearest_depth_us ? fmt::format("the nearest {:.1f} ms away", *o.nearest_depth_us / 1e3)
-                                                 : "none received in the last seconds";
+  const monitor::PairingCounters c = run_counters();
+  const std::string nearest = o.nearest_depth_us
+                                  ? fmt::format("the nearest {:.1f} ms {} it", std::abs(*o.nearest_depth_us) / 1e3,
+                                                *o.nearest_depth_us > 0 ? "after" : "before")
+                                  : "no depth frame received";
   spdlog::warn(
-      "{} stereo frames in a row have no depth frame within {:.1f} ms (utime {}: {}); {} of {} unlabelled so far. "
-      "A depth camera slower than the stereo one, or on another clock? --sync-tolerance-us half the depth frame "
-      "period pairs them, with depth up to that much older or newer",
-      unpaired_in_a_row_, options_.pairing.tolerance_us / 1e3, o.stereo_utime, nearest, c.unmatched_stereo,
-      c.unmatched_stereo + c.paired);
+      "no stereo frame of the last {:.1f} s ({}) had a depth frame within {:.1f} ms (utime {}: {}); {} of {} "
+      "unlabelled so far. Depth on another clock, or at a rate that never falls near the stereo frames? "
+      "--sync-tolerance-us half the depth frame period pairs them, with depth up to that much older or newer",
+      (o.stereo_utime - unpaired_run_.first_utime) / 1e6, unpaired_run_.frames, options_.pairing.tolerance_us / 1e3,
+      o.stereo_utime, nearest, c.unmatched_stereo, c.unmatched_stereo + c.paired);
 }
 
 void MonitorNode::note_paired() {
-  if (unpaired_in_a_row_ >= kUnpairedRunToSay) {
-    spdlog::info("stereo frames are paired with depth frames again, after {} unpaired", unpaired_in_a_row_);
+  if (unpaired_run_.said) {
+    spdlog::info("stereo frames are paired with depth frames again, after {} unpaired", unpaired_run_.frames);
     heartbeat_.set_state("running");
   }
-  unpaired_in_a_row_ = 0;
+  unpaired_run_ = {};
+}
+
+monitor::PairingCounters MonitorNode::run_counters() const {
+  monitor::PairingCounters c = earlier_pipelines_;  // the counts of the whole run
+  c += pipeline_->counters();
+  return c;
 }
 
 void MonitorNode::update_counters() {
   if (!pipeline_) return;
-  monitor::PairingCounters c = earlier_pipelines_;  // the counts of the whole run
-  c += pipeline_->counters();
+  const monitor::PairingCounters c = run_counters();
   heartbeat_.set_counter("frames_labelled", c.paired);
   heartbeat_.set_counter("stereo_unmatched", c.unmatched_stereo);
   heartbeat_.set_counter("stereo_duplicates", c.duplicate_stereo);
@@ -169,7 +182,7 @@ void MonitorNode::report_clock_events(const monitor::ClockCounters& now, monitor
 }
 
 void MonitorNode::flush() {
-  if (pipeline_) publish(pipeline_->flush());
+  if (pipeline_) publish(pipeline_->flush(), Pairing::kFlushed);
 }
 
 }  // namespace ivoa

@@ -38,11 +38,16 @@ class MonitorNode {
   void on_stereo(const obstacle_grid_t& msg);
   // False (counted, warned about once) while no calibration has arrived.
   bool has_calibration(const std::string& where);
-  void publish(std::vector<monitor::PipelineOutcome> outcomes);
-  // A run of unpaired stereo frames is said (state, a rate-limited warning
-  // with the nearest depth frame's distance); a pair ends it.
+  // kFlushed: frames decided because nothing more will come (a stop, a new
+  // calibration) say nothing about how the streams pair.
+  enum class Pairing { kLive, kFlushed };
+  void publish(std::vector<monitor::PipelineOutcome> outcomes, Pairing pairing = Pairing::kLive);
+  // A run of unpaired stereo frames long enough to mean the streams do not
+  // pair is said (state, a rate-limited warning with the nearest depth
+  // frame's distance); a pair ends it.
   void note_unpaired(const monitor::PipelineOutcome& outcome);
   void note_paired();
+  monitor::PairingCounters run_counters() const;  // of every pipeline of this run
   void update_counters();
   void report_clock_events(const monitor::ClockCounters& now, monitor::ClockCounters& seen, const std::string& channel);
 
@@ -54,7 +59,10 @@ class MonitorNode {
   CalibrationChanges calibrations_;  // to tell a new one from the same one again
   std::unique_ptr<monitor::LabelingPipeline> pipeline_;
   int64_t labelled_cells_ = 0;
-  int64_t unpaired_in_a_row_ = 0;
+  struct UnpairedRun {
+    int64_t frames = 0, first_utime = 0;
+    bool said = false;  // the state says "unpaired"
+  } unpaired_run_;
   double last_unpaired_warning_ms_ = -1e18;
   monitor::ClockCounters depth_clock_seen_, stereo_clock_seen_;  // what update_counters last reported
   monitor::PairingCounters earlier_pipelines_;                   // of the pipelines a calibration change replaced

@@ -297,6 +297,8 @@ TEST(DatasetBuilder, MostFramesUnpairedIsSaidWithTheFlagThatPairsThem) {
       << said;
   report.frames_labelled = 437, report.frames_unmatched = 4;  // a start-up's few
   EXPECT_EQ(pairing_warning(report, pairing), "");
+  report.frames_labelled = 50, report.frames_unmatched = 100;  // most paired, if few gave samples
+  EXPECT_EQ(pairing_warning(report, pairing), "");
 }
 
 // session.json names every log read: a split recording's later parts

@@ -30,6 +30,6 @@ if ! wait_for_line "$OUT/driver.log" "right camera .*reconnected, .* after its l
 if ! wait_exit after 65; then show driver after rig; exit 1; fi
 assert_json "$OUT/after.json" \
   's["checked"] >= 10' 's["content_mismatch"] == 0' 's["stamp_mismatch"] == 0' 's["utime_regressions"] == 0' \
-  's["status"]["counters"]["reconnects"] >= 1' 's["status"]["state"] == "running"' \
+  's["status"]["counters"]["disconnects"] >= s["status"]["counters"]["reconnects"] >= 1' 's["status"]["state"] == "running"' \
   || { show driver rig; exit 1; }
 echo "OK: $(cat "$OUT/after.json")"

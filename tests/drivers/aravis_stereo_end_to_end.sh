@@ -26,7 +26,7 @@ assert_json "$OUT/summary.json" \
   's["rig_messages"] >= 1' 's["pairs_before_rig"] == 0' 's["rig_name"] == "ivoa-test-640x480"' 'abs(s["rig_baseline"] - 0.12) < 1e-9' \
   's["status"]["state"] == "running"' 's["status"]["counters"]["pairs"] >= 20' \
   's["status"]["counters"]["missed_left"] <= 4' 's["status"]["counters"]["missed_right"] <= 4' \
-  's["status"]["counters"]["reconnects"] == 0' \
+  's["status"]["counters"]["reconnects"] == 0' 's["status"]["counters"]["disconnects"] == 0' \
   || { show driver rig; exit 1; }
 
 # Aravis' fake camera lacks the FLIR feature: a warning naming it, not a failure.

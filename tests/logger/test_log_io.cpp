@@ -340,24 +340,43 @@ TEST(LogSummary, CountsSequenceGapsRepeatsAndUtimeRegressions) {
   EXPECT_EQ(s.utime_regressions, 1);
 }
 
-// A respawned driver numbers its frames from 0 again: that run lost
-// nothing by its numbers, and the table says the numbers started again.
-TEST(LogSummary, APublisherThatStartsAgainAtZeroIsARestartNotARegression) {
+// A respawned driver numbers its frames from 0 again, later in time: that
+// run lost nothing but its own first numbers, and the table says the
+// numbers started again. A repeat or a late message is not a restart.
+ChannelSummary summary_of(const std::vector<std::pair<int64_t, int64_t>>& seq_and_utime, std::string* table = nullptr) {
   LogSummary summary;
-  for (const int64_t seq : {0, 1, 2, 0, 1, 3, 3}) {
-    const auto bytes = encoded_stereo(seq, 100);
+  for (const auto& [seq, utime] : seq_and_utime) {
+    const auto bytes = encoded_stereo(seq, utime);
     summary.add("STEREO_IMAGES", 7, bytes.data(), bytes.size());
   }
-  const ChannelSummary& s = summary.channels().at("STEREO_IMAGES");
+  if (table) *table = summary.table();
+  return summary.channels().at("STEREO_IMAGES");
+}
+
+TEST(LogSummary, APublisherThatStartsAgainIsARestartNotARegression) {
+  std::string table;
+  ChannelSummary s = summary_of({{0, 100}, {1, 101}, {2, 102}, {0, 200}, {1, 201}, {3, 203}, {3, 203}}, &table);
   EXPECT_EQ(s.seq_restarts, 1);
-  EXPECT_EQ(s.seq_regressions, 1) << "3 again";
+  EXPECT_EQ(s.seq_regressions, 1) << "3 again, at its own utime";
   EXPECT_EQ(s.missing_seq, 1) << "2 of the second run";
-  const std::string table = summary.table();
-  EXPECT_NE(table.find("STEREO_IMAGES: its sequence started again at 0 1 time (a publisher restarted)"),
-            std::string::npos)
+  EXPECT_NE(
+      table.find("STEREO_IMAGES: its sequence started again 1 time (went back as time went on: a publisher restarted)"),
+      std::string::npos)
       << table;
   EXPECT_NE(table.find("STEREO_IMAGES: 1 message repeated or out of order"), std::string::npos) << table;
   EXPECT_NE(channel_json(s).find("\"seq_restarts\": 1"), std::string::npos);
+
+  s = summary_of({{5, 100}, {6, 101}, {1, 300}, {2, 301}});  // the new run's 0 lost
+  EXPECT_EQ(s.seq_restarts, 1);
+  EXPECT_EQ(s.seq_regressions, 0);
+  EXPECT_EQ(s.missing_seq, 1);
+  s = summary_of({{0, 100}, {0, 300}});  // one message, then a respawn
+  EXPECT_EQ(s.seq_restarts, 1);
+  EXPECT_EQ(s.seq_regressions, 0);
+  s = summary_of({{1, 101}, {0, 100}, {2, 102}});  // a late message
+  EXPECT_EQ(s.seq_restarts, 0);
+  EXPECT_EQ(s.seq_regressions, 1);
+  EXPECT_EQ(s.missing_seq, 0) << "2 follows 1, the newest";
 }
 
 TEST(LogSummary, HeartbeatsOfManySendersAreNotCountedAsUtimeRegressions) {

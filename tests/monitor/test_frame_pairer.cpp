@@ -51,6 +51,10 @@ TEST(FramePairer, MissingPartnerIsUnmatchedNotPairedWithAFarFrame) {
   EXPECT_EQ(p.counters().unmatched_stereo, 1);
   EXPECT_EQ(p.counters().paired, 0);
   EXPECT_EQ(out[0].nearest_depth_us, 50000) << "says how far the nearest depth frame was";
+  append(out, p.add_stereo(130000, "s130000"));
+  append(out, p.add_depth(200000, "d200000"));
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[1].nearest_depth_us, -30000) << "an older one, by its sign";
 }
 
 TEST(FramePairer, DepthStreamStallDecidesPendingFramesEventually) {

@@ -207,25 +207,47 @@ TEST(MonitorNode, UnmatchedStereoFramesAreCountedNotLabelled) {
   EXPECT_EQ(f.heartbeat.counter("stereo_unmatched"), 1);
 }
 
-// A depth camera at 5 Hz beside a free-running stereo pair: no stereo frame
-// has a depth frame within the default 16.7 ms. That must show in the
-// state, not only in a counter, and end when frames pair again.
-TEST(MonitorNode, ARunOfUnpairedStereoFramesShowsInTheStateUntilOnePairs) {
+// Two free-running 5 Hz streams out of phase: no stereo frame has a depth
+// frame within the default 16.7 ms, and the monitor labelled nothing while
+// saying "running". Said once the streams have not paired for 2 s; a pair
+// ends it; frames decided at a stop say nothing of how the streams pair.
+TEST(MonitorNode, StreamsThatNeverPairShowInTheStateUntilOnePairs) {
   NodeFixture f;
   f.send_calibration();
   const cv::Mat ground = test::render_depth(f.rig, {});
-  for (int i = 1; i <= 6; ++i) {
+  for (int i = 1; i <= 11; ++i) {
     f.send_depth(i * 200'000, ground, i);
     f.send_stereo(i * 200'000 - 60'000, 0);  // 60 ms before its depth frame
-    if (i == 4) {
-      EXPECT_EQ(f.heartbeat.snapshot().state, "running") << "four unpaired: not yet a run";
+    if (i == 10) {
+      EXPECT_EQ(f.heartbeat.snapshot().state, "running") << "1.8 s unpaired: not yet said";
     }
   }
   EXPECT_TRUE(f.labels.empty());
-  EXPECT_EQ(f.heartbeat.snapshot().state, "unpaired: no depth frame near the stereo frames");
-  f.send_stereo(1'200'000, 0);  // on depth frame 6's utime
+  const std::string unpaired = "unpaired: no depth frame near the stereo frames";
+  EXPECT_EQ(f.heartbeat.snapshot().state, unpaired);
+  f.send_stereo(2'210'000, 0);  // near depth frame 11, but waits for a newer one
+  f.node.flush();
+  f.drain();
   ASSERT_EQ(f.labels.size(), 1u);
+  EXPECT_EQ(f.heartbeat.snapshot().state, unpaired) << "a frame paired at a stop";
+  f.send_depth(2'400'000, ground, 12);
+  f.send_stereo(2'400'000, 0);
+  ASSERT_EQ(f.labels.size(), 2u);
   EXPECT_EQ(f.heartbeat.snapshot().state, "running");
+}
+
+// A depth camera slower than the stereo one on the same clock pairs one
+// stereo frame of every six: labels at its rate, not a stream unpaired.
+TEST(MonitorNode, ASlowerDepthCameraIsNotUnpaired) {
+  NodeFixture f;
+  f.send_calibration();
+  const cv::Mat ground = test::render_depth(f.rig, {});
+  for (int k = 0; k <= 90; ++k) {  // 3 s of 30 Hz stereo, 5 Hz depth
+    if (k % 6 == 0) f.send_depth(k * 33'333, ground, k / 6);
+    f.send_stereo(k * 33'333, 0);
+    ASSERT_EQ(f.heartbeat.snapshot().state, "running") << "stereo frame " << k;
+  }
+  EXPECT_EQ(f.labels.size(), 16u);
 }
 
 }  // namespace

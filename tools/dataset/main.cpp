@@ -149,9 +149,10 @@ bool sessions_are_recordings(const SessionLogs& sessions, const std::vector<std:
 // built a session with a hole in it, silently.
 std::string parts_not_given(const std::vector<std::string>& files) {
   int next = 0, missing = 0;
-  std::string first;
+  std::string first, recording;  // --session may join several
   for (const auto& f : files) {
     if (!logio::is_split_part(f)) return "";
+    if (const std::string r = fs::path(f).replace_extension().string(); r != recording) recording = r, next = 0;
     const int part = std::stoi(fs::path(f).extension().string().substr(1));
     if (part > next && first.empty()) first = fs::path(f).replace_extension(fmt::format(".{:02d}", next)).string();
     missing += std::max(0, part - next);

@@ -191,8 +191,9 @@ bool score_logs(const ScoreCommandLine& cl, LiveScore& s, ReadCounts& counts) {
                 !skipped.empty()          ? ""
                 : cut_short               ? " in what was read before the damage (--resync reads on past it)"
                 : s.predicted_frames == 0 ? " (was ivoa-introspection running when it was recorded?)"
-                                          : " (was ivoa-depth-monitor running, with a depth sensor? Its last heartbeat "
-                                            "in ivoa-log-check says; 'unpaired': see its --sync-tolerance-us)");
+                                          : " (was ivoa-depth-monitor running, with a depth sensor? ivoa-log-check "
+                                            "shows its last heartbeat: stereo_unmatched near its in count means no "
+                                            "depth frame was near the stereo frames, see its --sync-tolerance-us)");
   return false;
 }
 

@@ -222,8 +222,8 @@ void add_check_options(CLI::App& app, CheckCommandLine& cl) {
         }
       });
   app.add_flag("--no-gaps", cl.no_gaps,
-               "fail if a sequence-numbered channel misses or repeats a message (a publisher that started again at "
-               "0, respawned, is neither)");
+               "fail if a sequence-numbered channel misses or repeats a message (a publisher that started again, its "
+               "seq going back as time went on, is neither)");
 }
 
 // Reads and prints every file, then the summary, the JSON and the verdict

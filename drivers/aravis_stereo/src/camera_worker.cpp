@@ -55,6 +55,7 @@ void CameraWorker::trigger() {
 
 void CameraWorker::on_frame(FrameResult&& result) {
   last_frame_ms_ = monotonic_ms();
+  frame_since_open_ = true;
   CameraEvent event;
   event.side = side_;
   if (result.complete) {
@@ -101,10 +102,11 @@ bool CameraWorker::open_camera() {
   last_frame_ms_ = monotonic_ms();
   if (lost_at_ms_ >= 0) {
     ++reconnects_;
-    spdlog::info("{}: reconnected, {:.1f} s after its last frame", source_->describe(),
-                 (monotonic_ms() - lost_at_ms_) / 1000.0);
+    spdlog::info("{}: reconnected, {:.1f} s after {}", source_->describe(), (monotonic_ms() - lost_at_ms_) / 1000.0,
+                 lost_after_a_frame_ ? "its last frame" : "it was opened and sent no frame");
   }
   lost_at_ms_ = -1;
+  frame_since_open_ = false;
   backoff_.succeeded();
   events_.push(status_event(CameraEvent::Type::kConnected, side_, source_->describe()));
   return true;
@@ -114,7 +116,9 @@ void CameraWorker::close_camera(const std::string& reason) {
   spdlog::warn("{}: {}; closing it and reconnecting", source_->describe(), reason);
   events_.push(status_event(CameraEvent::Type::kDisconnected, side_, reason));
   connected_ = false;
+  ++disconnects_;
   lost_at_ms_ = last_frame_ms_;  // the images stopped then, not now
+  lost_after_a_frame_ = frame_since_open_;
   source_->abandon();
 }
 

@@ -148,6 +148,7 @@ struct StereoDriver::State {
     heartbeat.set_counter("out_of_order", c.out_of_order);
     heartbeat.set_counter("missed_left", c.missed[0]);
     heartbeat.set_counter("missed_right", c.missed[1]);
+    heartbeat.set_counter("disconnects", left.disconnects() + right.disconnects());
     heartbeat.set_counter("reconnects", left.reconnects() + right.reconnects());
     heartbeat.set_counter("pairing_unlocks", c.unlocks);
     heartbeat.set_counter("queue_overflow", overflow);

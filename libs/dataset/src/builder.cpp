@@ -428,7 +428,8 @@ SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::strin
 }
 
 std::string pairing_warning(const BuildReport& r, const monitor::PairingConfig& pairing) {
-  if (r.frames_unmatched < 5 || r.frames_unmatched <= r.frames_labelled) return "";
+  // Not against frames_labelled: a paired frame may give no sample (every cell unknown, or stored already).
+  if (r.frames_unmatched < 5 || 2 * r.frames_unmatched <= r.stereo_frames) return "";
   return fmt::format(
       "{} of its {} stereo frames have no depth frame within {:.1f} ms (--sync-tolerance-us): a depth camera slower "
       "than the stereo one, or on another clock? Half the depth frame period pairs them",

@@ -11,13 +11,19 @@
 namespace ivoa::logio {
 namespace {
 
-void add_seq(ChannelSummary& s, int64_t seq) {
+// `time_went_on`: the message's utime is later than the one before it. A
+// seq that goes back while time goes on is its publisher starting again
+// (respawned); the new run's numbers before it were lost. Otherwise it is
+// a repeat or a late message, and the run's newest seq stays.
+void add_seq(ChannelSummary& s, int64_t seq, bool time_went_on) {
   if (s.typed == 1) {
     s.first_seq = seq;
-  } else if (seq == 0 && s.last_seq > 0) {  // a new run of its publisher: nothing lost by seq
+  } else if (seq <= s.last_seq && time_went_on) {
     ++s.seq_restarts;
+    s.missing_seq += seq;
   } else if (seq <= s.last_seq) {
     ++s.seq_regressions;
+    return;
   } else if (seq > s.last_seq + 1) {
     s.missing_seq += seq - s.last_seq - 1;
     if (s.gaps.size() < kMaxGapsListed) s.gaps.push_back({s.last_seq, seq});
@@ -64,10 +70,11 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
   ++s.typed;
   const auto utime = payload_utime(data, size);
   if (s.type == "unknown" || !utime) return;
+  const bool time_went_on = s.typed > 1 && *utime > s.last_utime;
   if (s.typed == 1) s.first_utime = *utime;
   else if (*utime < s.last_utime && s.utime_ordered) ++s.utime_regressions;
   s.last_utime = *utime;
-  if (const auto seq = payload_seq(s.type, data, size)) add_seq(s, *seq);
+  if (const auto seq = payload_seq(s.type, data, size)) add_seq(s, *seq, time_went_on);
 }
 
 std::string LogSummary::table() const {
@@ -84,8 +91,8 @@ std::string LogSummary::table() const {
   for (const auto& [name, s] : channels_) {  // the table's seq columns span every run of the publisher
     if (s.seq_restarts > 0)
       out += fmt::format(
-          "{}: its sequence started again at 0 {} time{} (a publisher restarted); \"missing\" counts "
-          "within each run\n",
+          "{}: its sequence started again {} time{} (went back as time went on: a publisher restarted); "
+          "\"missing\" counts within each run\n",
           name, s.seq_restarts, s.seq_restarts == 1 ? "" : "s");
     if (s.seq_regressions > 0)
       out += fmt::format("{}: {} message{} repeated or out of order by sequence number\n", name, s.seq_regressions,

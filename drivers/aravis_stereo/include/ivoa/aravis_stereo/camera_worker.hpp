@@ -39,7 +39,8 @@ class CameraWorker {
   void trigger();
 
   bool connected() const { return connected_; }
-  int64_t reconnects() const { return reconnects_; }  // closed and opened again
+  int64_t disconnects() const { return disconnects_; }  // closed for want of frames or control
+  int64_t reconnects() const { return reconnects_; }    // opened again after that
 
  private:
   void run();
@@ -61,9 +62,11 @@ class CameraWorker {
   bool stopping_ = false;
   bool trigger_requested_ = false;
   std::atomic<bool> connected_{false};
-  std::atomic<int64_t> reconnects_{0};
+  std::atomic<int64_t> disconnects_{0}, reconnects_{0};
   std::atomic<double> last_frame_ms_{0};
+  std::atomic<bool> frame_since_open_{false};  // set on the stream's thread
   double lost_at_ms_ = -1;
+  bool lost_after_a_frame_ = false;
 };
 
 }  // namespace ivoa::aravis_stereo

@@ -31,8 +31,8 @@ struct ChannelSummary {
   bool has_seq = false;
   int64_t first_seq = -1, last_seq = -1;
   int64_t missing_seq = 0;      // messages missing according to seq
-  int64_t seq_regressions = 0;  // seq repeated or went backwards, but for restarts
-  int64_t seq_restarts = 0;     // seq back to 0: its publisher started again (respawned)
+  int64_t seq_regressions = 0;  // seq repeated or went back at the same or an older utime
+  int64_t seq_restarts = 0;     // seq went back as utime went on: its publisher started again (respawned)
   std::vector<SeqGap> gaps;     // the first kMaxGapsListed of them
 };
 

@@ -71,8 +71,8 @@ class FramePairer {
     Stereo stereo;
     std::optional<int64_t> depth_utime;  // empty: unmatched
     const Depth* depth = nullptr;        // valid until the next add_* / flush call
-    // Unmatched: how far (us) the nearest depth frame held was, to say why;
-    // empty when none of its restart is held.
+    // Unmatched: the nearest depth frame held, depth utime minus stereo
+    // (us; < 0: older), to say why; empty when none of its restart is held.
     std::optional<int64_t> nearest_depth_us;
   };
 
@@ -178,7 +178,7 @@ class FramePairer {
     if (after != depth_.end() && after->first.first == epoch) gap = after->first.second - t;
     if (after != depth_.begin()) {
       const auto before = std::prev(after);
-      if (before->first.first == epoch && (!gap || t - before->first.second < *gap)) gap = t - before->first.second;
+      if (before->first.first == epoch && (!gap || t - before->first.second < *gap)) gap = before->first.second - t;
     }
     return gap;
   }

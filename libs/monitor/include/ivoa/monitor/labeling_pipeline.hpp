@@ -24,7 +24,7 @@ struct PipelineOutcome {
   int64_t stereo_utime = 0;
   obstacle_grid_t stereo_grid;
   std::optional<LabeledFrame> labeled;      // empty: no depth frame within the pairing tolerance
-  std::optional<int64_t> nearest_depth_us;  // unlabeled: how far the nearest depth frame held was
+  std::optional<int64_t> nearest_depth_us;  // unlabeled: the nearest depth frame held, depth - stereo utime
 };
 
 class LabelingPipeline {
