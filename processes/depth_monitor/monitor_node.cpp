@@ -122,7 +122,8 @@ void MonitorNode::publish(std::vector<monitor::PipelineOutcome> outcomes, Pairin
 }
 
 void MonitorNode::note_unpaired(const monitor::PipelineOutcome& o) {
-  if (unpaired_run_.frames++ == 0) unpaired_run_.first_utime = o.stereo_utime;
+  if (unpaired_run_.frames++ == 0 || o.stereo_utime < unpaired_run_.first_utime)  // or its clock went back
+    unpaired_run_.first_utime = o.stereo_utime;
   if (unpaired_run_.frames < kUnpairedRunToSay || o.stereo_utime - unpaired_run_.first_utime < kUnpairedSpanToSayUs)
     return;
   heartbeat_.set_state(kUnpairedState);
