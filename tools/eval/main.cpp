@@ -218,7 +218,6 @@ std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection
   const LabelledFrames frames = labelled_frames(session);
   logio::LogReader in(log, {/*resync=*/true});
   logio::LogEvent e;
-  int64_t& index = labelled_seen;
   // The simulator publishes a frame's truth after its images: read on past
   // a full budget until the truth has been checked.
   bool scene_checked = session.info().scene.empty();
@@ -240,7 +239,7 @@ std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection
     stereo_image_t msg;
     if (from_log.size() >= room || e.channel != channels::kStereoImages || !logio::decode(e, msg)) continue;
     const auto it = frames.find(msg.utime);
-    if (it == frames.end() || index++ % o.overlay_every != 0) continue;
+    if (it == frames.end() || labelled_seen++ % o.overlay_every != 0) continue;
     if (model.info().views == 2 && !warp)
       throw dataset::DatasetError(log + ": no rig calibration before the first frame (a two-view model needs it)");
     const std::string path =

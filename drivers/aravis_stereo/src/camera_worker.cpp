@@ -79,6 +79,7 @@ void CameraWorker::wait_for(double seconds) {
 }
 
 bool CameraWorker::open_camera() {
+  frame_since_open_ = false;  // before start(): its first frames may come before start() returns
   try {
     source_->start([this](FrameResult&& r) { on_frame(std::move(r)); });
   } catch (const CameraConfigError& e) {
@@ -106,7 +107,6 @@ bool CameraWorker::open_camera() {
                  lost_after_a_frame_ ? "its last frame" : "it was opened and sent no frame");
   }
   lost_at_ms_ = -1;
-  frame_since_open_ = false;
   backoff_.succeeded();
   events_.push(status_event(CameraEvent::Type::kConnected, side_, source_->describe()));
   return true;
