@@ -18,6 +18,8 @@
 namespace ivoa {
 namespace {
 
+constexpr const char* kFramesUntrainedSize = "frames_untrained_size";
+
 std::vector<float> flatten(const cv::Mat& m) { return std::vector<float>(m.begin<float>(), m.end<float>()); }
 
 // The query cell's prediction given the detector's verdict there (unknown:
@@ -152,6 +154,10 @@ double warm_up(introspection::IntrospectionModel& model, cv::Size image_size, in
   return monotonic_ms() - start;
 }
 
+cv::Size default_warm_up_size(const introspection::ModelInfo& info) {
+  return info.image_sizes.empty() ? cv::Size(960, 600) : info.image_sizes.front();
+}
+
 IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
                                      std::unique_ptr<introspection::IntrospectionModel> model,
                                      IntrospectionNodeOptions options, int mc_passes)
@@ -164,6 +170,7 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
       grids_(static_cast<size_t>(std::max(options_.queue_frames, 1)) + 16) {
   bus_.on_decode_error([this](const std::string& what) { heartbeat_.bad_input(what); });
   heartbeat_.set_counter(kFramesMissed, 0);
+  if (!model_->info().image_sizes.empty()) heartbeat_.set_counter(kFramesUntrainedSize, 0);
   bus_.subscribe<stereo_image_t>(options_.stereo_channel, [this](const stereo_image_t& m, const ReceiveInfo&) {
     heartbeat_.count_in();
     heartbeat_.add_to_counter(kFramesMissed, missed_.add(m.seq));
@@ -269,6 +276,25 @@ void IntrospectionNode::update_warp() {
   }
 }
 
+void IntrospectionNode::check_image_size(cv::Size size) {
+  if (size != last_image_size_) {
+    last_image_size_ = size;
+    last_size_trained_ = introspection::trained_on_size(model_->info(), size);
+    const bool warned = std::find(warned_sizes_.begin(), warned_sizes_.end(), size) != warned_sizes_.end();
+    if (!last_size_trained_ && !warned) {
+      warned_sizes_.push_back(size);
+      spdlog::warn(
+          "{}: {}x{} images, but model {} was trained on {} images: it runs (patches are cut on the ground and "
+          "resized), but how well it predicts this camera's failures is unmeasured. Record this rig "
+          "(procman_configs/record.pmd), build a dataset from the logs (ivoa-dataset build) and fine-tune on it "
+          "(ivoa-train --init <this model>). Such frames are counted as {}.",
+          options_.stereo_channel, size.width, size.height, model_->info().id,
+          introspection::image_sizes_text(model_->info().image_sizes), kFramesUntrainedSize);
+    }
+  }
+  if (!last_size_trained_) heartbeat_.add_to_counter(kFramesUntrainedSize, 1);
+}
+
 cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& where, cv::Mat& left) {
   try {
     left = decode_image(frame.msg.left);
@@ -303,6 +329,7 @@ void IntrospectionNode::process(const Frame& frame) {
   cv::Mat left;
   const cv::Mat input = model_input(frame, where, left);
   if (input.empty()) return;
+  check_image_size(left.size());
   introspection::Heatmaps h;
   std::vector<introspection::Prediction> predictions;
   std::optional<obstacle_grid_t> grid;

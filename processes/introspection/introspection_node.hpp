@@ -11,6 +11,10 @@
 // A grid from another detector than the model was trained for gives the
 // query cells' geometry but no verdicts (counted, warned about once): the
 // model knows when its own detector errs, not another's.
+// Frames of an image size the model was not trained on (ModelInfo::
+// image_sizes) are run all the same, since patches are cut on the ground
+// and resized, but counted (frames_untrained_size) and warned about once
+// per size: its accuracy on that camera is unmeasured.
 // A two-view model also needs the rig calibration, to warp the right image
 // onto the ground plane; frames before the first calibration are skipped
 // (counted apart, as frames_without_calibration: CalibrationWait).
@@ -48,6 +52,7 @@ struct IntrospectionNodeOptions {
   std::chrono::milliseconds grid_wait{200};
   // Before the first frame, run the model once on a blank frame of this
   // size (the camera's) on the worker thread; the constructor returns after.
+  // default_warm_up_size() is the size the model was trained on.
   std::optional<cv::Size> warm_up;
   // Frames held while the CNN is busy: 1 keeps only the newest (live); more
   // keeps that many, oldest first (a log read with ?speed=0, a burst).
@@ -100,6 +105,9 @@ introspection_t make_introspection_message(const introspection::IntrospectionMod
 // first real frame instead of delaying it. Call it on the thread that will
 // run the model: the set-up is partly per thread. Returns how long it took, ms.
 double warm_up(introspection::IntrospectionModel& model, cv::Size image_size, int near_cells = 40);
+// The first image size the model was trained on, or the simulator's 960x600
+// for a model that does not say.
+cv::Size default_warm_up_size(const introspection::ModelInfo& info);
 
 class IntrospectionNode {
  public:
@@ -128,6 +136,8 @@ class IntrospectionNode {
   cv::Mat model_input(const Frame& frame, const std::string& where, cv::Mat& left);
   // Builds the ground warp of a calibration received since (worker thread only).
   void update_warp();
+  // Counts a frame of a size the model was not trained on, warning once per size.
+  void check_image_size(cv::Size size);
 
   Bus& bus_;
   Heartbeat& heartbeat_;
@@ -137,6 +147,9 @@ class IntrospectionNode {
   LatestMailbox<Frame> frames_;
   RecentGrids grids_;
   bool warned_other_detector_ = false;               // LCM thread only
+  cv::Size last_image_size_;                         // worker thread only
+  bool last_size_trained_ = true;                    // worker thread only
+  std::vector<cv::Size> warned_sizes_;               // worker thread only
   SeqGaps missed_;                                   // LCM thread only
   std::optional<CalibrationWait> calibration_wait_;  // two-view models; worker thread only
   std::mutex calibration_mutex_;

@@ -29,7 +29,7 @@ struct CommandLine {
   ivoa::IntrospectionNodeOptions options;
   std::string lookup = "nearest";
   int grid_wait_ms = static_cast<int>(options.grid_wait.count());
-  std::string warm_up = "960x600";
+  std::string warm_up = "model";
   double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
 };
 
@@ -87,11 +87,13 @@ void add_model_options(CLI::App& app, CommandLine& cl) {
       ->check(ivoa::seed_number());
   app.add_option("--warm-up", cl.warm_up,
                  "before listening, run the model once on a blank frame of this size (WxH, the camera's), so the "
-                 "first real frame is not delayed by LibTorch's set-up; none: skip")
+                 "first real frame is not delayed by LibTorch's set-up; model: the size it was trained on (960x600 "
+                 "if it does not say); none: skip")
       ->capture_default_str()
       ->check([](const std::string& s) {
-        return s == "none" || frame_size(s) ? std::string()
-                                            : "expected WxH (e.g. 960x600, each side at most 8192) or none";
+        return s == "none" || s == "model" || frame_size(s)
+                   ? std::string()
+                   : "expected WxH (e.g. 960x600, each side at most 8192), model or none";
       });
 }
 
@@ -117,8 +119,11 @@ void add_channel_options(CLI::App& app, ivoa::IntrospectionNodeOptions& options)
 
 void log_model(const ivoa::introspection::IntrospectionModel& model, int mc_passes) {
   const auto& info = model.info();
-  spdlog::info("model {}: {} for '{}', {}px patches at stride {}{}, T = {}, gate {:.5f}", info.id, info.architecture,
-               info.detector, info.patch_size, info.stride,
+  const std::string trained_on = info.image_sizes.empty()
+                                     ? "images of unrecorded size"
+                                     : ivoa::introspection::image_sizes_text(info.image_sizes) + " images";
+  spdlog::info("model {}: {} for '{}', trained on {}, {}px patches at stride {}{}, T = {}, gate {:.5f}", info.id,
+               info.architecture, info.detector, trained_on, info.patch_size, info.stride,
                info.patch_scale > 0 ? fmt::format(", query cells from footprint-scaled patches (x{})", info.patch_scale)
                                     : std::string(),
                mc_passes, model.uncertainty_threshold());
@@ -151,7 +156,8 @@ int main(int argc, char** argv) {
     return ivoa::kExitBadInput;
   }
   log_model(*model, cl.config.mc_passes);
-  cl.options.warm_up = frame_size(cl.warm_up);
+  cl.options.warm_up =
+      cl.warm_up == "model" ? std::optional(ivoa::default_warm_up_size(model->info())) : frame_size(cl.warm_up);
   try {
     ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
     ivoa::logio::warn_that_a_replay_publishes_nothing(common.lcm_url,

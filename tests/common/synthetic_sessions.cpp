@@ -47,6 +47,7 @@ void write_synthetic_session(const std::string& dataset_root, const std::string&
   info.patch_size = s.patch_size;
   info.scene = s.scene;
   info.seed = s.scene_seed;
+  info.image_size = s.image_size;
   dataset::SessionWriter w(dataset_root, info);
   const int64_t frame = w.add_frame(0, 0, 4 * s.per_class);
   for (int k = 0; k < s.per_class; ++k)

@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <string>
 
+#include <opencv2/core.hpp>
+
 namespace ivoa::test {
 
 struct SyntheticSession {
@@ -16,6 +18,7 @@ struct SyntheticSession {
   int patch_size = 100;    // px, the side of each (view's) square
   std::string scene;       // recorded in session.json, as a simulated session's scene and seed
   int64_t scene_seed = -1;
+  cv::Size image_size;  // of the frames the patches were cut from; 0 x 0: not recorded
 };
 
 // Writes session `name` under `dataset_root`: one frame (utime 0), the

@@ -19,6 +19,7 @@
 #include "ivoa/core/footprint_patch.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/ground_warp.hpp"
+#include "ivoa/core/image_convert.hpp"
 #include "ivoa/dataset/builder.hpp"
 #include "ivoa/dataset/patch.hpp"
 #include "ivoa/logio/log_format.hpp"
@@ -123,6 +124,8 @@ TEST(DatasetBuilder, RerunLabelsMatchAnIndependentRecomputationAndPatchesTheFram
   EXPECT_EQ(session.info().scene, "indoor_office");
   EXPECT_EQ(session.info().seed, 3);
   EXPECT_EQ(session.info().environment, "indoor");
+  EXPECT_EQ(session.info().image_size, cv::Size(sim::make_sim_rig().left.width, sim::make_sim_rig().left.height))
+      << "what the patches were cut from, for the model to record";
   ASSERT_EQ(session.size(), expected.labels.size());
   for (size_t k = 0; k < session.size(); ++k) {
     const SampleRecord& s = session.samples()[k];
@@ -222,6 +225,36 @@ TEST(DatasetBuilder, RecordedLabelsAreUsedAsRecorded) {
   EXPECT_EQ(session.info().labels_from, "recorded");
   ASSERT_EQ(session.size(), recorded.size());
   for (const auto& s : session.samples()) EXPECT_EQ(s.label, (recorded.at({s.utime, s.cell})));
+}
+
+// A session records the size of the frames its patches were cut from, which
+// a model trained on it records in turn; frames of another size later (a
+// second camera's log given to the same session) are counted, for the tool
+// to say that the model will not know them.
+TEST(DatasetBuilder, FramesOfAnotherSizeThanTheSessionsAreCounted) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("rec.lcmlog");
+  write_patterned_labels_log(log_path);
+  const std::string other_log = dir.file("other_camera.lcmlog");
+  {
+    Bus bus("file://" + other_log + "?mode=w");
+    cv::Mat small(240, 320, CV_8UC3, cv::Scalar::all(90));
+    for (int64_t utime : {90'000'000, 90'100'000}) {
+      stereo_image_t frame{};
+      frame.utime = utime;
+      frame.left = encode_image(small, image_t::PIXEL_FORMAT_BGR, utime);
+      frame.right = frame.left;
+      bus.publish(channels::kStereoImages, frame);
+    }
+  }
+  SessionBuilder builder(dir.file("data"), "mixed", BuildOptions{});
+  builder.add_log(log_path);
+  builder.add_log(other_log);
+  const BuildReport report = builder.finish();
+  const cv::Size sim_camera(sim::make_sim_rig().left.width, sim::make_sim_rig().left.height);
+  EXPECT_EQ(report.image_size, sim_camera);
+  EXPECT_EQ(report.frames_other_size, 2);
+  EXPECT_EQ(SessionReader(dir.file("data") + "/mixed").info().image_size, sim_camera);
 }
 
 // A recorded labels message the session cannot store is skipped, named by

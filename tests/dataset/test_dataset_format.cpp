@@ -82,10 +82,11 @@ TEST(DatasetFormat, SessionRoundTripsPatchesIndexAndMetadata) {
   EXPECT_EQ(r.samples()[0].phenomenon, 2);
 }
 
-TEST(DatasetFormat, PatchScaleAndSidesRoundTripAndOldSessionsReadAsFixed) {
+TEST(DatasetFormat, PatchScaleSidesAndImageSizeRoundTripAndOldSessionsLackThem) {
   test::TempDir dir;
   SessionInfo scaled = info("s1");
   scaled.patch_scale = 1.6;
+  scaled.image_size = {640, 480};
   scaled.tn_kept = 0.25;
   {
     SessionWriter w(dir.path().string(), scaled);
@@ -102,6 +103,7 @@ TEST(DatasetFormat, PatchScaleAndSidesRoundTripAndOldSessionsReadAsFixed) {
     const SessionReader r(session);
     EXPECT_DOUBLE_EQ(r.info().patch_scale, 1.6);
     EXPECT_DOUBLE_EQ(r.info().tn_kept, 0.25);
+    EXPECT_EQ(r.info().image_size, cv::Size(640, 480));
     EXPECT_EQ(r.samples()[0].patch_side, 252);
     EXPECT_EQ(r.samples()[1].patch_side, r.info().patch_size);
   }
@@ -118,7 +120,7 @@ TEST(DatasetFormat, PatchScaleAndSidesRoundTripAndOldSessionsReadAsFixed) {
     std::ifstream j(session + "/session.json");
     json.assign(std::istreambuf_iterator<char>(j), {});
   }
-  for (const char* name : {"  \"patch_scale\"", "  \"tn_kept\"", "  \"tn_dropped\""}) {
+  for (const char* name : {"  \"patch_scale\"", "  \"tn_kept\"", "  \"tn_dropped\"", "  \"image_size\""}) {
     const size_t key = json.find(name);
     ASSERT_NE(key, std::string::npos) << name;
     json.erase(key, json.find('\n', key) - key + 1);
@@ -128,6 +130,7 @@ TEST(DatasetFormat, PatchScaleAndSidesRoundTripAndOldSessionsReadAsFixed) {
   EXPECT_EQ(old.info().patch_scale, 0.0);
   EXPECT_EQ(old.info().tn_kept, 1.0) << "sessions written before thinning kept every TN cell";
   EXPECT_EQ(old.info().tn_dropped, 0);
+  EXPECT_TRUE(old.info().image_size.empty()) << "sessions written before it do not know their image size";
   EXPECT_EQ(old.samples()[0].patch_side, old.info().patch_size);
 }
 

@@ -41,10 +41,14 @@ class EvalCli : public ::testing::Test {
     s.per_class = kPerClass;
     s.scene = "office";
     s.scene_seed = 31;
+    s.image_size = {960, 600};
     for (const char* name : {"a", "v", "t"}) {
       test::write_synthetic_session(dir_.file("data"), name, s);
       ++s.seed;
     }
+    s.image_size = {640, 480};
+    test::write_synthetic_session(dir_.file("data"), "c", s);
+    s.image_size = {960, 600};
     s.detector = "dense";
     test::write_synthetic_session(dir_.file("data"), "d", s);
     s.detector = "jppc";
@@ -61,7 +65,7 @@ class EvalCli : public ::testing::Test {
     std::filesystem::create_directories(dir_.file("data/unfinished"));  // a build that never wrote session.json
     std::ofstream(dir_.file("split.yaml")) << "train: [a]\nval: [v]\ntest: [t]\ndense: [d]\nscaled: [s]\n"
                                               "scaled_two_views: [b]\nempty: []\nunfinished: [unfinished]\n"
-                                              "no_samples: [z]\nother_size: [q]\n";
+                                              "no_samples: [z]\nother_size: [q]\nother_camera: [c]\n";
 
     introspection::TrainConfig c;
     c.dataset = dir_.file("data");
@@ -92,7 +96,10 @@ TEST_F(EvalCli, WritesARowAndAnEmbeddingPerSampleOfTheSplitsAsked) {
   EXPECT_EQ(csv.rfind("session,environment,split,sample,", 0), 0u);
   EXPECT_EQ(test::read_file(out() + "/embeddings.f32").size(), 4u * kPerClass * 256 * sizeof(float));
   const std::string json = test::read_file(out() + "/eval.json");
-  EXPECT_TRUE(contains(json, "{\"split\": \"test\", \"session\": \"t\", \"patch_scale\": 0, \"views\": 1}")) << json;
+  EXPECT_TRUE(contains(
+      json, "{\"split\": \"test\", \"session\": \"t\", \"patch_scale\": 0, \"views\": 1, \"image_size\": [960, 600]}"))
+      << json;
+  EXPECT_TRUE(contains(json, "\"image_sizes\": [[960, 600]]")) << json;
   EXPECT_TRUE(contains(json, "\"dataset\": \"" + dir_.file("data") + "\"")) << json;
   EXPECT_TRUE(contains(json, "\"detector\": \"jppc\"")) << json;
 }
@@ -103,6 +110,20 @@ TEST_F(EvalCli, WarnsWhenTheSessionsAreLabelledFromAnotherDetector) {
   EXPECT_TRUE(contains(r.output, "introspects the 'jppc' detector, but 1 of the 2 sessions")) << r.output;
   EXPECT_TRUE(contains(r.output, "d, from 'dense'")) << r.output;
   EXPECT_EQ(count_lines(test::read_file(out() + "/predictions.csv")), 1u + 8 * kPerClass);
+}
+
+// The patches are cut on the ground and resized, so it runs, but the
+// figures are of a camera the model has never seen, which the user is told.
+TEST_F(EvalCli, WarnsWhenTheSessionsAreOfACameraTheModelWasNotTrainedOn) {
+  const auto r = eval("test,other_camera");
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_TRUE(contains(r.output,
+                       "was trained on 960x600 images, but 1 of the 2 sessions is of another size (the first, "
+                       "c, 640x480)"))
+      << r.output;
+  EXPECT_TRUE(contains(test::read_file(out() + "/eval.json"),
+                       "\"session\": \"c\", \"patch_scale\": 0, \"views\": 1, "
+                       "\"image_size\": [640, 480]"));
 }
 
 TEST_F(EvalCli, RefusesPatchesCutUnlikeTheModelsNamingTheSessionAndTheFix) {

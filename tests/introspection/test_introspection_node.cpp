@@ -5,9 +5,14 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <sstream>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 
 #include "introspection_node.hpp"
 #include "ivoa/core/calibration.hpp"
@@ -23,7 +28,8 @@
 namespace ivoa {
 namespace {
 
-std::string write_model(const test::TempDir& dir, int views, double patch_scale = 0) {
+std::string write_model(const test::TempDir& dir, int views, double patch_scale = 0,
+                        std::vector<cv::Size> image_sizes = {}) {
   torch::manual_seed(3);
   auto net = introspection::make_network("slidenet", 0.5, views);
   introspection::ModelInfo info;
@@ -31,7 +37,9 @@ std::string write_model(const test::TempDir& dir, int views, double patch_scale 
   info.views = views;
   info.patch_scale = patch_scale;
   info.detector = "jppc";
-  const std::string path = dir.file("model_" + std::to_string(views) + "_" + std::to_string(patch_scale) + ".pt");
+  info.image_sizes = std::move(image_sizes);
+  const std::string path = dir.file("model_" + std::to_string(views) + "_" + std::to_string(patch_scale) + "_" +
+                                    std::to_string(info.image_sizes.size()) + ".pt");
   introspection::save_model(*net, info, path);
   return path;
 }
@@ -228,6 +236,89 @@ TEST(IntrospectionNode, WarmsUpOnABlankFrameThenRunsAsUsual) {
   ASSERT_TRUE(deliver_until(bus, [&] { return !out.empty(); }));
   EXPECT_EQ(out[0].utime, 5000);
   EXPECT_EQ(heartbeat.bad_input_count(), 0);
+}
+
+// What the process logs while it lives (the default logger's lines); the
+// logger before it is put back however the test ends.
+class CapturedLog {
+ public:
+  CapturedLog() {
+    spdlog::set_default_logger(
+        std::make_shared<spdlog::logger>("capture", std::make_shared<spdlog::sinks::ostream_sink_mt>(text_)));
+  }
+  ~CapturedLog() { spdlog::set_default_logger(previous_); }
+  CapturedLog(const CapturedLog&) = delete;
+  CapturedLog& operator=(const CapturedLog&) = delete;
+  std::string text() const { return text_.str(); }
+
+ private:
+  std::shared_ptr<spdlog::logger> previous_ = spdlog::default_logger();
+  std::ostringstream text_;
+};
+
+// Frames of a size the model was not trained on are run (patches are cut on
+// the ground and resized) but counted, so the status table shows a model on
+// a camera it has never seen; the warm-up defaults to the size it knows.
+TEST(IntrospectionNode, FramesOfASizeTheModelWasNotTrainedOnAreCounted) {
+  test::TempDir dir;
+  const RigCalibration rig = test::make_test_rig();
+  const cv::Size trained(rig.left.width, rig.left.height), other(trained.width + 40, 240), third(200, 200);
+  const auto frame_of_size = [](cv::Size size, int64_t utime) {
+    cv::Mat image(size, CV_8UC3);
+    cv::randu(image, 0, 255);
+    stereo_image_t msg;
+    msg.utime = utime;
+    msg.left = encode_image(image, image_t::PIXEL_FORMAT_BGR, utime);
+    msg.right = msg.left;
+    return msg;
+  };
+  const CapturedLog log;  // the node's warnings, counted below
+  {
+    Bus bus("memq://");
+    Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
+    const auto node = image_only_node(bus, heartbeat, write_model(dir, 1, 0, {trained}), 8);
+    EXPECT_EQ(heartbeat.counter("frames_untrained_size"), 0) << "shown from the start";
+    int published = 0;
+    bus.subscribe<introspection_t>(channels::kIntrospection,
+                                   [&](const introspection_t&, const ReceiveInfo&) { ++published; });
+    const std::vector<std::pair<cv::Size, int64_t>> frames{{trained, 1000}, {other, 2000}, {other, 3000},
+                                                           {trained, 4000}, {other, 5000}, {third, 6000}};
+    for (const auto& [size, utime] : frames) bus.publish(channels::kStereoImages, frame_of_size(size, utime));
+    ASSERT_TRUE(deliver_until(bus, [&] { return published == 6; })) << published << " published";
+    node->stop();
+    EXPECT_EQ(heartbeat.counter("frames_untrained_size"), 4);
+    EXPECT_EQ(heartbeat.bad_input_count(), 0) << "another size is not bad input";
+  }
+  const std::string said = log.text();
+  const auto warnings_of = [&](cv::Size size) {
+    const std::string what = std::to_string(size.width) + "x" + std::to_string(size.height) + " images, but model";
+    size_t n = 0;
+    for (size_t at = said.find(what); at != std::string::npos; at = said.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(warnings_of(other), 1u) << "once per size, not at each change back to it:\n" << said;
+  EXPECT_EQ(warnings_of(third), 1u) << said;
+  EXPECT_EQ(warnings_of(trained), 0u) << said;
+  EXPECT_NE(
+      said.find("was trained on " + std::to_string(trained.width) + "x" + std::to_string(trained.height) + " images"),
+      std::string::npos)
+      << said;
+
+  {
+    Bus bus("memq://");
+    Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
+    const auto node = image_only_node(bus, heartbeat, write_model(dir, 1), 8);
+    EXPECT_FALSE(heartbeat.counter("frames_untrained_size").has_value()) << "a model that does not say: no count";
+  }
+
+  introspection::InferenceConfig config;
+  config.mc_passes = 1;
+  EXPECT_EQ(
+      default_warm_up_size(introspection::IntrospectionModel::load(write_model(dir, 1, 0, {trained}), config)->info()),
+      trained);
+  EXPECT_EQ(default_warm_up_size(introspection::IntrospectionModel::load(write_model(dir, 1), config)->info()),
+            cv::Size(960, 600))
+      << "a model that does not say: the simulator's camera";
 }
 
 TEST(IntrospectionNode, ScaledModelPredictsQueryCellsFromTheirOwnPatches) {

@@ -72,6 +72,52 @@ TEST(ModelFile, SavedAndLoadedModelGivesIdenticalOutputsAndMetadata) {
               0);
 }
 
+// The camera sizes a model was trained on travel with it, so the tools can
+// say when it is run on another camera; older files say nothing, and then
+// no size is called untrained.
+TEST(ModelFile, TheTrainingImageSizesTravelWithTheModel) {
+  ModelInfo info;
+  info.detector = "jppc";
+  info.image_sizes = {{960, 600}, {640, 480}};
+  const ModelInfo read = info_from_json(info_to_json(info), "here");
+  EXPECT_EQ(read.image_sizes, info.image_sizes);
+  EXPECT_TRUE(trained_on_size(read, {640, 480}));
+  EXPECT_FALSE(trained_on_size(read, {1280, 720}));
+  EXPECT_EQ(image_sizes_text(read.image_sizes), "960x600, 640x480");
+
+  std::string older = info_to_json(ModelInfo{});
+  const size_t key = older.find(", \"image_sizes\": []");
+  ASSERT_NE(key, std::string::npos) << older;
+  older.erase(key, std::string(", \"image_sizes\": []").size());
+  const ModelInfo old_model = info_from_json(older, "older.pt");
+  EXPECT_TRUE(old_model.image_sizes.empty());
+  EXPECT_TRUE(trained_on_size(old_model, {1280, 720}));
+  EXPECT_EQ(image_sizes_text(old_model.image_sizes), "not recorded");
+
+  std::string bad = info_to_json(info);
+  bad.replace(bad.find("[640, 480]"), 10, "[640, 0]");
+  try {
+    info_from_json(bad, "bad.pt");
+    FAIL() << "a size of 0 pixels was read";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.pt: image_sizes must list [width, height] pairs"), std::string::npos)
+        << e.what();
+  }
+}
+
+// The training summary is JSON that eval.json quotes: read and written back,
+// its numbers stay numbers and its strings strings (every value came back
+// quoted, "steps": "14000"); a NaN, which no JSON reader takes, is quoted.
+TEST(ModelFile, TheTrainingSummaryKeepsItsTypes) {
+  ModelInfo info;
+  info.detector = "jppc";
+  info.training_summary =
+      R"({"steps": 7, "name": "7", "rate": 1e-05, "augment": true, "val": nan, "list": [1, "a"], "none": {}})";
+  const ModelInfo read = info_from_json(info_to_json(info), "here");
+  EXPECT_EQ(read.training_summary,
+            R"({"steps": 7, "name": "7", "rate": 1e-05, "augment": true, "val": "nan", "list": [1, "a"], "none": {}})");
+}
+
 TEST(ModelFile, HeatmapCellsEqualTheirPatches) {
   test::TempDir dir;
   const InferenceConfig c = one_pass_unfiltered();
@@ -309,6 +355,8 @@ TEST(ShippedModel, MetadataMatchesWhatTheMainJobAssumes) {
   EXPECT_EQ(model->info().views, views);
   EXPECT_DOUBLE_EQ(model->info().patch_scale, scale);
   EXPECT_EQ(model->info().detector, "jppc");
+  // The simulator's camera, which the live process warms up at.
+  EXPECT_EQ(model->info().image_sizes, std::vector<cv::Size>{cv::Size(960, 600)});
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -78,10 +79,10 @@ TEST_P(TrainingWith, LossFallsAndHeldOutSessionsBeatChance) {
   EXPECT_GE(r.val_verdict_accuracy_retained, r.val_accuracy_retained - 1e-9) << "the verdict leaves fewer ways to err";
   EXPECT_EQ(model->info().training_summary.find("held_out"), std::string::npos) << "test sessions must not be listed";
   EXPECT_NE(model->info().training_summary.find("\"a\""), std::string::npos);
-  EXPECT_NE(model->info().training_summary.find("\"steps_planned\": \"150\", \"kept\": \"best_validated\""),
+  EXPECT_NE(model->info().training_summary.find("\"steps_planned\": 150, \"kept\": \"best_validated\""),
             std::string::npos)
       << model->info().training_summary;
-  EXPECT_NE(model->info().training_summary.find("\"augment_noise_max\": \"0.03\""), std::string::npos)
+  EXPECT_NE(model->info().training_summary.find("\"augment_noise_max\": 0.03"), std::string::npos)
       << model->info().training_summary;
   EXPECT_NE(model->info().training_summary.find(std::string("\"optimizer\": \"") + optimizer_name(GetParam()) + "\""),
             std::string::npos)
@@ -161,7 +162,7 @@ TEST(Training, KeepLastWritesTheFinalStepsModelWhateverItsValidation) {
   InferenceConfig ic;
   ic.mc_passes = 2;
   const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
-  EXPECT_NE(summary.find("\"best_step\": \"20\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"best_step\": 20"), std::string::npos) << summary;
 }
 
 // The summary names the data by absolute path, quoted: a folder whose name
@@ -177,6 +178,37 @@ TEST(Training, TheModelNamesItsDataWhateverTheFolderIsCalled) {
   const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
   EXPECT_NE(summary.find(R"("dataset": ")" + dir.path().string() + R"(/my \"best\" data")"), std::string::npos)
       << summary;
+}
+
+// The model records the image sizes of the sessions it was trained on (not
+// those it was validated on), so the tools can say when it meets another
+// camera; one session that does not say leaves none recorded.
+TEST(Training, TheModelRecordsTheImageSizesItWasTrainedOn) {
+  const auto sizes_trained_on = [](const std::vector<cv::Size>& train_sizes) {
+    test::TempDir dir;
+    std::string names;
+    for (size_t k = 0; k < train_sizes.size(); ++k) {
+      test::SyntheticSession s;
+      s.seed = static_cast<unsigned>(k + 1);
+      s.image_size = train_sizes[k];
+      test::write_synthetic_session(dir.file("data"), "t" + std::to_string(k), s);
+      names += (k ? ", t" : "t") + std::to_string(k);
+    }
+    test::SyntheticSession v;
+    v.per_class = 5;
+    v.seed = 9;
+    v.image_size = {1280, 720};
+    test::write_synthetic_session(dir.file("data"), "v", v);
+    std::ofstream(dir.file("split.yaml")) << "train: [" << names << "]\nval: [v]\n";
+    train_model(tiny_config(dir, 5));
+    InferenceConfig ic;
+    ic.mc_passes = 2;
+    return IntrospectionModel::load(dir.file("model.pt"), ic)->info().image_sizes;
+  };
+  using Sizes = std::vector<cv::Size>;
+  EXPECT_EQ(sizes_trained_on({{960, 600}, {960, 600}}), Sizes{cv::Size(960, 600)});
+  EXPECT_EQ(sizes_trained_on({{960, 600}, {640, 480}}), (Sizes{{960, 600}, {640, 480}}));
+  EXPECT_EQ(sizes_trained_on({{960, 600}, {}}), Sizes{});
 }
 
 // A loss that is no number would leave NaN weights and gates, reported as a success.
@@ -403,7 +435,7 @@ TEST(Training, LearnsTheDetectorsEvidenceAsASideTaskWhenTheDatasetHasIt) {
   InferenceConfig ic;
   ic.mc_passes = 1;
   const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
-  EXPECT_NE(summary.find("\"evidence_weight\": \"5\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"evidence_weight\": 5"), std::string::npos) << summary;
 
   // Resuming must keep the setting the checkpoint was trained with.
   c.resume = true;

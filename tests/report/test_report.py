@@ -651,6 +651,43 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         self.assertIn(warning, read_text(os.path.join(out, "report.md")))
         self.assertNotIn("validated on", stderr)
 
+    def test_sessions_of_a_camera_the_model_was_not_trained_on_are_warned_of(self):
+        """eval.json records the model's training image sizes and each
+        session's: a session of another size is of a camera the model never
+        saw, and the report says so. Older files record neither: no warning."""
+        def other_size(meta):
+            meta["metadata"]["image_sizes"] = [[960, 600]]
+            meta["sessions"][0]["image_size"] = [640, 480]
+            return meta
+        d = self.eval_with_meta("other_camera", other_size)
+        out = os.path.join(self.root, "report_other_camera")
+        code, _, stderr = run_main(["--eval", d, "--dataset", self.f.data2, "--out", out])
+        self.assertEqual(code, 0, stderr)
+        warning = ("the model was trained on 960x600 images, but 1 of the 1 sessions evaluated is of another size "
+                   "(the first, lab_s3, 640x480)")
+        self.assertIn(warning, stderr)
+        self.assertIn(warning, read_text(os.path.join(out, "report.md")))
+
+        def same_size(meta):
+            meta["metadata"]["image_sizes"] = [[960, 600], [640, 480]]
+            meta["sessions"][0]["image_size"] = [640, 480]
+            return meta
+        d = self.eval_with_meta("same_camera", same_size)
+        code, _, stderr = run_main(["--eval", d, "--dataset", self.f.data2, "--out",
+                                    os.path.join(self.root, "report_same_camera")])
+        self.assertEqual(code, 0, stderr)
+        self.assertNotIn("of another size", stderr)
+
+        def older(meta):  # an eval.json written before sizes were recorded: nothing to compare
+            meta["metadata"].pop("image_sizes", None)
+            meta["sessions"][0]["image_size"] = [640, 480]
+            return meta
+        d = self.eval_with_meta("older_eval", older)
+        code, _, stderr = run_main(["--eval", d, "--dataset", self.f.data2, "--out",
+                                    os.path.join(self.root, "report_older_eval")])
+        self.assertEqual(code, 0, stderr)
+        self.assertNotIn("of another size", stderr)
+
     def test_evidence_is_optional_and_checked_against_the_labels(self):
         """No evidence: the report says so. Evidence that does not give the
         labels' verdicts at the threshold (here: a wrong --evidence-threshold)

@@ -81,6 +81,11 @@ int build_session(const std::string& out, const std::string& session, const std:
                 static_cast<long long>(r.frames_repeated));
   if (const std::string why = dataset::pairing_warning(r, options.pairing); !why.empty())
     spdlog::warn("{}: {}", session, why);
+  if (r.frames_other_size > 0)
+    spdlog::warn(
+        "{}: {} stereo frames are of another size than its first ones ({}x{}), the size the session records and a "
+        "model trained on it will know: build each camera's logs as a session of its own",
+        session, r.frames_other_size, r.image_size.width, r.image_size.height);
   if (r.samples == 0 && r.patches_outside > 0)
     spdlog::warn("{}: no samples: every labelled cell's patch leaves the image (a smaller --patch-size?)", session);
   if (r.evidence_mismatches > 0)

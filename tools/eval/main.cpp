@@ -321,11 +321,14 @@ struct Evaluated {
 Evaluated describe_sessions(const Options& o, const SessionList& sessions, const introspection::ModelInfo& model) {
   Evaluated e;
   std::vector<std::pair<std::string, std::string>> other_detector;  // (session, detector) unlike the model's
+  std::vector<std::pair<std::string, cv::Size>> other_size;         // (session, image size) the model has not seen
   for (const auto& [split, name] : sessions) {
     const dataset::SessionReader session(o.dataset + "/" + name);
     e.infos.push_back(session.info());
     e.samples += static_cast<double>(session.size());
     if (session.info().detector != model.detector) other_detector.push_back({name, session.info().detector});
+    const cv::Size size = session.info().image_size;
+    if (!size.empty() && !introspection::trained_on_size(model, size)) other_size.push_back({name, size});
   }
   if (e.samples == 0)
     throw dataset::DatasetError(fmt::format("{}: the {} session(s) of split(s) {} hold no samples: nothing to evaluate",
@@ -336,6 +339,14 @@ Evaluated describe_sessions(const Options& o, const SessionList& sessions, const
         "{}, from '{}'): their figures say how well it predicts that detector's failures, not its own",
         model.id, model.detector, other_detector.size(), sessions.size(), other_detector.front().first,
         other_detector.front().second);
+  if (!other_size.empty())
+    spdlog::warn(
+        "model {} was trained on {} images, but {} of the {} sessions {} of another size (the first, {}, {}x{}): its "
+        "patches are cut on the ground and resized, so it runs, but these figures measure it on a camera it has not "
+        "seen (fine-tune it on that camera's sessions: ivoa-train --init {})",
+        model.id, introspection::image_sizes_text(model.image_sizes), other_size.size(), sessions.size(),
+        other_size.size() == 1 ? "is" : "are", other_size.front().first, other_size.front().second.width,
+        other_size.front().second.height, o.model);
   return e;
 }
 
@@ -362,15 +373,22 @@ double write_predictions(const Options& o, const SessionList& sessions, introspe
   return done;
 }
 
+std::string sizes_json(const std::vector<cv::Size>& sizes) {
+  std::string json;
+  for (const cv::Size& s : sizes) json += fmt::format("{}[{}, {}]", json.empty() ? "" : ", ", s.width, s.height);
+  return json;
+}
+
 // The patches each session was cut as, so the report can refuse a dataset
 // cut otherwise (its mosaics would show other patches than the model saw).
 void write_eval_json(const Options& o, const introspection::IntrospectionModel& model, const SessionList& sessions,
                      const std::vector<dataset::SessionInfo>& infos, double samples) {
   std::string evaluated;
   for (size_t k = 0; k < sessions.size(); ++k)
-    evaluated += fmt::format("{}{{\"split\": {}, \"session\": {}, \"patch_scale\": {}, \"views\": {}}}", k ? ", " : "",
-                             json_quote(sessions[k].first), json_quote(sessions[k].second), infos[k].patch_scale,
-                             infos[k].views);
+    evaluated += fmt::format(
+        "{}{{\"split\": {}, \"session\": {}, \"patch_scale\": {}, \"views\": {}, \"image_size\": [{}, {}]}}",
+        k ? ", " : "", json_quote(sessions[k].first), json_quote(sessions[k].second), infos[k].patch_scale,
+        infos[k].views, infos[k].image_size.width, infos[k].image_size.height);
   const auto& info = model.info();
   const std::string path = o.out + "/eval.json";
   std::ofstream json(path);
@@ -380,8 +398,9 @@ void write_eval_json(const Options& o, const introspection::IntrospectionModel& 
        << ", \"verdict_uncertainty_threshold\": " << model.verdict_threshold() << ", \"overlay_dots\": \""
        << (o.dots_given_verdict ? "given_verdict" : "image") << "\", \"samples\": " << samples << ", \"sessions\": ["
        << evaluated << "], \"metadata\": {\"detector\": " << json_quote(info.detector)
-       << ", \"architecture\": " << json_quote(info.architecture)
-       << ", \"training\": " << (info.training_summary.empty() ? "{}" : info.training_summary) << "}}\n";
+       << ", \"architecture\": " << json_quote(info.architecture) << ", \"image_sizes\": ["
+       << sizes_json(info.image_sizes)
+       << "], \"training\": " << (info.training_summary.empty() ? "{}" : info.training_summary) << "}}\n";
   if (!json.flush()) throw OutputError(path + ": cannot write: " + std::strerror(errno));
 }
 

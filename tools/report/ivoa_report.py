@@ -52,8 +52,8 @@ import report_markdown as md  # noqa: E402
 import report_metrics as metrics  # noqa: E402
 from report_clustering import ClusterOptions, cluster_failures  # noqa: E402
 from report_inputs import (Dataset, EvalRun, InputError, attach_causes, attach_dataset, evidence_margin,  # noqa: E402
-                           load_causes, load_eval, load_repeatability, load_variants, make_names, patch_scale,
-                           patch_sides, patch_size, query_grid, seen_in_training)
+                           load_causes, load_eval, load_repeatability, load_variants, make_names, other_camera,
+                           patch_scale, patch_sides, patch_size, query_grid, seen_in_training)
 
 
 class _ShowDefaults(argparse.ArgumentDefaultsHelpFormatter):
@@ -147,6 +147,7 @@ def load_inputs(args: argparse.Namespace):
             datasets[key] = Dataset(path)
         warnings += attach_dataset(run, datasets[key])
         warnings += seen_in_training(run)
+        warnings += other_camera(run)
     causes = [load_causes(path) for path in args.causes or []]
     if causes:
         for run in runs:

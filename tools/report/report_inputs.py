@@ -668,6 +668,34 @@ def seen_in_training(run: EvalRun) -> List[str]:
     return warnings
 
 
+def _sizes(value) -> List[tuple]:
+    """[[w, h], ...] as (w, h) tuples; what is not such a pair is left out."""
+    pairs = value if isinstance(value, list) else []
+    return [tuple(p) for p in pairs
+            if isinstance(p, list) and len(p) == 2 and all(_is_number(v) and v > 0 for v in p)]
+
+
+def other_camera(run: EvalRun) -> List[str]:
+    """A warning when sessions were recorded at an image size the model was not
+    trained on (eval.json's metadata.image_sizes and sessions[].image_size;
+    older files record neither): the figures are of a camera it never saw."""
+    md = run.meta.get("metadata") if isinstance(run.meta.get("metadata"), dict) else {}
+    trained = _sizes(md.get("image_sizes"))
+    if not trained:
+        return []
+    entries = run.meta.get("sessions") if isinstance(run.meta.get("sessions"), list) else []
+    other = [(e.get("session"), _sizes([e.get("image_size")])) for e in entries if isinstance(e, dict)]
+    other = [(name, sizes[0]) for name, sizes in other if sizes and sizes[0] not in trained]
+    if not other:
+        return []
+    known = ", ".join(f"{w:g}x{h:g}" for w, h in trained)
+    (name, (w, h)) = other[0]
+    return [f"{run.name}: the model was trained on {known} images, but {len(other)} of the {len(entries)} sessions "
+            f"evaluated {'is' if len(other) == 1 else 'are'} of another size (the first, {name}, {w:g}x{h:g}): "
+            f"these figures are of a camera it has not seen (fine-tune it on that camera's sessions: "
+            f"ivoa-train --init)"]
+
+
 def attach_dataset(run: EvalRun, dataset: Dataset) -> List[str]:
     """Links an eval to the dataset it ran on and checks that they agree.
 

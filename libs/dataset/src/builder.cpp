@@ -161,6 +161,8 @@ void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
   ++report.stereo_frames;
   try {
     cv::Mat left = decode_image(msg.left);
+    if (!writer) report.image_size = info.image_size = left.size();  // what the session's patches are cut from
+    else if (left.size() != info.image_size) ++report.frames_other_size;
     const cv::Mat right = rerun() || warp || options.evidence ? decode_image(msg.right) : cv::Mat();
     if (options.evidence) right_images[msg.utime] = right;
     cv::Mat views = warp ? warp->stack(left, right) : left;

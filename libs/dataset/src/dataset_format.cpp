@@ -49,6 +49,7 @@ std::string session_json(const SessionInfo& i) {
   for (size_t k = 0; k < i.logs.size(); ++k) o << (k ? ", " : "") << json_quote(i.logs[k]);
   o << "],\n  \"scene\": " << json_quote(i.scene) << ",\n  \"seed\": " << i.seed
     << ",\n  \"environment\": " << json_quote(i.environment) << ",\n  \"rig_name\": " << json_quote(i.rig_name)
+    << ",\n  \"image_size\": [" << i.image_size.width << ", " << i.image_size.height << "]"
     << ",\n  \"patch_size\": " << i.patch_size << ",\n  \"views\": " << i.views
     << ",\n  \"patch_scale\": " << i.patch_scale << ",\n  \"tn_kept\": " << i.tn_kept
     << ",\n  \"evidence_size\": " << i.evidence_size << ",\n  \"tn_dropped\": " << i.tn_dropped
@@ -100,6 +101,12 @@ SessionInfo parse_session_json(const std::string& path) {
   i.seed = get<int64_t>(root, "seed", path);
   i.environment = get<std::string>(root, "environment", path);
   i.rig_name = get<std::string>(root, "rig_name", path);
+  if (root["image_size"]) {  // written before it was recorded: 0 x 0
+    const auto wh = get<std::vector<int>>(root, "image_size", path);
+    if (wh.size() != 2 || wh[0] < 0 || wh[1] < 0 || (wh[0] == 0) != (wh[1] == 0))
+      throw DatasetError(path + ": image_size must be [width, height] in pixels ([0, 0]: not known)");
+    i.image_size = cv::Size(wh[0], wh[1]);
+  }
   i.patch_size = get<int>(root, "patch_size", path);
   // the bound keeps patches.bin's expected size from overflowing (a huge
   // patch_size made an empty file pass its size check)

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <functional>
 #include <utility>
@@ -292,6 +293,19 @@ std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& 
   }
   if (native) return std::make_unique<NativeIntrospectionModel>(load_checked_native_model(path), config);
   return load_scripted(path, config);
+}
+
+bool trained_on_size(const ModelInfo& info, cv::Size size) {
+  return info.image_sizes.empty() ||
+         std::find(info.image_sizes.begin(), info.image_sizes.end(), size) != info.image_sizes.end();
+}
+
+std::string image_sizes_text(const std::vector<cv::Size>& sizes) {
+  if (sizes.empty()) return "not recorded";
+  std::string text;
+  for (const cv::Size& s : sizes)
+    text += (text.empty() ? "" : ", ") + std::to_string(s.width) + "x" + std::to_string(s.height);
+  return text;
 }
 
 double IntrospectionModel::uncertainty_threshold() const {

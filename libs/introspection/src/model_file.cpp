@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <regex>
 #include <sstream>
 #include <vector>
 #include <cmath>
@@ -37,6 +38,46 @@ torch::Tensor to_bytes(const std::string& s) {
 std::string from_bytes(const torch::Tensor& t) {
   const auto c = t.to(torch::kCPU).contiguous();
   return std::string(reinterpret_cast<const char*>(c.data_ptr<uint8_t>()), static_cast<size_t>(c.numel()));
+}
+
+// A number in JSON's grammar, true, false or null ("nan", which an ostream
+// writes for a NaN, is none of them, nor are "+5" or ".5").
+bool is_json_literal(const std::string& s) {
+  static const std::regex number(R"(-?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][+-]?[0-9]+)?)");
+  return s == "true" || s == "false" || s == "null" || std::regex_match(s, number);
+}
+
+// A node read from JSON, written back as JSON: quoted strings stay strings,
+// numbers and true/false/null stay bare (yaml-cpp's emitter quoted them
+// all, so a model re-saved by --calibrate-only said "steps": "14000").
+std::string json_of(const YAML::Node& node) {
+  std::string json;
+  switch (node.Type()) {
+    case YAML::NodeType::Map:
+      for (const auto& kv : node)
+        json += (json.empty() ? "{" : ", ") + json_quote(kv.first.as<std::string>()) + ": " + json_of(kv.second);
+      return json.empty() ? "{}" : json + "}";
+    case YAML::NodeType::Sequence:
+      for (const auto& item : node) json += (json.empty() ? "[" : ", ") + json_of(item);
+      return json.empty() ? "[]" : json + "]";
+    case YAML::NodeType::Scalar:  // tag "!": it was quoted
+      return node.Tag() != "!" && is_json_literal(node.Scalar()) ? node.Scalar() : json_quote(node.Scalar());
+    default: return "null";
+  }
+}
+
+// Absent in models written before sizes were recorded: none.
+std::vector<cv::Size> image_sizes_from(const YAML::Node& node, const std::string& where) {
+  std::vector<cv::Size> sizes;
+  if (!node || node.IsNull()) return sizes;
+  if (!node.IsSequence()) throw ModelError(where + ": image_sizes must be a list of [width, height] pairs");
+  for (const auto& size : node) {
+    const auto wh = size.as<std::vector<int>>();
+    if (wh.size() != 2 || wh[0] <= 0 || wh[1] <= 0)
+      throw ModelError(where + ": image_sizes must list [width, height] pairs of positive pixels");
+    sizes.emplace_back(wh[0], wh[1]);
+  }
+  return sizes;
 }
 
 }  // namespace
@@ -76,7 +117,10 @@ std::string info_to_json(const ModelInfo& i) {
   o << "{\"format\": " << json_quote(kFormat) << ", \"version\": 1, \"architecture\": " << json_quote(i.architecture)
     << ", \"detector\": " << json_quote(i.detector) << ", \"patch_size\": " << i.patch_size
     << ", \"stride\": " << i.stride << ", \"input_size\": " << i.input_size << ", \"views\": " << i.views
-    << ", \"patch_scale\": " << i.patch_scale << ", \"dropout\": " << i.dropout << ", \"color\": \"RGB\""
+    << ", \"patch_scale\": " << i.patch_scale << ", \"image_sizes\": [";
+  for (size_t k = 0; k < i.image_sizes.size(); ++k)
+    o << (k ? ", " : "") << "[" << i.image_sizes[k].width << ", " << i.image_sizes[k].height << "]";
+  o << "], \"dropout\": " << i.dropout << ", \"color\": \"RGB\""
     << ", \"mean\": [" << i.mean[0] << ", " << i.mean[1] << ", " << i.mean[2] << "], \"std\": [" << i.std[0] << ", "
     << i.std[1] << ", " << i.std[2] << "], \"classes\": [";
   for (size_t k = 0; k < i.classes.size(); ++k) o << (k ? ", " : "") << json_quote(i.classes[k]);
@@ -99,6 +143,7 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
     i.input_size = n["input_size"].as<int>();
     i.views = n["views"].as<int>(1);                   // models written before views existed see the left image only
     i.patch_scale = n["patch_scale"].as<double>(0.0);  // models written before scaling existed: fixed patches
+    i.image_sizes = image_sizes_from(n["image_sizes"], where);
     i.dropout = n["dropout"].as<double>();
     for (int c = 0; c < 3; ++c) {
       i.mean[static_cast<size_t>(c)] = n["mean"][c].as<float>();
@@ -109,11 +154,7 @@ ModelInfo info_from_json(const std::string& json, const std::string& where) {
     if (n["uncertainty_threshold"]) i.uncertainty_threshold = n["uncertainty_threshold"].as<double>();
     i.verdict_uncertainty_threshold =
         n["verdict_uncertainty_threshold"] ? n["verdict_uncertainty_threshold"].as<double>() : -1.0;
-    if (n["training"]) {
-      YAML::Emitter e;
-      e << YAML::Flow << YAML::DoubleQuoted << n["training"];
-      i.training_summary = e.c_str();
-    }
+    if (n["training"]) i.training_summary = json_of(n["training"]);
   } catch (const YAML::Exception& e) {
     throw ModelError(where + ": malformed model metadata: " + e.what());
   }

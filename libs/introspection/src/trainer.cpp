@@ -53,6 +53,26 @@ struct SplitData {
   }
 };
 
+// A model trained partly on sessions of unknown size cannot say which sizes
+// it knows: none are recorded then (and the user is told), rather than a
+// list that would call a size it was trained on unknown.
+std::vector<cv::Size> distinct_image_sizes(const std::vector<std::unique_ptr<dataset::SessionReader>>& sessions) {
+  std::vector<cv::Size> sizes;
+  for (const auto& session : sessions) {
+    if (session->size() == 0) continue;  // nothing of it is learnt
+    const cv::Size size = session->info().image_size;
+    if (size.empty()) {
+      spdlog::warn(
+          "session {} was built before sessions recorded their image size: the model will record none, so no tool "
+          "can say when it meets a camera it was not trained on (rebuild the session with ivoa-dataset build)",
+          session->info().session);
+      return {};
+    }
+    if (std::find(sizes.begin(), sizes.end(), size) == sizes.end()) sizes.push_back(size);
+  }
+  return sizes;
+}
+
 SplitData load_split_data(const TrainConfig& c, const std::string& split) {
   const std::vector<std::string> names = dataset::split_sessions(c.split_file, split, c.dataset);
   if (names.empty()) throw std::runtime_error(c.split_file + ": no sessions in split '" + split + "'");
@@ -327,6 +347,7 @@ ModelInfo model_info_for(const TrainConfig& c, const SplitData& train, const Spl
   info.patch_size = train.patch_size;
   info.views = train.views;
   info.patch_scale = train.patch_scale;
+  info.image_sizes = distinct_image_sizes(train.sessions);
   info.input_size = input_size_of(c.architecture);
   info.dropout = c.dropout;
   info.detector = train.detector;

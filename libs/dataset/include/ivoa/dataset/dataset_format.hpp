@@ -60,6 +60,9 @@ struct SessionInfo {
   int64_t seed = -1;
   std::string environment = "unknown";  // indoor, outdoor, unknown
   std::string rig_name;
+  // The left image's width x height in pixels, which the patches are cut
+  // from; 0 x 0 in datasets written before it was recorded.
+  cv::Size image_size;
   int patch_size = 100;
   // 1: the left image's patch (the paper); 2: the left patch with, below
   // it, the same square of the right image warped onto the ground plane

@@ -48,6 +48,12 @@ struct ModelInfo {
   // cut the same way (predict_cells); the heatmaps still use fixed squares,
   // which equal the scaled ones wherever the disc fits in patch_size.
   double patch_scale = 0;
+  // The left-image sizes (width x height, pixels) of the cameras the
+  // training sessions came from; empty for models written before they were
+  // recorded or trained on sessions that do not say. Patches are cut in the
+  // ground frame and resized, so another size runs, but nothing measured
+  // how well: the tools say so (trained_on_size).
+  std::vector<cv::Size> image_sizes;
   double dropout = 0.5;
   std::array<float, 3> mean{0.485f, 0.456f, 0.406f};  // RGB, on [0, 1]
   std::array<float, 3> std{0.229f, 0.224f, 0.225f};
@@ -60,6 +66,12 @@ struct ModelInfo {
   std::string training_summary;  // JSON: data, steps, validation metrics
   std::string id;                // file name and content hash
 };
+
+// Whether `size` is one the model was trained on; true when the model does
+// not say (ModelInfo::image_sizes empty).
+bool trained_on_size(const ModelInfo& info, cv::Size size);
+// "960x600" or "960x600, 640x480"; "not recorded" when empty.
+std::string image_sizes_text(const std::vector<cv::Size>& sizes);
 
 enum class QueryLookup { kNearest, kBilinear };
 
