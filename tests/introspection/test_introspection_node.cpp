@@ -283,7 +283,10 @@ TEST(IntrospectionNode, FramesOfASizeTheModelWasNotTrainedOnAreCounted) {
                                    [&](const introspection_t&, const ReceiveInfo&) { ++published; });
     const std::vector<std::pair<cv::Size, int64_t>> frames{{trained, 1000}, {other, 2000}, {other, 3000},
                                                            {trained, 4000}, {other, 5000}, {third, 6000}};
-    for (const auto& [size, utime] : frames) bus.publish(channels::kStereoImages, frame_of_size(size, utime));
+    for (const auto& [size, utime] : frames) {
+      stereo_image_t frame = frame_of_size(size, utime);
+      bus.publish(channels::kStereoImages, frame);
+    }
     ASSERT_TRUE(deliver_until(bus, [&] { return published == 6; })) << published << " published";
     node->stop();
     EXPECT_EQ(heartbeat.counter("frames_untrained_size"), 4);

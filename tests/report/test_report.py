@@ -682,9 +682,9 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
             meta["metadata"].pop("image_sizes", None)
             meta["sessions"][0]["image_size"] = [640, 480]
             return meta
-        d = self.eval_with_meta("older_eval", older)
+        d = self.eval_with_meta("eval_without_sizes", older)
         code, _, stderr = run_main(["--eval", d, "--dataset", self.f.data2, "--out",
-                                    os.path.join(self.root, "report_older_eval")])
+                                    os.path.join(self.root, "report_eval_without_sizes")])
         self.assertEqual(code, 0, stderr)
         self.assertNotIn("of another size", stderr)
 
