@@ -655,38 +655,28 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         """eval.json records the model's training image sizes and each
         session's: a session of another size is of a camera the model never
         saw, and the report says so. Older files record neither: no warning."""
-        def other_size(meta):
-            meta["metadata"]["image_sizes"] = [[960, 600]]
-            meta["sessions"][0]["image_size"] = [640, 480]
-            return meta
-        d = self.eval_with_meta("other_camera", other_size)
-        out = os.path.join(self.root, "report_other_camera")
-        code, _, stderr = run_main(["--eval", d, "--dataset", self.f.data2, "--out", out])
-        self.assertEqual(code, 0, stderr)
+        def report_of(name, model_sizes):
+            """stderr and report.md of the degenerate eval, its model trained on model_sizes (None: not
+            recorded, as in an eval.json written before sizes were) and its session at 640x480."""
+            def edit(meta):
+                if model_sizes is not None:
+                    meta["metadata"]["image_sizes"] = model_sizes
+                meta["sessions"][0]["image_size"] = [640, 480]
+                return meta
+            out = os.path.join(self.root, "report_" + name)
+            code, _, stderr = run_main(["--eval", self.eval_with_meta(name, edit), "--dataset", self.f.data2,
+                                        "--out", out])
+            self.assertEqual(code, 0, stderr)
+            return stderr, read_text(os.path.join(out, "report.md"))
+
         warning = ("the model was trained on 960x600 images, but 1 of the 1 sessions evaluated is of another size "
                    "(the first, lab_s3, 640x480)")
+        stderr, report = report_of("other_camera", [[960, 600]])
         self.assertIn(warning, stderr)
-        self.assertIn(warning, read_text(os.path.join(out, "report.md")))
-
-        def same_size(meta):
-            meta["metadata"]["image_sizes"] = [[960, 600], [640, 480]]
-            meta["sessions"][0]["image_size"] = [640, 480]
-            return meta
-        d = self.eval_with_meta("same_camera", same_size)
-        code, _, stderr = run_main(["--eval", d, "--dataset", self.f.data2, "--out",
-                                    os.path.join(self.root, "report_same_camera")])
-        self.assertEqual(code, 0, stderr)
-        self.assertNotIn("of another size", stderr)
-
-        def older(meta):  # an eval.json written before sizes were recorded: nothing to compare
-            meta["metadata"].pop("image_sizes", None)
-            meta["sessions"][0]["image_size"] = [640, 480]
-            return meta
-        d = self.eval_with_meta("eval_without_sizes", older)
-        code, _, stderr = run_main(["--eval", d, "--dataset", self.f.data2, "--out",
-                                    os.path.join(self.root, "report_eval_without_sizes")])
-        self.assertEqual(code, 0, stderr)
-        self.assertNotIn("of another size", stderr)
+        self.assertIn(warning, report)
+        for name, sizes in (("same_camera", [[960, 600], [640, 480]]), ("eval_without_sizes", None)):
+            stderr, report = report_of(name, sizes)
+            self.assertNotIn("of another size", stderr + report, name)
 
     def test_evidence_is_optional_and_checked_against_the_labels(self):
         """No evidence: the report says so. Evidence that does not give the
