@@ -21,12 +21,14 @@ test::CommandResult dataset_info(const std::string& args) {
   return test::run_command("timeout 60 " IVOA_DATASET_EXE " info " + args);
 }
 
-TEST(DatasetInfo, ListsSessionsWithTheirSplitDetectorAndClassCounts) {
+TEST(DatasetInfo, ListsSessionsWithTheirSplitDetectorClassCountsAndImageSizes) {
   test::TempDir dir;
   test::SyntheticSession s;
   s.per_class = 2;
+  s.image_size = {960, 600};
   test::write_synthetic_session(dir.file("data"), "a", s);
   s.detector = "dense";
+  s.image_size = {};
   test::write_synthetic_session(dir.file("data"), "b", s);
   std::ofstream(dir.file("split.yaml")) << "train: [a]\ntest: [b, gone]\n";
 
@@ -35,6 +37,7 @@ TEST(DatasetInfo, ListsSessionsWithTheirSplitDetectorAndClassCounts) {
   EXPECT_TRUE(contains(r.output, "train")) << r.output;
   EXPECT_TRUE(contains(r.output, "dense")) << r.output;
   EXPECT_TRUE(contains(r.output, "total: TP 4  TN 4  FP 4  FN 4")) << r.output;
+  EXPECT_TRUE(contains(r.output, "image sizes: 960x600 (1 session), not recorded (1 session)")) << r.output;
   EXPECT_TRUE(contains(r.output, "names session 'gone', which is not in")) << r.output;
   EXPECT_EQ(dataset_info(dir.file("data")).exit_code, kExitOk) << "the folder may also be given bare";
 }

@@ -222,7 +222,8 @@ int run_info(const std::string& root, const std::string& split_path) {
     return kExitBadInput;
   }
   std::array<int64_t, dataset::kNumClasses> total{};
-  int broken = 0;  // listed and counted; the others are still shown
+  std::map<std::string, int> image_sizes;  // "960x600" -> sessions; "not recorded" for older ones
+  int broken = 0;                          // listed and counted; the others are still shown
   for (const auto& name : sessions) {
     std::optional<dataset::SessionReader> r;
     try {
@@ -243,10 +244,16 @@ int run_info(const std::string& root, const std::string& split_path) {
                   static_cast<long long>(i.tn_dropped));
     for (int k = 0; k < dataset::kNumClasses; ++k)
       total[static_cast<size_t>(k)] += i.class_counts[static_cast<size_t>(k)];
+    ++image_sizes[i.image_size.empty() ? "not recorded"
+                                       : fmt::format("{}x{}", i.image_size.width, i.image_size.height)];
   }
   std::printf(
       "total: %s%s\n", class_counts(total).c_str(),
       broken > 0 ? fmt::format(" ({} of {} sessions unreadable, not counted)", broken, sessions.size()).c_str() : "");
+  std::vector<std::string> sizes;  // a model trained on these sessions knows these sizes
+  for (const auto& [size, count] : image_sizes)
+    sizes.push_back(fmt::format("{} ({} session{})", size, count, count == 1 ? "" : "s"));
+  std::printf("image sizes: %s\n", fmt::format("{}", fmt::join(sizes, ", ")).c_str());
   for (const auto& [session, split] : split_of)
     if (!fs::exists(root + "/" + session + "/session.json"))
       spdlog::warn("split '{}' names session '{}', which is not in {}", split, session, root);
