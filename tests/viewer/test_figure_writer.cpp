@@ -1,5 +1,7 @@
 // Where figures go: PNGs every N figures / S seconds with only the newest
 // kept, and an MJPG .avi video.
+#include <unistd.h>
+
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -16,9 +18,11 @@ namespace fs = std::filesystem;
 
 cv::Mat figure() { return cv::Mat(60, 90, CV_8UC3, cv::Scalar(10, 200, 30)); }
 
+// Every file but the writer's lock.
 std::vector<std::string> files_in(const fs::path& dir) {
   std::vector<std::string> out;
-  for (const auto& e : fs::directory_iterator(dir)) out.push_back(e.path().filename().string());
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().filename() != FigureWriter::kLockFile) out.push_back(e.path().filename().string());
   std::sort(out.begin(), out.end());
   return out;
 }
@@ -105,6 +109,31 @@ TEST(ViewerFigureWriter, WritesAnMjpgVideo) {
   EXPECT_EQ(header.substr(0, 4), "RIFF");
   EXPECT_EQ(header.substr(8, 4), "AVI ");
   EXPECT_GT(fs::file_size(o.video), 1000u);
+}
+
+// Each would hold the folder to --max-images by deleting the oldest
+// figures, the other's too: the second viewer is refused, naming the first;
+// once the first is gone (stopped, or killed and respawned) the folder is free.
+TEST(ViewerFigureWriter, ASecondViewerOnTheSameFolderIsRefused) {
+  ivoa::test::TempDir dir;
+  OutputOptions o;
+  o.out_dir = dir.file("figures");
+  {
+    FigureWriter first(o);
+    try {
+      FigureWriter second(o);
+      FAIL() << "two writers on one folder";
+    } catch (const OutputError& e) {
+      EXPECT_NE(std::string(e.what()).find(o.out_dir + ": another viewer (pid " + std::to_string(::getpid()) +
+                                           ") writes its figures here: give this one another --out-dir"),
+                std::string::npos)
+          << e.what();
+    }
+    first.write(figure(), 1, 0.0);
+  }
+  FigureWriter next(o);
+  next.write(figure(), 2, 0.0);
+  EXPECT_EQ(files_in(o.out_dir), (std::vector<std::string>{"frame_1.png", "frame_2.png"}));
 }
 
 TEST(ViewerFigureWriter, UnwritableOutputIsAnError) {

@@ -1,7 +1,6 @@
 #include "ivoa/dataset/dataset_format.hpp"
 
 #include <fcntl.h>
-#include <sys/file.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -24,6 +23,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "ivoa/core/atomic_files.hpp"
+#include "ivoa/core/file_lock.hpp"
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/process.hpp"
 
@@ -527,30 +527,20 @@ std::vector<std::string> list_sessions(const std::string& dataset_root) {
 
 namespace {
 
-// An exclusive flock(2) on DATASET/.dataset.lock while held: several
-// ivoa-dataset builds may add sessions to one dataset at once.
-class DatasetLock {
- public:
-  explicit DatasetLock(const std::string& dataset_root) : path_(dataset_root + "/.dataset.lock") {
-    fd_ = ::open(path_.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
-    if (fd_ >= 0 && ::flock(fd_, LOCK_EX) == 0) return;
-    const std::string why = std::strerror(errno);
-    if (fd_ >= 0) ::close(fd_);  // the destructor does not run when the constructor throws
-    throw DatasetError(path_ + ": cannot lock the dataset: " + why);
+// DATASET/.dataset.lock while held: several ivoa-dataset builds may add
+// sessions to one dataset at once.
+FileLock lock_dataset(const std::string& dataset_root) {
+  try {
+    return FileLock::wait_for(dataset_root + "/.dataset.lock");
+  } catch (const FileLockError& e) {
+    throw DatasetError(std::string(e.what()) + " (the dataset's lock)");
   }
-  ~DatasetLock() { ::close(fd_); }  // releases the lock
-  DatasetLock(const DatasetLock&) = delete;
-  DatasetLock& operator=(const DatasetLock&) = delete;
-
- private:
-  std::string path_;
-  int fd_ = -1;
-};
+}
 
 }  // namespace
 
 void register_session(const std::string& dataset_root, const std::string& session, int patch_size) {
-  const DatasetLock lock(dataset_root);
+  const FileLock lock = lock_dataset(dataset_root);
   std::vector<std::string> sessions = list_sessions(dataset_root);
   if (std::find(sessions.begin(), sessions.end(), session) == sessions.end()) sessions.push_back(session);
   std::sort(sessions.begin(), sessions.end());

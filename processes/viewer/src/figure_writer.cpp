@@ -55,6 +55,7 @@ FigureWriter::FigureWriter(OutputOptions options) : options_(std::move(options))
     std::error_code ec;
     std::filesystem::create_directories(options_.out_dir, ec);
     if (ec) throw OutputError("cannot create " + options_.out_dir + ": " + ec.message());
+    take_the_folder();
     if (options_.max_images > 0) adopt_earlier_figures();
   }
   if (!options_.video.empty()) {
@@ -80,6 +81,24 @@ void FigureWriter::write(const cv::Mat& figure, int64_t utime, double now_ms) {
     last_png_ms_ = now_ms;
   }
   if (video_) write_video(figure);
+}
+
+// Two viewers on one folder would each hold it to --max-images by deleting
+// the oldest figures, the other's among them; the second is refused. The
+// lock goes with the process, so a respawned viewer takes the folder back.
+void FigureWriter::take_the_folder() {
+  const std::string path = (std::filesystem::path(options_.out_dir) / kLockFile).string();
+  try {
+    folder_lock_ = FileLock::try_take(path);
+  } catch (const FileLockError& e) {
+    throw OutputError(e.what());
+  }
+  if (folder_lock_) return;
+  const pid_t holder = file_lock_holder(path);
+  throw OutputError(options_.out_dir + ": another viewer" +
+                    (holder > 0 ? " (pid " + std::to_string(holder) + ")" : std::string()) +
+                    " writes its figures here: give this one another --out-dir (each would delete the other's "
+                    "figures to keep the folder to --max-images)");
 }
 
 // The figures an earlier viewer left in the folder count towards

@@ -5,10 +5,13 @@
 #include <cstdint>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include <opencv2/core.hpp>
+
+#include "ivoa/core/file_lock.hpp"
 
 namespace ivoa::viewer {
 
@@ -28,7 +31,11 @@ class OutputError : public std::runtime_error {
 
 class FigureWriter {
  public:
-  // Throws OutputError if out_dir cannot be created.
+  // In out_dir, held while the writer lives: one viewer a folder.
+  static constexpr const char* kLockFile = ".ivoa-viewer.lock";
+
+  // Throws OutputError if out_dir cannot be created, or another viewer
+  // writes into it.
   explicit FigureWriter(OutputOptions options);
   ~FigureWriter();
 
@@ -41,12 +48,14 @@ class FigureWriter {
   int64_t video_frames() const { return video_frames_; }
 
  private:
+  void take_the_folder();
   void adopt_earlier_figures();
   void write_png(const cv::Mat& figure, int64_t utime);
   void keep_newest();
   void write_video(const cv::Mat& figure);
 
   OutputOptions options_;
+  std::optional<FileLock> folder_lock_;
   std::deque<std::string> written_;
   int64_t figures_since_png_ = 0, images_written_ = 0, video_frames_ = 0, earlier_figures_ = 0;
   double last_png_ms_ = -1e18;
