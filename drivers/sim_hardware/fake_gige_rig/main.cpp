@@ -134,6 +134,10 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
     return f.left_images.empty() ? ivoa::kExitUsage : ivoa::kExitBadInput;
   }
+  if (!f.left_images.empty())  // what the cameras show, which the pattern's checks do not apply to
+    spdlog::info("serving {} image pair(s) in turn (the first: {} | {}), resized to the size the driver asks for{}",
+                 f.left_images.size(), f.left_images.front(), f.right_images.front(),
+                 f.no_stamp ? "" : ", each stamped with its frame number");
   std::unique_ptr<FakeGigeCamera> cameras[2];
   try {
     if (f.cameras != "right") cameras[0] = make_camera(*scene, RigCamera::kLeft, f);
