@@ -1,7 +1,11 @@
 // Calls tune_libtorch_runtime() as the LibTorch programs do, then prints the
-// two variables it sets, for the tests in CMakeLists.txt to match.
+// two variables it sets and the name the process goes by (ps, top, pkill:
+// the re-executed program was once called "exe"), for the tests in
+// CMakeLists.txt to match.
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
+#include <string>
 
 #include "ivoa/introspection/model.hpp"
 
@@ -11,4 +15,7 @@ int main(int, char** argv) {
     const char* value = std::getenv(name);
     std::cout << name << '=' << (value ? value : "(unset)") << '\n';
   }
+  std::string comm;
+  std::getline(std::ifstream("/proc/self/comm"), comm);
+  std::cout << "process name=" << comm << '\n';
 }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
 #include <functional>
 #include <utility>
 
@@ -277,7 +278,14 @@ void tune_libtorch_runtime(char** argv) {
   for (const auto& [name, value] :
        {std::pair{"OMP_WAIT_POLICY", "PASSIVE"}, std::pair{"GLIBC_TUNABLES", kMallocTunables}})
     if (std::getenv(name) == nullptr && setenv(name, value, 1) == 0) changed = true;
-  if (changed) execv("/proc/self/exe", argv);  // only returns on failure: then run with the defaults
+  if (!changed) return;
+  // By its own path, not /proc/self/exe: the process takes its name (ps,
+  // top, pkill) from the file executed, and would be called "exe".
+  std::error_code error;
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe", error).string();
+  if (!error) execv(self.c_str(), argv);
+  execv("/proc/self/exe", argv);  // the file was replaced (a rebuild) since it started
+  // execv only returns on failure: then run with the defaults
 }
 
 std::unique_ptr<IntrospectionModel> IntrospectionModel::load(const std::string& path, const InferenceConfig& config) {
