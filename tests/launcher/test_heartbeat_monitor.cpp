@@ -109,5 +109,32 @@ TEST(LauncherHeartbeats, HeartbeatsReadAfterTheProcessEndedStillCount) {
   prctl(PR_SET_CHILD_SUBREAPER, 0);
 }
 
+// A respawned command is a new instance: the counts its earlier instances
+// reached (their last heartbeats) are kept beside the newest's, each once,
+// even when a killed instance's last heartbeat is read after the new one's.
+TEST(LauncherHeartbeats, EarlierInstancesCountsAreKeptOnceEach) {
+  Bus bus("memq://");
+  const Supervisor supervisor = idle_supervisor("detector");
+  HeartbeatMonitor monitor(bus, "TEST_HB_INSTANCES", supervisor);
+  auto publish = [&](int pid, int64_t in) {
+    process_status_t s = remote_status("detector", in, 1, 1);
+    s.pid = pid;
+    s.messages_in = in;
+    bus.publish("TEST_HB_INSTANCES", s);
+    monitor.drain();
+    return *monitor.latest("detector");
+  };
+  EXPECT_EQ(publish(100, 10).earlier.instances, 0);
+  HeartbeatMonitor::Latest now = publish(200, 5);  // respawned
+  EXPECT_EQ(now.earlier.instances, 1);
+  EXPECT_EQ(now.earlier.messages_in, 10);
+  now = publish(100, 12);  // the first instance's last word, read late
+  EXPECT_EQ(now.status.messages_in + now.earlier.messages_in, 17) << "12 from the first, 5 from the second";
+  now = publish(200, 9);
+  EXPECT_EQ(now.earlier.instances, 1);
+  EXPECT_EQ(now.status.messages_in + now.earlier.messages_in, 21);
+  EXPECT_EQ(now.earlier.messages_out, 12);
+}
+
 }  // namespace
 }  // namespace ivoa::launcher

@@ -42,5 +42,30 @@ TEST(StatusJson, AHeartbeatWithoutCountersHasAnEmptyObject) {
   EXPECT_NE(json.find("\"counters\": {}}}"), std::string::npos) << json;
 }
 
+// A command killed and respawned: the table counts what every instance did,
+// and the last heartbeat of the one killed is not shown as a live state.
+TEST(StatusTable, CountsEveryInstanceAndSaysWhenTheSenderHasEnded) {
+  StatusRow detector = row("stereo_detector");
+  detector.command.state = RunState::kRespawning;
+  process_status_t h;
+  h.messages_in = 30;
+  h.messages_out = 29;
+  h.dropped = 1;
+  h.state = "running";
+  detector.heartbeat = h;
+  detector.earlier = InstanceCounts{1, 100, 98, 2, 3};
+  detector.heartbeat_sender_ended = true;
+  const std::string table = format_status_table({detector});
+  EXPECT_NE(table.find("     130      127      3     3"), std::string::npos) << table;
+  EXPECT_NE(table.find("ended; last said running (0s ago)"), std::string::npos) << table;
+  const std::string json = format_status_json({detector}, RunSummary{});
+  EXPECT_NE(json.find("\"earlier_instances\": {\"instances\": 1, \"messages_in\": 100, \"messages_out\": 98, "
+                      "\"dropped\": 2, \"bad_input\": 3}"),
+            std::string::npos)
+      << json;
+  EXPECT_NE(json.find("\"messages_in\": 30,"), std::string::npos)
+      << "the heartbeat's own counts stay its own: " << json;
+}
+
 }  // namespace
 }  // namespace ivoa::launcher

@@ -17,41 +17,64 @@ void HeartbeatMonitor::drain() {
   }
 }
 
-std::optional<std::string> HeartbeatMonitor::local_command(pid_t pid) {
+std::optional<HeartbeatMonitor::Sender> HeartbeatMonitor::local_sender(pid_t pid) {
   const pid_t group = getpgid(pid);
   if (group > 0) {
     auto command = supervisor_.command_with_group(group);
-    if (command) commands_by_pid_[pid] = *command;
-    return command;
+    if (!command) return std::nullopt;
+    return senders_by_pid_[pid] = Sender{*command, group};
   }
   // The process has ended and been reaped: its last heartbeat (sent as it
   // stopped) is often read only now. Its pid is free, so no live process
   // can be mistaken for it.
-  const auto known = commands_by_pid_.find(pid);
-  if (known != commands_by_pid_.end()) return known->second;
-  return supervisor_.command_with_group(pid);  // a group leader never heard while alive
+  const auto known = senders_by_pid_.find(pid);
+  if (known != senders_by_pid_.end()) return known->second;
+  if (auto command = supervisor_.command_with_group(pid))  // a group leader never heard while alive
+    return Sender{*command, pid};
+  return std::nullopt;
 }
 
 void HeartbeatMonitor::on_status(const process_status_t& status) {
-  std::optional<std::string> command;
-  if (status.host == hostname_) command = local_command(status.pid);
-  else if (supervisor_.has(status.name)) command = status.name;
-  if (!command) return;
-  Latest next{status, std::chrono::steady_clock::now()};
+  Latest next;
+  next.status = status;
+  next.received = std::chrono::steady_clock::now();
+  std::string command;
+  if (status.host == hostname_) {
+    const std::optional<Sender> sender = local_sender(status.pid);
+    if (!sender) return;
+    command = sender->command;
+    next.local = true;
+    next.instance = sender->group;
+  } else if (supervisor_.has(status.name)) {
+    command = status.name;
+    next.instance = static_cast<int>(status.pid);
+  } else {
+    return;
+  }
+  CommandHeartbeats& heard = heard_[command];
   // A heartbeat's latency covers its own period; one with no work in it
   // (a process idle or stopping) keeps the last latency measured.
-  const auto previous = latest_.find(*command);
-  if (status.latency_ms_max == 0 && previous != latest_.end()) {
-    next.status.latency_ms_mean = previous->second.status.latency_ms_mean;
-    next.status.latency_ms_max = previous->second.status.latency_ms_max;
+  if (status.latency_ms_max == 0 && !heard.last_of_instance.empty()) {
+    next.status.latency_ms_mean = heard.latest.status.latency_ms_mean;
+    next.status.latency_ms_max = heard.latest.status.latency_ms_max;
   }
-  latest_[*command] = next;
+  heard.last_of_instance[next.instance] = status;
+  heard.latest = next;
 }
 
 std::optional<HeartbeatMonitor::Latest> HeartbeatMonitor::latest(const std::string& command) const {
-  const auto it = latest_.find(command);
-  if (it == latest_.end()) return std::nullopt;
-  return it->second;
+  const auto it = heard_.find(command);
+  if (it == heard_.end()) return std::nullopt;
+  Latest latest = it->second.latest;
+  for (const auto& [instance, status] : it->second.last_of_instance) {
+    if (instance == latest.instance) continue;
+    ++latest.earlier.instances;
+    latest.earlier.messages_in += status.messages_in;
+    latest.earlier.messages_out += status.messages_out;
+    latest.earlier.dropped += status.dropped;
+    latest.earlier.bad_input += status.bad_input;
+  }
+  return latest;
 }
 
 }  // namespace ivoa::launcher

@@ -3,6 +3,10 @@
 // heartbeat from this machine belongs to the command whose process group
 // holds its pid (so it works whatever the process calls itself and through
 // "sh -c"); one from another machine to the command of the same name.
+// A respawned command is a new instance (a new process group here, a new
+// pid there); the counts of its earlier instances, as their last heartbeats
+// gave them, are kept beside the newest, so a run's totals are not lost
+// with the process that was killed.
 #include <sys/types.h>
 
 #include <chrono>
@@ -11,6 +15,7 @@
 #include <string>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/launcher/status_report.hpp"
 #include "ivoa/launcher/supervisor.hpp"
 #include "ivoa/process_status_t.hpp"
 
@@ -27,18 +32,29 @@ class HeartbeatMonitor {
   struct Latest {
     process_status_t status;
     std::chrono::steady_clock::time_point received;
+    bool local = false;      // sent from this machine: `instance` is its process group
+    int instance = 0;        // the process group here, the pid on another machine
+    InstanceCounts earlier;  // the command's other instances, by the last heartbeat of each
   };
   std::optional<Latest> latest(const std::string& command) const;
 
  private:
+  struct Sender {
+    std::string command;
+    pid_t group = 0;
+  };
+  struct CommandHeartbeats {
+    Latest latest;
+    std::map<int, process_status_t> last_of_instance;
+  };
   void on_status(const process_status_t& status);
-  std::optional<std::string> local_command(pid_t pid);
+  std::optional<Sender> local_sender(pid_t pid);
 
   Bus& bus_;
   const Supervisor& supervisor_;
   std::string hostname_;
-  std::map<std::string, Latest> latest_;
-  std::map<pid_t, std::string> commands_by_pid_;  // every local pid heard from, for heartbeats read after it ended
+  std::map<std::string, CommandHeartbeats> heard_;
+  std::map<pid_t, Sender> senders_by_pid_;  // every local pid heard from, for heartbeats read after it ended
 };
 
 }  // namespace ivoa::launcher

@@ -252,11 +252,16 @@ class Run {
   std::vector<StatusRow> rows() const {
     std::vector<StatusRow> out;
     for (const auto& s : supervisor_.statuses()) {
-      StatusRow row{s, std::nullopt, 0};
+      StatusRow row;
+      row.command = s;
       if (monitor_)
         if (auto h = monitor_->latest(s.name)) {
           row.heartbeat = h->status;
           row.heartbeat_age_s = std::chrono::duration<double>(Clock::now() - h->received).count();
+          row.earlier = h->earlier;
+          const bool sender_runs =
+              (s.state == RunState::kRunning || s.state == RunState::kStopping) && h->instance == s.pid;
+          row.heartbeat_sender_ended = h->local && !sender_runs && h->status.state != "stopped";
         }
       out.push_back(std::move(row));
     }

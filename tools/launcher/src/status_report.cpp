@@ -33,6 +33,13 @@ std::string counters_json(const process_status_t& h) {
   return out + "}";
 }
 
+// The counts of the command's earlier instances (0 of them: never respawned).
+std::string earlier_json(const InstanceCounts& e) {
+  return "{\"instances\": " + std::to_string(e.instances) + ", \"messages_in\": " + std::to_string(e.messages_in) +
+         ", \"messages_out\": " + std::to_string(e.messages_out) + ", \"dropped\": " + std::to_string(e.dropped) +
+         ", \"bad_input\": " + std::to_string(e.bad_input) + "}";
+}
+
 std::string clip(const std::string& s, size_t width) { return s.size() <= width ? s : s.substr(0, width - 1) + "~"; }
 
 }  // namespace
@@ -57,12 +64,13 @@ std::string format_status_table(const std::vector<StatusRow>& rows) {
     std::string in = "-", out_count = "-", dropped = "-", bad = "-", latency = "-", hb_state = "";
     if (r.heartbeat) {
       const auto& h = *r.heartbeat;
-      in = std::to_string(h.messages_in);
-      out_count = std::to_string(h.messages_out);
-      dropped = std::to_string(h.dropped);
-      bad = std::to_string(h.bad_input);
+      in = std::to_string(h.messages_in + r.earlier.messages_in);
+      out_count = std::to_string(h.messages_out + r.earlier.messages_out);
+      dropped = std::to_string(h.dropped + r.earlier.dropped);
+      bad = std::to_string(h.bad_input + r.earlier.bad_input);
       latency = fixed(h.latency_ms_mean, 1);
-      hb_state = h.state + " (" + fixed(r.heartbeat_age_s, 0) + "s ago)";
+      hb_state = (r.heartbeat_sender_ended ? "ended; last said " : "") + h.state + " (" + fixed(r.heartbeat_age_s, 0) +
+                 "s ago)";
     }
     std::snprintf(line, sizeof(line), "%-20s %7s %-15s %4d %-8s %8s %8s %6s %5s %8s  %s\n", clip(c.name, 20).c_str(),
                   pid.c_str(), state_text(c).c_str(), c.restarts, describe_exit(c).c_str(), in.c_str(),
@@ -84,7 +92,8 @@ std::string format_status_json(const std::vector<StatusRow>& rows, const RunSumm
         << ", \"pid\": " << c.pid << ", \"state\": " << json_quote(to_string(c.state))
         << ", \"restarts\": " << c.restarts << ", \"exit_code\": " << c.exit_code
         << ", \"exit_signal\": " << c.exit_signal << ", \"failed\": " << (c.failed ? "true" : "false")
-        << ", \"killed\": " << (c.killed ? "true" : "false") << ", \"heartbeat\": ";
+        << ", \"killed\": " << (c.killed ? "true" : "false")
+        << ", \"earlier_instances\": " << earlier_json(rows[i].earlier) << ", \"heartbeat\": ";
     if (!rows[i].heartbeat) {
       out << "null}";
       continue;
