@@ -80,6 +80,10 @@ for name, c in cmds.items():
     assert c["state"] == "stopped" and not c["failed"] and not c["killed"], (name, c)
 det = cmds["stereo_detector"]
 assert det["restarts"] == 1, f"stereo_detector restarts {det['restarts']}, expected 1 (killed once)"
+# The killed instance's counts stay in the status (its last heartbeat's),
+# beside the respawned one's; the other commands ran once.
+assert det["earlier_instances"]["instances"] == 1, det["earlier_instances"]
+assert all(cmds[n]["earlier_instances"]["instances"] == 0 for n in processes - {"stereo_detector"}), cmds
 for name in processes - {"sim_driver", "stereo_detector"}:
     assert cmds[name]["restarts"] == 0, (name, cmds[name])
 assert cmds["sim_driver"]["exit_code"] == 0
