@@ -108,8 +108,14 @@ if mode == "record":
     pairs, grids, labels = totals["STEREO_IMAGES"], totals["OBSTACLES_STEREO"], totals["INTROSPECTION_LABELS"]
     assert pairs >= 4 * 12 and totals["DEPTH_IMAGE"] >= 3 * pairs // 2, totals
     assert grids >= pairs - 2, f"{grids} grids for {pairs} pairs"
-    # Grids whose depth frame the loaded host skipped stay unlabelled (counted).
-    assert labels >= 0.8 * grids, f"{labels} labelled frames of {grids}; monitor: {hb['depth_monitor']}"
+    # Grids whose depth frame the loaded host skipped stay unlabelled, but
+    # counted: every grid is labelled or said unmatched (or came before the
+    # calibration). How many go unmatched depends on the load (22 of 97 once
+    # beside the other tests on 2 cores), so the floor is only a sanity check.
+    mon = hb["depth_monitor"]["counters"]
+    accounted = labels + mon["stereo_unmatched"] + mon["frames_without_calibration"]
+    assert accounted >= grids - 2, f"{labels} labelled frames of {grids}, the rest not counted; monitor: {mon}"
+    assert labels >= grids // 2, f"{labels} labelled frames of {grids}; monitor: {hb['depth_monitor']}"
     assert hb["logger"]["messages_in"] == hb["logger"]["messages_out"], hb["logger"]
     sessions = [json.load(open(f)) for f in glob.glob(f"{out}/data/*/session.json")]
     samples = sum(s["samples"] for s in sessions)
