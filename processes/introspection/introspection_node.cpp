@@ -277,22 +277,17 @@ void IntrospectionNode::update_warp() {
 }
 
 void IntrospectionNode::check_image_size(cv::Size size) {
-  if (size != last_image_size_) {
-    last_image_size_ = size;
-    last_size_trained_ = introspection::trained_on_size(model_->info(), size);
-    const bool warned = std::find(warned_sizes_.begin(), warned_sizes_.end(), size) != warned_sizes_.end();
-    if (!last_size_trained_ && !warned) {
-      warned_sizes_.push_back(size);
-      spdlog::warn(
-          "{}: {}x{} images, but model {} was trained on {} images: it runs (patches are cut on the ground and "
-          "resized), but how well it predicts this camera's failures is unmeasured. Record this rig "
-          "(procman_configs/record.pmd), build a dataset from the logs (ivoa-dataset build) and fine-tune on it "
-          "(ivoa-train --init <this model>). Such frames are counted as {}.",
-          options_.stereo_channel, size.width, size.height, model_->info().id,
-          introspection::image_sizes_text(model_->info().image_sizes), kFramesUntrainedSize);
-    }
-  }
-  if (!last_size_trained_) heartbeat_.add_to_counter(kFramesUntrainedSize, 1);
+  if (introspection::trained_on_size(model_->info(), size)) return;
+  heartbeat_.add_to_counter(kFramesUntrainedSize, 1);
+  if (std::find(warned_sizes_.begin(), warned_sizes_.end(), size) != warned_sizes_.end()) return;
+  warned_sizes_.push_back(size);
+  spdlog::warn(
+      "{}: {}x{} images, but model {} was trained on {} images: it runs (patches are cut on the ground and "
+      "resized), but how well it predicts this camera's failures is unmeasured. Record this rig "
+      "(procman_configs/record.pmd), build a dataset from the logs (ivoa-dataset build) and fine-tune on it "
+      "(ivoa-train --init <this model>). Such frames are counted as {}.",
+      options_.stereo_channel, size.width, size.height, model_->info().id,
+      introspection::image_sizes_text(model_->info().image_sizes), kFramesUntrainedSize);
 }
 
 cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& where, cv::Mat& left) {

@@ -147,9 +147,7 @@ class IntrospectionNode {
   LatestMailbox<Frame> frames_;
   RecentGrids grids_;
   bool warned_other_detector_ = false;               // LCM thread only
-  cv::Size last_image_size_;                         // worker thread only
-  bool last_size_trained_ = true;                    // worker thread only
-  std::vector<cv::Size> warned_sizes_;               // worker thread only
+  std::vector<cv::Size> warned_sizes_;               // untrained ones (worker thread only)
   SeqGaps missed_;                                   // LCM thread only
   std::optional<CalibrationWait> calibration_wait_;  // two-view models; worker thread only
   std::mutex calibration_mutex_;

@@ -373,12 +373,6 @@ double write_predictions(const Options& o, const SessionList& sessions, introspe
   return done;
 }
 
-std::string sizes_json(const std::vector<cv::Size>& sizes) {
-  std::string json;
-  for (const cv::Size& s : sizes) json += fmt::format("{}[{}, {}]", json.empty() ? "" : ", ", s.width, s.height);
-  return json;
-}
-
 // The patches each session was cut as, so the report can refuse a dataset
 // cut otherwise (its mosaics would show other patches than the model saw).
 void write_eval_json(const Options& o, const introspection::IntrospectionModel& model, const SessionList& sessions,
@@ -398,9 +392,9 @@ void write_eval_json(const Options& o, const introspection::IntrospectionModel& 
        << ", \"verdict_uncertainty_threshold\": " << model.verdict_threshold() << ", \"overlay_dots\": \""
        << (o.dots_given_verdict ? "given_verdict" : "image") << "\", \"samples\": " << samples << ", \"sessions\": ["
        << evaluated << "], \"metadata\": {\"detector\": " << json_quote(info.detector)
-       << ", \"architecture\": " << json_quote(info.architecture) << ", \"image_sizes\": ["
-       << sizes_json(info.image_sizes)
-       << "], \"training\": " << (info.training_summary.empty() ? "{}" : info.training_summary) << "}}\n";
+       << ", \"architecture\": " << json_quote(info.architecture)
+       << ", \"image_sizes\": " << introspection::image_sizes_json(info.image_sizes)
+       << ", \"training\": " << (info.training_summary.empty() ? "{}" : info.training_summary) << "}}\n";
   if (!json.flush()) throw OutputError(path + ": cannot write: " + std::strerror(errno));
 }
 

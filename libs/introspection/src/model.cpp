@@ -316,6 +316,13 @@ std::string image_sizes_text(const std::vector<cv::Size>& sizes) {
   return text;
 }
 
+std::string image_sizes_json(const std::vector<cv::Size>& sizes) {
+  std::string json;
+  for (const cv::Size& s : sizes)
+    json += (json.empty() ? "" : ", ") + ("[" + std::to_string(s.width) + ", " + std::to_string(s.height) + "]");
+  return "[" + json + "]";
+}
+
 double IntrospectionModel::uncertainty_threshold() const {
   return config_.uncertainty_threshold >= 0 ? config_.uncertainty_threshold : info().uncertainty_threshold;
 }

@@ -117,10 +117,8 @@ std::string info_to_json(const ModelInfo& i) {
   o << "{\"format\": " << json_quote(kFormat) << ", \"version\": 1, \"architecture\": " << json_quote(i.architecture)
     << ", \"detector\": " << json_quote(i.detector) << ", \"patch_size\": " << i.patch_size
     << ", \"stride\": " << i.stride << ", \"input_size\": " << i.input_size << ", \"views\": " << i.views
-    << ", \"patch_scale\": " << i.patch_scale << ", \"image_sizes\": [";
-  for (size_t k = 0; k < i.image_sizes.size(); ++k)
-    o << (k ? ", " : "") << "[" << i.image_sizes[k].width << ", " << i.image_sizes[k].height << "]";
-  o << "], \"dropout\": " << i.dropout << ", \"color\": \"RGB\""
+    << ", \"patch_scale\": " << i.patch_scale << ", \"image_sizes\": " << image_sizes_json(i.image_sizes)
+    << ", \"dropout\": " << i.dropout << ", \"color\": \"RGB\""
     << ", \"mean\": [" << i.mean[0] << ", " << i.mean[1] << ", " << i.mean[2] << "], \"std\": [" << i.std[0] << ", "
     << i.std[1] << ", " << i.std[2] << "], \"classes\": [";
   for (size_t k = 0; k < i.classes.size(); ++k) o << (k ? ", " : "") << json_quote(i.classes[k]);

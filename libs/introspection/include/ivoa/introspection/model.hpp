@@ -72,6 +72,8 @@ struct ModelInfo {
 bool trained_on_size(const ModelInfo& info, cv::Size size);
 // "960x600" or "960x600, 640x480"; "not recorded" when empty.
 std::string image_sizes_text(const std::vector<cv::Size>& sizes);
+// As JSON: "[[960, 600], [640, 480]]".
+std::string image_sizes_json(const std::vector<cv::Size>& sizes);
 
 enum class QueryLookup { kNearest, kBilinear };
 
