@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "ivoa/core/bus.hpp"
+#include "ivoa/core/calibration.hpp"
 #include "ivoa/core/camera_model.hpp"
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/footprint_patch.hpp"
@@ -231,6 +232,8 @@ TEST(DatasetBuilder, RecordedLabelsAreUsedAsRecorded) {
 // a model trained on it records in turn; frames of another size later (a
 // second camera's log given to the same session) are counted, for the tool
 // to say that the model will not know them.
+// The session's size is that of the frames its samples come from, whichever
+// log comes first; frames of another size are counted, labelled or not.
 TEST(DatasetBuilder, FramesOfAnotherSizeThanTheSessionsAreCounted) {
   test::TempDir dir;
   const std::string log_path = dir.file("rec.lcmlog");
@@ -238,6 +241,8 @@ TEST(DatasetBuilder, FramesOfAnotherSizeThanTheSessionsAreCounted) {
   const std::string other_log = dir.file("other_camera.lcmlog");
   {
     Bus bus("file://" + other_log + "?mode=w");
+    rig_calibration_t calibration = to_message(sim::make_sim_rig(), 89'900'000);
+    bus.publish(channels::kRigCalibration, calibration);
     cv::Mat small(240, 320, CV_8UC3, cv::Scalar::all(90));
     for (int64_t utime : {90'000'000, 90'100'000}) {
       stereo_image_t frame{};
@@ -255,6 +260,14 @@ TEST(DatasetBuilder, FramesOfAnotherSizeThanTheSessionsAreCounted) {
   EXPECT_EQ(report.image_size, sim_camera);
   EXPECT_EQ(report.frames_other_size, 2);
   EXPECT_EQ(SessionReader(dir.file("data") + "/mixed").info().image_size, sim_camera);
+
+  SessionBuilder other_first(dir.file("data"), "other_first", BuildOptions{});
+  other_first.add_log(other_log);
+  other_first.add_log(log_path);
+  const BuildReport reversed = other_first.finish();
+  EXPECT_EQ(reversed.image_size, sim_camera);
+  EXPECT_EQ(reversed.frames_other_size, 2);
+  EXPECT_EQ(SessionReader(dir.file("data") + "/other_first").info().image_size, sim_camera);
 }
 
 // A recorded labels message the session cannot store is skipped, named by

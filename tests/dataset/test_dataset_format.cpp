@@ -161,6 +161,13 @@ TEST(DatasetFormat, ANonsensePatchSizeInSessionJsonIsNamedThere) {
   refused("patch_size", "1073741824", "patch_size must be 1 to 4096, not 1073741824");
   // read into memory before its size was checked: 2 GB for 4e6
   refused("evidence_size", "4000000", "evidence_size must be 0 to 4096, not 4000000");
+  // [width, height]: past any camera's, or not a pair of whole pixels
+  const std::string size_message = "image_size must be [width, height] in pixels ([0, 0]: not known)";
+  const size_t size_at = json.find("  \"image_size\": ");
+  ASSERT_NE(size_at, std::string::npos);
+  json.replace(size_at, json.find(']', size_at) + 1 - size_at, "  \"image_size\": 0");
+  for (const char* value : {"[100000, 100000]", "\"960x600\"", "[960, 600.5]", "[960, 0]", "[960]"})
+    refused("image_size", value, size_message);
 }
 
 TEST(DatasetFormat, TwoViewPatchesRoundTripStacked) {

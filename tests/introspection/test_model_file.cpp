@@ -94,14 +94,24 @@ TEST(ModelFile, TheTrainingImageSizesTravelWithTheModel) {
   EXPECT_TRUE(trained_on_size(old_model, {1280, 720}));
   EXPECT_EQ(image_sizes_text(old_model.image_sizes), "not recorded");
 
-  std::string bad = info_to_json(info);
-  bad.replace(bad.find("[640, 480]"), 10, "[640, 0]");
-  try {
-    info_from_json(bad, "bad.pt");
-    FAIL() << "a size of 0 pixels was read";
-  } catch (const ModelError& e) {
-    EXPECT_NE(std::string(e.what()).find("bad.pt: image_sizes must list [width, height] pairs"), std::string::npos)
-        << e.what();
+  // Each refused, the message saying what is expected and what was found.
+  for (const auto& [written, wrong] :
+       std::vector<std::pair<std::string, std::string>>{{"[[960, 600], [640, 0]]", "[640, 0]"},
+                                                        {"[960, 600]", "960"},
+                                                        {"[\"960x600\"]", "\"960x600\""},
+                                                        {"[[960, 600.5]]", "[960, 600.5]"},
+                                                        {"[[100000, 100000]]", "[100000, 100000]"}}) {
+    std::string bad = info_to_json(info);
+    bad.replace(bad.find("[[960, 600], [640, 480]]"), 24, written);
+    try {
+      info_from_json(bad, "bad.pt");
+      FAIL() << written << " was read";
+    } catch (const ModelError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.pt: image_sizes must be a list of [width, height] pairs"),
+                std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find(", not " + wrong), std::string::npos) << e.what();
+    }
   }
 }
 

@@ -136,5 +136,48 @@ TEST(LauncherHeartbeats, EarlierInstancesCountsAreKeptOnceEach) {
   EXPECT_EQ(now.earlier.messages_out, 12);
 }
 
+process_status_t instance_status(int pid, int64_t start_utime, int64_t in, double latency) {
+  process_status_t s = remote_status("detector", in, latency, latency);
+  s.pid = pid;
+  s.start_utime = start_utime;
+  s.messages_in = in;
+  s.state = "running";
+  return s;
+}
+
+// An instance is known by its host, pid and start time: a respawn that gets
+// the pid of the one before (a container's, or after pid wrap-around) is
+// another instance; the newest is the one started last, so the killed one's
+// last heartbeat, read late, adds its counts but is not shown as the
+// command's state, nor does the newest inherit its latency.
+TEST(LauncherHeartbeats, TheInstanceStartedLastIsShownAndAReusedPidIsAnotherInstance) {
+  Bus bus("memq://");
+  const Supervisor supervisor = idle_supervisor("detector");
+  HeartbeatMonitor monitor(bus, "TEST_HB_REUSED", supervisor);
+  auto publish = [&](const process_status_t& s) {
+    process_status_t copy = s;
+    bus.publish("TEST_HB_REUSED", copy);
+    monitor.drain();
+    return *monitor.latest("detector");
+  };
+  publish(instance_status(7, 1'000, 10, 40));
+  HeartbeatMonitor::Latest now = publish(instance_status(7, 2'000, 3, 0));  // respawned with the same pid
+  EXPECT_EQ(now.earlier.instances, 1);
+  EXPECT_EQ(now.status.messages_in + now.earlier.messages_in, 13);
+  EXPECT_DOUBLE_EQ(now.status.latency_ms_max, 0) << "no latency inherited from the instance before";
+
+  process_status_t last_word = instance_status(7, 1'000, 11, 40);
+  last_word.state = "stopped";
+  now = publish(last_word);  // read after the new instance's first heartbeat
+  EXPECT_EQ(now.status.start_utime, 2'000);
+  EXPECT_EQ(now.status.state, "running");
+  EXPECT_EQ(now.status.messages_in + now.earlier.messages_in, 14);
+
+  process_status_t other_robot = instance_status(7, 1'500, 100, 1);
+  other_robot.host = "another-robot";
+  now = publish(other_robot);  // same name and pid on another host: yet another instance
+  EXPECT_EQ(now.earlier.instances, 2);
+}
+
 }  // namespace
 }  // namespace ivoa::launcher

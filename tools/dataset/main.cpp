@@ -83,7 +83,8 @@ int build_session(const std::string& out, const std::string& session, const std:
     spdlog::warn("{}: {}", session, why);
   if (r.frames_other_size > 0)
     spdlog::warn(
-        "{}: {} stereo frames are of another size than its first ones ({}x{}), the size the session records and a "
+        "{}: {} stereo frames are of another size than the frames its samples start with ({}x{}), the size the session "
+        "records and a "
         "model trained on it will know: build each camera's logs as a session of its own",
         session, r.frames_other_size, r.image_size.width, r.image_size.height);
   if (r.samples == 0 && r.patches_outside > 0)
@@ -253,7 +254,8 @@ int run_info(const std::string& root, const std::string& split_path) {
   std::vector<std::string> sizes;  // a model trained on these sessions knows these sizes
   for (const auto& [size, count] : image_sizes)
     sizes.push_back(fmt::format("{} ({} session{})", size, count, count == 1 ? "" : "s"));
-  std::printf("image sizes: %s\n", fmt::format("{}", fmt::join(sizes, ", ")).c_str());
+  std::printf("image sizes: %s\n",
+              sizes.empty() ? "none (no readable session)" : fmt::format("{}", fmt::join(sizes, ", ")).c_str());
   for (const auto& [session, split] : split_of)
     if (!fs::exists(root + "/" + session + "/session.json"))
       spdlog::warn("split '{}' names session '{}', which is not in {}", split, session, root);

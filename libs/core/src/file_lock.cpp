@@ -1,6 +1,7 @@
 #include "ivoa/core/file_lock.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <unistd.h>
 
@@ -12,47 +13,68 @@
 namespace ivoa {
 namespace {
 
-int open_lock_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
-  if (fd < 0) throw FileLockError(path + ": cannot open the lock file: " + std::strerror(errno));
-  return fd;
+struct LockFile {
+  int fd = -1;
+  bool writable = false;
+};
+
+// A lock file another user left (a shared folder) or on a read-only mount
+// can still be locked through a read-only descriptor: only the pid is not
+// written. A link is refused rather than followed: the pid would be written
+// into whatever it points to.
+LockFile open_lock_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC | O_NOFOLLOW, 0644);
+  if (fd >= 0) return {fd, true};
+  const int error = errno;
+  if (error == EACCES || error == EROFS || error == EPERM) {
+    const int read_only = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    if (read_only >= 0) return {read_only, false};
+  }
+  std::string why = std::strerror(error);
+  if (error == ELOOP) why += " (a link: the lock file must be a plain file; remove the link)";
+  throw FileLockError(path + ": cannot open the lock file: " + why);
 }
 
 // Who holds it, for the message of whoever is refused; not needed for the
 // lock itself, so a failed write is no error.
-void write_pid(int fd) {
+void write_pid(const LockFile& file) {
+  if (!file.writable) return;
   const std::string pid = std::to_string(::getpid()) + "\n";
-  if (::ftruncate(fd, 0) != 0) return;
-  const ssize_t written = ::pwrite(fd, pid.data(), pid.size(), 0);
+  if (::ftruncate(file.fd, 0) != 0) return;
+  const ssize_t written = ::pwrite(file.fd, pid.data(), pid.size(), 0);
   static_cast<void>(written);
+}
+
+[[noreturn]] void throw_lock_error(const std::string& path, int error) {
+  throw FileLockError(path + ": cannot lock: " + std::strerror(error), error == ENOLCK || error == EOPNOTSUPP);
 }
 
 }  // namespace
 
 FileLock FileLock::wait_for(const std::string& path) {
-  const int fd = open_lock_file(path);
+  const LockFile file = open_lock_file(path);
   int rc;
-  while ((rc = ::flock(fd, LOCK_EX)) != 0 && errno == EINTR) {
+  while ((rc = ::flock(file.fd, LOCK_EX)) != 0 && errno == EINTR) {
   }
   if (rc != 0) {
-    const std::string why = std::strerror(errno);
-    ::close(fd);
-    throw FileLockError(path + ": cannot lock: " + why);
+    const int error = errno;
+    ::close(file.fd);
+    throw_lock_error(path, error);
   }
-  write_pid(fd);
-  return FileLock(fd);
+  write_pid(file);
+  return FileLock(file.fd);
 }
 
 std::optional<FileLock> FileLock::try_take(const std::string& path) {
-  const int fd = open_lock_file(path);
-  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+  const LockFile file = open_lock_file(path);
+  if (::flock(file.fd, LOCK_EX | LOCK_NB) != 0) {
     const int error = errno;
-    ::close(fd);
+    ::close(file.fd);
     if (error == EWOULDBLOCK) return std::nullopt;
-    throw FileLockError(path + ": cannot lock: " + std::strerror(error));
+    throw_lock_error(path, error);
   }
-  write_pid(fd);
-  return FileLock(fd);
+  write_pid(file);
+  return FileLock(file.fd);
 }
 
 FileLock::FileLock(FileLock&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
@@ -72,7 +94,9 @@ FileLock::~FileLock() {
 pid_t file_lock_holder(const std::string& path) {
   std::ifstream in(path);
   long pid = 0;
-  return in >> pid && pid > 0 ? static_cast<pid_t>(pid) : 0;
+  if (!(in >> pid) || pid <= 0) return 0;
+  const bool alive = ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
+  return alive ? static_cast<pid_t>(pid) : 0;
 }
 
 }  // namespace ivoa

@@ -77,9 +77,10 @@ struct SessionBuilder::Impl {
   std::map<int64_t, cv::Mat> right_images;  // utime -> raw right BGR, for evidence
   std::unique_ptr<stereo::ObstacleDetector> evidence_detector;  // made for the labels' detector when first needed
   bool evidence_warned = false;
-  std::map<int64_t, Truth> truths;           // utime -> simulator truth
-  std::deque<introspection_labels_t> ready;  // labels waiting for their frame's truth
-  std::set<int64_t> stored_frames;           // utimes: a frame's samples are stored once
+  std::map<int64_t, Truth> truths;                           // utime -> simulator truth
+  std::deque<introspection_labels_t> ready;                  // labels waiting for their frame's truth
+  std::set<int64_t> stored_frames;                           // utimes: a frame's samples are stored once
+  std::vector<std::pair<cv::Size, int64_t>> frames_by_size;  // stereo frames read, by left image size, in order
   int64_t label_sources = 0;  // messages the labels come from: recorded labels, or depth to re-label with
 
   bool rerun() const { return options.labels != kRecordedLabels; }
@@ -97,6 +98,8 @@ struct SessionBuilder::Impl {
   std::vector<std::pair<size_t, cv::Mat>> labelled_patches(const introspection_labels_t& labels, const cv::Mat& views,
                                                            const std::vector<int>& sides) const;
   void open_writer();
+  void set_image_size(cv::Size size);
+  void count_frames_of_other_sizes();
   std::string no_label_source() const;
 };
 
@@ -131,6 +134,18 @@ void SessionBuilder::Impl::open_writer() {
   writer = std::make_unique<SessionWriter>(root, info);
 }
 
+// The size of the left images the session's patches are cut from: its
+// first stored frame's (session.json records it before any sample).
+void SessionBuilder::Impl::set_image_size(cv::Size size) { report.image_size = info.image_size = size; }
+
+// Stereo frames of another size than the session's, stored or not: a second
+// camera's logs built into the same session.
+void SessionBuilder::Impl::count_frames_of_other_sizes() {
+  report.frames_other_size = 0;
+  for (const auto& [size, frames] : frames_by_size)
+    if (size != info.image_size) report.frames_other_size += frames;
+}
+
 void SessionBuilder::Impl::on_calibration(const logio::LogEvent& e) {
   rig_calibration_t msg;
   if (!logio::decode(e, msg))
@@ -161,8 +176,9 @@ void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
   ++report.stereo_frames;
   try {
     cv::Mat left = decode_image(msg.left);
-    if (!writer) report.image_size = info.image_size = left.size();  // what the session's patches are cut from
-    else if (left.size() != info.image_size) ++report.frames_other_size;
+    if (frames_by_size.empty() || frames_by_size.back().first != left.size())
+      frames_by_size.push_back({left.size(), 0});
+    ++frames_by_size.back().second;
     const cv::Mat right = rerun() || warp || options.evidence ? decode_image(msg.right) : cv::Mat();
     if (options.evidence) right_images[msg.utime] = right;
     cv::Mat views = warp ? warp->stack(left, right) : left;
@@ -306,6 +322,7 @@ void SessionBuilder::Impl::emit(const introspection_labels_t& labels) {
     return bad("labels for frame " + std::to_string(labels.utime) + " whose stereo images are not in the log");
   }
   const std::vector<std::vector<float>> evidence = evidence_of(labels, image->second);
+  if (!writer) set_image_size(cv::Size(image->second.cols, image->second.rows / options.views));
   open_writer();
   const auto truth = truths.find(labels.utime);
   int32_t labelled = 0;
@@ -477,7 +494,9 @@ BuildReport SessionBuilder::finish() {
   if (m.label_sources == 0) throw DatasetError(m.no_label_source());
   if (m.pipeline) m.take(m.pipeline->flush());
   m.emit_ready(true);
+  if (!m.writer && !m.frames_by_size.empty()) m.set_image_size(m.frames_by_size.front().first);
   m.open_writer();  // an empty session is still written, so it can be listed
+  m.count_frames_of_other_sizes();
   m.writer->close();
   return m.report;
 }

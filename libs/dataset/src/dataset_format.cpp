@@ -24,6 +24,7 @@
 
 #include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/file_lock.hpp"
+#include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/process.hpp"
 
@@ -72,6 +73,23 @@ T get(const YAML::Node& node, const std::string& key, const std::string& where) 
   }
 }
 
+// session.json's image_size: [width, height] of the left images, [0, 0]
+// where not known, no larger than any camera's.
+cv::Size image_size_from(const YAML::Node& root, const std::string& where) {
+  const std::string expected = where + ": image_size must be [width, height] in pixels ([0, 0]: not known), at most " +
+                               std::to_string(kMaxImagePixels) + " pixels";
+  std::vector<int> wh;
+  try {
+    wh = root["image_size"].as<std::vector<int>>();
+  } catch (const YAML::Exception&) {
+    throw DatasetError(expected);
+  }
+  if (wh.size() != 2 || wh[0] < 0 || wh[1] < 0 || (wh[0] == 0) != (wh[1] == 0) ||
+      int64_t{wh[0]} * wh[1] > kMaxImagePixels)
+    throw DatasetError(expected);
+  return cv::Size(wh[0], wh[1]);
+}
+
 // A dataset file that is missing or no file (a folder in its place gave
 // "basic_filebuf::underflow ... Is a directory"; a named pipe blocked the
 // reader for ever) is named as such.
@@ -101,12 +119,7 @@ SessionInfo parse_session_json(const std::string& path) {
   i.seed = get<int64_t>(root, "seed", path);
   i.environment = get<std::string>(root, "environment", path);
   i.rig_name = get<std::string>(root, "rig_name", path);
-  if (root["image_size"]) {  // written before it was recorded: 0 x 0
-    const auto wh = get<std::vector<int>>(root, "image_size", path);
-    if (wh.size() != 2 || wh[0] < 0 || wh[1] < 0 || (wh[0] == 0) != (wh[1] == 0))
-      throw DatasetError(path + ": image_size must be [width, height] in pixels ([0, 0]: not known)");
-    i.image_size = cv::Size(wh[0], wh[1]);
-  }
+  if (root["image_size"]) i.image_size = image_size_from(root, path);  // written before it was recorded: 0 x 0
   i.patch_size = get<int>(root, "patch_size", path);
   // the bound keeps patches.bin's expected size from overflowing (a huge
   // patch_size made an empty file pass its size check)

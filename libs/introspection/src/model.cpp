@@ -1,10 +1,12 @@
 #include "ivoa/introspection/model.hpp"
 
+#include <sys/prctl.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <utility>
 
@@ -269,6 +271,21 @@ std::unique_ptr<IntrospectionModel> load_scripted(const std::string& path, const
 
 }  // namespace
 
+namespace {
+
+// A process takes its name (ps, top, pkill) from the file executed: after
+// the re-execution through /proc/self/exe it is "exe". It is given back
+// the name it was invoked by, a link's name included, as exec gives it.
+void name_after_invocation(char** argv) {
+  std::ifstream comm("/proc/self/comm");
+  std::string name;
+  if (!std::getline(comm, name) || name != "exe" || argv == nullptr || argv[0] == nullptr) return;
+  const std::string invoked = std::filesystem::path(argv[0]).filename().string();
+  if (!invoked.empty()) prctl(PR_SET_NAME, invoked.substr(0, 15).c_str(), 0, 0, 0);
+}
+
+}  // namespace
+
 void tune_libtorch_runtime(char** argv) {
   // Thresholds above any tensor: nothing is mapped per allocation, nothing
   // handed back to the kernel between steps.
@@ -278,13 +295,10 @@ void tune_libtorch_runtime(char** argv) {
   for (const auto& [name, value] :
        {std::pair{"OMP_WAIT_POLICY", "PASSIVE"}, std::pair{"GLIBC_TUNABLES", kMallocTunables}})
     if (std::getenv(name) == nullptr && setenv(name, value, 1) == 0) changed = true;
-  if (!changed) return;
-  // By its own path, not /proc/self/exe: the process takes its name (ps,
-  // top, pkill) from the file executed, and would be called "exe".
-  std::error_code error;
-  const std::string self = std::filesystem::read_symlink("/proc/self/exe", error).string();
-  if (!error) execv(self.c_str(), argv);
-  execv("/proc/self/exe", argv);  // the file was replaced (a rebuild) since it started
+  if (!changed) return name_after_invocation(argv);
+  // Through /proc/self/exe: it still reaches the running binary after a
+  // rebuild replaced the file or a move renamed it.
+  execv("/proc/self/exe", argv);
   // execv only returns on failure: then run with the defaults
 }
 

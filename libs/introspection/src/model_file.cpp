@@ -14,6 +14,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "ivoa/core/atomic_files.hpp"
+#include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/process.hpp"
 
@@ -66,15 +67,23 @@ std::string json_of(const YAML::Node& node) {
   }
 }
 
-// Absent in models written before sizes were recorded: none.
+// Absent in models written before sizes were recorded: none. A size past
+// any camera's is refused: the live process warms up at the first one.
 std::vector<cv::Size> image_sizes_from(const YAML::Node& node, const std::string& where) {
   std::vector<cv::Size> sizes;
   if (!node || node.IsNull()) return sizes;
-  if (!node.IsSequence()) throw ModelError(where + ": image_sizes must be a list of [width, height] pairs");
+  const std::string expected = where + ": image_sizes must be a list of [width, height] pairs of positive pixels, " +
+                               "e.g. [[960, 600]], each at most " + std::to_string(kMaxImagePixels) + " pixels";
+  if (!node.IsSequence()) throw ModelError(expected);
   for (const auto& size : node) {
-    const auto wh = size.as<std::vector<int>>();
-    if (wh.size() != 2 || wh[0] <= 0 || wh[1] <= 0)
-      throw ModelError(where + ": image_sizes must list [width, height] pairs of positive pixels");
+    std::vector<int> wh;
+    try {
+      wh = size.as<std::vector<int>>();
+    } catch (const YAML::Exception&) {
+      throw ModelError(expected + ", not " + json_of(size));
+    }
+    if (wh.size() != 2 || wh[0] <= 0 || wh[1] <= 0 || int64_t{wh[0]} * wh[1] > kMaxImagePixels)
+      throw ModelError(expected + ", not " + json_of(size));
     sizes.emplace_back(wh[0], wh[1]);
   }
   return sizes;

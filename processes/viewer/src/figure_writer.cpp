@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
 #ifdef IVOA_VIEWER_HAS_VIDEOIO
 #include <opencv2/videoio.hpp>
 #endif
@@ -84,21 +85,27 @@ void FigureWriter::write(const cv::Mat& figure, int64_t utime, double now_ms) {
 }
 
 // Two viewers on one folder would each hold it to --max-images by deleting
-// the oldest figures, the other's among them; the second is refused. The
-// lock goes with the process, so a respawned viewer takes the folder back.
+// the oldest figures, the other's among them, and overwrite each other's
+// figures of the same frame; the second is refused. The lock goes with the
+// process, so a respawned viewer takes the folder back. Where the file
+// system cannot lock (a share without a lock service) the viewer runs
+// unguarded rather than not at all.
 void FigureWriter::take_the_folder() {
   const std::string path = (std::filesystem::path(options_.out_dir) / kLockFile).string();
   try {
     folder_lock_ = FileLock::try_take(path);
   } catch (const FileLockError& e) {
-    throw OutputError(e.what());
+    if (!e.unsupported()) throw OutputError(e.what());
+    spdlog::warn("{}; not checking for another viewer writing into {}", e.what(), options_.out_dir);
+    return;
   }
   if (folder_lock_) return;
   const pid_t holder = file_lock_holder(path);
   throw OutputError(options_.out_dir + ": another viewer" +
                     (holder > 0 ? " (pid " + std::to_string(holder) + ")" : std::string()) +
-                    " writes its figures here: give this one another --out-dir (each would delete the other's "
-                    "figures to keep the folder to --max-images)");
+                    " writes its figures here: give this one another --out-dir (the two would overwrite each "
+                    "other's figures of a frame, and each would delete the other's to keep the folder to "
+                    "--max-images)");
 }
 
 // The figures an earlier viewer left in the folder count towards

@@ -52,14 +52,18 @@ void HeartbeatMonitor::on_status(const process_status_t& status) {
     return;
   }
   CommandHeartbeats& heard = heard_[command];
+  const InstanceKey key{status.host, next.instance, status.start_utime};
+  const bool first = heard.last_of_instance.empty();
+  heard.last_of_instance[key] = status;
+  if (!first && status.start_utime < heard.latest_key.start_utime) return;  // an earlier instance's, read late
   // A heartbeat's latency covers its own period; one with no work in it
-  // (a process idle or stopping) keeps the last latency measured.
-  if (status.latency_ms_max == 0 && !heard.last_of_instance.empty()) {
+  // (a process idle or stopping) keeps the last latency its instance measured.
+  if (status.latency_ms_max == 0 && !first && key == heard.latest_key) {
     next.status.latency_ms_mean = heard.latest.status.latency_ms_mean;
     next.status.latency_ms_max = heard.latest.status.latency_ms_max;
   }
-  heard.last_of_instance[next.instance] = status;
   heard.latest = next;
+  heard.latest_key = key;
 }
 
 std::optional<HeartbeatMonitor::Latest> HeartbeatMonitor::latest(const std::string& command) const {
@@ -67,7 +71,7 @@ std::optional<HeartbeatMonitor::Latest> HeartbeatMonitor::latest(const std::stri
   if (it == heard_.end()) return std::nullopt;
   Latest latest = it->second.latest;
   for (const auto& [instance, status] : it->second.last_of_instance) {
-    if (instance == latest.instance) continue;
+    if (instance == it->second.latest_key) continue;
     ++latest.earlier.instances;
     latest.earlier.messages_in += status.messages_in;
     latest.earlier.messages_out += status.messages_out;

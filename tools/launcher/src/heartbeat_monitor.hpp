@@ -4,15 +4,19 @@
 // holds its pid (so it works whatever the process calls itself and through
 // "sh -c"); one from another machine to the command of the same name.
 // A respawned command is a new instance (a new process group here, a new
-// pid there); the counts of its earlier instances, as their last heartbeats
-// gave them, are kept beside the newest, so a run's totals are not lost
-// with the process that was killed.
+// pid there, and a new start time either way, so a reused pid is not taken
+// for the instance before); the counts of its earlier instances, as their
+// last heartbeats gave them, are kept beside the newest, so a run's totals
+// are not lost with the process that was killed. The newest instance is the
+// one started last: a killed one's last heartbeat, read late, only adds to
+// the counts.
 #include <sys/types.h>
 
 #include <chrono>
 #include <map>
 #include <optional>
 #include <string>
+#include <tuple>
 
 #include "ivoa/core/bus.hpp"
 #include "ivoa/launcher/status_report.hpp"
@@ -43,9 +47,19 @@ class HeartbeatMonitor {
     std::string command;
     pid_t group = 0;
   };
+  struct InstanceKey {
+    std::string host;
+    int id = 0;  // Latest::instance
+    int64_t start_utime = 0;
+    bool operator<(const InstanceKey& o) const {
+      return std::tie(host, id, start_utime) < std::tie(o.host, o.id, o.start_utime);
+    }
+    bool operator==(const InstanceKey& o) const { return !(*this < o) && !(o < *this); }
+  };
   struct CommandHeartbeats {
     Latest latest;
-    std::map<int, process_status_t> last_of_instance;
+    InstanceKey latest_key;
+    std::map<InstanceKey, process_status_t> last_of_instance;
   };
   void on_status(const process_status_t& status);
   std::optional<Sender> local_sender(pid_t pid);

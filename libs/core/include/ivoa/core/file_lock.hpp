@@ -12,7 +12,14 @@ namespace ivoa {
 
 class FileLockError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  FileLockError(const std::string& what, bool unsupported = false)
+      : std::runtime_error(what), unsupported_(unsupported) {}
+  // The file system cannot lock at all (ENOLCK, EOPNOTSUPP: an NFS or CIFS
+  // share without a lock service), as opposed to this file or folder.
+  bool unsupported() const { return unsupported_; }
+
+ private:
+  bool unsupported_;
 };
 
 class FileLock {
@@ -35,7 +42,9 @@ class FileLock {
   int fd_ = -1;
 };
 
-// The pid the holder of the lock at `path` wrote; 0 if none can be read.
+// The pid the holder of the lock at `path` wrote, if that process is alive;
+// 0 otherwise. A holder that could only read the file (one another user
+// left) wrote none, so a pid is a hint, not proof.
 pid_t file_lock_holder(const std::string& path);
 
 }  // namespace ivoa

@@ -66,8 +66,8 @@ struct BuildReport {
   int64_t frames_repeated = 0;        // labels of a frame already stored (a log given twice): skipped
   int64_t bad_messages = 0;           // undecodable or inconsistent, skipped
   int64_t evidence_mismatches = 0;    // samples whose re-run verdict differs from the label's (NaN evidence)
-  cv::Size image_size;                // the session's: its frames' before the first sample
-  int64_t frames_other_size = 0;      // stereo frames of another size after it (not the model's to know)
+  cv::Size image_size;                // the session's: its first stored frame's (no frame stored: its first frame's)
+  int64_t frames_other_size = 0;      // stereo frames of another size (not the model's to know), stored or not
   std::vector<std::string> problems;  // log damage (with byte offsets) and bad messages
   std::array<int64_t, kNumClasses> class_counts{};
 };
