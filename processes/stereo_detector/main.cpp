@@ -79,10 +79,11 @@ std::optional<int> prepare(const DetectorFlags& f, std::optional<ivoa::RigCalibr
 
 int run_detector(const ivoa::CommonOptions& common, const DetectorFlags& f,
                  const std::optional<ivoa::RigCalibration>& initial_rig) {
-  const ivoa::StereoDetectorOptions& o = f.options;
+  ivoa::StereoDetectorOptions o = f.options;
   try {
     ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
-    ivoa::logio::warn_that_a_replay_publishes_nothing(common.lcm_url, "its obstacle grids (" + o.output_channel + ")");
+    o.publish_failures_expected = ivoa::logio::warn_that_a_replay_publishes_nothing(
+        common.lcm_url, "its obstacle grids (" + o.output_channel + ")");
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "stereo_detector", common.status_channel);
     bus.on_decode_error([&](const std::string& what) { heartbeat.bad_input(what); });

@@ -46,6 +46,8 @@ struct StereoDetectorOptions {
   // ones count as dropped. More: that many, oldest first, so a recording of
   // a simulator that renders ahead loses no frame to a stall at start-up.
   int queue_frames = 1;
+  // Reading a log (already said at start): failed publishes are only counted.
+  bool publish_failures_expected = false;
 };
 
 class StereoDetectorNode {

@@ -164,7 +164,8 @@ TEST(DatasetBuild, LogsOfOneNameMustBeOneRecording) {
       {"s.lcmlog t.lcmlog.00 ./s.lcmlog", "./s.lcmlog is given twice: give each log once"},
       {"t.lcmlog.00 t.lcmlog.01 other/t.lcmlog.02", "t.lcmlog.00 and other/t.lcmlog.02 are both session t"},
       {"s.lcmlog t.lcmlog.00 s.lcmlog.01", "s.lcmlog and s.lcmlog.01 are both session s"},
-      {"t.lcmlog.01 t.lcmlog.00", "t.lcmlog.01 and t.lcmlog.00 are both session t"}};
+      {"t.lcmlog.01 t.lcmlog.00",
+       "the split parts of session t are given out of order: give t.lcmlog.00 before t.lcmlog.01"}};
   for (const auto& [logs, said] : refused) {
     const auto r = build(logs);
     EXPECT_EQ(r.exit_code, kExitUsage) << logs << "\n" << r.output;

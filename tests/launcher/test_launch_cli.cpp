@@ -275,11 +275,11 @@ TEST(LaunchCli, OutputPathsAndSetsAreCheckedBeforeTheRun) {
   const auto config = write_file(dir, "o.pmd", "# @default RATE = 5\ncmd \"a\" { exec = \"echo ${RATE}\"; }\n");
   const auto file = write_file(dir, "plain_file", "x");
   Result r = launch(config + " --output-dir " + file + " --duration 30");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(r.exit_code, 4) << r.output;
   EXPECT_TRUE(contains(r.output, "--output-dir " + file + ": cannot create the folder")) << r.output;
   EXPECT_FALSE(contains(r.output, "[a] 5")) << "the command ran: " << r.output;
   r = launch(config + " --status-file " + dir.file("missing/status.json") + " --duration 30");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(r.exit_code, 4) << r.output;
   EXPECT_TRUE(contains(r.output, "missing/status.json: cannot write: No such file or directory")) << r.output;
   r = launch(config + " --duration 1e30");
   EXPECT_EQ(r.exit_code, 2) << r.output;

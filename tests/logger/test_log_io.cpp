@@ -16,6 +16,7 @@
 #include "ivoa/logio/log_summary.hpp"
 #include "ivoa/logio/log_writer.hpp"
 #include "ivoa/logio/replay_check.hpp"
+#include "ivoa/logio/session_name.hpp"
 #include "ivoa/process_status_t.hpp"
 #include "logger_test_util.hpp"
 #include "test_rig.hpp"
@@ -459,3 +460,16 @@ TEST(LogSummary, MessagesOfAnotherTypeOnAChannelAreSaidUnderTheTable) {
 
 }  // namespace
 }  // namespace ivoa::logio
+
+// Split parts read out of order make time go back; the tools that take a
+// session's parts (log-check, log-play, dataset) say which to give first.
+TEST(SplitParts, OutOfOrderPartsOfOneRecordingAreNamed) {
+  using ivoa::logio::split_parts_out_of_order;
+  EXPECT_EQ(split_parts_out_of_order({"s.lcmlog.01", "s.lcmlog.00"}), "s.lcmlog.00 before s.lcmlog.01");
+  EXPECT_EQ(split_parts_out_of_order({"a/s.lcmlog.00", "a/s.lcmlog.02", "./a/s.lcmlog.01"}),
+            "./a/s.lcmlog.01 before a/s.lcmlog.02");
+  EXPECT_EQ(split_parts_out_of_order({"s.lcmlog.00", "s.lcmlog.01", "s.lcmlog.02"}), "");
+  EXPECT_EQ(split_parts_out_of_order({"t.lcmlog.03", "s.lcmlog.00"}), "") << "two recordings";
+  EXPECT_EQ(split_parts_out_of_order({"b/s.lcmlog.03", "a/s.lcmlog.00"}), "") << "two folders";
+  EXPECT_EQ(split_parts_out_of_order({"s.lcmlog", "s.lcmlog.00"}), "") << "not a part";
+}

@@ -141,6 +141,10 @@ bool sessions_are_recordings(const SessionLogs& sessions, const std::vector<std:
     const auto [first, new_name] = first_log_of.emplace(name, files.front());
     const std::string other = new_name ? another_recording_among(files) : files.front();
     if (other.empty()) continue;
+    if (const std::string order = new_name ? logio::split_parts_out_of_order(files) : ""; !order.empty()) {
+      spdlog::error("the split parts of session {} are given out of order: give {}", name, order);
+      return false;
+    }
     spdlog::error(
         "{} and {} are both session {}: give each session's log once (split parts NAME.lcmlog.NN of one folder, in "
         "order, go together; --session NAME joins other logs on purpose)",

@@ -155,12 +155,30 @@ std::map<std::string, std::string> variable_overrides(const CliOptions& o, const
   return overrides;
 }
 
+// A built-in the environment sets otherwise (an IVOA_BIN exported for
+// another build) wins over the launcher's own; said, since the commands
+// then run other binaries than the launcher's.
+void warn_of_builtins_from_the_environment(const std::map<std::string, std::string>& builtins,
+                                           const std::map<std::string, std::string>& overrides) {
+  for (const auto& [name, own] : builtins) {
+    const char* exported = std::getenv(name.c_str());
+    if (exported && own != exported && !overrides.count(name))
+      spdlog::warn(
+          "{}={} from the environment, not this launcher's {}: the commands use it (unset {} to use the "
+          "launcher's)",
+          name, exported, own, name);
+  }
+}
+
 // Loads the configuration and picks this host's commands; throws with the
 // file and line of what is wrong.
 SelectedCommands prepare(CliOptions& o, Config& config) {
   config = load_config(o.config_path);
   for (const auto& w : config.warnings) spdlog::warn("{}", w);
-  const Variables variables(config, variable_overrides(o, config), builtin_variables(o.config_path));
+  const std::map<std::string, std::string> builtins = builtin_variables(o.config_path);
+  std::map<std::string, std::string> overrides = variable_overrides(o, config);
+  warn_of_builtins_from_the_environment(builtins, overrides);
+  const Variables variables(config, std::move(overrides), builtins);
   SelectedCommands selected = select_commands(config, o.selection, variables);
   o.launcher.supervisor.environment = variables.exported();
   if (!o.launcher.script.empty()) flatten_script(config, o.launcher.script);
@@ -176,17 +194,18 @@ SelectedCommands prepare(CliOptions& o, Config& config) {
 }
 
 // --output-dir and --status-file are written during and after the run:
-// a path that cannot be is found out before anything starts.
-void check_output_paths(const LauncherOptions& l) {
+// a path that cannot be is found out before anything starts. "" if fine.
+std::string output_path_problem(const LauncherOptions& l) {
   if (!l.output_dir.empty()) {
     std::error_code error;
     fs::create_directories(l.output_dir, error);
     if (error || !fs::is_directory(l.output_dir))
-      throw ConfigError("--output-dir " + l.output_dir + ": cannot create the folder" +
-                        (error ? ": " + error.message() : " (a file of that name exists)"));
+      return "--output-dir " + l.output_dir + ": cannot create the folder" +
+             (error ? ": " + error.message() : " (a file of that name exists)");
   }
   if (const std::string why = ivoa::why_cannot_write(l.status_file); !why.empty())
-    throw ConfigError("--status-file " + l.status_file + ": cannot write: " + why);
+    return "--status-file " + l.status_file + ": cannot write: " + why;
+  return "";
 }
 
 // False (with the hosts the configuration has) if nothing runs on this host.
@@ -223,7 +242,8 @@ int main(int argc, char** argv) {
   CLI::App app{
       "Run a procman configuration (.pmd) on this machine: the commands for --host, respawned when they die, "
       "stopped cleanly on Ctrl-C; PROCESS_STATUS heartbeats in the status table (--lcm-url none: without LCM). "
-      "Exit codes: 0 ok, 1 a command without auto_respawn failed, 2 bad flags or configuration."};
+      "Exit codes: 0 ok, 1 a command without auto_respawn failed, 2 bad flags or configuration, 4 --output-dir "
+      "or --status-file cannot be written."};
   ivoa::CommonOptions common;
   CliOptions o;
   ivoa::add_common_options(app, common);
@@ -237,10 +257,13 @@ int main(int argc, char** argv) {
   try {
     selected = prepare(o, config);
     warn_of_an_lcm_url_not_handed_on(o.launcher);
-    if (!o.list) check_output_paths(o.launcher);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;
+  }
+  if (const std::string problem = o.list ? "" : output_path_problem(o.launcher); !problem.empty()) {
+    spdlog::error("{}", problem);
+    return ivoa::kExitIoError;
   }
   if (o.list) {
     print_commands(selected, o.launcher);

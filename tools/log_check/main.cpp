@@ -19,6 +19,7 @@
 #include "ivoa/core/process.hpp"
 #include "ivoa/logio/log_reader.hpp"
 #include "ivoa/logio/log_summary.hpp"
+#include "ivoa/logio/session_name.hpp"
 #include "ivoa/log_check/last_heartbeats.hpp"
 
 namespace {
@@ -238,7 +239,8 @@ int check_logs(const CheckCommandLine& cl) {
     print_file(results.back());
     damaged = damaged || results.back().damaged();
   }
-  std::printf("\n%s", summary.table().c_str());
+  if (summary.events() > 0) std::printf("\n%s", summary.table().c_str());
+  else std::printf("\nno message read\n");
   if (const std::string table = heartbeats.table(); !table.empty()) std::printf("\n%s", table.c_str());
   if (!ivoa::write_text_file(cl.json_path, results_json(results, summary, heartbeats))) return ivoa::kExitIoError;
   const bool expected = expectations_hold(cl.expected, summary);
@@ -271,6 +273,10 @@ int main(int argc, char** argv) {
   }
   if (const std::string log = ivoa::same_file_among(cl.json_path, cl.files); !log.empty()) {
     spdlog::error("--json {} is the log {}: it would be written over", cl.json_path, log);
+    return ivoa::kExitUsage;
+  }
+  if (const std::string order = ivoa::logio::split_parts_out_of_order(cl.files); !order.empty()) {
+    spdlog::error("split parts given out of order: give {} (read out of order, time goes back)", order);
     return ivoa::kExitUsage;
   }
   if (const std::string why = ivoa::why_cannot_write(cl.json_path); !why.empty()) {

@@ -17,6 +17,7 @@
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/log_play/log_player.hpp"
 #include "ivoa/logio/log_reader.hpp"
+#include "ivoa/logio/session_name.hpp"
 
 namespace {
 
@@ -61,6 +62,10 @@ int main(int argc, char** argv) {
   if (const std::string same = output_among_inputs(common.lcm_url, logs); !same.empty()) {
     spdlog::error("--lcm-url {} would write over {}, one of the logs to play: name another output file", common.lcm_url,
                   same);
+    return ivoa::kExitUsage;
+  }
+  if (const std::string order = ivoa::logio::split_parts_out_of_order(logs); !order.empty()) {
+    spdlog::error("split parts given out of order: give {} (played out of order, time would go back)", order);
     return ivoa::kExitUsage;
   }
   try {

@@ -112,17 +112,17 @@ case "$scale" in
     TRAIN_SEEDS=(11); TRAIN_FRAMES=96
     VAL_SEEDS=(21); VAL_SCENES=(indoor_office polished_lobby wet_parking_lot); VAL_FRAMES=24
     TEST_SEEDS=(31); TEST_FRAMES=24
-    STEPS=1400; BATCH=128; KEEP_LAST=1 ;;
+    STEPS=1400; BATCH=128; KEEP_LAST=1; WARMUP=200 ;;
   smoke)  # seconds-scale: checks the whole chain (used by the tests)
     SCENE_NAMES=(indoor_office polished_lobby wet_parking_lot); TRAIN_SEEDS=(11); TRAIN_FRAMES=8
     VAL_SEEDS=(21); VAL_SCENES=(indoor_office); VAL_FRAMES=6
     TEST_SEEDS=(31); TEST_FRAMES=6
-    STEPS=60; BATCH=32; KEEP_LAST=1 ;;
+    STEPS=60; BATCH=32; KEEP_LAST=1; WARMUP=12 ;;  # warm-up a fifth of the steps, not ivoa-train's 200
   full)
     TRAIN_SEEDS=(11 12 13 14 15 16 17 18); TRAIN_FRAMES=120
     VAL_SEEDS=(21); VAL_SCENES=("${SCENE_NAMES[@]}"); VAL_FRAMES=60
     TEST_SEEDS=(31); TEST_FRAMES=60
-    STEPS=14000; BATCH=128; KEEP_LAST=0 ;;
+    STEPS=14000; BATCH=128; KEEP_LAST=0; WARMUP=200 ;;
   *) echo "ivoa-main-job: --scale must be default, full or smoke" >&2; exit 2 ;;
 esac
 # ./tools/run-main-job.sh checks the flags so, before it installs and builds.
@@ -300,7 +300,7 @@ for detector in "${trained[@]}"; do
   fi
   echo "$training_setup" > "$setup_file"
   "$BIN/ivoa-train" --dataset "$out/data_$detector" --split "$split_file" --out "$out/model_$detector.pt" --optimizer "$OPTIMIZER" \
-    --steps "$STEPS" --batch-size "$BATCH" --validate-every $((STEPS / 6)) --checkpoint-every $((STEPS / 3)) \
+    --steps "$STEPS" --warmup-steps "$WARMUP" --batch-size "$BATCH" --validate-every $((STEPS / 6)) --checkpoint-every $((STEPS / 3)) \
     --evidence-weight "$evidence_weight" $keep --resume | tee "$out/train_$detector.txt"
 done
 

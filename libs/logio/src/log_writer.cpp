@@ -21,8 +21,9 @@ LogWriter::LogWriter(std::string path, LogWriterOptions options) : path_(std::mo
     std::error_code ignored;
     if (std::filesystem::is_directory(path_, ignored))  // EEXIST or EISDIR: --force would not help
       throw LogWriteError("cannot create log " + path_ + ": it is a folder (name a file in it)");
-    throw LogWriteError("cannot create log " + path_ + ": " + std::strerror(error) +
-                        (error == EEXIST ? " (use --force to overwrite)" : ""));
+    throw LogWriteError(
+        "cannot create log " + path_ + ": " + std::strerror(error) +
+        (error == EEXIST ? " (--force overwrites it, --increment records to a new NAME-1, NAME-2, ...)" : ""));
   }
 }
 

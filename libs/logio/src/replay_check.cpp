@@ -57,13 +57,14 @@ void refuse_a_log_lcm_cannot_replay(const std::string& lcm_url) {
   if (!check.warning.empty()) spdlog::warn("{}", check.warning);
 }
 
-void warn_that_a_replay_publishes_nothing(const std::string& lcm_url, const std::string& outputs) {
+bool warn_that_a_replay_publishes_nothing(const std::string& lcm_url, const std::string& outputs) {
   const std::string path = log_replayed_by(lcm_url);
-  if (path.empty()) return;
+  if (path.empty()) return false;
   spdlog::warn(
       "reading the log {}: LCM cannot publish into a log it reads, so {} are computed and counted as "
       "publish_failures, not sent. To see them, play the log to this process with ivoa-log-play",
       path, outputs);
+  return true;
 }
 
 }  // namespace ivoa::logio

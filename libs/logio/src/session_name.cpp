@@ -11,6 +11,20 @@ bool is_split_part(const std::string& log_path) {
          std::isdigit(static_cast<unsigned char>(ext[2]));
 }
 
+std::string split_parts_out_of_order(const std::vector<std::string>& logs) {
+  namespace fs = std::filesystem;
+  const auto recording = [](const std::string& log) {
+    return (fs::absolute(log).parent_path() / fs::path(log).stem()).lexically_normal();
+  };
+  for (size_t i = 1; i < logs.size(); ++i) {
+    const std::string &before = logs[i - 1], &log = logs[i];
+    if (is_split_part(before) && is_split_part(log) && recording(before) == recording(log) &&
+        fs::path(log).extension() < fs::path(before).extension())
+      return log + " before " + before;
+  }
+  return "";
+}
+
 std::string session_name_of(const std::string& log_path) {
   std::string name = std::filesystem::path(log_path).filename().string();
   if (is_split_part(name)) name = name.substr(0, name.size() - 3);

@@ -65,8 +65,10 @@ void ScriptRunner::advance() {
       const auto names = targets(step);
       if (!waiting_) {
         if (names.empty() && step.target_kind != TargetKind::kEverything)
-          on_event_("script", "line " + std::to_string(step.line) + ": \"" + step.target +
-                                  "\" has no command selected here (another --host's, or --skip); step skipped");
+          on_event_(
+              "script",
+              "line " + std::to_string(step.line) + ": \"" + step.target +
+                  "\" has no command selected here (another --host's, or left out by --group or --skip); step skipped");
         apply(step, names);
         waiting_ = true;
         said_waiting_ = false;

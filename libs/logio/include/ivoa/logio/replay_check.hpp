@@ -27,7 +27,7 @@ void refuse_a_log_lcm_cannot_replay(const std::string& lcm_url);
 
 // LCM cannot publish into a log it reads: a process given one computes its
 // `outputs` (channel names) and counts them as publish_failures. Says so
-// once, with the way to see them, if `lcm_url` replays a log.
-void warn_that_a_replay_publishes_nothing(const std::string& lcm_url, const std::string& outputs);
+// once, with the way to see them, if `lcm_url` replays a log; true if so.
+bool warn_that_a_replay_publishes_nothing(const std::string& lcm_url, const std::string& outputs);
 
 }  // namespace ivoa::logio
