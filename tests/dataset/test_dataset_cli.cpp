@@ -177,6 +177,9 @@ TEST(DatasetBuild, LogsOfOneNameMustBeOneRecording) {
   EXPECT_FALSE(contains(r.output, "are both session")) << r.output;
   r = build("--session joined s.lcmlog other/s.lcmlog");  // on purpose
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  r = build("--session joined t.lcmlog.01 t.lcmlog.00");  // but not out of order
+  EXPECT_EQ(r.exit_code, kExitUsage) << r.output;
+  EXPECT_TRUE(contains(r.output, "give t.lcmlog.00 before t.lcmlog.01")) << r.output;
 }
 
 // A part left out of a split recording (a glob that missed it) is said:

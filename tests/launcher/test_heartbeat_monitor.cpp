@@ -25,7 +25,7 @@ Supervisor idle_supervisor(const std::string& name) {
 }
 
 process_status_t remote_status(const std::string& name, int64_t out, double latency_mean, double latency_max) {
-  process_status_t s;
+  process_status_t s{};
   s.name = name;
   s.host = "another-machine";  // matched by name, not by process group
   s.messages_out = out;
@@ -62,7 +62,7 @@ TEST(LauncherHeartbeats, IdleHeartbeatKeepsTheLastMeasuredLatency) {
 process_status_t local_status(int pid, const std::string& state) {
   char host[256] = {0};
   gethostname(host, sizeof(host) - 1);
-  process_status_t s;
+  process_status_t s{};
   s.name = "whatever-it-calls-itself";  // matched by process group, not by name
   s.host = host;
   s.pid = pid;
@@ -147,10 +147,9 @@ process_status_t instance_status(int pid, int64_t start_utime, int64_t in, doubl
 
 // An instance is known by its host, pid and start time: a respawn that gets
 // the pid of the one before (a container's, or after pid wrap-around) is
-// another instance; the newest is the one started last, so the killed one's
-// last heartbeat, read late, adds its counts but is not shown as the
-// command's state, nor does the newest inherit its latency.
-TEST(LauncherHeartbeats, TheInstanceStartedLastIsShownAndAReusedPidIsAnotherInstance) {
+// another instance, and does not inherit its latency; so is a process of
+// the same name and pid on another host.
+TEST(LauncherHeartbeats, AReusedPidIsAnotherInstance) {
   Bus bus("memq://");
   const Supervisor supervisor = idle_supervisor("detector");
   HeartbeatMonitor monitor(bus, "TEST_HB_REUSED", supervisor);
@@ -165,18 +164,51 @@ TEST(LauncherHeartbeats, TheInstanceStartedLastIsShownAndAReusedPidIsAnotherInst
   EXPECT_EQ(now.earlier.instances, 1);
   EXPECT_EQ(now.status.messages_in + now.earlier.messages_in, 13);
   EXPECT_DOUBLE_EQ(now.status.latency_ms_max, 0) << "no latency inherited from the instance before";
+  process_status_t other_robot = instance_status(7, 2'000, 100, 1);
+  other_robot.host = "another-robot";
+  EXPECT_EQ(publish(other_robot).earlier.instances, 2);
+}
 
-  process_status_t last_word = instance_status(7, 1'000, 11, 40);
-  last_word.state = "stopped";
-  now = publish(last_word);  // read after the new instance's first heartbeat
-  EXPECT_EQ(now.status.start_utime, 2'000);
+// A killed local instance's last heartbeat, read after its respawned
+// successor's, adds its counts but is not shown as the command's state:
+// the supervisor says which process group is the command's now.
+TEST(LauncherHeartbeats, AKilledInstancesLateHeartbeatDoesNotReplaceTheCurrentOnes) {
+  ASSERT_EQ(prctl(PR_SET_CHILD_SUBREAPER, 1), 0);
+  SupervisorOptions options;
+  options.reap_orphans = true;
+  options.respawn_delay_s = 0.05;
+  LaunchCommand c;
+  c.spec.name = "family";
+  c.spec.exec = c.shell_command = "exec sleep 30";
+  c.spec.auto_respawn = true;
+  Supervisor supervisor(
+      {c}, options, [](const std::string&, const std::string&) {}, [](const std::string&, const std::string&) {});
+  Bus bus("memq://");
+  HeartbeatMonitor monitor(bus, "TEST_HB_KILLED", supervisor);
+  const auto heard = [&](int pid, const std::string& state, int64_t in) {
+    process_status_t s = local_status(pid, state);
+    s.start_utime = pid;
+    s.messages_in = in;
+    bus.publish("TEST_HB_KILLED", s);
+    monitor.drain();
+    return *monitor.latest("family");
+  };
+  supervisor.start_all();
+  const int first = supervisor.status("family").pid;
+  ASSERT_GT(first, 0);
+  EXPECT_EQ(heard(first, "running", 10).status.state, "running");
+  ASSERT_EQ(::kill(first, SIGKILL), 0);
+  for (int i = 0; i < 200 && supervisor.status("family").pid == first; ++i) supervisor.step(20);
+  const int second = supervisor.status("family").pid;
+  ASSERT_NE(second, first);
+  ASSERT_GT(second, 0);
+  EXPECT_EQ(heard(second, "running", 2).earlier.instances, 1);
+  const HeartbeatMonitor::Latest now = heard(first, "running (its last word)", 12);
+  EXPECT_EQ(now.instance, second);
   EXPECT_EQ(now.status.state, "running");
   EXPECT_EQ(now.status.messages_in + now.earlier.messages_in, 14);
-
-  process_status_t other_robot = instance_status(7, 1'500, 100, 1);
-  other_robot.host = "another-robot";
-  now = publish(other_robot);  // same name and pid on another host: yet another instance
-  EXPECT_EQ(now.earlier.instances, 2);
+  supervisor.kill_all();
+  prctl(PR_SET_CHILD_SUBREAPER, 0);
 }
 
 }  // namespace

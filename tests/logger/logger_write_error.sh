@@ -80,7 +80,7 @@ set +e
 "$B/bin/ivoa-logger" --lcm-url "file://$input?speed=0" "$out/limit/out.lcmlog" 2>"$out/exists.err"
 code=$?
 set -e
-[ $code = 4 ] && grep -q "use --force" "$out/exists.err" || { echo "FAIL: existing file: exit $code"; exit 1; }
+[ $code = 4 ] && grep -q -e "--force overwrites it, --increment records to a new NAME-1" "$out/exists.err" || { echo "FAIL: existing file: exit $code"; exit 1; }
 echo "OK: an existing log is refused with exit 4"
 
 # With --increment (what record.pmd passes, for a respawned logger given a

@@ -128,10 +128,16 @@ std::string another_recording_among(const std::vector<std::string>& files) {
 // twice, or two logs of one name that are not split parts from one folder
 // (a scene's session recorded twice, in two folders), were merged into one
 // session whose labels were paired with the other log's frames. --session
-// joins logs on purpose; a file twice is refused even then.
+// joins logs on purpose; a file twice, or split parts out of order, are
+// refused even then.
 bool sessions_are_recordings(const SessionLogs& sessions, const std::vector<std::string>& logs, bool named_by_flag) {
   if (const std::string twice = file_given_twice(logs); !twice.empty()) {
     spdlog::error("{} is given twice: give each log once", twice);
+    return false;
+  }
+  if (const std::string order = logio::split_parts_out_of_order(logs); !order.empty()) {
+    spdlog::error("the split parts of session {} are given out of order: give {}",
+                  logio::session_name_of(order.substr(0, order.find(" before "))), order);
     return false;
   }
   if (named_by_flag) return true;
@@ -141,10 +147,6 @@ bool sessions_are_recordings(const SessionLogs& sessions, const std::vector<std:
     const auto [first, new_name] = first_log_of.emplace(name, files.front());
     const std::string other = new_name ? another_recording_among(files) : files.front();
     if (other.empty()) continue;
-    if (const std::string order = new_name ? logio::split_parts_out_of_order(files) : ""; !order.empty()) {
-      spdlog::error("the split parts of session {} are given out of order: give {}", name, order);
-      return false;
-    }
     spdlog::error(
         "{} and {} are both session {}: give each session's log once (split parts NAME.lcmlog.NN of one folder, in "
         "order, go together; --session NAME joins other logs on purpose)",

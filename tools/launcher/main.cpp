@@ -162,7 +162,8 @@ void warn_of_builtins_from_the_environment(const std::map<std::string, std::stri
                                            const std::map<std::string, std::string>& overrides) {
   for (const auto& [name, own] : builtins) {
     const char* exported = std::getenv(name.c_str());
-    if (exported && own != exported && !overrides.count(name))
+    std::error_code error;
+    if (exported && !fs::equivalent(own, exported, error) && !overrides.count(name))
       spdlog::warn(
           "{}={} from the environment, not this launcher's {}: the commands use it (unset {} to use the "
           "launcher's)",

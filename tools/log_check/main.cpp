@@ -275,10 +275,11 @@ int main(int argc, char** argv) {
     spdlog::error("--json {} is the log {}: it would be written over", cl.json_path, log);
     return ivoa::kExitUsage;
   }
-  if (const std::string order = ivoa::logio::split_parts_out_of_order(cl.files); !order.empty()) {
-    spdlog::error("split parts given out of order: give {} (read out of order, time goes back)", order);
-    return ivoa::kExitUsage;
-  }
+  if (const std::string order = ivoa::logio::split_parts_out_of_order(cl.files); !order.empty())
+    spdlog::warn(
+        "split parts given out of order? {} (read so, time goes back between them: a restart below may be "
+        "that)",
+        order);
   if (const std::string why = ivoa::why_cannot_write(cl.json_path); !why.empty()) {
     spdlog::error("--json {}: cannot write: {}", cl.json_path, why);
     return ivoa::kExitIoError;

@@ -290,7 +290,7 @@ fi
 keep=$([ "$KEEP_LAST" = 1 ] && echo --keep-last || true)
 for detector in "${trained[@]}"; do
   evidence_weight=$([ "$detector" = jppc ] && echo 5 || echo 0)
-  training_setup="views $views, patch scale $patch_scale, $OPTIMIZER, $STEPS steps, batch $BATCH, evidence weight $evidence_weight${keep:+, keep last}"
+  training_setup="views $views, patch scale $patch_scale, $OPTIMIZER, $STEPS steps ($WARMUP warming up), batch $BATCH, evidence weight $evidence_weight${keep:+, keep last}"
   step "Training introspection for $detector ($STEPS steps, batch $BATCH)"
   setup_file="$out/model_$detector.pt.setup"
   if compgen -G "$out/model_$detector.pt.checkpoint.*" > /dev/null &&

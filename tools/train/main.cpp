@@ -141,9 +141,9 @@ void finish_config(TrainCommandLine& cl) {
       c, cl.optimizer == "sgd" ? introspection::Optimizer::kSgd : introspection::Optimizer::kAdamW);
   if (cl.learning_rate_option->count()) c.learning_rate = cl.learning_rate;
   if (cl.weight_decay_option->count()) c.weight_decay = cl.weight_decay;
-  if (!cl.calibrate_only && c.warmup_steps >= c.steps)
+  if (!cl.calibrate_only && c.warmup_steps > c.steps)
     spdlog::warn(
-        "--warmup-steps {} is not under --steps {}: the whole run warms up, to a learning rate of {:.3g} "
+        "--warmup-steps {} is more than --steps {}: the whole run warms up, to a learning rate of {:.3g} "
         "at its last step instead of --lr {:.3g} (give fewer --warmup-steps)",
         c.warmup_steps, c.steps, c.learning_rate * static_cast<double>(c.steps) / c.warmup_steps, c.learning_rate);
 }

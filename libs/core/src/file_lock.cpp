@@ -45,8 +45,11 @@ void write_pid(const LockFile& file) {
   static_cast<void>(written);
 }
 
-[[noreturn]] void throw_lock_error(const std::string& path, int error) {
-  throw FileLockError(path + ": cannot lock: " + std::strerror(error), error == ENOLCK || error == EOPNOTSUPP);
+// NFS emulates flock with a byte-range lock, which a read-only descriptor
+// cannot take (EBADF): as for a share without locks, nothing can be checked.
+[[noreturn]] void throw_lock_error(const std::string& path, const LockFile& file, int error) {
+  const bool unsupported = error == ENOLCK || error == EOPNOTSUPP || (error == EBADF && !file.writable);
+  throw FileLockError(path + ": cannot lock: " + std::strerror(error), unsupported);
 }
 
 }  // namespace
@@ -59,7 +62,7 @@ FileLock FileLock::wait_for(const std::string& path) {
   if (rc != 0) {
     const int error = errno;
     ::close(file.fd);
-    throw_lock_error(path, error);
+    throw_lock_error(path, file, error);
   }
   write_pid(file);
   return FileLock(file.fd);
@@ -71,7 +74,7 @@ std::optional<FileLock> FileLock::try_take(const std::string& path) {
     const int error = errno;
     ::close(file.fd);
     if (error == EWOULDBLOCK) return std::nullopt;
-    throw_lock_error(path, error);
+    throw_lock_error(path, file, error);
   }
   write_pid(file);
   return FileLock(file.fd);

@@ -274,13 +274,19 @@ std::unique_ptr<IntrospectionModel> load_scripted(const std::string& path, const
 namespace {
 
 // A process takes its name (ps, top, pkill) from the file executed: after
-// the re-execution through /proc/self/exe it is "exe". It is given back
-// the name it was invoked by, a link's name included, as exec gives it.
+// the re-execution through /proc/self/exe it is "exe". It is given the name
+// of the file first executed back, which argv[0] names (a link's name
+// included); failing that, the binary's own.
 void name_after_invocation(char** argv) {
   std::ifstream comm("/proc/self/comm");
   std::string name;
-  if (!std::getline(comm, name) || name != "exe" || argv == nullptr || argv[0] == nullptr) return;
-  const std::string invoked = std::filesystem::path(argv[0]).filename().string();
+  if (!std::getline(comm, name) || name != "exe") return;
+  std::string invoked = argv && argv[0] ? std::filesystem::path(argv[0]).filename().string() : "";
+  if (invoked.empty()) {
+    std::error_code error;
+    invoked = std::filesystem::read_symlink("/proc/self/exe", error).filename().string();
+    if (const size_t deleted = invoked.find(" (deleted)"); deleted != std::string::npos) invoked.resize(deleted);
+  }
   if (!invoked.empty()) prctl(PR_SET_NAME, invoked.substr(0, 15).c_str(), 0, 0, 0);
 }
 

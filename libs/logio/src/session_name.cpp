@@ -14,7 +14,10 @@ bool is_split_part(const std::string& log_path) {
 std::string split_parts_out_of_order(const std::vector<std::string>& logs) {
   namespace fs = std::filesystem;
   const auto recording = [](const std::string& log) {
-    return (fs::absolute(log).parent_path() / fs::path(log).stem()).lexically_normal();
+    std::error_code error;  // a folder named through a link is the same folder
+    const fs::path folder = fs::absolute(log).parent_path();
+    const fs::path real = fs::weakly_canonical(folder, error);
+    return (error ? folder.lexically_normal() : real) / fs::path(log).stem();
   };
   for (size_t i = 1; i < logs.size(); ++i) {
     const std::string &before = logs[i - 1], &log = logs[i];

@@ -55,7 +55,7 @@ void HeartbeatMonitor::on_status(const process_status_t& status) {
   const InstanceKey key{status.host, next.instance, status.start_utime};
   const bool first = heard.last_of_instance.empty();
   heard.last_of_instance[key] = status;
-  if (!first && status.start_utime < heard.latest_key.start_utime) return;  // an earlier instance's, read late
+  if (!first && is_a_replaced_instance(command, next, heard)) return;
   // A heartbeat's latency covers its own period; one with no work in it
   // (a process idle or stopping) keeps the last latency its instance measured.
   if (status.latency_ms_max == 0 && !first && key == heard.latest_key) {
@@ -64,6 +64,18 @@ void HeartbeatMonitor::on_status(const process_status_t& status) {
   }
   heard.latest = next;
   heard.latest_key = key;
+}
+
+// A heartbeat of a local instance the command has replaced (killed and
+// respawned), read after the current one's: its counts are kept, but the
+// command's state is the current instance's. Which instance is current is
+// the supervisor's word, not the senders' clocks (a clock stepped back, or
+// another host's). Elsewhere the last heartbeat read is the state.
+bool HeartbeatMonitor::is_a_replaced_instance(const std::string& command, const Latest& next,
+                                              const CommandHeartbeats& heard) const {
+  if (!next.local) return false;
+  const int current = supervisor_.status(command).pid;
+  return next.instance != current && heard.latest.local && heard.latest.instance == current;
 }
 
 std::optional<HeartbeatMonitor::Latest> HeartbeatMonitor::latest(const std::string& command) const {

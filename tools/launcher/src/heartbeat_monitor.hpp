@@ -7,9 +7,8 @@
 // pid there, and a new start time either way, so a reused pid is not taken
 // for the instance before); the counts of its earlier instances, as their
 // last heartbeats gave them, are kept beside the newest, so a run's totals
-// are not lost with the process that was killed. The newest instance is the
-// one started last: a killed one's last heartbeat, read late, only adds to
-// the counts.
+// are not lost with the process that was killed. A killed local instance's
+// last heartbeat, read after its successor's, only adds to the counts.
 #include <sys/types.h>
 
 #include <chrono>
@@ -62,6 +61,7 @@ class HeartbeatMonitor {
     std::map<InstanceKey, process_status_t> last_of_instance;
   };
   void on_status(const process_status_t& status);
+  bool is_a_replaced_instance(const std::string& command, const Latest& next, const CommandHeartbeats& heard) const;
   std::optional<Sender> local_sender(pid_t pid);
 
   Bus& bus_;

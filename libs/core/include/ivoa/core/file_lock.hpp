@@ -15,7 +15,8 @@ class FileLockError : public std::runtime_error {
   FileLockError(const std::string& what, bool unsupported = false)
       : std::runtime_error(what), unsupported_(unsupported) {}
   // The file system cannot lock at all (ENOLCK, EOPNOTSUPP: an NFS or CIFS
-  // share without a lock service), as opposed to this file or folder.
+  // share without a lock service; NFS given a lock file another user owns),
+  // as opposed to this file or folder.
   bool unsupported() const { return unsupported_; }
 
  private:
