@@ -57,6 +57,33 @@ TEST(CommonOptions, AnOfflineToolNamesAnLcmUrlAsRefusedNotAsAMissingFile) {
   }
 }
 
+// A misspelt flag is named as unknown, not reported as the required option
+// it did not set (CLI11 checks those first), in a subcommand too.
+TEST(CommonOptions, AnUnknownFlagIsNamedBeforeAMissingRequiredOne) {
+  const auto parse = [](std::vector<const char*> args) {
+    CLI::App app;
+    CommonOptions options;
+    add_offline_options(app, options);
+    std::string out;
+    CLI::App* build = app.add_subcommand("build");
+    build->add_option("--out", out)->required();
+    app.require_subcommand(1);
+    args.insert(args.begin(), "ivoa-tool");
+    testing::internal::CaptureStderr();
+    const int code = parse_command_line(app, static_cast<int>(args.size()), const_cast<char**>(args.data()));
+    return std::make_pair(code, testing::internal::GetCapturedStderr());
+  };
+  auto [code, err] = parse({"build", "--oot", "data"});
+  EXPECT_EQ(code, kExitUsage);
+  EXPECT_NE(err.find("unknown arguments: --oot data (and --out is required)"), std::string::npos) << err;
+  std::tie(code, err) = parse({"--bogus"});
+  EXPECT_EQ(code, kExitUsage);
+  EXPECT_NE(err.find("unknown argument: --bogus (and A subcommand is required)"), std::string::npos) << err;
+  std::tie(code, err) = parse({"build"});
+  EXPECT_EQ(code, kExitUsage);
+  EXPECT_EQ(err.find("unknown"), std::string::npos) << err;
+}
+
 // A file or folder to read that is missing, or of the other kind, is an
 // unusable input (exit 3) named with its flag; a bad flag stays exit 2.
 TEST(CommonOptions, AMissingInputFileIsBadInputNotAUsageError) {

@@ -116,6 +116,20 @@ void explain_parse_error(CLI::App& app, const CLI::ParseError& e, int argc, char
   else app.exit(e);
 }
 
+// CLI11 checks for required options before unknown ones, so a misspelt
+// flag was reported as the option it left unset ("--out is required" for
+// `build --bogus`). The unknown arguments are named first.
+bool explain_unknown_arguments(const CLI::App& app, const CLI::ParseError& e) {
+  if (e.get_name() != "RequiredError" || app.get_allow_extras()) return false;
+  const std::vector<std::string> unknown = app.remaining(true);
+  if (unknown.empty()) return false;
+  std::string list;
+  for (const auto& arg : unknown) list += (list.empty() ? "" : " ") + arg;
+  std::cerr << "unknown argument" << (unknown.size() == 1 ? "" : "s") << ": " << list << " (and " << e.what()
+            << ")\nRun with --help for more information.\n";
+  return true;
+}
+
 // An offline tool (no --lcm-url of its own) given one: CLI11 took its value
 // for a file to read ("logs: File does not exist: udpm://...").
 bool refuse_an_lcm_url_offline(const CLI::App& app, int argc, char** argv) {
@@ -143,6 +157,7 @@ int parse_command_line(CLI::App& app, int argc, char** argv) {
     return kExitUsage;
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e) == 0 ? kExitOk : kExitUsage;  // --help
+    if (explain_unknown_arguments(app, e)) return kExitUsage;
     explain_parse_error(app, e, argc, argv);
     return is_missing_input(e) ? kExitBadInput : kExitUsage;
   }
