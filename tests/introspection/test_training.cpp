@@ -145,12 +145,41 @@ TEST_P(TrainingWith, ResumesFromTheCheckpoint) {
 INSTANTIATE_TEST_SUITE_P(Optimizers, TrainingWith, ::testing::Values(Optimizer::kSgd, Optimizer::kAdamW),
                          [](const ::testing::TestParamInfo<Optimizer>& p) { return optimizer_name(p.param); });
 
+// --out is written once, calibrated, at the end: a run stopped part way
+// (Ctrl-C, a kill, a full disk) leaves the model an earlier run wrote there
+// as it was; it used to be replaced by each better validated model, its
+// gates not yet calibrated.
+TEST(Training, ARunStoppedPartWayLeavesTheEarlierModelAsItWas) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 20);
+  std::ofstream(c.output) << "an earlier run's model";
+  struct Stopped {};
+  try {
+    train_model(c, [&](const TrainStatus& s) {
+      if (s.step == 12) throw Stopped{};  // after two validations
+    });
+    FAIL() << "not stopped";
+  } catch (const Stopped&) {
+  }
+  std::ifstream in(c.output);
+  const std::string kept((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_EQ(kept, "an earlier run's model");
+  EXPECT_TRUE(std::filesystem::exists(c.output + ".checkpoint.kept"));
+  c.resume = true;  // and the resumed run writes the model it kept, calibrated
+  const TrainReport r = train_model(c);
+  EXPECT_GT(r.val_accuracy_retained, 0);
+  InferenceConfig ic;
+  ic.mc_passes = 2;
+  const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
+  EXPECT_EQ(summary.find("\"val_accuracy_retained\": 0,"), std::string::npos) << summary;
+}
+
 TEST(Training, KeepLastWritesTheFinalStepsModelWhateverItsValidation) {
   test::TempDir dir;
   TrainConfig c = tiny_run(dir, 5, 20);
   c.keep_last = true;
   double final_validation = -1;
-  bool written_early = false;  // the default writes the first validated model (step 5)
+  bool written_early = false;
   const TrainReport r = train_model(c, [&](const TrainStatus& s) {
     if (s.step < c.steps) written_early = written_early || std::filesystem::exists(c.output);
     if (s.step == c.steps) final_validation = s.val_mean_class_accuracy;

@@ -536,6 +536,11 @@ struct Learner {
 // The files of a run's checkpoint are OUT.checkpoint.*.
 std::string checkpoint_of(const TrainConfig& c) { return c.output + ".checkpoint"; }
 
+// The model kept so far (best validated, or the last), uncalibrated: --out
+// is written only once its gates are calibrated, so a run stopped part way
+// leaves the model an earlier run wrote there as it was.
+std::string kept_model_of(const TrainConfig& c) { return checkpoint_of(c) + ".kept"; }
+
 std::unique_ptr<torch::optim::Optimizer> make_optimizer(const TrainConfig& c,
                                                         const std::vector<torch::Tensor>& parameters) {
   if (c.optimizer == Optimizer::kAdamW)
@@ -601,10 +606,12 @@ StepResult train_step(Learner& l, const TrainConfig& c, const SplitData& train, 
 // `what`: "the training loss is nan", or that the validation's outputs are not numbers.
 [[noreturn]] void throw_diverged(const TrainConfig& c, const TrainReport& report, int64_t step,
                                  const std::string& what) {
-  throw std::invalid_argument(
-      fmt::format("step {}: {}: training diverged (try a lower --lr than {}); {}", step, what, c.learning_rate,
-                  report.best_step > 0 ? fmt::format("{} holds the model kept at step {}", c.output, report.best_step)
-                                       : std::string("no model was written")));
+  throw std::invalid_argument(fmt::format(
+      "step {}: {}: training diverged (try a lower --lr than {}); {}", step, what, c.learning_rate,
+      report.best_step > 0 ? fmt::format("{} holds the model kept at step {}, its gates not calibrated (ivoa-train "
+                                         "--calibrate-only --init {} --out {} calibrates them)",
+                                         kept_model_of(c), report.best_step, kept_model_of(c), c.output)
+                           : std::string("no model was written")));
 }
 
 // What the progress callback sees after a step: the running means, the rate.
@@ -682,6 +689,8 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   ModelInfo info = model_info_for(c, train, val);
   Learner learner = make_learner(c, train, info, device, report);
   const int64_t first_step = learner.first_step;
+  std::error_code ignored;
+  if (first_step == 0) std::filesystem::remove(kept_model_of(c), ignored);  // an earlier run's
 
   // Every random stream continues from the step (a resumed run does not replay the first batches);
   // the sampler's and the augmenter's seeds are the run's times two primes, so no two streams coincide.
@@ -720,7 +729,7 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
       if (c.keep_last ? last : better) {
         record_kept(report, v.confusion, step + 1);
         info.training_summary = training_summary(c, train, val, report, step + 1);
-        save_model_or_throw(*learner.net, info, c.output);  // the best so far (or the last), complete at every moment
+        save_model_or_throw(*learner.net, info, kept_model_of(c));
       }
       status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
     }
@@ -731,7 +740,8 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   }
 
   // Calibrate the uncertainty gates of the model kept on validation data.
-  NativeModel best = load_native_model(c.output);
+  // A checkpoint from before the kept model had a file of its own left it at --out.
+  NativeModel best = load_native_model(std::filesystem::exists(kept_model_of(c)) ? kept_model_of(c) : c.output);
   best.net->to(device);
   calibrate_gates(best, val, val_refs, c, device, generator, report);
   best.info.training_summary = training_summary(c, train, val, report, report.best_step);
