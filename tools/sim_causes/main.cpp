@@ -29,6 +29,7 @@
 #include <spdlog/spdlog.h>
 
 #include "ivoa/causes/cause_finder.hpp"
+#include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/channels.hpp"
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/labels.hpp"
@@ -488,24 +489,33 @@ void parse_variants(CommandLine& cl) {
   if (parsed.size() > 8) throw std::invalid_argument("at most 8 --variant");
 }
 
-// The two CSVs with their headers; the variants' one stays closed (writes do
-// nothing) without --variants-out. Returns false, having said why, if one
-// cannot be written.
-bool open_outputs(const Options& opt, std::ofstream& csv, std::ofstream& variants_csv) {
-  csv.open(opt.out);
-  if (!csv) {
-    spdlog::error("cannot write {}: {}", opt.out, std::strerror(errno));
-    return false;
-  }
-  csv << "session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause,fixed_by\n";
-  if (opt.variants_out.empty()) return true;
-  variants_csv.open(opt.variants_out);
-  if (!variants_csv) {
-    spdlog::error("cannot write {}: {}", opt.variants_out, std::strerror(errno));
-    return false;
-  }
-  variants_csv << "session,detector,variant,label,cells,right,wrong\n";
+// Whether the outputs can be written, found before the work; false, having
+// said why, if not.
+bool outputs_writable(const Options& opt) {
+  for (const std::string& out : {opt.out, opt.variants_out})
+    if (const std::string why = why_cannot_write(out); !why.empty()) {
+      spdlog::error("cannot write {}: {}", out, why);
+      return false;
+    }
   return true;
+}
+
+// The two CSVs, whole or not at all: an earlier run's stay as they were
+// when this one fails, or explains nothing.
+bool write_outputs(const Options& opt, const std::string& rows, const std::string& variant_rows) {
+  FileSet files;
+  std::string error;
+  const bool written =
+      files.stage(opt.out,
+                  "session,detector,utime,cell,label,x,y,stereo_state,replayed_state,tested,causes,jointly,cause,"
+                  "fixed_by\n" +
+                      rows,
+                  error) &&
+      (opt.variants_out.empty() ||
+       files.stage(opt.variants_out, "session,detector,variant,label,cells,right,wrong\n" + variant_rows, error)) &&
+      files.commit(error);
+  if (!written) spdlog::error("{}", error);
+  return written;
 }
 
 // Two logs of one session name would give its rows twice (and a variants
@@ -548,17 +558,17 @@ bool outputs_apart_from_inputs(const CommandLine& cl) {
 int explain(const CommandLine& cl) {
   const Options& opt = cl.opt;
   if (!sessions_named_once(cl.logs) || !outputs_apart_from_inputs(cl)) return kExitUsage;
-  std::ofstream csv, variants_csv;
-  if (!open_outputs(opt, csv, variants_csv)) return kExitIoError;
+  if (!outputs_writable(opt)) return kExitIoError;
   Tally tally;
   tally.unexplained_fixed.resize(opt.variants.size());
   tally.variants.resize(opt.variants.size());
   int worst = kExitOk;
   size_t failed = 0;
   const std::vector<SessionResult> results = explain_sessions(cl.logs, opt, cl.jobs);
+  std::string rows, variant_rows;
   for (const SessionResult& r : results) {
-    csv << r.rows.str();
-    variants_csv << r.variant_rows.str();
+    rows += r.rows.str();
+    variant_rows += r.variant_rows.str();
     tally.add(r.tally);
     if (!r.error.empty()) {  // a bad session is reported and skipped; the others are still written
       spdlog::error("{}", r.error);
@@ -566,18 +576,13 @@ int explain(const CommandLine& cl) {
       ++failed;
     }
   }
-  csv.flush();
-  variants_csv.flush();
-  if (!csv || (!opt.variants_out.empty() && !variants_csv)) {
-    spdlog::error("writing {} failed", !csv ? opt.out : opt.variants_out);
-    return kExitIoError;
-  }
-  if (failed == results.size()) return worst;  // no session explained: no tables of zeros
+  if (failed == results.size()) return worst;  // no session explained: no tables of zeros, no files
   if (tally.frames == 0 && tally.skipped_frames > 0) {
     // Every frame refused (warnings above): an empty table is not a result.
     spdlog::error("no frame could be replayed: all {} were skipped (warnings above)", tally.skipped_frames);
     return kExitBadInput;
   }
+  if (!write_outputs(opt, rows, variant_rows)) return kExitIoError;
   print_summary(tally);
   print_variants(tally, opt.variants);
   return worst;
