@@ -350,11 +350,41 @@ Evaluated describe_sessions(const Options& o, const SessionList& sessions, const
   return e;
 }
 
+// eval.json, predictions.csv and embeddings.f32 are written beside their
+// names and renamed into place once all three are whole: a run that fails
+// or is stopped part way leaves an earlier run's outputs as they were (they
+// were rewritten in place, a killed run's rows under the earlier eval.json).
+class PartialOutputs {
+ public:
+  explicit PartialOutputs(const std::string& folder) : folder_(folder) {}
+  ~PartialOutputs() {
+    std::error_code ignored;
+    for (const auto& name : names_) fs::remove(partial(name), ignored);
+  }
+  // Where to write `name` until commit().
+  std::string partial(const std::string& name) {
+    if (std::find(names_.begin(), names_.end(), name) == names_.end()) names_.push_back(name);
+    return folder_ + "/" + name + ".partial";
+  }
+  void commit() {
+    for (const auto& name : names_) {
+      std::error_code error;
+      fs::rename(partial(name), folder_ + "/" + name, error);
+      if (error) throw OutputError(folder_ + "/" + name + ": cannot write: " + error.message());
+    }
+    names_.clear();
+  }
+
+ private:
+  std::string folder_;
+  std::vector<std::string> names_;
+};
+
 // predictions.csv and embeddings.f32 (one FC2 vector per row); returns the
 // number of rows.
 double write_predictions(const Options& o, const SessionList& sessions, introspection::IntrospectionModel& model,
-                         double total) {
-  const std::string csv_path = o.out + "/predictions.csv", emb_path = o.out + "/embeddings.f32";
+                         double total, PartialOutputs& outputs) {
+  const std::string csv_path = outputs.partial("predictions.csv"), emb_path = outputs.partial("embeddings.f32");
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> csv(std::fopen(csv_path.c_str(), "w"), &std::fclose);
   const std::unique_ptr<std::FILE, int (*)(std::FILE*)> emb(std::fopen(emb_path.c_str(), "wb"), &std::fclose);
   if (!csv || !emb)
@@ -376,7 +406,7 @@ double write_predictions(const Options& o, const SessionList& sessions, introspe
 // The patches each session was cut as, so the report can refuse a dataset
 // cut otherwise (its mosaics would show other patches than the model saw).
 void write_eval_json(const Options& o, const introspection::IntrospectionModel& model, const SessionList& sessions,
-                     const std::vector<dataset::SessionInfo>& infos, double samples) {
+                     const std::vector<dataset::SessionInfo>& infos, double samples, PartialOutputs& outputs) {
   std::string evaluated;
   for (size_t k = 0; k < sessions.size(); ++k)
     evaluated += fmt::format(
@@ -384,7 +414,7 @@ void write_eval_json(const Options& o, const introspection::IntrospectionModel& 
         k ? ", " : "", json_quote(sessions[k].first), json_quote(sessions[k].second), infos[k].patch_scale,
         infos[k].views, infos[k].image_size.width, infos[k].image_size.height);
   const auto& info = model.info();
-  const std::string path = o.out + "/eval.json";
+  const std::string path = outputs.partial("eval.json");
   std::ofstream json(path);
   json << "{\"model\": " << json_quote(info.id) << ", \"dataset\": " << json_quote(fs::absolute(o.dataset).string())
        << ", \"mc_passes\": " << o.inference.mc_passes
@@ -473,9 +503,11 @@ int evaluate(const Options& o) {
   std::error_code error;
   fs::create_directories(o.out, error);
   if (error) throw OutputError(o.out + ": cannot create the output folder: " + error.message());
+  PartialOutputs outputs(o.out);
+  const double samples = write_predictions(o, sessions, *model, evaluated.samples, outputs);
+  write_eval_json(o, *model, sessions, evaluated.infos, samples, outputs);
+  outputs.commit();
   remove_old_overlays(o.out + "/overlays");
-  const double samples = write_predictions(o, sessions, *model, evaluated.samples);
-  write_eval_json(o, *model, sessions, evaluated.infos, samples);
   if (!o.logs.empty()) write_overlays(o, *model, sessions);
   std::printf("predictions: %s/predictions.csv (%.0f samples), embeddings: %s/embeddings.f32\n", o.out.c_str(), samples,
               o.out.c_str());
