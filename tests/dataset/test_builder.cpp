@@ -637,6 +637,18 @@ TEST(DatasetBuilder, LogWithoutRecordedLabelsIsRefusedAndKeepsTheExistingSession
   relabel.add_log(raw);
   EXPECT_THROW(relabel.finish(), DatasetError);
   EXPECT_EQ(SessionReader(dir.file("data") + "/s").size(), recorded.size());
+
+  BuildOptions no_images;  // and labels without the stereo frames they were made on (it wrote 0 samples, exit 0)
+  no_images.stereo_channel = "NO_SUCH_STEREO";
+  SessionBuilder blind(dir.file("data"), "s", no_images);
+  blind.add_log(labelled);
+  try {
+    blind.finish();
+    FAIL() << "a session without images was written";
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("labelled.lcmlog: no NO_SUCH_STEREO message"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(SessionReader(dir.file("data") + "/s").size(), recorded.size());
 }
 
 }  // namespace

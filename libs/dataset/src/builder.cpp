@@ -109,12 +109,16 @@ void SessionBuilder::Impl::bad(const std::string& what) {
   spdlog::warn("skipped: {}", what);
 }
 
-// Why a session whose logs hold nothing to label from is refused, before an
-// existing session of that name is replaced by an empty one.
+// Why a session whose logs hold nothing to label from, or no stereo frame
+// to cut patches from, is refused, before an existing session of that name
+// is replaced by an empty one.
 std::string SessionBuilder::Impl::no_label_source() const {
   std::string logs;
   for (const auto& log : info.logs) logs += (logs.empty() ? "" : ", ") + log;
   const std::string kept = "; session '" + session + "' not written (an existing one is kept)";
+  if (report.stereo_frames == 0)
+    return logs + ": no " + options.stereo_channel + " message after the calibration: no images to cut patches " +
+           "from (recorded without the stereo camera, or with -c leaving it out?)" + kept;
   if (rerun())
     return logs + ": no " + options.depth_channel + " message after the calibration, so the depth monitor has " +
            "nothing to label from" + kept;
@@ -491,7 +495,7 @@ void SessionBuilder::add_log(const std::string& path, const ProgressCallback& pr
 
 BuildReport SessionBuilder::finish() {
   Impl& m = *impl_;
-  if (m.label_sources == 0) throw DatasetError(m.no_label_source());
+  if (m.label_sources == 0 || m.report.stereo_frames == 0) throw DatasetError(m.no_label_source());
   if (m.pipeline) m.take(m.pipeline->flush());
   m.emit_ready(true);
   if (!m.writer && !m.frames_by_size.empty()) m.set_image_size(m.frames_by_size.front().first);
