@@ -174,6 +174,29 @@ TEST(Training, ARunStoppedPartWayLeavesTheEarlierModelAsItWas) {
   EXPECT_EQ(summary.find("\"val_accuracy_retained\": 0,"), std::string::npos) << summary;
 }
 
+// A resumed run keeps the settings and sessions it started with (its model
+// would say it trained all its steps with the new ones); more steps are fine.
+TEST(Training, ResumingWithOtherSettingsIsRefusedNamingThem) {
+  test::TempDir dir;
+  TrainConfig c = tiny_run(dir, 5, 10);
+  train_model(c);
+  c.resume = true;
+  c.steps = 12;
+  c.batch_size = 16;
+  c.augment = false;
+  try {
+    train_model(c);
+    FAIL() << "resumed with other settings";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("other settings than these: batch_size 16 (was 8), augment off"),
+              std::string::npos)
+        << e.what();
+  }
+  c.batch_size = 8;
+  c.augment = true;
+  EXPECT_EQ(train_model(c).last.step, 12);
+}
+
 TEST(Training, KeepLastWritesTheFinalStepsModelWhateverItsValidation) {
   test::TempDir dir;
   TrainConfig c = tiny_run(dir, 5, 20);

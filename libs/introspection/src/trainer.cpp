@@ -13,6 +13,7 @@
 #include <ATen/CPUGeneratorImpl.h>
 #include <spdlog/spdlog.h>
 #include <torch/torch.h>
+#include <yaml-cpp/yaml.h>
 
 #include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/json_text.hpp"
@@ -301,6 +302,45 @@ void check_can_start_from(const ModelInfo& from, const ModelInfo& wanted, bool r
       fmt::format("cannot {} from {}: {} ({})", resuming ? "resume" : "start", from.id, why, remedy));
 }
 
+// A resumed run goes on with the recipe and the sessions it was started
+// with: a model says it was trained with what the run was given last, so
+// other settings would be recorded for steps they did not train (and the
+// evaluation's held-out check would follow the new split). --steps may grow.
+void check_resumed_recipe(const ModelInfo& from, const TrainConfig& c, const SplitData& train) {
+  YAML::Node was;
+  try {
+    was = YAML::Load(from.training_summary);  // JSON, which YAML reads
+  } catch (const YAML::Exception&) {
+    return;  // no summary kept yet: nothing to compare
+  }
+  // Another optimiser is refused by the checkpoint's own check, with its remedy.
+  const std::string optimizer = optimizer_name(c.optimizer);
+  if (!was.IsMap() || was["optimizer"].as<std::string>(optimizer) != optimizer) return;
+  std::vector<std::string> changed;
+  const auto number = [&](const char* key, double now) {
+    if (was[key] && std::abs(was[key].as<double>(now) - now) > 1e-4 * std::max(1.0, std::abs(now)))
+      changed.push_back(fmt::format("{} {} (was {})", key, now, was[key].as<std::string>("")));
+  };
+  number("batch_size", static_cast<double>(c.batch_size));
+  number("learning_rate", c.learning_rate);
+  number("momentum", c.momentum);
+  number("weight_decay", c.weight_decay);
+  number("seed", static_cast<double>(c.seed));
+  number("augment_noise_max", c.augment_noise_max);
+  number("fn_weight", c.fn_weight);
+  if (was["augment"] && was["augment"].as<bool>(c.augment) != c.augment)
+    changed.push_back(std::string("augment ") + (c.augment ? "on" : "off"));
+  if (was["kept"] && was["kept"].as<std::string>("") != (c.keep_last ? "last" : "best_validated"))
+    changed.push_back(c.keep_last ? "--keep-last" : "no --keep-last");
+  if (was["train_sessions"] && was["train_sessions"].as<std::vector<std::string>>(train.names) != train.names)
+    changed.push_back("the training sessions");
+  if (changed.empty()) return;
+  throw std::runtime_error(fmt::format(
+      "cannot resume {}: it was trained with other settings than these: {} (give the run's own settings, or delete "
+      "{}.checkpoint.* to train from scratch)",
+      from.id, fmt::join(changed, ", "), c.output));
+}
+
 // The side task, if the weight and the training sessions allow it.
 std::unique_ptr<EvidenceTask> make_evidence_task(const TrainConfig& c, const SplitData& train,
                                                  IntrospectionNetImpl& net, torch::Device device) {
@@ -558,6 +598,7 @@ Learner make_learner(const TrainConfig& c, const SplitData& train, const ModelIn
   if (resuming || !c.init.empty()) {
     NativeModel start_from = load_native_model(resuming ? checkpoint + ".model" : c.init);
     check_can_start_from(start_from.info, info, resuming, c.output);
+    if (resuming) check_resumed_recipe(start_from.info, c, train);
     l.net = start_from.net;
   } else {
     l.net = make_network(c.architecture, c.dropout, train.views);
@@ -733,9 +774,11 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
       }
       status.best_val_mean_class_accuracy = report.best_val_mean_class_accuracy;
     }
-    if ((step + 1) % c.checkpoint_every == 0 || last)
+    if ((step + 1) % c.checkpoint_every == 0 || last) {
+      info.training_summary = training_summary(c, train, val, report, step + 1);  // what a resume is checked against
       save_checkpoint(checkpoint_of(c), *learner.net, info, learner.evidence.get(), c.optimizer, *learner.optimizer,
                       step + 1, report);
+    }
     if (progress) progress(status);
   }
 
