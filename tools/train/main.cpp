@@ -56,9 +56,10 @@ void add_optimiser_options(CLI::App& app, TrainCommandLine& cl) {
   app.add_option("--steps", c.steps, "optimiser steps")->capture_default_str()->check(ivoa::positive_number());
   // Bounds for the numbers below: past them LibTorch fails far into the run
   // (bad_alloc, a float overflow naming no flag, a divergence blamed on --lr).
-  app.add_option("--batch-size", c.batch_size, "patches per step, drawn class-balanced")
+  // 1024 two-view patches take 1.8 GB in a step; 65536 were killed for memory at 24 GB without a word.
+  app.add_option("--batch-size", c.batch_size, "patches per step, drawn class-balanced (at most 4096: 1.8 GB a 1024)")
       ->capture_default_str()
-      ->check(ivoa::number_in(1, 65536));
+      ->check(ivoa::number_in(1, 4096));
   app.add_option("--optimizer", cl.optimizer, "adamw or sgd (the paper's)")
       ->check(CLI::IsMember({"adamw", "sgd"}))
       ->capture_default_str();

@@ -727,6 +727,11 @@ TrainReport train_model(const TrainConfig& c, const std::function<void(const Tra
   const SplitData val = load_split_data(c, c.val_split);
   TrainReport report;
   const std::vector<int> classes = classes_present(train, report);
+  if (static_cast<size_t>(c.batch_size) > train.size())
+    spdlog::warn(
+        "--batch-size {} is more than the {} training samples: every batch repeats them (the rarest class "
+        "most, as batches are drawn class-balanced)",
+        c.batch_size, train.size());
   ModelInfo info = model_info_for(c, train, val);
   Learner learner = make_learner(c, train, info, device, report);
   const int64_t first_step = learner.first_step;
