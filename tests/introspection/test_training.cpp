@@ -96,6 +96,13 @@ TEST_P(TrainingWith, LossFallsAndHeldOutSessionsBeatChance) {
   EXPECT_GT(static_cast<double>(right) / static_cast<double>(test.size()), 0.6);  // chance is 0.25
 }
 
+// The training summary the model file at `path` carries.
+std::string training_summary_of(const std::string& path) {
+  InferenceConfig ic;
+  ic.mc_passes = 1;
+  return IntrospectionModel::load(path, ic)->info().training_summary;
+}
+
 // A short training run on dir/data with dir/split.yaml.
 TrainConfig tiny_config(const test::TempDir& dir, int64_t steps) {
   TrainConfig c;
@@ -168,9 +175,7 @@ TEST(Training, ARunStoppedPartWayLeavesTheEarlierModelAsItWas) {
   c.resume = true;  // and the resumed run writes the model it kept, calibrated
   const TrainReport r = train_model(c);
   EXPECT_GT(r.val_accuracy_retained, 0);
-  InferenceConfig ic;
-  ic.mc_passes = 2;
-  const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
+  const std::string summary = training_summary_of(c.output);
   EXPECT_EQ(summary.find("\"val_accuracy_retained\": 0,"), std::string::npos) << summary;
 }
 
@@ -211,9 +216,7 @@ TEST(Training, KeepLastWritesTheFinalStepsModelWhateverItsValidation) {
   EXPECT_EQ(r.best_step, 20);
   EXPECT_FALSE(r.best_before_resume);
   EXPECT_NEAR(r.best_val_mean_class_accuracy, final_validation, 1e-9);
-  InferenceConfig ic;
-  ic.mc_passes = 2;
-  const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
+  const std::string summary = training_summary_of(c.output);
   EXPECT_NE(summary.find("\"best_step\": 20"), std::string::npos) << summary;
 }
 
@@ -225,9 +228,7 @@ TEST(Training, TheModelNamesItsDataWhateverTheFolderIsCalled) {
   std::filesystem::rename(dir.file("data"), dir.file("my \"best\" data"));
   c.dataset = dir.file("my \"best\" data");
   train_model(c);
-  InferenceConfig ic;
-  ic.mc_passes = 2;
-  const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
+  const std::string summary = training_summary_of(c.output);
   EXPECT_NE(summary.find(R"("dataset": ")" + dir.path().string() + R"(/my \"best\" data")"), std::string::npos)
       << summary;
 }
@@ -484,9 +485,7 @@ TEST(Training, LearnsTheDetectorsEvidenceAsASideTaskWhenTheDatasetHasIt) {
   ASSERT_EQ(evidence_losses.size(), 60u);
   EXPECT_GT(evidence_losses.front(), 0.0);
   EXPECT_LT(evidence_losses.back(), 0.5 * evidence_losses[4]) << "the head learns what the class implies";
-  InferenceConfig ic;
-  ic.mc_passes = 1;
-  const std::string summary = IntrospectionModel::load(c.output, ic)->info().training_summary;
+  const std::string summary = training_summary_of(c.output);
   EXPECT_NE(summary.find("\"evidence_weight\": 5"), std::string::npos) << summary;
 
   // Resuming must keep the setting the checkpoint was trained with.

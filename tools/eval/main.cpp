@@ -359,23 +359,25 @@ class PartialOutputs {
   explicit PartialOutputs(const std::string& folder) : folder_(folder) {}
   ~PartialOutputs() {
     std::error_code ignored;
-    for (const auto& name : names_) fs::remove(partial(name), ignored);
+    for (const auto& name : names_) fs::remove(partial_path(name), ignored);
   }
   // Where to write `name` until commit().
   std::string partial(const std::string& name) {
     if (std::find(names_.begin(), names_.end(), name) == names_.end()) names_.push_back(name);
-    return folder_ + "/" + name + ".partial";
+    return partial_path(name);
   }
   void commit() {
     for (const auto& name : names_) {
       std::error_code error;
-      fs::rename(partial(name), folder_ + "/" + name, error);
+      fs::rename(partial_path(name), folder_ + "/" + name, error);
       if (error) throw OutputError(folder_ + "/" + name + ": cannot write: " + error.message());
     }
     names_.clear();
   }
 
  private:
+  std::string partial_path(const std::string& name) const { return folder_ + "/" + name + ".partial"; }
+
   std::string folder_;
   std::vector<std::string> names_;
 };
