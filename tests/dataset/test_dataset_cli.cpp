@@ -77,6 +77,19 @@ TEST(DatasetInfo, ABrokenIndexIsNamed) {
   EXPECT_TRUE(contains(r.output, "dataset.json: session 'a' is listed twice")) << r.output;
 }
 
+// A later layout read as this one would give wrong samples, not an error.
+TEST(DatasetInfo, AnIndexOfAnotherVersionOrFormatIsRefused) {
+  test::TempDir dir;
+  std::ofstream(dir.file("dataset.json")) << R"({"format": "ivoa-dataset", "version": 2, "sessions": []})";
+  auto r = dataset_info(dir.path().string());
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "dataset.json: dataset version 2; this build reads 1 to 1")) << r.output;
+  std::ofstream(dir.file("dataset.json")) << R"({"format": "other", "version": 1, "sessions": []})";
+  r = dataset_info(dir.path().string());
+  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
+  EXPECT_TRUE(contains(r.output, "dataset.json: format 'other', not 'ivoa-dataset'")) << r.output;
+}
+
 TEST(DatasetInfo, WithoutAFolderAsksForOneAsTheArgumentOrTheFlag) {
   const auto r = dataset_info("");
   EXPECT_EQ(r.exit_code, kExitUsage) << r.output;

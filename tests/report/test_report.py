@@ -151,6 +151,11 @@ def write_eval(out, sessions, predicted, probs, var, embeddings, detector="jppc"
         mpimg.imsave(os.path.join(out, "overlays", "office_s1_1000000.png"), np.zeros((8, 8, 3)))
 
 
+def sweep_run(**columns):
+    """A stand-in for an EvalRun of T = 20 passes with these columns, no run-time gate."""
+    return types.SimpleNamespace(meta={"mc_passes": 20}, model_threshold=None, **columns)
+
+
 def one_hot_probs(predicted, p_top=0.8):
     """Probabilities with p_top on the predicted class and the rest shared."""
     probs = np.full((len(predicted), 4), (1 - p_top) / 3)
@@ -979,6 +984,16 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
         self.assert_bad_input(["--eval", d, "--dataset", self.f.data],
                               "eval.json: missing field 'verdict_uncertainty_threshold'")
 
+    def test_one_pass_is_no_uncertainty_not_a_failed_claim(self):
+        """With T = 1 every variance is 0: the sweep cannot judge the paper's claim."""
+        d = self.eval_with_meta("meta_one_pass", lambda m: dict(m, mc_passes=1), self.f.known)
+        out = os.path.join(self.root, "report_one_pass")
+        code, _, stderr = run_main(["--eval", d, "--dataset", self.f.data, "--out", out, "--tsne-iterations", "250"])
+        self.assertEqual(code, 0, stderr)
+        report = read_text(os.path.join(out, "report.md"))
+        self.assertIn("Paper's claim met here: **not measured (T = 1)**", report)
+        self.assertIn("accuracy rises as the threshold falls: **not measured (T = 1: one pass", report)
+
     def test_dataset_cut_at_another_patch_scale(self):
         """eval.json's views and patch scale per session against the dataset's
         session.json: the same samples cut otherwise would fill the mosaics with
@@ -1265,6 +1280,31 @@ class CauseAndSettingsRowsTest(FabricatedInputsCase):
         self.assertEqual(code, 0, stderr)
         self.assertIn("the causes given hold no rows", stderr)
 
+    def test_a_cell_given_twice_is_refused(self):
+        """The later row won silently: two answers for one cell, one of them wrong."""
+        causes = os.path.join(self.root, "causes_twice.csv")
+        write_causes(causes, self.f.sessions)
+        lines = read_text(causes).splitlines()
+        with open(causes, "a") as fh:
+            fh.write(lines[1] + "\n")
+        code, _, stderr = run_main(["--eval", self.f.perfect, "--dataset", self.f.data, "--causes", causes,
+                                    "--out", os.path.join(self.root, "report_bad")])
+        self.assertEqual(code, 3, stderr)
+        self.assertIn(f"causes_twice.csv: line {len(lines) + 1}: session ", stderr)
+        self.assertIn("again (first on line 2; files concatenated?)", stderr)
+
+    def test_a_dataset_of_a_later_version_is_refused(self):
+        """Another layout read as this one would give wrong patches."""
+        for name, key, value, message in (("data_v2", "version", 2, "dataset version 2; this report reads 1 to 1"),
+                                          ("data_other", "format", "x", "format 'x', not 'ivoa-dataset'")):
+            d, _ = self.dataset_copy(name)
+            path = os.path.join(d, "dataset.json")
+            meta = json.loads(read_text(path))
+            meta[key] = value
+            with open(path, "w") as fh:
+                json.dump(meta, fh)
+            self.assert_refused(d, "dataset.json: " + message)
+
     def dataset_copy(self, name):
         """A copy of the fabricated dataset and the folder of its first session."""
         d = os.path.join(self.root, name)
@@ -1360,7 +1400,7 @@ class MetricUnitTest(unittest.TestCase):
         y = np.repeat(np.arange(4), 50)
         p = np.where(rng.random(200) < 0.7, y, (y + 1) % 4)
         var = np.where(p == y, rng.uniform(0.05, 0.1, 200), rng.uniform(0.001, 0.02, 200))
-        run = types.SimpleNamespace(label=y, predicted=p, var_predicted=var, model_threshold=None)
+        run = sweep_run(label=y, predicted=p, var_predicted=var)
         s = uncertainty_sweep(run)
         self.assertFalse(s["accuracy_rises_as_threshold_falls"])
         self.assertLess(s["at_70"]["overall_accuracy"], s["unfiltered"]["overall_accuracy"])
@@ -1495,7 +1535,7 @@ class MetricUnitTest(unittest.TestCase):
         p = np.where(wrong, (y + 1) % 4, y)
         var = np.where(wrong, rng.uniform(0.05, 0.1, 640), rng.uniform(0.001, 0.02, 640))
         var[600:] = np.where(wrong[600:], rng.uniform(0.0001, 0.0005, 40), 0.03)
-        run = types.SimpleNamespace(label=y, predicted=p, var_predicted=var, model_threshold=None)
+        run = sweep_run(label=y, predicted=p, var_predicted=var)
         s = uncertainty_sweep(run)
         self.assertLess(s["spearman_threshold_vs_mpca"], -0.9)  # over the points keeping ≥ 20 FN: it rises
         # the 70 % point keeps the 10 sure-and-wrong FN only (a loss of 5 points there): not held against it
@@ -1505,14 +1545,12 @@ class MetricUnitTest(unittest.TestCase):
         y = np.repeat(np.arange(4), [300, 300, 300, 18])
         wrong = rng.random(918) < 0.2
         var = np.where(wrong, rng.uniform(0.05, 0.1, 918), rng.uniform(0.001, 0.02, 918))
-        run = types.SimpleNamespace(label=y, predicted=np.where(wrong, (y + 1) % 4, y), var_predicted=var,
-                                    model_threshold=None)
+        run = sweep_run(label=y, predicted=np.where(wrong, (y + 1) % 4, y), var_predicted=var)
         self.assertEqual(uncertainty_sweep(run)["verdict"], "yes")
         # no class with 20 cells: nothing to judge by, and said so
         y = np.repeat(np.arange(4), 10)
         var = rng.uniform(0.001, 0.1, 40)
-        run = types.SimpleNamespace(label=y, predicted=np.where(rng.random(40) < 0.2, (y + 1) % 4, y),
-                                    var_predicted=var, model_threshold=None)
+        run = sweep_run(label=y, predicted=np.where(rng.random(40) < 0.2, (y + 1) % 4, y), var_predicted=var)
         self.assertEqual(uncertainty_sweep(run)["verdict"], "undetermined (no class has 20 cells: too few to judge)")
 
     def test_sweep_points_say_how_few_cells_the_smallest_class_keeps(self):

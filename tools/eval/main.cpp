@@ -459,6 +459,17 @@ void add_options(CLI::App& app, Options& o) {
       ->check(ivoa::seed_number());
 }
 
+// Whether `path` is `folder` or lies inside it, by any spelling, whether or
+// not `path` exists yet.
+bool lies_within(const std::string& path, const std::string& folder) {
+  std::error_code error;
+  const auto inner = fs::weakly_canonical(fs::absolute(path), error);
+  const auto outer = fs::weakly_canonical(fs::absolute(folder), error);
+  if (error) return false;
+  const auto relative = inner.lexically_relative(outer);  // "../x" when outside
+  return !relative.empty() && *relative.begin() != "..";
+}
+
 // The figures of an earlier run into the same --out would pass for this
 // model's (the report shows every overlay it finds there): those named as
 // prepare_log_overlays names them, <session>_<utime>.png, are removed.
@@ -533,6 +544,17 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
   while (o.out.size() > 1 && o.out.back() == '/') o.out.pop_back();  // "eval/" prints as eval/x, not eval//x
+  if (o.inference.mc_passes == 1)
+    spdlog::warn(
+        "--mc-passes 1: one pass without dropout, so every variance is 0 and the uncertainty gates keep "
+        "everything (the report's sweep says 'not measured'; the paper's T is 20)");
+  if (lies_within(o.out, o.dataset)) {
+    spdlog::error(
+        "--out {} lies in the dataset {}: an evaluation's files there would mix with its sessions (a session "
+        "folder holding them can no longer be rebuilt); give a folder outside it",
+        o.out, o.dataset);
+    return kExitUsage;
+  }
   try {
     return evaluate(o);
   } catch (const OutputError& e) {

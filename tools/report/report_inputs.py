@@ -192,6 +192,19 @@ class DatasetSession:
         return self._evidence
 
 
+DATASET_INDEX_VERSION = 1  # dataset.json's "version", as ivoa-dataset writes it
+
+
+def _check_dataset_version(path: str, meta: dict) -> None:
+    """A later layout read as this one would give wrong patches, not an error."""
+    if "format" in meta and meta["format"] != "ivoa-dataset":
+        raise InputError(f"{path}: format {meta['format']!r}, not 'ivoa-dataset': not this project's dataset index")
+    version = meta.get("version", 1)
+    if not _is_integer(version) or not 1 <= version <= DATASET_INDEX_VERSION:
+        raise InputError(f"{path}: dataset version {version!r}; this report reads 1 to {DATASET_INDEX_VERSION} "
+                         "(written by a newer ivoa-dataset?)")
+
+
 class Dataset:
     """An IVOA dataset folder; sessions are loaded on demand and cached."""
 
@@ -201,6 +214,7 @@ class Dataset:
             raise InputError(f"{path}: dataset folder not found")
         meta_path = os.path.join(path, "dataset.json")
         self.meta = _read_json(meta_path) if os.path.isfile(meta_path) else {}
+        _check_dataset_version(meta_path, self.meta)
         self.patch_size = _checked_field(meta_path, self.meta, "patch_size", 100, 1)
         self._sessions: Dict[str, DatasetSession] = {}
 
@@ -811,11 +825,17 @@ def load_causes(path: str) -> Causes:
                              f"tested there ({tested[bad[0]]})")
     bits = np.where((bits == 0) & (_numeric(path, cols, "jointly", int) != 0), ONLY_TOGETHER, bits)
     rows = {}
+    first_line: Dict[tuple, int] = {}
     for i, (session, detector, label) in enumerate(zip(cols["session"], cols["detector"], cols["label"])):
         if label not in ("FP", "FN"):
             raise InputError(f"{path}: line {_line(i)}: label '{label}' (causes are for FP and FN cells)")
+        key = (session, detector, int(utime[i]), int(cell[i]))
+        if key in first_line:  # two answers for one cell: which is right cannot be told
+            raise InputError(f"{path}: line {_line(i)}: session {session}, detector {detector}, utime {key[2]}, "
+                             f"cell {key[3]} again (first on line {first_line[key]}; files concatenated?)")
+        first_line[key] = _line(i)
         cause = int(bits[i]) if stereo[i] == replayed[i] else NO_CAUSE
-        rows[(session, detector, int(utime[i]), int(cell[i]))] = (LABEL_NAMES.index(label), cause)
+        rows[key] = (LABEL_NAMES.index(label), cause)
     causes = Causes(path=path, rows=rows, detectors=set(cols["detector"]))
     if "fixed_by" in cols:  # older files lack it
         none_found = (stereo == replayed) & (bits == 0)

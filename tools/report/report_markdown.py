@@ -9,7 +9,7 @@ from typing import Dict, List, Optional, Sequence
 from margin_bands import band_name
 from report_clustering import REFERENCE_VAR_CUT, ClusterOptions
 from report_inputs import FN, FP, LABEL_NAMES, EvalRun, cause_name, phenomenon_name, surface_name
-from report_metrics import FEW_CELLS, PAPER_MPCA_AT_70, RETAIN_TARGET
+from report_metrics import FEW_CELLS, NO_UNCERTAINTY, PAPER_MPCA_AT_70, RETAIN_TARGET
 
 PURITY_TARGET = 0.80
 
@@ -206,6 +206,13 @@ def _withheld_failures(p: dict) -> str:
             "it as unknown, not as free.\n")
 
 
+def _claim_met(sweep: dict, mpca_at_70: Optional[float]) -> str:
+    """'yes', 'no', or not measured where the run had no uncertainty (T = 1)."""
+    if sweep["verdict"] == NO_UNCERTAINTY:
+        return "not measured (T = 1)"
+    return "yes" if mpca_at_70 is not None and mpca_at_70 > PAPER_MPCA_AT_70 else "no"
+
+
 def uncertainty_section(rm: dict, figs: Dict[str, str]) -> str:
     """§3: accuracy and retained data vs the uncertainty threshold."""
     s = rm["sweep"]
@@ -231,7 +238,7 @@ def uncertainty_section(rm: dict, figs: Dict[str, str]) -> str:
         f"{fmt(s['unfiltered']['mean_per_class_accuracy'])} unfiltered "
         f"({'+' if gain is not None and gain >= 0 else ''}{fmt(None if gain is None else 100 * gain, 1)} points; "
         f"the paper reports > {int(100 * PAPER_MPCA_AT_70)} % at 70 % retained, +6 points). "
-        f"Paper's claim met here: **{'yes' if a70 is not None and a70 > PAPER_MPCA_AT_70 else 'no'}**.\n")
+        f"Paper's claim met here: **{_claim_met(s, a70)}**.\n")
     out.append(_withheld_failures(s["at_70"]))
     rho = s["spearman_threshold_vs_mpca"]
     out.append(

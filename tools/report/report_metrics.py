@@ -341,9 +341,21 @@ def _accuracy_trend(pts: List[dict], unfiltered: dict, at70: dict) -> dict:
             "verdict": verdict}
 
 
+NO_UNCERTAINTY = "not measured (T = 1: one pass without dropout, so no uncertainty to gate by)"
+
+
+def _unless_deterministic(run: EvalRun, sweep: dict) -> dict:
+    """With one pass every variance is 0 and the gate keeps everything: the
+    sweep says nothing of the uncertainty, and must not read as a failed claim."""
+    if run.meta.get("mc_passes") == 1:
+        sweep.update(verdict=NO_UNCERTAINTY, accuracy_rises_as_threshold_falls=None)
+    return sweep
+
+
 def uncertainty_sweep(run: EvalRun, quantiles: int = 101) -> dict:
     """gate_sweep of the model's own predictions, gated by var_predicted."""
-    return gate_sweep(run.label, run.predicted, run.var_predicted, run.model_threshold, quantiles)
+    return _unless_deterministic(run, gate_sweep(run.label, run.predicted, run.var_predicted, run.model_threshold,
+                                                 quantiles))
 
 
 def gate_sweep(label: np.ndarray, predicted: np.ndarray, var: np.ndarray, model_thr: Optional[float],
@@ -403,7 +415,7 @@ def given_verdict(run: EvalRun) -> Optional[dict]:
         "sessions": [dict(class_metrics(run.label[run.session == s], v.predicted[run.session == s]), group=str(s))
                      for s in sorted(set(run.session.tolist()))],
         "failure": failure,
-        "sweep": gate_sweep(run.label, v.predicted, v.var_wrong, run.verdict_threshold),
+        "sweep": _unless_deterministic(run, gate_sweep(run.label, v.predicted, v.var_wrong, run.verdict_threshold)),
     }
 
 

@@ -102,7 +102,7 @@ void add_model_options(CLI::App& app, TrainCommandLine& cl) {
   app.add_option("--augment-noise", c.augment_noise_max,
                  "largest per-pixel Gaussian noise sigma the augmentation adds (on [0, 1]; 0: none)")
       ->capture_default_str()
-      ->check(ivoa::non_negative_number());
+      ->check(ivoa::number_in(0, 1));  // a sigma past the whole range leaves nothing of the patch
   app.add_option("--seed", c.seed, "initial weights, batch draws, augmentation and dropout")
       ->capture_default_str()
       ->check(ivoa::seed_number());

@@ -33,8 +33,9 @@ namespace fs = std::filesystem;
 namespace ivoa::dataset {
 namespace {
 
-constexpr int kMaxPatchSize = 4096;     // px a side; patches are 100 px
-constexpr int kMaxEvidenceSize = 4096;  // values per sample; JPP-C keeps one per ground sample, a few dozen
+constexpr int kMaxPatchSize = 4096;      // px a side; patches are 100 px
+constexpr int kDatasetIndexVersion = 1;  // dataset.json's "version": what this build writes and reads
+constexpr int kMaxEvidenceSize = 4096;   // values per sample; JPP-C keeps one per ground sample, a few dozen
 
 constexpr const char* kSamplesHeaderV1 =
     "sample,frame,utime,depth_utime,cell,label,stereo_state,depth_state,x,y,u,v,phenomena,phenomenon,surface";
@@ -518,6 +519,24 @@ cv::Mat SessionReader::patch(size_t i) const {
   return cv::Mat(info_.patch_size * info_.views, info_.patch_size, CV_8UC3, const_cast<uint8_t*>(patch_data(i)));
 }
 
+namespace {
+
+// dataset.json's "format" and "version" (absent in none this project wrote):
+// a later version may lay its sessions out otherwise, and reading it as
+// this one would give wrong samples rather than an error.
+void check_index_format(const YAML::Node& root, const std::string& path) {
+  if (root["format"] && root["format"].as<std::string>("") != "ivoa-dataset")
+    throw DatasetError(path + ": format '" + root["format"].as<std::string>("?") +
+                       "', not 'ivoa-dataset': not this project's dataset index");
+  if (!root["version"]) return;
+  const int version = root["version"].as<int>(-1);
+  if (version < 1 || version > kDatasetIndexVersion)
+    throw DatasetError(path + ": dataset version " + root["version"].as<std::string>("?") + "; this build reads 1 to " +
+                       std::to_string(kDatasetIndexVersion) + " (written by a newer ivoa-dataset? use that one)");
+}
+
+}  // namespace
+
 std::vector<std::string> list_sessions(const std::string& dataset_root) {
   const std::string path = dataset_root + "/dataset.json";
   if (!fs::exists(path)) return {};
@@ -528,6 +547,7 @@ std::vector<std::string> list_sessions(const std::string& dataset_root) {
       throw DatasetError(path +
                          ": not a dataset index (an object with a \"sessions\" list; rebuild it with "
                          "ivoa-dataset build)");
+    check_index_format(root, path);
     sessions = root["sessions"].as<std::vector<std::string>>();
   } catch (const YAML::Exception& e) {
     throw DatasetError(path + ": " + e.what());
@@ -558,7 +578,8 @@ void register_session(const std::string& dataset_root, const std::string& sessio
   if (std::find(sessions.begin(), sessions.end(), session) == sessions.end()) sessions.push_back(session);
   std::sort(sessions.begin(), sessions.end());
   std::ostringstream out;
-  out << "{\n  \"format\": \"ivoa-dataset\",\n  \"version\": 1,\n  \"patch_size\": " << patch_size
+  out << "{\n  \"format\": \"ivoa-dataset\",\n  \"version\": " << kDatasetIndexVersion
+      << ",\n  \"patch_size\": " << patch_size
       << ",\n  \"label_names\": [\"TP\", \"TN\", \"FP\", \"FN\"],\n  \"sessions\": [";
   for (size_t k = 0; k < sessions.size(); ++k) out << (k ? ", " : "") << json_quote(sessions[k]);
   out << "]\n}\n";

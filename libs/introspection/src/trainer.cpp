@@ -43,9 +43,10 @@ struct SplitData {
   std::vector<std::string> names;
   int patch_size = 0;
   int views = 0;
-  double patch_scale = -1;  // -1 until the first session is read
-  int evidence_size = -1;   // values per sample; 0 if a session has none
-  std::string detector;     // whose failures the labels are: one for all
+  double patch_scale = -1;     // -1 until the first session is read
+  int evidence_size = -1;      // values per sample; 0 if a session has none
+  bool some_evidence = false;  // a session carries evidence (0 above then means they disagree)
+  std::string detector;        // whose failures the labels are: one for all
 
   size_t size() const {
     size_t n = 0;
@@ -98,6 +99,7 @@ SplitData load_split_data(const TrainConfig& c, const std::string& split) {
           fmt::format("{}: patch scale {}, the other sessions {}", name, reader->info().patch_scale, d.patch_scale));
     const int evidence_size = reader->info().evidence_size;  // sessions that disagree cannot share the side task
     d.evidence_size = d.evidence_size < 0 || d.evidence_size == evidence_size ? evidence_size : 0;
+    d.some_evidence = d.some_evidence || evidence_size > 0;
     const auto session = static_cast<uint32_t>(d.sessions.size());
     for (size_t i = 0; i < reader->size(); ++i)
       d.by_class[static_cast<size_t>(reader->samples()[i].label)].push_back({session, static_cast<uint32_t>(i)});
@@ -138,16 +140,28 @@ std::string json_list(const std::vector<std::string>& v) {
 }
 
 // A fixed, deterministic validation subset spread over all sessions and classes.
+// Fewer validation samples than this, and which step is kept and where the
+// gates fall are mostly chance (a class then has a few dozen cells or none).
+constexpr size_t kFewValidationSamples = 500;
+
 std::vector<SampleRef> validation_subset(const SplitData& d, int64_t max_samples) {
   if (d.size() == 0)
     throw std::runtime_error("the validation sessions (" + json_list(d.names) +
                              ") have no labelled samples: nothing to validate or calibrate on");
   std::vector<SampleRef> all;
   for (const auto& c : d.by_class) all.insert(all.end(), c.begin(), c.end());
-  if (static_cast<int64_t>(all.size()) <= max_samples) return all;
   std::vector<SampleRef> out;
-  const double step = static_cast<double>(all.size()) / static_cast<double>(max_samples);
-  for (int64_t k = 0; k < max_samples; ++k) out.push_back(all[static_cast<size_t>(static_cast<double>(k) * step)]);
+  if (static_cast<int64_t>(all.size()) <= max_samples) {
+    out = std::move(all);
+  } else {
+    const double step = static_cast<double>(all.size()) / static_cast<double>(max_samples);
+    for (int64_t k = 0; k < max_samples; ++k) out.push_back(all[static_cast<size_t>(static_cast<double>(k) * step)]);
+  }
+  if (out.size() < kFewValidationSamples)
+    spdlog::warn(
+        "validating on {} samples: the best step and the uncertainty gates rest on them and are largely chance "
+        "(more validation sessions, or a larger --max-val-samples, make them more)",
+        out.size());
   return out;
 }
 
@@ -345,6 +359,11 @@ void check_resumed_recipe(const ModelInfo& from, const TrainConfig& c, const Spl
 std::unique_ptr<EvidenceTask> make_evidence_task(const TrainConfig& c, const SplitData& train,
                                                  IntrospectionNetImpl& net, torch::Device device) {
   if (c.evidence_weight <= 0) return nullptr;
+  if (train.evidence_size <= 0 && !train.some_evidence && train.detector != "jppc") {
+    // only JPP-C records its window costs: the usual case for the dense detector, nothing to fix
+    spdlog::info("the '{}' detector records no evidence: training without the side task", train.detector);
+    return nullptr;
+  }
   if (train.evidence_size <= 0) {
     spdlog::warn(
         "the training sessions carry no detector evidence (or not all the same): training without the side "
