@@ -180,6 +180,10 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
   });
   if (model_->info().views == 2) {
     calibration_wait_.emplace(heartbeat_, options_.calibration_channel);
+    if (options_.initial_calibration) {  // the worker builds its warp before the first frame
+      calibrations_.take(*options_.initial_calibration);
+      new_rig_ = options_.initial_calibration;
+    }
     bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
                                       [this](const rig_calibration_t& m, const ReceiveInfo&) { on_calibration(m); });
   }

@@ -47,6 +47,10 @@ struct IntrospectionNodeOptions {
   std::string grid_channel{channels::kObstaclesStereo};  // "" = no query cells
   std::string out_channel{channels::kIntrospection};
   std::string calibration_channel{channels::kRigCalibration};  // two-view models only
+  // A two-view model's calibration to start with (--calibration FILE), so
+  // that the first frames need not wait for the channel's; a calibration
+  // received later replaces it.
+  std::optional<RigCalibration> initial_calibration;
   // After the CNN, how long to wait for the detector's grid of the frame
   // (its verdicts); the query cells' geometry comes from any recent grid.
   std::chrono::milliseconds grid_wait{200};

@@ -30,6 +30,7 @@ struct CommandLine {
   std::string lookup = "nearest";
   int grid_wait_ms = static_cast<int>(options.grid_wait.count());
   std::string warm_up = "model";
+  std::string calibration_file;  // --calibration
   double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
 };
 
@@ -49,6 +50,9 @@ std::optional<cv::Size> frame_size(const std::string& text) {
 void add_model_options(CLI::App& app, CommandLine& cl) {
   auto& config = cl.config;
   app.add_option("--model", cl.model_path, "model file (ivoa-train, or a scripted model)")->capture_default_str();
+  app.add_option("--calibration", cl.calibration_file,
+                 "rig calibration file a two-view model starts with, so that the first frames need not wait for one "
+                 "on the calibration channel (which replaces it)");
   app.add_option("--mc-passes", config.mc_passes, "T, Monte-Carlo dropout passes (1-1000)")
       ->capture_default_str()
       ->check(ivoa::number_in(1, 1000));
@@ -129,6 +133,22 @@ void log_model(const ivoa::introspection::IntrospectionModel& model, int mc_pass
                mc_passes, model.uncertainty_threshold());
 }
 
+// --calibration FILE into the node's options; the exit code if it cannot be read.
+std::optional<int> load_initial_calibration(CommandLine& cl, int views) {
+  if (cl.calibration_file.empty()) return std::nullopt;
+  if (views == 1) {
+    spdlog::info("--calibration {}: not used, the model reads the left image alone", cl.calibration_file);
+    return std::nullopt;
+  }
+  try {
+    cl.options.initial_calibration = ivoa::load_rig_calibration(cl.calibration_file);
+  } catch (const ivoa::CalibrationError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitBadInput;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -156,6 +176,7 @@ int main(int argc, char** argv) {
     return ivoa::kExitBadInput;
   }
   log_model(*model, cl.config.mc_passes);
+  if (const std::optional<int> code = load_initial_calibration(cl, model->info().views); code) return *code;
   cl.options.warm_up =
       cl.warm_up == "model" ? std::optional(ivoa::default_warm_up_size(model->info())) : frame_size(cl.warm_up);
   try {

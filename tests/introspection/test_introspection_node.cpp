@@ -132,6 +132,37 @@ TEST(IntrospectionNode, TwoViewModelWaitsForTheCalibrationThenRuns) {
   EXPECT_EQ(out[1].utime, 4000);
 }
 
+// --calibration FILE: a respawned process ran nothing until the channel's
+// next calibration (up to a second).
+TEST(IntrospectionNode, TwoViewModelGivenACalibrationRunsTheFirstFrame) {
+  test::TempDir dir;
+  Bus bus("memq://");
+  Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
+  introspection::InferenceConfig config;
+  config.mc_passes = 2;
+  IntrospectionNodeOptions options;
+  options.grid_channel = "";
+  const RigCalibration rig = test::make_test_rig();
+  options.initial_calibration = rig;
+  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 2), config), options,
+                         2);
+  std::vector<introspection_t> out;
+  bus.subscribe<introspection_t>(channels::kIntrospection,
+                                 [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });
+  stereo_image_t first = stereo_frame(rig, 1000);
+  bus.publish(channels::kStereoImages, first);
+  ASSERT_TRUE(deliver_until(bus, [&] { return !out.empty(); }));
+  EXPECT_EQ(out[0].utime, 1000);
+  EXPECT_EQ(heartbeat.counter(kFramesWithoutCalibration), 0);
+  // The same calibration again on the channel is not a new one: no warp is rebuilt, nothing is skipped.
+  rig_calibration_t again = to_message(rig, 1);
+  bus.publish(channels::kRigCalibration, again);
+  stereo_image_t second = stereo_frame(rig, 2000);
+  bus.publish(channels::kStereoImages, second);
+  ASSERT_TRUE(deliver_until(bus, [&] { return out.size() == 2; }));
+  EXPECT_EQ(heartbeat.bad_input_count(), 0);
+}
+
 // `n` stereo frames (utimes 1000, 2000, ...) delivered at once, far faster
 // than one inference.
 void publish_burst(Bus& bus, int n) {

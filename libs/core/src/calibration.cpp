@@ -9,6 +9,7 @@
 
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/core/message_counts.hpp"
+#include "ivoa/core/process.hpp"
 #include "ivoa/rig_calibration_t.hpp"
 
 namespace ivoa {
@@ -202,6 +203,9 @@ void validate(const RigCalibration& rig, const std::string& where) {
 }
 
 RigCalibration load_rig_calibration(const std::string& path) {
+  // said here, where OpenCV would log its own error line before ours
+  if (const std::string why = why_not_a_file(path); !why.empty())
+    throw CalibrationError(path + ": cannot read the calibration file: " + why);
   cv::FileStorage fs;
   try {
     fs.open(path, cv::FileStorage::READ);
