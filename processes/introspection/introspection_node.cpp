@@ -183,6 +183,7 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
     if (options_.initial_calibration) {  // the worker builds its warp before the first frame
       calibrations_.take(*options_.initial_calibration);
       new_rig_ = options_.initial_calibration;
+      new_rig_source_ = "the --calibration file";
     }
     bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
                                       [this](const rig_calibration_t& m, const ReceiveInfo&) { on_calibration(m); });
@@ -239,7 +240,10 @@ void IntrospectionNode::work() {
 void IntrospectionNode::on_calibration(const rig_calibration_t& msg) {
   std::lock_guard<std::mutex> lock(calibration_mutex_);
   try {
-    if (std::optional<RigCalibration> rig = calibrations_.take_if_new(msg)) new_rig_ = std::move(rig);
+    if (std::optional<RigCalibration> rig = calibrations_.take_if_new(msg)) {
+      new_rig_ = std::move(rig);
+      new_rig_source_ = options_.calibration_channel;
+    }
   } catch (const CalibrationError& e) {
     heartbeat_.bad_input(options_.calibration_channel + ": " + e.what());
   }
@@ -267,16 +271,18 @@ void IntrospectionNode::on_grid(obstacle_grid_t grid) {
 // maps do not fit in memory) is bad input; the warp built before stays.
 void IntrospectionNode::update_warp() {
   std::optional<RigCalibration> rig;
+  std::string source;
   {
     std::lock_guard<std::mutex> lock(calibration_mutex_);
     rig = std::exchange(new_rig_, std::nullopt);
+    source = new_rig_source_;
   }
   if (!rig) return;
   try {
     warp_ = std::make_unique<GroundWarp>(*rig);  // outside the lock: 0.4 s for 960x600 on a slow core
   } catch (const std::exception& e) {
-    heartbeat_.bad_input(options_.calibration_channel + ": cannot use calibration '" + rig->rig_name +
-                         "': " + e.what() + (warp_ ? " (the one before stays)" : ""));
+    heartbeat_.bad_input(source + ": cannot use calibration '" + rig->rig_name + "': " + e.what() +
+                         (warp_ ? " (the one before stays)" : ""));
   }
 }
 

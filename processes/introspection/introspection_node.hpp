@@ -157,6 +157,7 @@ class IntrospectionNode {
   std::mutex calibration_mutex_;
   CalibrationChanges calibrations_;        // to tell a new one from the same one again
   std::optional<RigCalibration> new_rig_;  // handed to the worker, which builds the warp
+  std::string new_rig_source_;             // where it came from, for an error
   std::unique_ptr<GroundWarp> warp_;       // worker thread only
   std::atomic<int64_t> frames_done_{0};
   std::thread worker_;

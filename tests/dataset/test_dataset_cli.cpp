@@ -88,6 +88,16 @@ TEST(DatasetInfo, AnIndexOfAnotherVersionOrFormatIsRefused) {
   r = dataset_info(dir.path().string());
   EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
   EXPECT_TRUE(contains(r.output, "dataset.json: format 'other', not 'ivoa-dataset'")) << r.output;
+  // checked before the sessions list, which a later version may lay out otherwise
+  std::ofstream(dir.file("dataset.json")) << R"({"format": "ivoa-dataset", "version": 3, "sessions": {"a": 1}})";
+  r = dataset_info(dir.path().string());
+  EXPECT_TRUE(contains(r.output, "dataset.json: dataset version 3")) << r.output;
+  for (const char* version : {R"("1")", "true", "0", "1.5"}) {
+    std::ofstream(dir.file("dataset.json")) << R"({"version": )" << version << R"(, "sessions": []})";
+    r = dataset_info(dir.path().string());
+    EXPECT_EQ(r.exit_code, kExitBadInput) << version << ": " << r.output;
+    EXPECT_TRUE(contains(r.output, "is not a version number (1, 2, ...)")) << version << ": " << r.output;
+  }
 }
 
 TEST(DatasetInfo, WithoutAFolderAsksForOneAsTheArgumentOrTheFlag) {

@@ -568,6 +568,9 @@ TEST(DatasetFormat, SplitSessionsMustBeInTheFileAndTheDataset) {
   };
   EXPECT_EQ(error_of("val"), dir.file("split.yaml") + ": no split 'val' (it has: test, train)");
   EXPECT_EQ(error_of("test"), dir.file("split.yaml") + ": split 'test' names session 'c', which is not in " + root);
+  // ivoa-train and ivoa-eval find their sessions here: a later version's index is refused here too
+  std::ofstream(root + "/dataset.json") << R"({"format": "ivoa-dataset", "version": 2, "sessions": ["a", "b"]})";
+  EXPECT_NE(error_of("train").find("dataset.json: dataset version 2"), std::string::npos) << error_of("train");
 }
 
 TEST(Patch, ExtractsCentredPatchesInsideTheImageOnly) {

@@ -154,7 +154,7 @@ TEST(IntrospectionNode, TwoViewModelGivenACalibrationRunsTheFirstFrame) {
   ASSERT_TRUE(deliver_until(bus, [&] { return !out.empty(); }));
   EXPECT_EQ(out[0].utime, 1000);
   EXPECT_EQ(heartbeat.counter(kFramesWithoutCalibration), 0);
-  // The same calibration again on the channel is not a new one: no warp is rebuilt, nothing is skipped.
+  // The same calibration again on the channel is not a new one: nothing is skipped or refused.
   rig_calibration_t again = to_message(rig, 1);
   bus.publish(channels::kRigCalibration, again);
   stereo_image_t second = stereo_frame(rig, 2000);

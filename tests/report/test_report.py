@@ -1296,7 +1296,9 @@ class CauseAndSettingsRowsTest(FabricatedInputsCase):
     def test_a_dataset_of_a_later_version_is_refused(self):
         """Another layout read as this one would give wrong patches."""
         for name, key, value, message in (("data_v2", "version", 2, "dataset version 2; this report reads 1 to 1"),
-                                          ("data_other", "format", "x", "format 'x', not 'ivoa-dataset'")):
+                                          ("data_v_text", "version", "1", 'version "1" is not a version number'),
+                                          ("data_v_bool", "version", True, "version true is not a version number"),
+                                          ("data_other", "format", "x", 'format "x", not "ivoa-dataset"')):
             d, _ = self.dataset_copy(name)
             path = os.path.join(d, "dataset.json")
             meta = json.loads(read_text(path))

@@ -198,10 +198,13 @@ DATASET_INDEX_VERSION = 1  # dataset.json's "version", as ivoa-dataset writes it
 def _check_dataset_version(path: str, meta: dict) -> None:
     """A later layout read as this one would give wrong patches, not an error."""
     if "format" in meta and meta["format"] != "ivoa-dataset":
-        raise InputError(f"{path}: format {meta['format']!r}, not 'ivoa-dataset': not this project's dataset index")
+        raise InputError(f"{path}: format {json.dumps(meta['format'])}, not \"ivoa-dataset\": not this project's "
+                         "dataset index")
     version = meta.get("version", 1)
-    if not _is_integer(version) or not 1 <= version <= DATASET_INDEX_VERSION:
-        raise InputError(f"{path}: dataset version {version!r}; this report reads 1 to {DATASET_INDEX_VERSION} "
+    if not _is_integer(version) or version < 1:
+        raise InputError(f"{path}: version {json.dumps(version)} is not a version number (1, 2, ...)")
+    if version > DATASET_INDEX_VERSION:
+        raise InputError(f"{path}: dataset version {version}; this report reads 1 to {DATASET_INDEX_VERSION} "
                          "(written by a newer ivoa-dataset?)")
 
 

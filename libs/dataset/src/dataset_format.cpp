@@ -525,13 +525,16 @@ namespace {
 // a later version may lay its sessions out otherwise, and reading it as
 // this one would give wrong samples rather than an error.
 void check_index_format(const YAML::Node& root, const std::string& path) {
-  if (root["format"] && root["format"].as<std::string>("") != "ivoa-dataset")
-    throw DatasetError(path + ": format '" + root["format"].as<std::string>("?") +
+  const YAML::Node format = root["format"], version = root["version"];
+  if (format && (!format.IsScalar() || format.Scalar() != "ivoa-dataset"))
+    throw DatasetError(path + ": format '" + YAML::Dump(format) +
                        "', not 'ivoa-dataset': not this project's dataset index");
-  if (!root["version"]) return;
-  const int version = root["version"].as<int>(-1);
-  if (version < 1 || version > kDatasetIndexVersion)
-    throw DatasetError(path + ": dataset version " + root["version"].as<std::string>("?") + "; this build reads 1 to " +
+  if (!version) return;
+  int number = 0;  // a quoted "1" is text, as the report reads it
+  if (!version.IsScalar() || version.Tag() == "!" || !YAML::convert<int>::decode(version, number) || number < 1)
+    throw DatasetError(path + ": version '" + YAML::Dump(version) + "' is not a version number (1, 2, ...)");
+  if (number > kDatasetIndexVersion)
+    throw DatasetError(path + ": dataset version " + std::to_string(number) + "; this build reads 1 to " +
                        std::to_string(kDatasetIndexVersion) + " (written by a newer ivoa-dataset? use that one)");
 }
 
@@ -543,11 +546,14 @@ std::vector<std::string> list_sessions(const std::string& dataset_root) {
   std::vector<std::string> sessions;
   try {
     const YAML::Node root = load_yaml_file(path);
-    if (!root.IsMap() || !root["sessions"].IsSequence())
-      throw DatasetError(path +
-                         ": not a dataset index (an object with a \"sessions\" list; rebuild it with "
-                         "ivoa-dataset build)");
-    check_index_format(root, path);
+    const auto not_an_index = [&] {
+      return DatasetError(path +
+                          ": not a dataset index (an object with a \"sessions\" list; rebuild it with "
+                          "ivoa-dataset build)");
+    };
+    if (!root.IsMap()) throw not_an_index();
+    check_index_format(root, path);  // first: a later version may list its sessions otherwise
+    if (!root["sessions"] || !root["sessions"].IsSequence()) throw not_an_index();
     sessions = root["sessions"].as<std::vector<std::string>>();
   } catch (const YAML::Exception& e) {
     throw DatasetError(path + ": " + e.what());
@@ -623,6 +629,7 @@ std::map<std::string, std::vector<std::string>> load_split(const std::string& pa
 
 std::vector<std::string> split_sessions(const std::string& path, const std::string& split,
                                         const std::string& dataset_root) {
+  list_sessions(dataset_root);  // its index checked: another version's sessions may be laid out otherwise
   const auto splits = load_split(path);
   const auto it = splits.find(split);
   if (it == splits.end()) {

@@ -160,8 +160,10 @@ std::vector<SampleRef> validation_subset(const SplitData& d, int64_t max_samples
   if (out.size() < kFewValidationSamples)
     spdlog::warn(
         "validating on {} samples: the best step and the uncertainty gates rest on them and are largely chance "
-        "(more validation sessions, or a larger --max-val-samples, make them more)",
-        out.size());
+        "({})",
+        out.size(),
+        static_cast<int64_t>(out.size()) == max_samples ? "a larger --max-val-samples makes them more"
+                                                        : "more validation sessions make them more");
   return out;
 }
 

@@ -168,7 +168,8 @@ std::vector<std::string> list_sessions(const std::string& dataset_root);
 std::map<std::string, std::vector<std::string>> load_split(const std::string& path);
 
 // The sessions the split file at `path` lists under `split`, each checked to
-// be in the dataset at `dataset_root`. Throws DatasetError naming the file
+// be in the dataset at `dataset_root` (whose dataset.json, if any, must be
+// one this build reads). Throws DatasetError naming the file
 // and the split it lacks (with those it has) or the session the dataset lacks.
 std::vector<std::string> split_sessions(const std::string& path, const std::string& split,
                                         const std::string& dataset_root);
