@@ -1,8 +1,12 @@
 // ivoa-depth-monitor: the supervisor. Turns depth images into per-cell
 // obstacle verdicts and labels each stereo verdict TP/TN/FP/FN (Algorithm 1).
+#include <optional>
+#include <string>
+
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/calibration.hpp"
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/grid_messages.hpp"
 #include "ivoa/core/process.hpp"
@@ -112,6 +116,10 @@ int main(int argc, char** argv) {
   ivoa::CommonOptions common;
   ivoa::MonitorNodeOptions options;
   double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
+  std::string calibration_file;
+  app.add_option("--calibration", calibration_file,
+                 "rig calibration file to start with, so that the first frames need not wait for one on the "
+                 "calibration channel (which replaces it)");
   ivoa::add_common_options(app, common);
   ivoa::add_status_channel_option(app, common.status_channel);
   ivoa::add_socket_buffer_option(app, socket_buffer_mb);
@@ -121,6 +129,13 @@ int main(int argc, char** argv) {
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("depth_monitor", common.log_level);
   if (!heights_in_order(options.monitor)) return ivoa::kExitUsage;
+  std::optional<ivoa::RigCalibration> initial_rig;
+  try {
+    if (!calibration_file.empty()) initial_rig = ivoa::load_rig_calibration(calibration_file);
+  } catch (const ivoa::CalibrationError& e) {
+    spdlog::error("{}", e.what());
+    return ivoa::kExitBadInput;
+  }
   ivoa::install_stop_handlers();
   try {
     ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
@@ -130,6 +145,14 @@ int main(int argc, char** argv) {
     ivoa::Bus bus(common.lcm_url);
     ivoa::Heartbeat heartbeat(bus, "depth_monitor", common.status_channel);
     ivoa::MonitorNode node(bus, heartbeat, options);
+    if (initial_rig) {
+      try {
+        node.set_calibration(*initial_rig);
+      } catch (const std::exception& e) {  // the pipeline's own checks (its grid, the depth camera)
+        spdlog::error("{}: unusable calibration: {}", calibration_file, e.what());
+        return ivoa::kExitBadInput;
+      }
+    }
     ivoa::enlarge_receive_buffer(bus, socket_buffer_mb);
     spdlog::info("listening on {} ({} + {} -> {} + {})", bus.url(), options.depth_channel, options.stereo_channel,
                  options.depth_out_channel, options.labels_out_channel);

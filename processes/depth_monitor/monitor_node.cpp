@@ -46,27 +46,33 @@ bool MonitorNode::has_calibration(const std::string& where) {
   return false;
 }
 
+void MonitorNode::set_calibration(const RigCalibration& rig) {
+  use_calibration(rig);
+  calibrations_.take(rig);  // the same one on the channel is not a change
+}
+
 void MonitorNode::on_calibration(const rig_calibration_t& msg) {
   try {
-    const std::optional<RigCalibration> new_rig = calibrations_.take_if_new(msg);
-    if (!new_rig) return;
-    const RigCalibration& rig = *new_rig;
-    // Built first: one that cannot be built leaves the running one as it is.
-    auto next = std::make_unique<monitor::LabelingPipeline>(rig, options_.grid, options_.monitor, options_.pairing);
-    if (pipeline_) {
-      spdlog::info("rig calibration changed: rebuilding the monitor");
-      publish(pipeline_->flush(), Pairing::kFlushed);
-      earlier_pipelines_ += pipeline_->counters();
-    }
-    pipeline_ = std::move(next);
-    unpaired_run_ = {};
-    calibration_wait_.end();
-    spdlog::info("calibration '{}': depth {}x{}, {} query cells ({} with a full patch in the left image)", rig.rig_name,
-                 rig.depth.width, rig.depth.height, pipeline_->grid().size(), pipeline_->grid().count_in_image());
-    heartbeat_.set_state("running");
+    if (const std::optional<RigCalibration> new_rig = calibrations_.take_if_new(msg)) use_calibration(*new_rig);
   } catch (const std::exception& e) {
     heartbeat_.bad_input(options_.calibration_channel + ": unusable calibration: " + e.what());
   }
+}
+
+void MonitorNode::use_calibration(const RigCalibration& rig) {
+  // Built first: one that cannot be built leaves the running one as it is.
+  auto next = std::make_unique<monitor::LabelingPipeline>(rig, options_.grid, options_.monitor, options_.pairing);
+  if (pipeline_) {
+    spdlog::info("rig calibration changed: rebuilding the monitor");
+    publish(pipeline_->flush(), Pairing::kFlushed);
+    earlier_pipelines_ += pipeline_->counters();
+  }
+  pipeline_ = std::move(next);
+  unpaired_run_ = {};
+  calibration_wait_.end();
+  spdlog::info("calibration '{}': depth {}x{}, {} query cells ({} with a full patch in the left image)", rig.rig_name,
+               rig.depth.width, rig.depth.height, pipeline_->grid().size(), pipeline_->grid().count_in_image());
+  heartbeat_.set_state("running");
 }
 
 void MonitorNode::on_depth(const depth_image_t& msg) {

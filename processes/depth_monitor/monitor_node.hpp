@@ -29,11 +29,16 @@ struct MonitorNodeOptions {
 class MonitorNode {
  public:
   MonitorNode(Bus& bus, Heartbeat& heartbeat, MonitorNodeOptions options);
+  // A calibration to start with (--calibration FILE), as if it had come on
+  // the channel; a different one received later replaces it. Throws what
+  // building the monitor for it throws.
+  void set_calibration(const RigCalibration& rig);
   // Decides what is still pending (on shutdown, or at the end of a log).
   void flush();
 
  private:
   void on_calibration(const rig_calibration_t& msg);
+  void use_calibration(const RigCalibration& rig);  // builds the monitor for it; throws
   void on_depth(const depth_image_t& msg);
   void on_stereo(const obstacle_grid_t& msg);
   // False (counted, warned about once) while no calibration has arrived.

@@ -98,6 +98,24 @@ TEST(MonitorNode, InputsBeforeTheCalibrationAreCountedApartFromBadInput) {
   EXPECT_EQ(f.heartbeat.snapshot().state, "running");
 }
 
+// --calibration FILE: a respawned monitor skipped its first frames until
+// the driver's next RIG_CALIBRATION (up to a second).
+TEST(MonitorNode, GivenACalibrationItLabelsTheFirstFrames) {
+  NodeFixture f;
+  f.node.set_calibration(f.rig);
+  EXPECT_EQ(f.heartbeat.snapshot().state, "running");
+  f.send_depth(1'000, test::render_depth(f.rig, {}));
+  f.send_stereo(1'000, 0);
+  EXPECT_EQ(f.labels.size(), 1u);
+  EXPECT_EQ(f.heartbeat.counter(kFramesWithoutCalibration), 0);
+  f.send_calibration();  // the same rig again on the channel: it goes on labelling
+  f.send_depth(100'000, test::render_depth(f.rig, {}));
+  f.send_stereo(100'000, 0);
+  EXPECT_EQ(f.labels.size(), 2u);
+  EXPECT_EQ(f.heartbeat.counter("frames_labelled"), 2);
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 0);
+}
+
 // A new calibration rebuilds the monitor: its counts went back to 0 (the
 // summary said 2 frames labelled of 4).
 TEST(MonitorNode, CountsAreOfTheWholeRunAcrossACalibrationChange) {
