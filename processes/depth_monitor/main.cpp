@@ -148,7 +148,9 @@ int main(int argc, char** argv) {
     if (initial_rig) {
       try {
         node.set_calibration(*initial_rig);
-      } catch (const std::exception& e) {  // the pipeline's own checks (its grid, the depth camera)
+        spdlog::info("started with calibration '{}' from {} (one on the calibration channel replaces it)",
+                     initial_rig->rig_name, calibration_file);
+      } catch (const std::exception& e) {  // a loaded rig builds; only its maps' memory can fail here
         spdlog::error("{}: unusable calibration: {}", calibration_file, e.what());
         return ivoa::kExitBadInput;
       }

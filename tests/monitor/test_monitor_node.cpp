@@ -108,8 +108,10 @@ TEST(MonitorNode, GivenACalibrationItLabelsTheFirstFrames) {
   f.send_stereo(1'000, 0);
   EXPECT_EQ(f.labels.size(), 1u);
   EXPECT_EQ(f.heartbeat.counter(kFramesWithoutCalibration), 0);
-  f.send_calibration();  // the same rig again on the channel: it goes on labelling
+  // The same rig again on the channel is no change: a rebuild would flush the depth frame waiting
+  // for its stereo grid, and that grid would go unlabelled.
   f.send_depth(100'000, test::render_depth(f.rig, {}));
+  f.send_calibration();
   f.send_stereo(100'000, 0);
   EXPECT_EQ(f.labels.size(), 2u);
   EXPECT_EQ(f.heartbeat.counter("frames_labelled"), 2);
