@@ -521,7 +521,7 @@ cv::Mat SessionReader::patch(size_t i) const {
 
 namespace {
 
-// dataset.json's "format" and "version" (absent in none this project wrote):
+// dataset.json's "format" and "version" (every index this project wrote has both):
 // a later version may lay its sessions out otherwise, and reading it as
 // this one would give wrong samples rather than an error.
 void check_index_format(const YAML::Node& root, const std::string& path) {
