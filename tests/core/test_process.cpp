@@ -117,6 +117,21 @@ TEST(CommonOptions, AMissingInputFileIsBadInputNotAUsageError) {
   EXPECT_EQ(parse_inputs({"--model", model.c_str(), "--steps", "0"}).first, kExitUsage);
 }
 
+// ivoa-eval's --out must stay out of its dataset, whether or not it exists yet.
+TEST(LiesWithin, AFolderOrAnythingBelowItAsSpeltOrResolved) {
+  test::TempDir dir;
+  std::filesystem::create_directories(dir.file("data"));
+  std::filesystem::create_directories(dir.file("elsewhere"));
+  std::filesystem::create_directory_symlink(dir.file("elsewhere"), dir.file("data/linked_session"));
+  const std::string data = dir.file("data");
+  EXPECT_TRUE(lies_within(data, data + "/"));
+  EXPECT_TRUE(lies_within(dir.file("data/s1/eval"), data)) << "not there yet";
+  EXPECT_TRUE(lies_within(dir.file("data/linked_session/eval"), data)) << "resolved, it leaves the folder";
+  EXPECT_TRUE(lies_within(dir.file("elsewhere/../data/x"), data));
+  EXPECT_FALSE(lies_within(dir.file("data_eval"), data)) << "a sibling that shares the folder's prefix";
+  EXPECT_FALSE(lies_within(dir.file("data/../eval"), data));
+}
+
 TEST(WritesOver, TheSameFileByAnySpellingOrAFileInsideTheInputFolder) {
   test::TempDir dir;
   std::filesystem::create_directories(dir.file("data/office_s1"));

@@ -63,41 +63,36 @@ TEST(DatasetInfo, FolderWithoutADatasetIsBadInput) {
   EXPECT_TRUE(contains(r.output, "not a dataset")) << r.output;
 }
 
+// `ivoa-dataset info` on a dataset whose index is `index`: refused as bad
+// input, naming `message` (the failure says which index).
+void expect_index_refused(const test::TempDir& dir, const std::string& index, const std::string& message) {
+  std::ofstream(dir.file("dataset.json")) << index;
+  const auto r = dataset_info(dir.path().string());
+  EXPECT_EQ(r.exit_code, kExitBadInput) << index << ": " << r.output;
+  EXPECT_TRUE(contains(r.output, message)) << index << ": " << r.output;
+}
+
 // An empty index gave yaml-cpp's bare "bad conversion"; a session listed
 // twice was counted twice.
 TEST(DatasetInfo, ABrokenIndexIsNamed) {
   test::TempDir dir;
-  std::ofstream(dir.file("dataset.json")) << "";
-  auto r = dataset_info(dir.path().string());
-  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
-  EXPECT_TRUE(contains(r.output, "dataset.json: not a dataset index")) << r.output;
-  std::ofstream(dir.file("dataset.json")) << R"({"sessions": ["a", "b", "a"]})";
-  r = dataset_info(dir.path().string());
-  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
-  EXPECT_TRUE(contains(r.output, "dataset.json: session 'a' is listed twice")) << r.output;
+  expect_index_refused(dir, "", "dataset.json: not a dataset index");
+  expect_index_refused(dir, R"({"sessions": ["a", "b", "a"]})", "dataset.json: session 'a' is listed twice");
 }
 
 // A later layout read as this one would give wrong samples, not an error.
 TEST(DatasetInfo, AnIndexOfAnotherVersionOrFormatIsRefused) {
   test::TempDir dir;
-  std::ofstream(dir.file("dataset.json")) << R"({"format": "ivoa-dataset", "version": 2, "sessions": []})";
-  auto r = dataset_info(dir.path().string());
-  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
-  EXPECT_TRUE(contains(r.output, "dataset.json: dataset version 2; this build reads 1 to 1")) << r.output;
-  std::ofstream(dir.file("dataset.json")) << R"({"format": "other", "version": 1, "sessions": []})";
-  r = dataset_info(dir.path().string());
-  EXPECT_EQ(r.exit_code, kExitBadInput) << r.output;
-  EXPECT_TRUE(contains(r.output, "dataset.json: format 'other', not 'ivoa-dataset'")) << r.output;
+  expect_index_refused(dir, R"({"format": "ivoa-dataset", "version": 2, "sessions": []})",
+                       "dataset.json: dataset version 2; this build reads 1 to 1");
+  expect_index_refused(dir, R"({"format": "other", "version": 1, "sessions": []})",
+                       "dataset.json: format 'other', not 'ivoa-dataset'");
   // checked before the sessions list, which a later version may lay out otherwise
-  std::ofstream(dir.file("dataset.json")) << R"({"format": "ivoa-dataset", "version": 3, "sessions": {"a": 1}})";
-  r = dataset_info(dir.path().string());
-  EXPECT_TRUE(contains(r.output, "dataset.json: dataset version 3")) << r.output;
-  for (const char* version : {R"("1")", "true", "0", "1.5"}) {
-    std::ofstream(dir.file("dataset.json")) << R"({"version": )" << version << R"(, "sessions": []})";
-    r = dataset_info(dir.path().string());
-    EXPECT_EQ(r.exit_code, kExitBadInput) << version << ": " << r.output;
-    EXPECT_TRUE(contains(r.output, "is not a version number (1, 2, ...)")) << version << ": " << r.output;
-  }
+  expect_index_refused(dir, R"({"format": "ivoa-dataset", "version": 3, "sessions": {"a": 1}})",
+                       "dataset.json: dataset version 3");
+  for (const char* version : {R"("1")", "true", "0", "1.5"})
+    expect_index_refused(dir, std::string(R"({"version": )") + version + R"(, "sessions": []})",
+                         "is not a version number (1, 2, ...)");
 }
 
 TEST(DatasetInfo, WithoutAFolderAsksForOneAsTheArgumentOrTheFlag) {

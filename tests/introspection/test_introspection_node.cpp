@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include <optional>
+
 #include <gtest/gtest.h>
 #include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/spdlog.h>
@@ -64,15 +66,18 @@ bool deliver_until(Bus& bus, Done done) {
   return done();
 }
 
-// A node with T = 2 passes that publishes heatmaps only (no obstacle grids).
+// A node with T = 2 passes that publishes heatmaps only (no obstacle grids);
+// `calibration`: the one it starts with (--calibration FILE).
 std::unique_ptr<IntrospectionNode> image_only_node(Bus& bus, Heartbeat& heartbeat, const std::string& model_path,
-                                                   int queue_frames = 1) {
+                                                   int queue_frames = 1,
+                                                   std::optional<RigCalibration> calibration = std::nullopt) {
   introspection::InferenceConfig config;
   config.mc_passes = 2;
   config.seed = 1;
   IntrospectionNodeOptions options;
   options.grid_channel = "";
   options.queue_frames = queue_frames;
+  options.initial_calibration = std::move(calibration);
   return std::make_unique<IntrospectionNode>(bus, heartbeat,
                                              introspection::IntrospectionModel::load(model_path, config), options, 2);
 }
@@ -138,14 +143,8 @@ TEST(IntrospectionNode, TwoViewModelGivenACalibrationRunsTheFirstFrame) {
   test::TempDir dir;
   Bus bus("memq://");
   Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
-  introspection::InferenceConfig config;
-  config.mc_passes = 2;
-  IntrospectionNodeOptions options;
-  options.grid_channel = "";
   const RigCalibration rig = test::make_test_rig();
-  options.initial_calibration = rig;
-  IntrospectionNode node(bus, heartbeat, introspection::IntrospectionModel::load(write_model(dir, 2), config), options,
-                         2);
+  const auto node = image_only_node(bus, heartbeat, write_model(dir, 2), 1, rig);
   std::vector<introspection_t> out;
   bus.subscribe<introspection_t>(channels::kIntrospection,
                                  [&](const introspection_t& m, const ReceiveInfo&) { out.push_back(m); });

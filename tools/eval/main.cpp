@@ -459,21 +459,6 @@ void add_options(CLI::App& app, Options& o) {
       ->check(ivoa::seed_number());
 }
 
-// Whether `path` is `folder` or lies inside it, by any spelling, whether or
-// not `path` exists yet.
-bool lies_within(const std::string& path, const std::string& folder) {
-  const auto inside = [](const fs::path& inner, const fs::path& outer) {
-    const auto relative = inner.lexically_relative(outer);  // "../x" when outside
-    return !relative.empty() && *relative.begin() != "..";
-  };
-  // as spelt, too: through a session folder that is a link, the resolved path leaves the dataset
-  if (inside(fs::absolute(path).lexically_normal(), fs::absolute(folder).lexically_normal())) return true;
-  std::error_code error;
-  const auto inner = fs::weakly_canonical(fs::absolute(path), error);
-  const auto outer = fs::weakly_canonical(fs::absolute(folder), error);
-  return !error && inside(inner, outer);
-}
-
 // The figures of an earlier run into the same --out would pass for this
 // model's (the report shows every overlay it finds there): those named as
 // prepare_log_overlays names them, <session>_<utime>.png, are removed.

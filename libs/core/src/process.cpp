@@ -232,6 +232,16 @@ std::string file_given_twice(const std::vector<std::string>& files) {
   return "";
 }
 
+namespace {
+
+// `inner` is `outer` or below it, both normal absolute paths.
+bool is_under(const std::filesystem::path& inner, const std::filesystem::path& outer) {
+  const auto relative = inner.lexically_relative(outer);  // "../x" when outside
+  return !relative.empty() && *relative.begin() != "..";
+}
+
+}  // namespace
+
 bool writes_over(const std::string& path, const std::string& input) {
   if (path.empty() || input.empty()) return false;
   if (!same_file_among(path, {input}).empty()) return true;
@@ -242,8 +252,17 @@ bool writes_over(const std::string& path, const std::string& input) {
   if (error) return false;
   if (out == in) return true;
   if (!std::filesystem::is_directory(in, error) || !std::filesystem::exists(out, error)) return false;
-  const auto inside = out.lexically_relative(in);  // "../x" when outside
-  return !inside.empty() && *inside.begin() != "..";
+  return is_under(out, in);
+}
+
+bool lies_within(const std::string& path, const std::string& folder) {
+  namespace fs = std::filesystem;
+  // as spelt, too: through a folder inside that is a link, the resolved path leaves `folder`
+  if (is_under(fs::absolute(path).lexically_normal(), fs::absolute(folder).lexically_normal())) return true;
+  std::error_code error;
+  const auto inner = fs::weakly_canonical(fs::absolute(path), error);
+  const auto outer = fs::weakly_canonical(fs::absolute(folder), error);
+  return !error && is_under(inner, outer);
 }
 
 std::string why_not_a_file(const std::string& path) {

@@ -79,6 +79,11 @@ std::string file_given_twice(const std::vector<std::string>& files);
 // writes over nothing.
 bool writes_over(const std::string& path, const std::string& input);
 
+// Whether `path` is `folder` or lies inside it, as spelt or resolved,
+// whether or not `path` exists yet (an output that must stay out of an
+// input folder).
+bool lies_within(const std::string& path, const std::string& folder);
+
 // Why `path` cannot be read as a file ("no such file", "is a folder", "is a
 // pipe, device or socket, not a file"), or "" if it is a regular file: a
 // reader that opened a named pipe would wait for a writer for ever.
