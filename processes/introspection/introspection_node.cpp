@@ -183,7 +183,8 @@ IntrospectionNode::IntrospectionNode(Bus& bus, Heartbeat& heartbeat,
     if (options_.initial_calibration) {  // the worker builds its warp before the first frame
       calibrations_.take(*options_.initial_calibration);
       new_rig_ = options_.initial_calibration;
-      new_rig_source_ = "the --calibration file";
+      new_rig_source_ =
+          options_.initial_calibration_file.empty() ? "the --calibration file" : options_.initial_calibration_file;
     }
     bus_.subscribe<rig_calibration_t>(options_.calibration_channel,
                                       [this](const rig_calibration_t& m, const ReceiveInfo&) { on_calibration(m); });
@@ -280,6 +281,7 @@ void IntrospectionNode::update_warp() {
   if (!rig) return;
   try {
     warp_ = std::make_unique<GroundWarp>(*rig);  // outside the lock: 0.4 s for 960x600 on a slow core
+    spdlog::info("ground warp built for calibration '{}' from {}", rig->rig_name, source);
   } catch (const std::exception& e) {
     heartbeat_.bad_input(source + ": cannot use calibration '" + rig->rig_name + "': " + e.what() +
                          (warp_ ? " (the one before stays)" : ""));

@@ -51,6 +51,7 @@ struct IntrospectionNodeOptions {
   // that the first frames need not wait for the channel's; a calibration
   // received later replaces it.
   std::optional<RigCalibration> initial_calibration;
+  std::string initial_calibration_file;  // where it was read, for messages
   // After the CNN, how long to wait for the detector's grid of the frame
   // (its verdicts); the query cells' geometry comes from any recent grid.
   std::chrono::milliseconds grid_wait{200};

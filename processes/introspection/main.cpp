@@ -142,6 +142,7 @@ std::optional<int> load_initial_calibration(CommandLine& cl, int views) {
   }
   try {
     cl.options.initial_calibration = ivoa::load_rig_calibration(cl.calibration_file);
+    cl.options.initial_calibration_file = cl.calibration_file;
     spdlog::info("starting with calibration '{}' from {} (one on the calibration channel replaces it)",
                  cl.options.initial_calibration->rig_name, cl.calibration_file);
   } catch (const ivoa::CalibrationError& e) {

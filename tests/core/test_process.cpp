@@ -130,6 +130,7 @@ TEST(LiesWithin, AFolderOrAnythingBelowItAsSpeltOrResolved) {
   EXPECT_TRUE(lies_within(dir.file("elsewhere/../data/x"), data));
   EXPECT_FALSE(lies_within(dir.file("data_eval"), data)) << "a sibling that shares the folder's prefix";
   EXPECT_FALSE(lies_within(dir.file("data/../eval"), data));
+  EXPECT_FALSE(lies_within(dir.file("data/linked_session/../eval"), data)) << "up from the link's target";
 }
 
 TEST(WritesOver, TheSameFileByAnySpellingOrAFileInsideTheInputFolder) {

@@ -90,6 +90,8 @@ TEST(DatasetInfo, AnIndexOfAnotherVersionOrFormatIsRefused) {
   // checked before the sessions list, which a later version may lay out otherwise
   expect_index_refused(dir, R"({"format": "ivoa-dataset", "version": 3, "sessions": {"a": 1}})",
                        "dataset.json: dataset version 3");
+  expect_index_refused(dir, R"({"version": 99999999999, "sessions": []})", "dataset version 99999999999;");
+  expect_index_refused(dir, R"({"format": null, "sessions": []})", "format 'null', not 'ivoa-dataset'");
   for (const char* version : {R"("1")", "true", "0", "1.5"})
     expect_index_refused(dir, std::string(R"({"version": )") + version + R"(, "sessions": []})",
                          "is not a version number (1, 2, ...)");

@@ -5,12 +5,11 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <thread>
 #include <utility>
 #include <vector>
-
-#include <optional>
 
 #include <gtest/gtest.h>
 #include <spdlog/sinks/ostream_sink.h>
@@ -29,6 +28,24 @@
 
 namespace ivoa {
 namespace {
+
+// What the process logs while it lives (the default logger's lines); the
+// logger before it is put back however the test ends.
+class CapturedLog {
+ public:
+  CapturedLog() {
+    spdlog::set_default_logger(
+        std::make_shared<spdlog::logger>("capture", std::make_shared<spdlog::sinks::ostream_sink_mt>(text_)));
+  }
+  ~CapturedLog() { spdlog::set_default_logger(previous_); }
+  CapturedLog(const CapturedLog&) = delete;
+  CapturedLog& operator=(const CapturedLog&) = delete;
+  std::string text() const { return text_.str(); }
+
+ private:
+  std::shared_ptr<spdlog::logger> previous_ = spdlog::default_logger();
+  std::ostringstream text_;
+};
 
 std::string write_model(const test::TempDir& dir, int views, double patch_scale = 0,
                         std::vector<cv::Size> image_sizes = {}) {
@@ -144,6 +161,7 @@ TEST(IntrospectionNode, TwoViewModelGivenACalibrationRunsTheFirstFrame) {
   Bus bus("memq://");
   Heartbeat heartbeat(bus, "introspection", "NODE_TEST_STATUS", 3600.0);
   const RigCalibration rig = test::make_test_rig();
+  const CapturedLog log;  // the warps built, counted below
   const auto node = image_only_node(bus, heartbeat, write_model(dir, 2), 1, rig);
   std::vector<introspection_t> out;
   bus.subscribe<introspection_t>(channels::kIntrospection,
@@ -160,6 +178,11 @@ TEST(IntrospectionNode, TwoViewModelGivenACalibrationRunsTheFirstFrame) {
   bus.publish(channels::kStereoImages, second);
   ASSERT_TRUE(deliver_until(bus, [&] { return out.size() == 2; }));
   EXPECT_EQ(heartbeat.bad_input_count(), 0);
+  node->stop();  // the worker logs no more while the log is read
+  const std::string said = log.text();
+  const size_t built = said.find("ground warp built");
+  ASSERT_NE(built, std::string::npos) << said;
+  EXPECT_EQ(said.find("ground warp built", built + 1), std::string::npos) << "built again for the same rig:\n" << said;
 }
 
 // `n` stereo frames (utimes 1000, 2000, ...) delivered at once, far faster
@@ -267,24 +290,6 @@ TEST(IntrospectionNode, WarmsUpOnABlankFrameThenRunsAsUsual) {
   EXPECT_EQ(out[0].utime, 5000);
   EXPECT_EQ(heartbeat.bad_input_count(), 0);
 }
-
-// What the process logs while it lives (the default logger's lines); the
-// logger before it is put back however the test ends.
-class CapturedLog {
- public:
-  CapturedLog() {
-    spdlog::set_default_logger(
-        std::make_shared<spdlog::logger>("capture", std::make_shared<spdlog::sinks::ostream_sink_mt>(text_)));
-  }
-  ~CapturedLog() { spdlog::set_default_logger(previous_); }
-  CapturedLog(const CapturedLog&) = delete;
-  CapturedLog& operator=(const CapturedLog&) = delete;
-  std::string text() const { return text_.str(); }
-
- private:
-  std::shared_ptr<spdlog::logger> previous_ = spdlog::default_logger();
-  std::ostringstream text_;
-};
 
 // Frames of a size the model was not trained on are run (patches are cut on
 // the ground and resized) but counted, so the status table shows a model on

@@ -151,6 +151,16 @@ class LabelRepeatabilityTest(unittest.TestCase):
         self.assertEqual(proc.returncode, 4, proc.stderr)
         self.assertIn("cannot write " + os.path.join(self.tmp.name, "no", "x.json") + ": its folder", proc.stderr)
 
+    def test_a_dataset_of_a_later_version_is_refused(self):
+        # its samples.csv may read as labels yet mean something else
+        later = os.path.join(self.tmp.name, "later")
+        write_dataset(later, [TN] * 100)
+        with open(os.path.join(later, "dataset.json"), "w") as f:
+            json.dump({"format": "ivoa-dataset", "version": 7, "sessions": ["office_s31"]}, f)
+        proc = subprocess.run([sys.executable, TOOL, self.data[0], later], capture_output=True, text=True, timeout=60)
+        self.assertEqual(proc.returncode, 3, proc.stderr)
+        self.assertIn("dataset.json: dataset version 7; this report reads 1 to 1", proc.stderr)
+
     def test_a_session_without_samples_adds_no_cells_and_is_not_refused(self):
         # ivoa-dataset writes (and lists) a session where no frame gave a sample
         root = os.path.join(self.tmp.name, "with_empty")

@@ -459,6 +459,17 @@ void add_options(CLI::App& app, Options& o) {
       ->check(ivoa::seed_number());
 }
 
+// The dataset, or the folder in it that links to a session folder elsewhere,
+// that `out` lies in; "" if none.
+std::string dataset_folder_holding(const std::string& out, const std::string& dataset) {
+  if (lies_within(out, dataset)) return dataset;
+  std::error_code error, broken_link;
+  for (fs::directory_iterator it(dataset, error), end; !error && it != end; it.increment(error))
+    if (it->is_symlink(broken_link) && it->is_directory(broken_link) && lies_within(out, it->path().string()))
+      return it->path().string();
+  return "";
+}
+
 // The figures of an earlier run into the same --out would pass for this
 // model's (the report shows every overlay it finds there): those named as
 // prepare_log_overlays names them, <session>_<utime>.png, are removed.
@@ -537,11 +548,11 @@ int main(int argc, char** argv) {
     spdlog::warn(
         "--mc-passes 1: one pass without dropout, so every variance is 0 and the uncertainty gates keep "
         "everything (the report's sweep says 'not measured'; the paper's T is 20)");
-  if (lies_within(o.out, o.dataset)) {
+  if (const std::string folder = dataset_folder_holding(o.out, o.dataset); !folder.empty()) {
     spdlog::error(
-        "--out {} lies in the dataset {}: an evaluation's files there would mix with its sessions (a session "
+        "--out {} lies in the dataset {}{}: an evaluation's files there would mix with its sessions (a session "
         "folder holding them can no longer be rebuilt); give a folder outside it",
-        o.out, o.dataset);
+        o.out, o.dataset, folder == o.dataset ? "" : fmt::format(" (in {}, a link to a session folder)", folder));
     return kExitUsage;
   }
   try {

@@ -42,15 +42,12 @@ if __name__ == "__main__":
 import numpy as np  # noqa: E402
 
 from margin_bands import MARGIN_AGREEMENT_MIN, band_name, margin_bands  # noqa: E402
+from report_inputs import InputError, read_dataset_index  # noqa: E402
 
 LABEL_NAMES = ("TP", "TN", "FP", "FN")
 TP, FP = 0, 2  # the labels whose detector verdict is "obstacle"
 EXIT_BAD_INPUT = 3
 EXIT_CANNOT_WRITE = 4  # as the C++ tools: an output that cannot be written
-
-
-class InputError(Exception):
-    pass
 
 
 def read_labels(dataset: str) -> Dict[str, Dict[Tuple[int, int], int]]:
@@ -59,6 +56,7 @@ def read_labels(dataset: str) -> Dict[str, Dict[Tuple[int, int], int]]:
     no frame gave a sample); a dataset with no sample at all is refused."""
     if not os.path.isdir(dataset):
         raise InputError(f"{dataset}: dataset folder not found")
+    read_dataset_index(dataset)  # a later layout's labels could be read wrong, without an error
     sessions = {}
     for name in sorted(os.listdir(dataset)):
         if name.startswith("."):  # .NAME.partial: a session ivoa-dataset is building, or was killed building

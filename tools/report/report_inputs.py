@@ -208,6 +208,15 @@ def _check_dataset_version(path: str, meta: dict) -> None:
                          "(written by a newer ivoa-dataset?)")
 
 
+def read_dataset_index(dataset: str) -> dict:
+    """A dataset folder's dataset.json, its format and version checked; {}
+    where there is none (the earliest datasets wrote none)."""
+    meta_path = os.path.join(dataset, "dataset.json")
+    meta = _read_json(meta_path) if os.path.isfile(meta_path) else {}
+    _check_dataset_version(meta_path, meta)
+    return meta
+
+
 class Dataset:
     """An IVOA dataset folder; sessions are loaded on demand and cached."""
 
@@ -215,10 +224,8 @@ class Dataset:
         self.path = path
         if not os.path.isdir(path):
             raise InputError(f"{path}: dataset folder not found")
-        meta_path = os.path.join(path, "dataset.json")
-        self.meta = _read_json(meta_path) if os.path.isfile(meta_path) else {}
-        _check_dataset_version(meta_path, self.meta)
-        self.patch_size = _checked_field(meta_path, self.meta, "patch_size", 100, 1)
+        self.meta = read_dataset_index(path)
+        self.patch_size = _checked_field(os.path.join(path, "dataset.json"), self.meta, "patch_size", 100, 1)
         self._sessions: Dict[str, DatasetSession] = {}
 
     def session(self, name: str) -> DatasetSession:

@@ -240,6 +240,12 @@ bool is_under(const std::filesystem::path& inner, const std::filesystem::path& o
   return !relative.empty() && *relative.begin() != "..";
 }
 
+// A ".." after a link leaves the link's target, not the folder it is spelt in:
+// such a path can only be judged resolved.
+bool steps_up(const std::filesystem::path& path) {
+  return std::any_of(path.begin(), path.end(), [](const std::filesystem::path& part) { return part == ".."; });
+}
+
 }  // namespace
 
 bool writes_over(const std::string& path, const std::string& input) {
@@ -258,7 +264,10 @@ bool writes_over(const std::string& path, const std::string& input) {
 bool lies_within(const std::string& path, const std::string& folder) {
   namespace fs = std::filesystem;
   // as spelt, too: through a folder inside that is a link, the resolved path leaves `folder`
-  if (is_under(fs::absolute(path).lexically_normal(), fs::absolute(folder).lexically_normal())) return true;
+  const fs::path spelt = fs::absolute(path), spelt_folder = fs::absolute(folder);
+  if (!steps_up(spelt) && !steps_up(spelt_folder) &&
+      is_under(spelt.lexically_normal(), spelt_folder.lexically_normal()))
+    return true;
   std::error_code error;
   const auto inner = fs::weakly_canonical(fs::absolute(path), error);
   const auto outer = fs::weakly_canonical(fs::absolute(folder), error);

@@ -525,14 +525,14 @@ namespace {
 // a later version may lay its sessions out otherwise, and reading it as
 // this one would give wrong samples rather than an error.
 void check_index_format(const YAML::Node& root, const std::string& path) {
+  const auto shown = [](const YAML::Node& n) { return n.IsNull() ? std::string("null") : YAML::Dump(n); };  // JSON's
   const YAML::Node format = root["format"], version = root["version"];
   if (format && (!format.IsScalar() || format.Scalar() != "ivoa-dataset"))
-    throw DatasetError(path + ": format '" + YAML::Dump(format) +
-                       "', not 'ivoa-dataset': not this project's dataset index");
+    throw DatasetError(path + ": format '" + shown(format) + "', not 'ivoa-dataset': not this project's dataset index");
   if (!version) return;
-  int number = 0;  // a quoted "1" is text, as the report reads it
-  if (!version.IsScalar() || version.Tag() == "!" || !YAML::convert<int>::decode(version, number) || number < 1)
-    throw DatasetError(path + ": version '" + YAML::Dump(version) + "' is not a version number (1, 2, ...)");
+  long long number = 0;  // wide: any whole number past this build's is a later version; a quoted "1" is text
+  if (!version.IsScalar() || version.Tag() == "!" || !YAML::convert<long long>::decode(version, number) || number < 1)
+    throw DatasetError(path + ": version '" + shown(version) + "' is not a version number (1, 2, ...)");
   if (number > kDatasetIndexVersion)
     throw DatasetError(path + ": dataset version " + std::to_string(number) + "; this build reads 1 to " +
                        std::to_string(kDatasetIndexVersion) + " (written by a newer ivoa-dataset? use that one)");

@@ -151,7 +151,8 @@ std::vector<SampleRef> validation_subset(const SplitData& d, int64_t max_samples
   std::vector<SampleRef> all;
   for (const auto& c : d.by_class) all.insert(all.end(), c.begin(), c.end());
   std::vector<SampleRef> out;
-  if (static_cast<int64_t>(all.size()) <= max_samples) {
+  const bool capped = static_cast<int64_t>(all.size()) > max_samples;
+  if (!capped) {
     out = std::move(all);
   } else {
     const double step = static_cast<double>(all.size()) / static_cast<double>(max_samples);
@@ -161,9 +162,7 @@ std::vector<SampleRef> validation_subset(const SplitData& d, int64_t max_samples
     spdlog::warn(
         "validating on {} samples: the best step and the uncertainty gates rest on them and are largely chance "
         "({})",
-        out.size(),
-        static_cast<int64_t>(out.size()) == max_samples ? "a larger --max-val-samples makes them more"
-                                                        : "more validation sessions make them more");
+        out.size(), capped ? "a larger --max-val-samples makes them more" : "more validation sessions make them more");
   return out;
 }
 
