@@ -78,6 +78,9 @@ TEST(DatasetInfo, ABrokenIndexIsNamed) {
   test::TempDir dir;
   expect_index_refused(dir, "", "dataset.json: not a dataset index");
   expect_index_refused(dir, R"({"sessions": ["a", "b", "a"]})", "dataset.json: session 'a' is listed twice");
+  // yaml-cpp would read the first, the report the last
+  expect_index_refused(dir, R"({"version": 1, "version": 2, "sessions": []})",
+                       "dataset.json: key 'version' is given twice");
 }
 
 // A later layout read as this one would give wrong samples, not an error.

@@ -525,7 +525,7 @@ TEST(DatasetFormat, SplitFileBySessionRejectsOverlap) {
     EXPECT_NE(std::string(e.what()).find("'b'"), std::string::npos) << e.what();
   }
   EXPECT_THROW(load_split(dir.file("missing.yaml")), DatasetError);
-  // YAML keeps the last of a repeated key: the first list would be lost unseen
+  // a repeated key: a reader keeps one of the two lists, and the other would be lost unseen
   std::ofstream(dir.file("twice.yaml")) << "test: [a]\ntest: [b]\n";
   try {
     load_split(dir.file("twice.yaml"));

@@ -1307,6 +1307,15 @@ class CauseAndSettingsRowsTest(FabricatedInputsCase):
                 json.dump(meta, fh)
             self.assert_refused(d, "dataset.json: " + message)
 
+    def test_a_key_given_twice_is_refused(self):
+        """json keeps the last of two, the C++ tools the first: neither is a safe guess."""
+        d, _ = self.dataset_copy("data_key_twice")
+        path = os.path.join(d, "dataset.json")
+        text = read_text(path).strip()
+        with open(path, "w") as fh:
+            fh.write(text[:-1].rstrip() + ', "version": 2}\n')
+        self.assert_refused(d, 'dataset.json: key "version" is given twice')
+
     def dataset_copy(self, name):
         """A copy of the fabricated dataset and the folder of its first session."""
         d = os.path.join(self.root, name)

@@ -365,11 +365,28 @@ class EvalRun:
         return bool(np.any(self.surface != 255) or np.any(self.phenomenon != 0))
 
 
+class _RepeatedKey(ValueError):
+    pass
+
+
+def _refuse_repeated_keys(pairs: list) -> dict:
+    """json's object_pairs_hook: a key given twice (json keeps the last, the
+    C++ tools' yaml-cpp the first) is an error, not a silent choice."""
+    seen = set()
+    for key, _ in pairs:
+        if key in seen:
+            raise _RepeatedKey(key)
+        seen.add(key)
+    return dict(pairs)
+
+
 def _read_json(path: str) -> dict:
     """json.load with an InputError naming the file on failure."""
     try:
         with open(path, encoding="utf-8") as f:
-            data = json.load(f)
+            data = json.load(f, object_pairs_hook=_refuse_repeated_keys)
+    except _RepeatedKey as e:
+        raise InputError(f"{path}: key {json.dumps(e.args[0])} is given twice") from None
     except OSError as e:
         raise InputError(f"{path}: cannot read ({e.strerror})") from None
     except UnicodeDecodeError:

@@ -98,10 +98,17 @@ void require_file(const std::string& path) {
   if (const std::string why = why_not_a_file(path); !why.empty()) throw DatasetError(path + ": " + why);
 }
 
-// A YAML (JSON) file read whole.
-YAML::Node load_yaml_file(const std::string& path) {
+// A YAML (JSON) file read whole. A top-level key (`what`) given twice is
+// refused: yaml-cpp reads the first, Python's json (the report) the last.
+YAML::Node load_yaml_file(const std::string& path, const std::string& what = "key") {
   require_file(path);
-  return YAML::LoadFile(path);
+  YAML::Node root = YAML::LoadFile(path);
+  std::set<std::string> keys;
+  if (root.IsMap())
+    for (const auto& entry : root)
+      if (entry.first.IsScalar() && !keys.insert(entry.first.Scalar()).second)
+        throw DatasetError(path + ": " + what + " '" + entry.first.Scalar() + "' is given twice");
+  return root;
 }
 
 SessionInfo parse_session_json(const std::string& path) {
@@ -597,7 +604,7 @@ void register_session(const std::string& dataset_root, const std::string& sessio
 std::map<std::string, std::vector<std::string>> load_split(const std::string& path) {
   YAML::Node root;
   try {
-    root = load_yaml_file(path);
+    root = load_yaml_file(path, "split");
   } catch (const YAML::Exception& e) {
     throw DatasetError(path + ": cannot read split file: " + e.what());
   }
@@ -606,7 +613,6 @@ std::map<std::string, std::vector<std::string>> load_split(const std::string& pa
   std::map<std::string, std::string> owner;
   for (const auto& kv : root) {
     const std::string name = kv.first.as<std::string>();
-    if (splits.count(name)) throw DatasetError(path + ": split '" + name + "' is given twice");
     std::vector<std::string> sessions;
     try {
       sessions = kv.second.as<std::vector<std::string>>();
