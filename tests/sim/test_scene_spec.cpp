@@ -103,6 +103,9 @@ TEST(SimSceneSpec, ErrorsNameFileAndKey) {
   EXPECT_NE(error_of("layout: {width: [5, 2]}\n").find("layout.width: range [min, max] has min > max"),
             std::string::npos);
   EXPECT_NE(error_of("phenomena: {glare: 1.5}\n").find("phenomena.glare: must be a probability"), std::string::npos);
+  EXPECT_NE(
+      error_of("name: x\nmaterial_jitter: 1.5\n").find("test.yaml:2: material_jitter: must be in [0, 1], got 1.5"),
+      std::string::npos);
   EXPECT_NE(error_of("environment: underwater\n").find("environment: expected indoor or outdoor"), std::string::npos);
   EXPECT_NE(error_of("layout: [1, 2\n").find("test.yaml:"), std::string::npos);
   EXPECT_NE(error_of("elements:\n  - {type: wall, from: [0, 0]}\n").find("wall needs from and to"), std::string::npos);

@@ -83,8 +83,30 @@ uint16_t SceneBuilder::material(const std::string& name) {
   auto& mats = data_->materials;
   for (size_t i = 0; i < mats.size(); ++i)
     if (mats[i].spec.name == name) return static_cast<uint16_t>(i);
-  mats.push_back(make_material_data(resolve(name)));
+  mats.push_back(make_material_data(as_this_seed_shows(resolve(name))));
   return static_cast<uint16_t>(mats.size() - 1);
+}
+
+Material SceneBuilder::as_this_seed_shows(Material m) const {
+  const double j = spec_.material_jitter;
+  if (j <= 0 || m.emission > 0) return m;
+  // A wet variant ("paving_wet") draws as its dry material does, so a wet
+  // patch differs from the floor around it by its water film only.
+  std::string family = m.name;
+  if (family.size() > 4 && family.compare(family.size() - 4, 4, "_wet") == 0) family.resize(family.size() - 4);
+  Rng rng(hash_combine(data_->seed, hash_string(("material_jitter/" + spec_.name + "/" + family).c_str())));
+  const double brightness = std::exp(0.5 * j * rng.uniform(-1, 1));
+  Rgb gain;
+  for (double& g : gain) g = brightness * std::exp(0.15 * j * rng.uniform(-1, 1));
+  for (int c = 0; c < 3; ++c) {
+    m.color[c] = std::clamp(m.color[c] * gain[c], 0.0, 1.0);
+    m.color2[c] = std::clamp(m.color2[c] * gain[c], 0.0, 1.0);
+  }
+  // Kept above textureless()'s and repetitive()'s 0.03, so the phenomena stay.
+  const double contrast = m.contrast * std::exp(j * rng.uniform(-1, 1));
+  if (!m.textureless()) m.contrast = std::clamp(contrast, 0.05, 1.0);
+  m.scale *= std::exp(j * rng.uniform(-1, 1));
+  return m;
 }
 
 std::string SceneBuilder::pick(const std::vector<std::string>& palette,

@@ -80,6 +80,11 @@ class SceneBuilder {
   std::vector<Panel>& panels() { return panels_; }
 
  private:
+  // `m` as this seed shows it: SceneSpec::material_jitter, drawn per
+  // material from a generator of its own, so the rest of the scene is the
+  // same seed's without it.
+  Material as_this_seed_shows(Material m) const;
+
   const SceneSpec& spec_;
   Rng rng_;
   std::shared_ptr<SceneData> data_;

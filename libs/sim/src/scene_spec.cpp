@@ -431,7 +431,7 @@ SceneSpec parse(const YAML::Node& root, const std::string& file) {
   const Reader r(root, "", file);
   if (!root.IsMap()) r.fail("a scene file is a mapping (name, environment, layout, ...)");
   r.allow({"name", "environment", "layout", "floor", "walls", "obstacles", "pits", "lighting", "phenomena", "materials",
-           "elements", "start"});
+           "material_jitter", "elements", "start"});
   SceneSpec s;
   s.source = file;
   maybe(r, "name", s.name, &Reader::string);
@@ -449,6 +449,7 @@ SceneSpec parse(const YAML::Node& root, const std::string& file) {
   if (r.has("pits")) parse_pits(r["pits"], s.pits);
   if (r.has("lighting")) parse_lighting(r["lighting"], s.lighting);
   if (r.has("phenomena")) parse_phenomena(r["phenomena"], s.phenomena);
+  if (r.has("material_jitter")) s.material_jitter = r["material_jitter"].number_in(0, 1);
   if (r.has("materials")) {
     const Reader m = r["materials"];
     for (size_t i = 0; i < m.size(); ++i) s.materials.push_back(parse_material(m.at(i), s.materials));
@@ -538,6 +539,7 @@ void check_contents(const SceneSpec& spec) {
   check_range("pits.size", spec.pits.size, 0.05, 20);
   check_range("pits.depth", spec.pits.depth, 0.02, 20);
   check_range("phenomena.wet_patches", spec.phenomena.wet_patches, 0, 1000);
+  check_range("material_jitter", Range(spec.material_jitter), 0, 1);
 }
 
 void check_lighting(const LightingSpec& l) {

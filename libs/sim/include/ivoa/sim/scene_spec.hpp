@@ -166,6 +166,11 @@ struct SceneSpec {
   PitSpec pits;
   LightingSpec lighting;
   PhenomenaSpec phenomena;
+  // 0..1: how far each material's look strays from its definition, drawn
+  // per seed: colours x exp(+-0.5 j) overall and x exp(+-0.15 j) per channel,
+  // texture contrast and feature size x exp(+-j). Gloss, wetness, the
+  // pattern and whether a material is textureless or periodic stay. 0: as defined.
+  double material_jitter = 0;
   std::vector<Material> materials;    // scene-specific materials (added to the library)
   std::vector<ElementSpec> elements;  // placed exactly, in addition to the generated ones
   std::optional<Pose2D> start;        // robot start pose (default: drawn from the seed)
