@@ -169,7 +169,8 @@ struct SceneSpec {
   // 0..1: how far each material's look strays from its definition, drawn
   // per seed: colours x exp(+-0.5 j) overall and x exp(+-0.15 j) per channel,
   // texture contrast and feature size x exp(+-j). Gloss, wetness, the
-  // pattern and whether a material is textureless or periodic stay. 0: as defined.
+  // pattern, whether a material is textureless or periodic, and lights
+  // stay. 0: as defined.
   double material_jitter = 0;
   std::vector<Material> materials;    // scene-specific materials (added to the library)
   std::vector<ElementSpec> elements;  // placed exactly, in addition to the generated ones
