@@ -14,6 +14,10 @@ namespace {
 
 using GT = sim_ground_truth_t;
 
+// Linear luminance (of the texture's mean) under which a baseboard shows
+// as a dark stripe.
+constexpr float kDarkStripeLuminance = 0.02f;
+
 // Textures depend only on the material (not on the scene), so every scene in
 // a process shares them: the library's maps are synthesised once.
 std::shared_ptr<const Texture> cached_texture(const Material& m) {
@@ -57,7 +61,7 @@ MaterialData make_material_data(const Material& m) {
   d.ir_albedo = m.ir_albedo >= 0 ? static_cast<float>(m.ir_albedo) : std::min(1.0f, 0.15f + std::sqrt(lum));
   if (m.textureless()) d.phenomena |= GT::PHENOMENON_TEXTURELESS;
   if (m.repetitive()) d.phenomena |= GT::PHENOMENON_REPETITIVE;
-  if (lum < 0.02f) d.phenomena |= GT::PHENOMENON_DARK_STRIPE;  // only used where it is a baseboard
+  if (lum < kDarkStripeLuminance) d.phenomena |= GT::PHENOMENON_DARK_STRIPE;  // only used where it is a baseboard
   return d;
 }
 
@@ -95,9 +99,16 @@ Material SceneBuilder::as_this_seed_shows(Material m) const {
   std::string family = m.name;
   if (family.size() > 4 && family.compare(family.size() - 4, 4, "_wet") == 0) family.resize(family.size() - 4);
   Rng rng(hash_combine(data_->seed, hash_string(("material_jitter/" + spec_.name + "/" + family).c_str())));
+  // A dark material only darkens: lighter, a baseboard would stop being the
+  // dark stripe the scene file asked for. (Its texture's mean is no lighter
+  // than its main colour.)
+  const bool dark = to_linear(m.color).luminance() < kDarkStripeLuminance;
   const double brightness = std::exp(0.5 * j * rng.uniform(-1, 1));
   Rgb gain;
-  for (double& g : gain) g = brightness * std::exp(0.15 * j * rng.uniform(-1, 1));
+  for (double& g : gain) {
+    g = brightness * std::exp(0.15 * j * rng.uniform(-1, 1));
+    if (dark) g = std::min(g, 1.0);
+  }
   for (int c = 0; c < 3; ++c) {
     m.color[c] = std::clamp(m.color[c] * gain[c], 0.0, 1.0);
     m.color2[c] = std::clamp(m.color2[c] * gain[c], 0.0, 1.0);

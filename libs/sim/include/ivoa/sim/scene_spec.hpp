@@ -170,7 +170,7 @@ struct SceneSpec {
   // per seed: colours x exp(+-0.5 j) overall and x exp(+-0.15 j) per channel,
   // texture contrast and feature size x exp(+-j). Gloss, wetness, the
   // pattern, whether a material is textureless or periodic, and lights
-  // stay. 0: as defined.
+  // stay; dark materials (baseboards' dark stripes) only darken. 0: as defined.
   double material_jitter = 0;
   std::vector<Material> materials;    // scene-specific materials (added to the library)
   std::vector<ElementSpec> elements;  // placed exactly, in addition to the generated ones
