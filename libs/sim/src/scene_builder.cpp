@@ -100,8 +100,8 @@ Material SceneBuilder::as_this_seed_shows(Material m) const {
   if (family.size() > 4 && family.compare(family.size() - 4, 4, "_wet") == 0) family.resize(family.size() - 4);
   Rng rng(hash_combine(data_->seed, hash_string(("material_jitter/" + spec_.name + "/" + family).c_str())));
   // A dark material only darkens: lighter, a baseboard would stop being the
-  // dark stripe the scene file asked for. (Its texture's mean is no lighter
-  // than its main colour.)
+  // dark stripe the scene file asked for. Judged by its main colour, the
+  // lighter of every shipped baseboard's two.
   const bool dark = to_linear(m.color).luminance() < kDarkStripeLuminance;
   const double brightness = std::exp(0.5 * j * rng.uniform(-1, 1));
   Rgb gain;
