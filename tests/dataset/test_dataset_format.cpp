@@ -170,6 +170,30 @@ TEST(DatasetFormat, ANonsensePatchSizeInSessionJsonIsNamedThere) {
     refused("image_size", value, size_message);
 }
 
+// yaml-cpp keeps the first of two equal keys, Python's json (the report) the
+// last: the two would read different sessions, so a repeat is refused at any depth.
+TEST(DatasetFormat, AKeyGivenTwiceInSessionJsonIsRefusedAtAnyDepth) {
+  test::TempDir dir;
+  { SessionWriter w(dir.path().string(), info("twice")); }
+  const std::string path = dir.path().string() + "/twice/session.json";
+  std::string json;
+  {
+    std::ifstream j(path);
+    json.assign(std::istreambuf_iterator<char>(j), {});
+  }
+  const size_t grid = json.find("\"grid\": {");
+  ASSERT_NE(grid, std::string::npos);
+  json.insert(json.find('{', grid) + 1, "\"spacing\": 0.5, ");
+  std::ofstream(path) << json;
+  try {
+    SessionReader reader(dir.path().string() + "/twice");
+    ADD_FAILURE() << "read a session whose grid gives its spacing twice";
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("session.json: key 'grid.spacing' is given twice"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(DatasetFormat, TwoViewPatchesRoundTripStacked) {
   test::TempDir dir;
   SessionInfo i = info("two");
@@ -359,6 +383,42 @@ TEST(DatasetFormat, TrailingJunkAWrongSampleNumberAndAFrameOutsideTheSessionAreN
     test::TempDir dir;
     const std::string what = reading_error_after(dir, edit);
     EXPECT_NE(what.find("samples.csv line 3: " + expected), std::string::npos) << what;
+  }
+}
+
+// Every labelled cell's pixel lies in the image (its patch was cut there);
+// one off it is refused by the writer and, edited in by hand, by the reader.
+TEST(DatasetFormat, APixelOffTheImageIsRefusedWhereTheSizeIsKnown) {
+  test::TempDir dir;
+  SessionInfo sized = info("sized");
+  sized.image_size = cv::Size(640, 480);
+  SampleRecord inside;
+  inside.u = 639.5f;
+  inside.v = 10;
+  {
+    SessionWriter w(dir.path().string(), sized);
+    w.add_frame(1, 1, 2);
+    w.add_sample(inside, numbered_patch(0));
+    SampleRecord off = inside;
+    off.u = 640;
+    EXPECT_THROW(w.add_sample(off, numbered_patch(1)), DatasetError);
+    w.add_sample(inside, numbered_patch(1));
+  }
+  const auto csv = dir.path() / "sized" / "samples.csv";
+  std::ifstream in(csv);
+  std::string header, first, second;
+  std::getline(in, header);
+  std::getline(in, first);
+  std::getline(in, second);
+  in.close();
+  std::ofstream(csv) << header << "\n" << first << "\n" << with_column(second, 11, "-3") << "\n";
+  try {
+    SessionReader r((dir.path() / "sized").string());
+    ADD_FAILURE() << "read a sample whose v is -3";
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("samples.csv line 3: pixel (u 639.5, v -3) lies off the 640 x 480 image"),
+              std::string::npos)
+        << e.what();
   }
 }
 

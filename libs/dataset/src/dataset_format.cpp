@@ -98,16 +98,29 @@ void require_file(const std::string& path) {
   if (const std::string why = why_not_a_file(path); !why.empty()) throw DatasetError(path + ": " + why);
 }
 
-// A YAML (JSON) file read whole. A top-level key (`what`) given twice is
-// refused: yaml-cpp reads the first, Python's json (the report) the last.
+// A key given twice in `node` or any map within it is refused: yaml-cpp
+// reads the first, Python's json (the report) the last. `what` names a
+// top-level key; nested ones are named by their path ("grid.patch_size").
+void refuse_repeated_keys(const YAML::Node& node, const std::string& path, const std::string& what,
+                          const std::string& prefix = "") {
+  if (node.IsSequence())
+    for (const auto& item : node) refuse_repeated_keys(item, path, what, prefix);
+  if (!node.IsMap()) return;
+  std::set<std::string> keys;
+  for (const auto& entry : node) {
+    if (!entry.first.IsScalar()) continue;
+    const std::string name = prefix + entry.first.Scalar();
+    if (!keys.insert(entry.first.Scalar()).second)
+      throw DatasetError(path + ": " + (prefix.empty() ? what : "key") + " '" + name + "' is given twice");
+    refuse_repeated_keys(entry.second, path, what, name + ".");
+  }
+}
+
+// A YAML (JSON) file read whole, no key given twice at any level.
 YAML::Node load_yaml_file(const std::string& path, const std::string& what = "key") {
   require_file(path);
   YAML::Node root = YAML::LoadFile(path);
-  std::set<std::string> keys;
-  if (root.IsMap())
-    for (const auto& entry : root)
-      if (entry.first.IsScalar() && !keys.insert(entry.first.Scalar()).second)
-        throw DatasetError(path + ": " + what + " '" + entry.first.Scalar() + "' is given twice");
+  refuse_repeated_keys(root, path, what);
   return root;
 }
 
@@ -175,6 +188,14 @@ void check_finite(const SampleRecord& s, const std::string& where) {
   const std::pair<const char*, float> coordinates[] = {{"x", s.x}, {"y", s.y}, {"u", s.u}, {"v", s.v}};
   for (const auto& [name, value] : coordinates)
     if (!std::isfinite(value)) throw DatasetError(where + ": column " + name + " is " + std::to_string(value));
+}
+
+// A cell's pixel off the image (where the size is known: not 0 x 0) cuts no
+// patch there and would draw its ring and dot off every overlay.
+void check_in_image(const SampleRecord& s, const cv::Size& image, const std::string& where) {
+  if (image.empty() || (s.u >= 0 && s.u < image.width && s.v >= 0 && s.v < image.height)) return;
+  throw DatasetError(fmt::format("{}: pixel (u {}, v {}) lies off the {} x {} image (session.json)", where, s.u, s.v,
+                                 image.width, image.height));
 }
 
 // Whole-field numbers: "16abc" or "" is not a number (sscanf took "16").
@@ -326,6 +347,7 @@ void SessionWriter::add_sample(SampleRecord s, const cv::Mat& patch, const std::
     throw DatasetError("sample label " + std::to_string(s.label) + " out of range");
   if (s.frame < 0 || s.frame >= static_cast<int64_t>(frames_.size())) throw DatasetError("sample refers to no frame");
   check_finite(s, dir_ + " sample " + std::to_string(info_.samples));  // what SessionReader would refuse
+  check_in_image(s, info_.image_size, dir_ + " sample " + std::to_string(info_.samples));
   if (static_cast<int>(evidence.size()) != info_.evidence_size)
     throw DatasetError(fmt::format("sample {}: {} evidence values, the session stores {}", info_.samples,
                                    evidence.size(), info_.evidence_size));
@@ -432,6 +454,7 @@ SessionReader::SessionReader(const std::string& session_dir) : dir_(session_dir)
     if (s.frame < 0 || s.frame >= info_.frames)
       throw DatasetError(where + ": frame " + std::to_string(s.frame) + ", but the session has " +
                          std::to_string(info_.frames) + " frames (session.json)");
+    check_in_image(s, info_.image_size, where);
     if (!has_side) s.patch_side = info_.patch_size;
     samples_.push_back(s);
   }
