@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <cstdio>
 #include <filesystem>
@@ -32,6 +33,7 @@
 #include "ivoa/core/json_text.hpp"
 #include "ivoa/core/process.hpp"
 #include "ivoa/core/progress.hpp"
+#include "ivoa/core/stop_signal.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
 #include "ivoa/figures/paper_figure.hpp"
 #include "ivoa/introspection/model.hpp"
@@ -47,6 +49,14 @@ namespace fs = std::filesystem;
 using namespace ivoa;
 
 namespace {
+
+// Thrown between batches or logs once a signal asks the run to stop:
+// unwinding removes the .partial files. `kept`: what the output folder holds.
+struct Stopped {
+  const char* kept;
+};
+constexpr const char* kKeptEarlier = "an earlier run's outputs, if any, as they were";
+constexpr const char* kKeptPredictions = "this run's predictions and embeddings, not all of its overlays";
 
 struct Options {
   std::string model, dataset, split_file, out;
@@ -122,6 +132,7 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
   const auto& info = session.info();
   check_session_fits(info, model.info());
   for (size_t begin = 0; begin < session.size(); begin += kBatch) {
+    if (stop_requested()) throw Stopped{kKeptEarlier};
     const size_t end = std::min(session.size(), begin + kBatch);
     std::vector<cv::Mat> patches;
     for (size_t i = begin; i < end; ++i) patches.push_back(session.patch(i));
@@ -266,6 +277,7 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
   size_t written = 0;
   std::map<std::string, int64_t> labelled_seen;  // by session, over its split parts
   for (const auto& log : o.logs) {
+    if (stop_requested()) throw Stopped{kKeptPredictions};
     const std::string session = logio::session_name_of(log);
     const std::string dir = o.dataset + "/" + session;
     if (!fs::exists(dir + "/session.json")) {
@@ -289,7 +301,10 @@ int write_overlays(const Options& o, introspection::IntrospectionModel& model, c
   std::vector<cv::Mat> maps;
   for (const auto& p : held) maps.push_back(p.heatmaps.uncertainty);
   const double shared_max = figures::uncertainty_scale_top(maps);
-  for (const auto& p : held) write_overlay(o, p, shared_max);
+  for (const auto& p : held) {
+    if (stop_requested()) throw Stopped{kKeptPredictions};
+    write_overlay(o, p, shared_max);
+  }
   written += held.size();
   spdlog::info("wrote {} overlay figures to {}/overlays{}", written, o.out,
                written >= static_cast<size_t>(o.max_overlays)
@@ -555,8 +570,15 @@ int main(int argc, char** argv) {
         o.out, o.dataset, folder == o.dataset ? "" : fmt::format(" (in {}, a link to a session folder)", folder));
     return kExitUsage;
   }
+  install_stop_handlers();
   try {
     return evaluate(o);
+  } catch (const Stopped& stopped) {
+    const int sig = stop_signal();
+    spdlog::warn("stopped by signal {}: {} holds {}", sig, o.out, stopped.kept);
+    std::signal(sig, SIG_DFL);  // exit as the signal would have, for the shell and the launcher
+    std::raise(sig);
+    return kExitFailure;
   } catch (const OutputError& e) {
     spdlog::error("{}", e.what());
     return kExitIoError;
