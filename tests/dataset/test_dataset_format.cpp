@@ -176,11 +176,7 @@ TEST(DatasetFormat, AKeyGivenTwiceInSessionJsonIsRefusedAtAnyDepth) {
   test::TempDir dir;
   { SessionWriter w(dir.path().string(), info("twice")); }
   const std::string path = dir.path().string() + "/twice/session.json";
-  std::string json;
-  {
-    std::ifstream j(path);
-    json.assign(std::istreambuf_iterator<char>(j), {});
-  }
+  std::string json = test::read_file(path);
   const size_t grid = json.find("\"grid\": {");
   ASSERT_NE(grid, std::string::npos);
   json.insert(json.find('{', grid) + 1, "\"spacing\": 0.5, ");
@@ -322,11 +318,14 @@ TEST(DatasetFormat, IndexThatDisagreesWithSessionJsonIsReported) {
   }
 }
 
-// The error reading a session whose samples.csv has its second row edited by
-// hand ("" if none).
-std::string reading_error_after(const test::TempDir& dir, const std::function<std::string(std::string)>& edit) {
+// The error reading a session of two default samples (of an image of
+// `image_size`) whose samples.csv has its second row edited by hand ("" if none).
+std::string reading_error_after(const test::TempDir& dir, const std::function<std::string(std::string)>& edit,
+                                const cv::Size& image_size = {}) {
   {
-    SessionWriter w(dir.path().string(), info("hand"));
+    SessionInfo hand = info("hand");
+    hand.image_size = image_size;
+    SessionWriter w(dir.path().string(), hand);
     w.add_frame(1, 1, 2);
     w.add_sample(SampleRecord{}, numbered_patch(0));
     w.add_sample(SampleRecord{}, numbered_patch(1));
@@ -402,24 +401,11 @@ TEST(DatasetFormat, APixelOffTheImageIsRefusedWhereTheSizeIsKnown) {
     SampleRecord off = inside;
     off.u = 640;
     EXPECT_THROW(w.add_sample(off, numbered_patch(1)), DatasetError);
-    w.add_sample(inside, numbered_patch(1));
   }
-  const auto csv = dir.path() / "sized" / "samples.csv";
-  std::ifstream in(csv);
-  std::string header, first, second;
-  std::getline(in, header);
-  std::getline(in, first);
-  std::getline(in, second);
-  in.close();
-  std::ofstream(csv) << header << "\n" << first << "\n" << with_column(second, 11, "-3") << "\n";
-  try {
-    SessionReader r((dir.path() / "sized").string());
-    ADD_FAILURE() << "read a sample whose v is -3";
-  } catch (const DatasetError& e) {
-    EXPECT_NE(std::string(e.what()).find("samples.csv line 3: pixel (u 639.5, v -3) lies off the 640 x 480 image"),
-              std::string::npos)
-        << e.what();
-  }
+  test::TempDir edited;
+  const std::string what = reading_error_after(
+      edited, [](std::string row) { return with_column(row, 11, "-3"); }, cv::Size(640, 480));
+  EXPECT_NE(what.find("samples.csv line 3: pixel (u 0, v -3) lies off the 640 x 480 image"), std::string::npos) << what;
 }
 
 TEST(DatasetFormat, ARowWithMoreFieldsThanTheHeaderIsNamed) {
