@@ -134,6 +134,7 @@ void write_rows(std::FILE* csv, std::FILE* emb, const dataset::SessionReader& se
   for (size_t begin = 0; begin < session.size(); begin += kBatch) {
     if (stop_requested()) throw Stopped{kKeptEarlier};
     const size_t end = std::min(session.size(), begin + kBatch);
+    session.prefetch(begin, 2 * kBatch);  // this batch and, while it runs, the next
     std::vector<cv::Mat> patches;
     for (size_t i = begin; i < end; ++i) patches.push_back(session.patch(i));
     const introspection::PatchOutputs out = model.run_patches(patches, true);

@@ -109,8 +109,10 @@ SplitData load_split_data(const TrainConfig& c, const std::string& split) {
   return d;
 }
 
-// Where each sample's raw patch lies (memory-mapped).
+// Where each sample's raw patch lies (memory-mapped), with the reads of
+// the ones not yet in memory started together rather than one by one.
 std::vector<const uint8_t*> patch_pointers(const SplitData& d, const std::vector<SampleRef>& refs) {
+  for (const auto& r : refs) d.sessions[r.session]->prefetch(r.index);
   std::vector<const uint8_t*> out;
   out.reserve(refs.size());
   for (const auto& r : refs) out.push_back(d.sessions[r.session]->patch_data(r.index));

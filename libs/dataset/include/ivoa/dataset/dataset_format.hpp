@@ -143,6 +143,9 @@ class SessionReader {
   cv::Mat left_patch(size_t i) const { return patch(i).rowRange(0, info_.patch_size); }
   size_t patch_bytes() const;
   const uint8_t* patch_data(size_t i) const;
+  // Asks the kernel to start reading patches [first, first + count) from
+  // disk; a hint, for readers that know which patches come next (a batch).
+  void prefetch(size_t first, size_t count = 1) const;
   // The info().evidence_size evidence values of sample i; nullptr if the
   // session has none.
   const float* evidence(size_t i) const;
