@@ -556,7 +556,10 @@ void SessionReader::prefetch(size_t first, size_t count) const {
   static const auto page = static_cast<size_t>(sysconf(_SC_PAGESIZE));
   const size_t begin = first * patch_bytes() / page * page;
   const size_t end = (first + count) * patch_bytes();
-  madvise(const_cast<uint8_t*>(mapped_) + begin, end - begin, MADV_WILLNEED);  // a hint; errors change nothing
+  // In pieces: the kernel reads at most its readahead window per call.
+  constexpr size_t kPiece = size_t{1} << 20;
+  for (size_t at = begin; at < end; at += kPiece)  // a hint; errors change nothing
+    madvise(const_cast<uint8_t*>(mapped_) + at, std::min(kPiece, end - at), MADV_WILLNEED);
 }
 
 cv::Mat SessionReader::patch(size_t i) const {
