@@ -179,7 +179,10 @@ record_session() {
   fi
   [ -e "$log" ] && echo "  $name: the log of an earlier run is not $frames whole frames: recorded again"
   rm -f "$log" "$log.json"
-  # A fixed start time per seed: the same session is the same log bytes.
+  # A fixed start time per seed: the same session gives the same frames and
+  # labels (a dataset built from it is the same bytes), not the same log bytes
+  # (the logger stamps receive times; two recordings of one session differed
+  # by 2.6 kB in size).
   local utime=$((1700000000000000 + seed * 10000000000))
   in_lcm_net "$worker" "$BIN/ivoa-launch" "$ROOT/procman_configs/sim.pmd" --script start \
     --set SCENE="$SCENES/$scene.yaml" --set SEED="$seed" --set FRAMES="$frames" --set RATE=$RATE \
