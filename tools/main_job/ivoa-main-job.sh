@@ -227,7 +227,8 @@ mkdir -p "$out/logs" "$out/process_logs"
 # loggers (their --min-free-mb) and the run fails late. What a fresh run
 # writes into $out, measured on 2026-12-05, and the loggers' reserve; at
 # full scale 76 GB since the low-obstacle sessions (logs 22 GB and JPP-C's
-# dataset 32 GB measured on 2026-12-06, the dense one's taken as before).
+# dataset 32 GB measured on 2026-12-06; the dense one's, not measured, taken
+# as two thirds of that, as at the default scale).
 case "$scale/$shipped_only" in
   full/0) need_gb=76 ;; full/1) need_gb=3 ;; default/0) need_gb=7 ;; *) need_gb=1 ;;
 esac
