@@ -236,6 +236,7 @@ std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection
   std::vector<PendingOverlay> from_log;
   std::unique_ptr<GroundWarp> warp;  // two-view models, from the log's calibration
   while ((from_log.size() < room || !scene_checked) && in.next(e)) {
+    if (stop_requested()) throw Stopped{kKeptPredictions};  // a long log is minutes of reading
     if (!scene_checked && e.channel == channels::kSimGroundTruth) {
       scene_checked = true;
       if (const std::string why = other_scene(e, session.info()); !why.empty()) {
