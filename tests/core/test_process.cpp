@@ -131,6 +131,10 @@ TEST(LiesWithin, AFolderOrAnythingBelowItAsSpeltOrResolved) {
   EXPECT_FALSE(lies_within(dir.file("data_eval"), data)) << "a sibling that shares the folder's prefix";
   EXPECT_FALSE(lies_within(dir.file("data/../eval"), data));
   EXPECT_FALSE(lies_within(dir.file("data/linked_session/../eval"), data)) << "up from the link's target";
+  const std::string data_via_up = dir.file("elsewhere/../data");
+  EXPECT_TRUE(lies_within(dir.file("data/linked_session/eval"), data_via_up)) << "a '..' in the folder";
+  EXPECT_TRUE(lies_within(dir.file("elsewhere/../data/linked_session/eval"), data_via_up)) << "and in both";
+  EXPECT_FALSE(lies_within(dir.file("data/linked_session/../eval"), data_via_up));
 }
 
 TEST(WritesOver, TheSameFileByAnySpellingOrAFileInsideTheInputFolder) {

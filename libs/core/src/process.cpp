@@ -240,10 +240,24 @@ bool is_under(const std::filesystem::path& inner, const std::filesystem::path& o
   return !relative.empty() && *relative.begin() != "..";
 }
 
-// A ".." after a link leaves the link's target, not the folder it is spelt in:
-// such a path can only be judged resolved.
-bool steps_up(const std::filesystem::path& path) {
-  return std::any_of(path.begin(), path.end(), [](const std::filesystem::path& part) { return part == ".."; });
+// `path` absolute and as spelt, but for what its last ".." steps up from: a
+// ".." after a link leaves the link's target, not the folder it is spelt
+// in, so the part up to it is resolved and the rest kept as written.
+std::filesystem::path as_spelt(const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path absolute = fs::absolute(path);
+  fs::path up_to_last_up, rest;
+  for (const auto& part : absolute) {
+    rest /= part;
+    if (part == "..") {
+      up_to_last_up /= rest;
+      rest.clear();
+    }
+  }
+  if (up_to_last_up.empty()) return absolute.lexically_normal();
+  std::error_code error;
+  const fs::path resolved = fs::weakly_canonical(up_to_last_up, error);
+  return error ? fs::path() : (resolved / rest).lexically_normal();  // empty: lies within nothing
 }
 
 }  // namespace
@@ -264,10 +278,7 @@ bool writes_over(const std::string& path, const std::string& input) {
 bool lies_within(const std::string& path, const std::string& folder) {
   namespace fs = std::filesystem;
   // as spelt, too: through a folder inside that is a link, the resolved path leaves `folder`
-  const fs::path spelt = fs::absolute(path), spelt_folder = fs::absolute(folder);
-  if (!steps_up(spelt) && !steps_up(spelt_folder) &&
-      is_under(spelt.lexically_normal(), spelt_folder.lexically_normal()))
-    return true;
+  if (is_under(as_spelt(path), as_spelt(folder))) return true;
   std::error_code error;
   const auto inner = fs::weakly_canonical(fs::absolute(path), error);
   const auto outer = fs::weakly_canonical(fs::absolute(folder), error);
