@@ -135,6 +135,12 @@ TEST(LiesWithin, AFolderOrAnythingBelowItAsSpeltOrResolved) {
   EXPECT_TRUE(lies_within(dir.file("data/linked_session/eval"), data_via_up)) << "a '..' in the folder";
   EXPECT_TRUE(lies_within(dir.file("elsewhere/../data/linked_session/eval"), data_via_up)) << "and in both";
   EXPECT_FALSE(lies_within(dir.file("data/linked_session/../eval"), data_via_up));
+  // A link inside the linked session: resolved, the path leaves both folders.
+  std::filesystem::create_directories(dir.file("other"));
+  std::filesystem::create_directory_symlink(dir.file("other"), dir.file("elsewhere/nested"));
+  const std::string nested = dir.file("elsewhere/../data/linked_session/nested/eval");
+  EXPECT_TRUE(lies_within(nested, data_via_up));
+  EXPECT_TRUE(lies_within(nested, dir.file("elsewhere/../data/linked_session")));
 }
 
 TEST(WritesOver, TheSameFileByAnySpellingOrAFileInsideTheInputFolder) {
