@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 
@@ -25,6 +26,7 @@
 #include "ivoa/dataset/patch.hpp"
 #include "ivoa/logio/log_format.hpp"
 #include "ivoa/logio/log_reader.hpp"
+#include "ivoa/logio/log_writer.hpp"
 #include "ivoa/monitor/depth_monitor.hpp"
 #include "ivoa/monitor/labeler.hpp"
 #include "ivoa/stereo/detector.hpp"
@@ -649,6 +651,47 @@ TEST(DatasetBuilder, LogWithoutRecordedLabelsIsRefusedAndKeepsTheExistingSession
     EXPECT_NE(std::string(e.what()).find("labelled.lcmlog: no NO_SUCH_STEREO message"), std::string::npos) << e.what();
   }
   EXPECT_EQ(SessionReader(dir.file("data") + "/s").size(), recorded.size());
+}
+
+// A copy of the log at `from` with every channel renamed to PREFIX + name,
+// as a robot started with renamed channels records it.
+void copy_with_renamed_channels(const std::string& from, const std::string& to, const std::string& prefix) {
+  logio::LogReader in(from);
+  logio::LogWriter out(to);
+  logio::LogEvent e;
+  while (in.next(e)) out.write(prefix + e.channel, e.timestamp, e.data.data(), e.data.size());
+  out.close();
+}
+
+std::string file_text(const std::string& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// `ivoa-dataset build` reads such a log by the names given, into the same
+// samples as the original; without them it finds no frames and says so.
+TEST(DatasetBuildCli, RenamedChannelsAreReadWhenNamed) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("office_s6.lcmlog"), renamed = dir.file("renamed") + "/office_s6.lcmlog";
+  std::filesystem::create_directories(dir.file("renamed"));
+  test::write_sim_log(log_path, kScene, 6, 3);
+  copy_with_renamed_channels(log_path, renamed, "R2_");
+  const std::string build = "timeout 120 " IVOA_DATASET_EXE " build --labels jppc --no-evidence --out ";
+  ASSERT_EQ(test::run_command(build + dir.file("plain") + " " + log_path).exit_code, kExitOk);
+  const auto named = test::run_command(
+      build + dir.file("named") +
+      " --stereo-channel R2_STEREO_IMAGES --depth-channel R2_DEPTH_IMAGE --calibration-channel R2_RIG_CALIBRATION "
+      "--truth-channel R2_SIM_GROUND_TRUTH " +
+      renamed);
+  ASSERT_EQ(named.exit_code, kExitOk) << named.output;
+  const std::string samples = file_text(dir.file("plain") + "/office_s6/samples.csv");
+  EXPECT_GT(std::count(samples.begin(), samples.end(), '\n'), 20) << samples;
+  EXPECT_EQ(file_text(dir.file("named") + "/office_s6/samples.csv"), samples);
+
+  const auto unnamed = test::run_command(build + dir.file("unnamed") + " " + renamed);
+  EXPECT_NE(unnamed.output.find("no RIG_CALIBRATION message in the log"), std::string::npos) << unnamed.output;
+  EXPECT_NE(unnamed.output.find("--calibration-channel"), std::string::npos) << unnamed.output;
+  EXPECT_EQ(unnamed.exit_code, kExitBadInput) << unnamed.output;
 }
 
 }  // namespace

@@ -255,6 +255,26 @@ TEST_F(LiveScoreTool, ScoresALogAndWritesJson) {
       << json.str();
 }
 
+// A robot whose processes were started with renamed channels: its log is
+// scored by naming them, and without the names it is refused by them.
+TEST_F(LiveScoreTool, RenamedChannelsAreReadWhenNamed) {
+  const std::string log_path = (dir / "renamed.lcmlog").string();
+  {
+    logio::LogWriter log(log_path);
+    write(log, "ROBOT2_LABELS", labels_message(1, {{1.0f, 0.0f, kTN, kFree}}));
+    write(log, "ROBOT2_INTROSPECTION", prediction_message(1, {{1.0f, 0.0f, kTN, 1, kFree, kTN, 1}}));
+    log.close();
+  }
+  std::string out;
+  EXPECT_EQ(run(log_path, out), 3);
+  EXPECT_NE(out.find("no INTROSPECTION messages to score"), std::string::npos) << out;
+  ASSERT_EQ(run(log_path + " --introspection-channel ROBOT2_INTROSPECTION --labels-channel ROBOT2_LABELS", out), 0)
+      << out;
+  EXPECT_NE(out.find("frames: 1 labelled, 1 predicted, 1 both (scored)"), std::string::npos) << out;
+  EXPECT_EQ(run(log_path + " --introspection-channel ROBOT2_INTROSPECTION", out), 3);
+  EXPECT_NE(out.find("no INTROSPECTION_LABELS messages to score"), std::string::npos) << out;
+}
+
 TEST_F(LiveScoreTool, ALogWithoutIntrospectionIsRefusedByName) {
   const std::string log_path = (dir / "labels_only.lcmlog").string();
   {

@@ -353,6 +353,12 @@ void add_build_command(CLI::App& app, BuildCommand& b) {
   build->add_option("--sync-tolerance-us", options.pairing.tolerance_us, "max |stereo - depth| utime, us")
       ->capture_default_str()
       ->check(ivoa::number_in(0, 60e6));
+  ivoa::add_log_channel_option(*build, "--stereo-channel", options.stereo_channel, "stereo pairs");
+  ivoa::add_log_channel_option(*build, "--depth-channel", options.depth_channel, "depth images");
+  ivoa::add_log_channel_option(*build, "--calibration-channel", options.calibration_channel, "the rig calibration");
+  ivoa::add_log_channel_option(*build, "--labels-channel", options.labels_channel,
+                               "the monitor's labels (--labels recorded)");
+  ivoa::add_log_channel_option(*build, "--truth-channel", options.truth_channel, "the simulator's ground truth");
   build->add_option("logs", b.logs, "LCM log files, in order")->required()->check(ivoa::input_file());
   const size_t before_relabel_flags = build->get_options().size();
   add_query_grid_options(*build, options.grid);

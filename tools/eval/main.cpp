@@ -68,6 +68,10 @@ struct Options {
   double uncertainty_max = -1;      // < 0: the largest of the run's overlays; 0: each frame's own
   bool dots_given_verdict = false;  // overlay dots: predictions given the recorded verdict
   introspection::InferenceConfig inference;
+  // The --logs' channels read for overlays (defaults: the processes' own).
+  std::string stereo_channel{channels::kStereoImages};
+  std::string calibration_channel{channels::kRigCalibration};
+  std::string truth_channel{channels::kSimGroundTruth};
 };
 
 constexpr const char* kHeader =
@@ -237,20 +241,20 @@ std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection
   std::unique_ptr<GroundWarp> warp;  // two-view models, from the log's calibration
   while ((from_log.size() < room || !scene_checked) && in.next(e)) {
     if (stop_requested()) throw Stopped{kKeptPredictions};  // a long log is minutes of reading
-    if (!scene_checked && e.channel == channels::kSimGroundTruth) {
+    if (!scene_checked && e.channel == o.truth_channel) {
       scene_checked = true;
       if (const std::string why = other_scene(e, session.info()); !why.empty()) {
         spdlog::warn("{}: {}: no overlays from it", log, why);
         return {};
       }
     }
-    if (model.info().views == 2 && !warp && e.channel == channels::kRigCalibration) {
+    if (model.info().views == 2 && !warp && e.channel == o.calibration_channel) {
       rig_calibration_t rig;
       if (logio::decode(e, rig)) warp = std::make_unique<GroundWarp>(from_message(rig));
       continue;
     }
     stereo_image_t msg;
-    if (from_log.size() >= room || e.channel != channels::kStereoImages || !logio::decode(e, msg)) continue;
+    if (from_log.size() >= room || e.channel != o.stereo_channel || !logio::decode(e, msg)) continue;
     const auto it = frames.find(msg.utime);
     if (it == frames.end() || labelled_seen++ % o.overlay_every != 0) continue;
     if (model.info().views == 2 && !warp)
@@ -467,6 +471,11 @@ void add_options(CLI::App& app, Options& o) {
   app.add_flag("--dots-given-verdict", o.dots_given_verdict,
                "overlay dots: predictions given the detector's recorded verdict (default: from the image alone, as the "
                "paper)");
+  add_log_channel_option(app, "--stereo-channel", o.stereo_channel, "stereo pairs (overlays of --logs)");
+  add_log_channel_option(app, "--calibration-channel", o.calibration_channel,
+                         "the rig calibration (overlays of --logs, two-view models)");
+  add_log_channel_option(app, "--truth-channel", o.truth_channel,
+                         "the simulator's ground truth (checks that a --logs file is the session's scene)");
   app.add_option("--mc-passes", o.inference.mc_passes, "Monte-Carlo dropout passes per sample (the paper's T)")
       ->capture_default_str()
       ->check(number_in(1, 1000));  // as ivoa-introspection: 1e6 passes grew past 10 GB

@@ -53,15 +53,23 @@ void feed(const std::string& path, const logio::LogEvent& e, tools::LiveScorer& 
   }
 }
 
-// Feeds every INTROSPECTION, INTROSPECTION_LABELS and OBSTACLES_STEREO
-// event to the scorer; damage is reported and read past with --resync.
-void read_log(const std::string& path, bool resync, tools::LiveScorer& scorer, ReadCounts& counts) {
+// The channels scored (defaults: the processes' own).
+struct ScoredChannels {
+  std::string predictions{channels::kIntrospection};
+  std::string labels{channels::kIntrospectionLabels};
+  std::string grid{channels::kObstaclesStereo};
+};
+
+// Feeds every prediction, label and detector-grid event to the scorer;
+// damage is reported and read past with --resync.
+void read_log(const std::string& path, bool resync, const ScoredChannels& ch, tools::LiveScorer& scorer,
+              ReadCounts& counts) {
   logio::LogReader reader(path, {resync});
   logio::LogEvent e;
   while (reader.next(e)) {
-    if (e.channel == channels::kIntrospection) feed<introspection_t>(path, e, scorer, counts);
-    else if (e.channel == channels::kIntrospectionLabels) feed<introspection_labels_t>(path, e, scorer, counts);
-    else if (e.channel == channels::kObstaclesStereo) feed<obstacle_grid_t>(path, e, scorer, counts);
+    if (e.channel == ch.predictions) feed<introspection_t>(path, e, scorer, counts);
+    else if (e.channel == ch.labels) feed<introspection_labels_t>(path, e, scorer, counts);
+    else if (e.channel == ch.grid) feed<obstacle_grid_t>(path, e, scorer, counts);
   }
   if (const std::string why = reader.not_a_log(); !why.empty()) spdlog::warn("{}: {}", path, why);
   else
@@ -153,6 +161,7 @@ struct ScoreCommandLine {
   std::vector<std::string> files;
   std::string json_path;
   bool resync = false;
+  ScoredChannels channels;
 
   // The logs, for messages: "FILE" or "FILE (and N more)".
   std::string logs() const {
@@ -166,6 +175,10 @@ void add_score_options(CLI::App& app, ScoreCommandLine& cl) {
       ->check(ivoa::input_file());
   app.add_flag("--resync", cl.resync, "skip damaged parts and read on (default: stop at the first damage)");
   app.add_option("--json", cl.json_path, "also write the counts and figures as JSON to this file");
+  add_log_channel_option(app, "--introspection-channel", cl.channels.predictions, "predictions (introspection_t)");
+  add_log_channel_option(app, "--labels-channel", cl.channels.labels, "the monitor's labels (introspection_labels_t)");
+  add_log_channel_option(app, "--grid-channel", cl.channels.grid,
+                         "the detector's grids, whose verdicts the predictions are given (obstacle_grid_t)");
 }
 
 // Reads every log into `s`; false (after saying why) when one is unreadable
@@ -173,7 +186,7 @@ void add_score_options(CLI::App& app, ScoreCommandLine& cl) {
 bool score_logs(const ScoreCommandLine& cl, LiveScore& s, ReadCounts& counts) {
   tools::LiveScorer scorer;
   try {
-    for (const auto& path : cl.files) read_log(path, cl.resync, scorer, counts);
+    for (const auto& path : cl.files) read_log(path, cl.resync, cl.channels, scorer, counts);
   } catch (const logio::LogReadError& e) {
     spdlog::error("{}", e.what());
     return false;
@@ -187,7 +200,7 @@ bool score_logs(const ScoreCommandLine& cl, LiveScore& s, ReadCounts& counts) {
                : "";
   const bool cut_short = counts.damaged_files > 0 && !cl.resync;
   spdlog::error("{}: no {} messages{} to score{}", cl.logs(),
-                s.predicted_frames == 0 ? "INTROSPECTION" : "INTROSPECTION_LABELS", skipped,
+                s.predicted_frames == 0 ? cl.channels.predictions : cl.channels.labels, skipped,
                 !skipped.empty()          ? ""
                 : cut_short               ? " in what was read before the damage (--resync reads on past it)"
                 : s.predicted_frames == 0 ? " (was ivoa-introspection running when it was recorded?)"
@@ -208,7 +221,8 @@ int report(const ScoreCommandLine& cl, const LiveScore& s, const ReadCounts& cou
         static_cast<long long>(counts.damaged_files));
   if (!write_text_file(cl.json_path, score_json(s))) return kExitIoError;
   if (s.scored_frames == 0) {
-    spdlog::error("{}: no frame has both INTROSPECTION and INTROSPECTION_LABELS (their utimes never match)", cl.logs());
+    spdlog::error("{}: no frame has both {} and {} (their utimes never match)", cl.logs(), cl.channels.predictions,
+                  cl.channels.labels);
     return kExitBadInput;
   }
   if (s.image.all.total() == 0) {  // frames matched, but no cell: every figure above is n/a

@@ -62,6 +62,11 @@ struct Options {
   stereo::DetectorConfig detector;
   std::vector<causes::DetectorVariant> variants;
   std::string variants_out;  // per session, variant and label: what each variant says (empty: not written)
+  // The log's channels read (defaults: the simulator's and the monitor's own).
+  std::string calibration_channel{channels::kRigCalibration};
+  std::string truth_channel{channels::kSimGroundTruth};
+  std::string labels_channel{channels::kIntrospectionLabels};
+  std::string stereo_channel{channels::kStereoImages};
 };
 
 // JPP-C works on half-resolution images (JPP's 480x300): does it miss
@@ -114,12 +119,12 @@ struct SessionLog {
   int64_t repeated_labels = 0;  // a frame's labels again (a log given twice): skipped
 };
 
-void read_event(const logio::LogEvent& e, bool want_labels, SessionLog& log) {
+void read_event(const logio::LogEvent& e, const Options& opt, bool want_labels, SessionLog& log) {
   bool ok = true;
-  if (e.channel == channels::kRigCalibration && !log.rig) {
+  if (e.channel == opt.calibration_channel && !log.rig) {
     rig_calibration_t msg;
     if ((ok = logio::decode(e, msg))) log.rig = from_message(msg);
-  } else if (e.channel == channels::kSimGroundTruth) {
+  } else if (e.channel == opt.truth_channel) {
     sim_ground_truth_t msg;
     if ((ok = logio::decode(e, msg))) {
       if (!std::isfinite(msg.robot_x) || !std::isfinite(msg.robot_y) || !std::isfinite(msg.robot_yaw))
@@ -127,14 +132,14 @@ void read_event(const logio::LogEvent& e, bool want_labels, SessionLog& log) {
                                                 msg.robot_x, msg.robot_y, msg.robot_yaw));
       log.truth[msg.utime] = {msg.scene, msg.seed, msg.seq, {msg.robot_x, msg.robot_y, msg.robot_yaw}};
     }
-  } else if (e.channel == channels::kIntrospectionLabels && want_labels) {
+  } else if (e.channel == opt.labels_channel && want_labels) {
     Labels msg;
     if ((ok = logio::decode(e, msg))) {
       causes::check_labels(msg);
       if (!log.labelled_utimes.insert(msg.utime).second) ++log.repeated_labels;
       else log.labels.push_back(std::move(msg));
     }
-  } else if (e.channel == channels::kStereoImages && log.pixelformat < 0) {
+  } else if (e.channel == opt.stereo_channel && log.pixelformat < 0) {
     stereo_image_t msg;
     if ((ok = logio::decode(e, msg))) log.pixelformat = msg.left.pixelformat;
   }
@@ -144,13 +149,13 @@ void read_event(const logio::LogEvent& e, bool want_labels, SessionLog& log) {
   }
 }
 
-SessionLog read_log(const std::string& path, bool want_labels) {
+SessionLog read_log(const std::string& path, const Options& opt, bool want_labels) {
   logio::LogReader reader(path, {/*resync=*/true});  // damage skipped, reported below
   SessionLog log;
   logio::LogEvent event;
   while (reader.next(event)) {
     try {
-      read_event(event, want_labels, log);
+      read_event(event, opt, want_labels, log);
     } catch (const std::exception& e) {  // e.g. an invalid calibration
       ++log.bad_messages;
       spdlog::warn("{}: {} at byte {}: {}", path, event.channel, event.offset, e.what());
@@ -161,12 +166,10 @@ SessionLog read_log(const std::string& path, bool want_labels) {
   if (log.repeated_labels > 0)
     spdlog::warn("{}: {} frames' labels came again (a log given twice?): each frame explained once", path,
                  log.repeated_labels);
-  if (!log.rig) throw std::runtime_error(path + ": no " + std::string(channels::kRigCalibration) + " message");
+  if (!log.rig) throw std::runtime_error(path + ": no " + opt.calibration_channel + " message");
   if (log.truth.empty())
-    throw std::runtime_error(path + ": no " + std::string(channels::kSimGroundTruth) +
-                             " messages (causes need a simulated session)");
-  if (want_labels && log.labels.empty())
-    throw std::runtime_error(path + ": no " + std::string(channels::kIntrospectionLabels) + " messages");
+    throw std::runtime_error(path + ": no " + opt.truth_channel + " messages (causes need a simulated session)");
+  if (want_labels && log.labels.empty()) throw std::runtime_error(path + ": no " + opt.labels_channel + " messages");
   return log;
 }
 
@@ -311,7 +314,7 @@ void write_variant_rows(std::ostream& csv, const std::string& session, const std
 
 void explain_session(const std::string& path, const Options& opt, SessionResult& out) {
   const std::string session = logio::session_name_of(path);
-  SessionLog log = read_log(path, opt.dataset.empty());
+  SessionLog log = read_log(path, opt, opt.dataset.empty());
   if (!opt.dataset.empty()) labels_from_dataset(opt.dataset, session, log);
   out.tally.bad_messages = log.bad_messages;
   if (log.labels.empty()) {  // a dataset session without labelled cells: nothing to explain
@@ -473,6 +476,10 @@ void add_options(CLI::App& app, CommandLine& cl) {
   app.add_option("--variants-out", opt.variants_out,
                  "CSV to write: per session, variant and label, the labelled cells of the re-rendered frames and how "
                  "many the variant gets right and wrong");
+  add_log_channel_option(app, "--calibration-channel", opt.calibration_channel, "the rig calibration");
+  add_log_channel_option(app, "--truth-channel", opt.truth_channel, "the simulator's ground truth");
+  add_log_channel_option(app, "--labels-channel", opt.labels_channel, "the monitor's labels (without --dataset)");
+  add_log_channel_option(app, "--stereo-channel", opt.stereo_channel, "stereo pairs (their pixel format)");
   stereo::add_detector_options(app, opt.detector);
 }
 

@@ -93,6 +93,14 @@ const CLI::Validator& channel_name() {
   return check;
 }
 
+CLI::Option* add_log_channel_option(CLI::App& app, const std::string& flag, std::string& channel,
+                                    const std::string& what) {
+  return app.add_option(flag, channel, "the log's channel of " + what)
+      ->capture_default_str()
+      ->group("Channels")
+      ->check(channel_name());
+}
+
 const CLI::Validator& channel_regex() {
   static const CLI::Validator check(
       [](std::string& text) {

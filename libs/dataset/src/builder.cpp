@@ -118,7 +118,9 @@ std::string SessionBuilder::Impl::no_label_source() const {
   const std::string kept = "; session '" + session + "' not written (an existing one is kept)";
   if (report.stereo_frames == 0)
     return logs + ": no " + options.stereo_channel + " message after the calibration: no images to cut patches " +
-           "from (recorded without the stereo camera, or with -c leaving it out?)" + kept;
+           "from (recorded without the stereo camera, with -c leaving it out, or under another name: "
+           "--stereo-channel?)" +
+           kept;
   if (rerun())
     return logs + ": no " + options.depth_channel + " message after the calibration, so the depth monitor has " +
            "nothing to label from" + kept;
@@ -490,7 +492,8 @@ void SessionBuilder::add_log(const std::string& path, const ProgressCallback& pr
   if (m.rig) return;
   if (const std::string why = reader.not_a_log(); !why.empty()) throw DatasetError(path + ": " + why);
   throw DatasetError(path + ": no " + o.calibration_channel +
-                     " message in the log; a log must hold the rig calibration (record it with ivoa-logger)");
+                     " message in the log; a log must hold the rig calibration (record it with ivoa-logger; one "
+                     "recorded under another name is read with --calibration-channel)");
 }
 
 BuildReport SessionBuilder::finish() {

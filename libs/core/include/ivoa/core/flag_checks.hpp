@@ -3,6 +3,7 @@
 // PositiveNumber and NonNegativeNumber name the double range they test
 // against, 300 digits long; these say "--steps: must be > 0, not 0".
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace ivoa {
 
@@ -28,6 +29,11 @@ const CLI::Validator& channel_name();
 // against whole names (help: REGEX). LCM refused a bad one only once the
 // process had started, in a message that did not name the flag.
 const CLI::Validator& channel_regex();
+// A log's channel that an offline tool reads, by its exact name, in the
+// "Channels" group with its default shown: logs of a robot whose processes
+// were started with renamed channels stay readable.
+CLI::Option* add_log_channel_option(CLI::App& app, const std::string& flag, std::string& channel,
+                                    const std::string& what);
 // A whole number >= 1 that is odd, e.g. a filter window (help: ODD).
 const CLI::Validator& odd_positive_integer();
 // A file (help: FILE) or folder (DIR) to read, which must exist. Unlike
