@@ -1,5 +1,7 @@
 // Detector parameters from flags and from a --config file, by JPP's names.
 #include <fstream>
+#include <set>
+#include <string>
 
 #include <CLI/CLI.hpp>
 #include <gtest/gtest.h>
@@ -102,6 +104,22 @@ TEST(StereoOptions, ShippedExampleConfigHoldsTheDefaults) {
   EXPECT_EQ(detector.jpp.texture_gate, 0.0);
   EXPECT_EQ(detector.dense.sgbm.num_disparities, dense_defaults.sgbm.num_disparities);
   EXPECT_EQ(detector.dense.min_obstacle_fraction, dense_defaults.min_obstacle_fraction);
+}
+
+TEST(StereoOptions, ShippedExampleConfigNamesEveryDetectorFlag) {
+  // The README calls it the parameter list: a flag added without its key
+  // (the SGBM tuning and the dense range were) would be missing from it.
+  std::ifstream in(IVOA_STEREO_EXAMPLE_CONFIG);
+  std::set<std::string> keys;
+  for (std::string line; std::getline(in, line);)
+    if (const size_t eq = line.find(" = "); eq != std::string::npos && line[0] != '#') keys.insert(line.substr(0, eq));
+  CLI::App app;
+  DetectorConfig detector;
+  add_detector_options(app, detector);
+  for (const CLI::Option* option : app.get_options()) {
+    if (option->get_lnames().empty() || option->get_lnames()[0] == "help") continue;
+    EXPECT_TRUE(keys.count(option->get_lnames()[0])) << "stereo_detector.ini has no key " << option->get_lnames()[0];
+  }
 }
 
 }  // namespace

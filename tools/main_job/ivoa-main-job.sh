@@ -28,10 +28,10 @@
 #   --noise-draws K  also record the test sessions with K sensor-noise draws
 #                  (ivoa-label-repeatability.sh) and set, band by band of
 #                  JPP-C's margin, how often another draw keeps its verdict
-#                  beside the models in the report (default 0: off; K
-#                  realisations, noise seeds 0 to K-1, seed 0 the recorded
-#                  sessions' own; about a minute per draw at the default
-#                  scale, 2-3 at full)
+#                  beside the models in the report (default 0: off; K >= 2
+#                  realisations, noise seeds 0 to K-1, each recorded again,
+#                  seed 0 reproducing the test sessions' own labels; about
+#                  a minute per draw at the default scale, 2-3 at full)
 #   --live         the short variant: run the shipped model live on the
 #                  simulator (sim.pmd with introspection and the viewer)
 #   --shipped-only only the shipped JPP-C model: record the scale's test
@@ -48,7 +48,7 @@ BIN=$BUILD/bin
 PY=/usr/bin/python3          # Debian's, with numpy/matplotlib/sklearn
 SCENES=$ROOT/libs/sim/scenes
 SHIPPED=$ROOT/libs/introspection/models/introspection_jppc.pt
-SHIPPED_VIEWS=2 SHIPPED_PATCH_SCALE=1.6  # its metadata (checked by the test shipped_model_metadata)
+SHIPPED_VIEWS=2 SHIPPED_PATCH_SCALE=1.6  # its metadata (checked by ShippedModel.MetadataMatchesWhatTheMainJobAssumes)
 # fits_shipped: whether --views and --patch-scale are the shipped model's (1.60 is 1.6).
 fits_shipped() {
   [ "$views" = "$SHIPPED_VIEWS" ] && awk -v a="$patch_scale" -v b="$SHIPPED_PATCH_SCALE" 'BEGIN { exit !(a + 0 == b + 0) }'
