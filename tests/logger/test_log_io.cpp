@@ -112,6 +112,35 @@ TEST(LogWriter, RefusesAnExistingFileUnlessAskedToOverwrite) {
   EXPECT_EQ(std::filesystem::file_size(path), 0u);
 }
 
+// Two loggers started with --force on one file: the second emptied the
+// first one's recording and wrote over it, and both reported success.
+TEST(LogWriter, AFileAnotherWriterHoldsIsRefusedEvenWhenOverwriting) {
+  test::TempDir dir;
+  const std::string path = dir.file("busy.lcmlog");
+  LogWriter first(path);
+  const uint8_t payload[4] = {1, 2, 3, 4};
+  first.write("FIRST", 1, payload, sizeof payload);
+  LogWriterOptions overwrite;
+  overwrite.overwrite = true;
+  try {
+    LogWriter second(path, overwrite);
+    FAIL() << "a second writer took a file being written";
+  } catch (const LogWriteError& e) {
+    EXPECT_NE(std::string(e.what()).find("another process is writing it"), std::string::npos) << e.what();
+  }
+  first.write("FIRST", 2, payload, sizeof payload);
+  first.close();
+  LogReader reader(path);
+  LogEvent event;
+  int events = 0;
+  while (reader.next(event)) ++events;
+  EXPECT_EQ(events, 2);
+  EXPECT_TRUE(reader.clean());
+  LogWriter after(path, overwrite);  // once closed, it may be overwritten
+  after.close();
+  EXPECT_EQ(std::filesystem::file_size(path), 0u);
+}
+
 // A folder given as the log: "use --force" would not help, so it is not offered.
 TEST(LogWriter, FolderIsRefusedAsSuchWithOrWithoutOverwrite) {
   test::TempDir dir;

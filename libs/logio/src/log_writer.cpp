@@ -1,6 +1,7 @@
 #include "ivoa/logio/log_writer.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/uio.h>
 #include <unistd.h>
@@ -14,7 +15,8 @@
 namespace ivoa::logio {
 
 LogWriter::LogWriter(std::string path, LogWriterOptions options) : path_(std::move(path)), options_(options) {
-  const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (options_.overwrite ? O_TRUNC : O_EXCL);
+  // Not O_TRUNC: an existing file is emptied only once this writer holds it.
+  const int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (options_.overwrite ? 0 : O_EXCL);
   fd_ = ::open(path_.c_str(), flags, 0644);
   if (fd_ < 0) {
     const int error = errno;
@@ -24,6 +26,29 @@ LogWriter::LogWriter(std::string path, LogWriterOptions options) : path_(std::mo
     throw LogWriteError(
         "cannot create log " + path_ + ": " + std::strerror(error) +
         (error == EEXIST ? " (--force overwrites it, --increment records to a new NAME-1, NAME-2, ...)" : ""));
+  }
+  hold_for_writing();
+}
+
+// An exclusive flock for the writer's life: a second writer of the same
+// file (a logger started twice with --force) used to empty and overwrite
+// what the first one was recording, and both reported success.
+void LogWriter::hold_for_writing() {
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int error = errno;
+    if (error == EWOULDBLOCK) {
+      ::close(fd_);
+      fd_ = -1;
+      throw LogWriteError("cannot create log " + path_ +
+                          ": another process is writing it (a second logger on the same file?); left as it is");
+    }
+    // ENOLCK, EOPNOTSUPP: a file system without locks (some network shares) records unguarded.
+  }
+  if (options_.overwrite && ::ftruncate(fd_, 0) != 0) {
+    const int error = errno;
+    ::close(fd_);
+    fd_ = -1;
+    throw LogWriteError("cannot empty log " + path_ + " to overwrite it: " + std::strerror(error));
   }
 }
 

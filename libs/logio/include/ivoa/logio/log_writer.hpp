@@ -18,7 +18,9 @@ class LogWriteError : public std::runtime_error {
 };
 
 struct LogWriterOptions {
-  bool overwrite = false;  // otherwise an existing file is an error
+  // Otherwise an existing file is an error. Either way a file another
+  // LogWriter is writing (in any process) is refused and left as it is.
+  bool overwrite = false;
   // Written data is pushed to the disk and dropped from the page cache in
   // chunks of this size, so hours of images neither pile up as dirty memory
   // nor evict everything else cached; 0 leaves it all to the kernel.
@@ -48,6 +50,7 @@ class LogWriter {
   bool deleted() const;
 
  private:
+  void hold_for_writing();
   [[noreturn]] void fail(const std::string& what, int error);
   void write_back(uint64_t upto);
 
