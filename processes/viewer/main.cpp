@@ -13,6 +13,7 @@
 
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/process.hpp"
+#include "ivoa/core/receive_buffer.hpp"
 #include "ivoa/logio/replay_check.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/logio/log_reader.hpp"
@@ -134,12 +135,13 @@ std::array<bool, ivoa::viewer::kNumParts> parts_in_log(const std::string& url, c
 }
 
 // Draws until stopped (or, offline, until the log ends); the exit code.
-int run_viewer(const ivoa::CommonOptions& common, const ivoa::viewer::ViewerOptions& options, bool window,
-               bool offline) {
+int run_viewer(const ivoa::CommonOptions& common, const ivoa::viewer::ViewerOptions& options, bool window, bool offline,
+               double socket_buffer_mb) {
   ivoa::logio::refuse_a_log_lcm_cannot_replay(common.lcm_url);
   ivoa::Bus bus(common.lcm_url);
   ivoa::Heartbeat heartbeat(bus, "viewer", common.status_channel);
   ivoa::viewer::ViewerNode node(bus, heartbeat, options);
+  if (!offline) ivoa::enlarge_receive_buffer(bus, socket_buffer_mb);
   spdlog::info("listening on {}{}{}{}", bus.url(),
                options.output.out_dir.empty() ? "" : "; PNGs in " + options.output.out_dir,
                options.output.video.empty() ? "" : "; video " + options.output.video, window ? "; window" : "");
@@ -166,8 +168,10 @@ int main(int argc, char** argv) {
       "the output."};
   ivoa::CommonOptions common;
   ivoa::viewer::ViewerOptions options;
+  double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
   ivoa::add_common_options(app, common);
   ivoa::add_status_channel_option(app, common.status_channel);
+  ivoa::add_socket_buffer_option(app, socket_buffer_mb);
   add_output_options(app, options);
   add_matching_options(app, options);
   add_channel_options(app, options);
@@ -181,7 +185,7 @@ int main(int argc, char** argv) {
   const std::optional<bool> window = choose_window(options);
   if (!window) return ivoa::kExitUsage;
   try {
-    return run_viewer(common, options, *window, offline);
+    return run_viewer(common, options, *window, offline, socket_buffer_mb);
   } catch (const ivoa::BusError& e) {
     spdlog::error("{}", e.what());
     return e.exit_code();

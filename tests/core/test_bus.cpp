@@ -26,6 +26,11 @@ TEST(Bus, UdpmUrlsGetALargeReceiveBuffer) {
   EXPECT_EQ(with_receive_buffer("udpm://239.255.76.67:7667"), "udpm://239.255.76.67:7667?recv_buf_size=16777216");
   EXPECT_EQ(with_receive_buffer("udpm://a:1?recv_buf_size=5"), "udpm://a:1?recv_buf_size=5");
   EXPECT_EQ(with_receive_buffer("memq://"), "memq://");
+  // Given explicitly (--lcm-url), as from $LCM_DEFAULT_URL.
+  EXPECT_EQ(effective_lcm_url("udpm://239.255.76.67:7689?ttl=0"),
+            "udpm://239.255.76.67:7689?ttl=0&recv_buf_size=16777216");
+  EXPECT_EQ(effective_lcm_url("memq://"), "memq://");
+  EXPECT_EQ(Bus("memq://").url(), "memq://");
 }
 
 TEST(Bus, MemqPublishSubscribeSetsCounts) {

@@ -17,6 +17,7 @@
 #include "ivoa/core/channel_counts.hpp"
 #include "ivoa/core/message_registry.hpp"
 #include "ivoa/core/process.hpp"
+#include "ivoa/core/receive_buffer.hpp"
 #include "ivoa/core/stop_signal.hpp"
 #include "ivoa/core/time.hpp"
 
@@ -47,6 +48,7 @@ struct Watch {
   double duration_s = 0, print_every_s = 2;
   std::string json_path, ready_file;
   std::map<std::string, int64_t> expect;
+  double socket_buffer_mb = ivoa::kDefaultSocketBufferMb;
 };
 
 // Counts traffic until the expectations are met, the duration is over or a
@@ -65,6 +67,7 @@ int watch(const std::string& lcm_url, const Watch& w) {
   }
   ivoa::install_stop_handlers();
   bus.handle(0);  // udpm joins the group lazily, on the first handle
+  ivoa::enlarge_receive_buffer(bus, w.socket_buffer_mb);
   if (!ivoa::write_ready_file(w.ready_file)) return ivoa::kExitIoError;
   const double start = ivoa::monotonic_ms();
   double last_print = start;
@@ -116,6 +119,7 @@ int main(int argc, char** argv) {
                  "CHANNEL=N (N >= 1): exit 0 as soon as every channel has N messages, 1 on timeout")
       ->delimiter(',');
   app.add_option("--ready-file", w.ready_file, "create this file once subscribed (lets scripts start publishers)");
+  ivoa::add_socket_buffer_option(app, w.socket_buffer_mb);
   app.add_flag("--list-types", list_types, "print every ivoa message type and its fingerprint, then exit");
   if (const int code = ivoa::parse_command_line(app, argc, argv); code >= 0) return code;
   ivoa::init_logging("lcm-stats", common.log_level);

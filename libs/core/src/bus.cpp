@@ -85,7 +85,11 @@ struct Bus::Subscription {
   }
 };
 
-Bus::Bus(const std::string& url) : url_(url.empty() ? default_lcm_url() : url) {
+std::string effective_lcm_url(const std::string& given) {
+  return given.empty() ? default_lcm_url() : with_receive_buffer(given);
+}
+
+Bus::Bus(const std::string& url) : url_(effective_lcm_url(url)) {
   if (const std::string why = bad_udpm_port(url_); !why.empty()) throw BusError(why, kExitUsage);
   lcm_ = std::make_unique<lcm::LCM>(url_);
   if (!lcm_->good()) throw cannot_start(url_);

@@ -28,6 +28,10 @@ inline constexpr const char* kProjectDefaultUrl = "udpm://239.255.76.67:7667?ttl
 // default, with a large receive buffer added to any udpm URL lacking one.
 std::string default_lcm_url();
 std::string with_receive_buffer(const std::string& url);
+// The URL a Bus opens for a --lcm-url: default_lcm_url() for "", else the
+// URL given with the same receive buffer (a viewer on a robot's own port
+// lost most stereo pairs in the kernel without it, uncounted).
+std::string effective_lcm_url(const std::string& given);
 
 // The log a file:// URL replays (not mode=w or mode=a), or "" for a URL that
 // replays none.
