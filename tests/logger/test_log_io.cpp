@@ -156,6 +156,17 @@ TEST(LogWriter, FolderIsRefusedAsSuchWithOrWithoutOverwrite) {
   }
 }
 
+// A pipe (`ivoa-log-check <(cat log)`) or a device read as a file of size 0:
+// "intact but empty", exit 0.
+TEST(LogReader, APipeOrDeviceIsRefusedAsNotARegularFile) {
+  try {
+    LogReader reader("/dev/null");
+    FAIL() << "read a device as a log";
+  } catch (const LogReadError& e) {
+    EXPECT_NE(std::string(e.what()).find("/dev/null: not a regular file"), std::string::npos) << e.what();
+  }
+}
+
 TEST(LogReader, TruncatedEventIsReportedAtItsOffsetAfterTheGoodOnes) {
   test::TempDir dir;
   const std::string path = dir.file("cut.lcmlog");

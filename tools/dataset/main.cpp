@@ -56,13 +56,14 @@ std::string class_counts(const std::array<int64_t, dataset::kNumClasses>& c) {
 int build_session(const std::string& out, const std::string& session, const std::vector<std::string>& logs,
                   const dataset::BuildOptions& options) {
   uint64_t total = 0;
-  for (const auto& log : logs) total += fs::exists(log) ? fs::file_size(log) : 0;
+  std::error_code no_size;  // a log that cannot be read is named by the builder
+  for (const auto& log : logs) total += fs::is_regular_file(log) ? fs::file_size(log, no_size) : 0;
   Progress progress("session " + session, static_cast<double>(total) / 1e6, "MB");
   dataset::SessionBuilder builder(out, session, options);
   uint64_t before = 0;
   for (const auto& log : logs) {
     builder.add_log(log, [&](uint64_t done, uint64_t) { progress.update(static_cast<double>(before + done) / 1e6); });
-    before += fs::file_size(log);
+    before += fs::file_size(log, no_size);
   }
   const dataset::BuildReport r = builder.finish();
   progress.finish(std::to_string(r.stereo_frames) + " frames");

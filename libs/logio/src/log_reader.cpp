@@ -49,6 +49,13 @@ LogReader::LogReader(std::string path, LogReaderOptions options) : path_(std::mo
     if (fd_ >= 0) ::close(fd_);
     throw LogReadError("cannot open log " + path_ + ": " + std::strerror(error));
   }
+  // Events are read at their offsets: a pipe or device read as a file of
+  // size 0 passed as an intact, empty log.
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd_);
+    throw LogReadError("cannot read log " + path_ +
+                       ": not a regular file (a pipe or a device: save it to a file first)");
+  }
   size_ = static_cast<uint64_t>(st.st_size);
   ::posix_fadvise(fd_, 0, 0, POSIX_FADV_SEQUENTIAL);
 }
