@@ -653,6 +653,35 @@ TEST(DatasetBuilder, LogWithoutRecordedLabelsIsRefusedAndKeepsTheExistingSession
   EXPECT_EQ(SessionReader(dir.file("data") + "/s").size(), recorded.size());
 }
 
+// Logs that give no sample (here: no depth frame within the tolerance)
+// replaced a good session of that name with an empty one, exit 0.
+TEST(SessionBuilder, NoSampleAtAllIsAnErrorThatKeepsTheExistingSession) {
+  test::TempDir dir;
+  const std::string log_path = dir.file("office_s7.lcmlog");
+  test::write_sim_log(log_path, kScene, 7, 2);  // depth 4 ms after stereo
+  BuildOptions options;
+  options.labels = "jppc";
+  options.evidence = false;
+  SessionBuilder good(dir.file("data"), "s", options);
+  good.add_log(log_path);
+  const int64_t samples = good.finish().samples;
+  ASSERT_GT(samples, 0);
+  options.pairing.tolerance_us = 0;
+  SessionBuilder unpaired(dir.file("data"), "s", options);
+  unpaired.add_log(log_path);
+  try {
+    unpaired.finish();
+    FAIL() << "an empty session was written";
+  } catch (const DatasetError& e) {
+    const std::string why = e.what();
+    EXPECT_NE(why.find("no sample to store (0 of 2 stereo frames labelled, 2 without a depth frame within 0.0 ms"),
+              std::string::npos)
+        << why;
+    EXPECT_NE(why.find("session 's' not written (an existing one is kept)"), std::string::npos) << why;
+  }
+  EXPECT_EQ(static_cast<int64_t>(SessionReader(dir.file("data") + "/s").size()), samples);
+}
+
 // A copy of the log at `from` with every channel renamed to PREFIX + name,
 // as a robot started with renamed channels records it.
 void copy_with_renamed_channels(const std::string& from, const std::string& to, const std::string& prefix) {

@@ -101,6 +101,7 @@ struct SessionBuilder::Impl {
   void set_image_size(cv::Size size);
   void count_frames_of_other_sizes();
   std::string no_label_source() const;
+  std::string no_samples() const;
 };
 
 void SessionBuilder::Impl::bad(const std::string& what) {
@@ -126,6 +127,21 @@ std::string SessionBuilder::Impl::no_label_source() const {
            "nothing to label from" + kept;
   return logs + ": no " + options.labels_channel + " message after the calibration: recorded without the depth " +
          "monitor? Label it offline from its depth frames with --labels jppc (or dense)" + kept;
+}
+
+// Why logs with frames and labels gave no sample at all (nothing paired,
+// every patch off the image): an empty session replaced a good one of the
+// same name, exit 0.
+std::string SessionBuilder::Impl::no_samples() const {
+  std::string logs;
+  for (const auto& log : info.logs) logs += (logs.empty() ? "" : ", ") + log;
+  std::string why = fmt::format("{} of {} stereo frames labelled", report.frames_labelled, report.stereo_frames);
+  if (report.frames_unmatched > 0)
+    why += fmt::format(", {} without a depth frame within {:.1f} ms (--sync-tolerance-us)", report.frames_unmatched,
+                       static_cast<double>(options.pairing.tolerance_us) / 1e3);
+  if (report.patches_outside > 0) why += fmt::format(", {} cells whose patch leaves the image", report.patches_outside);
+  if (report.tn_dropped > 0) why += fmt::format(", {} TN cells left out (--keep-tn)", report.tn_dropped);
+  return logs + ": no sample to store (" + why + "); session '" + session + "' not written (an existing one is kept)";
 }
 
 void SessionBuilder::Impl::open_writer() {
@@ -501,8 +517,9 @@ BuildReport SessionBuilder::finish() {
   if (m.label_sources == 0 || m.report.stereo_frames == 0) throw DatasetError(m.no_label_source());
   if (m.pipeline) m.take(m.pipeline->flush());
   m.emit_ready(true);
+  if (m.report.samples == 0) throw DatasetError(m.no_samples());
   if (!m.writer && !m.frames_by_size.empty()) m.set_image_size(m.frames_by_size.front().first);
-  m.open_writer();  // an empty session is still written, so it can be listed
+  m.open_writer();  // opened by its first sample already
   m.count_frames_of_other_sizes();
   m.writer->close();
   return m.report;
