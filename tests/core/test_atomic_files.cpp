@@ -1,5 +1,7 @@
 // Files replaced whole or not at all: what keeps a checkpoint, a model or a
 // sidecar usable when the disk fills while it is rewritten.
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <string>
 
@@ -35,6 +37,19 @@ TEST(ReplaceFile, AWriteThatFailsKeepsTheOldFileWhole) {
   EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
   EXPECT_NE(error.find(path + ": cannot write (File too large)"), std::string::npos) << error;
   EXPECT_NE(error.find("the previous file, if any, is kept"), std::string::npos) << error;
+}
+
+// Run as root, a --json or --out naming /dev/full had the device node
+// replaced by a regular file; a pipe here stands for any such file.
+TEST(ReplaceFile, APipeOrDeviceIsRefusedAndLeftInPlace) {
+  test::TempDir dir;
+  const std::string path = dir.file("pipe");
+  ASSERT_EQ(::mkfifo(path.c_str(), 0644), 0);
+  std::string error;
+  EXPECT_FALSE(replace_file(path, "x", error));
+  EXPECT_NE(error.find(path + ": not a regular file"), std::string::npos) << error;
+  EXPECT_TRUE(std::filesystem::is_fifo(path));
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
 }
 
 TEST(ReplaceFile, AFolderThatIsNotThereIsNamed) {

@@ -304,6 +304,16 @@ TEST(WriteTextFile, WritesTheTextOrSaysItCannot) {
   EXPECT_FALSE(write_text_file("/dev/full", "a full disk is reported, not lost in the buffer"));
 }
 
+// A write that fails (a full disk; here the temporary's name is taken by a
+// folder) cut the last run's file short or emptied it.
+TEST(WriteTextFile, AFailedWriteKeepsThePreviousFileWhole) {
+  test::TempDir dir;
+  ASSERT_TRUE(write_text_file(dir.file("out.json"), "{\"run\": 1}\n"));
+  std::filesystem::create_directory(dir.file("out.json.tmp"));
+  EXPECT_FALSE(write_text_file(dir.file("out.json"), "{\"run\": 2}\n"));
+  EXPECT_EQ(test::read_file(dir.file("out.json")), "{\"run\": 1}\n");
+}
+
 TEST(WriteReadyFile, CreatesTheFileScriptsWaitFor) {
   test::TempDir dir;
   EXPECT_TRUE(write_ready_file(dir.file("ready")));

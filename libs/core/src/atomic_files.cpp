@@ -1,6 +1,7 @@
 #include "ivoa/core/atomic_files.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -57,6 +58,13 @@ FileSet::~FileSet() {
 }
 
 bool FileSet::stage(const std::string& path, std::string_view bytes, std::string& error) {
+  // The rename would put a regular file in a device's or pipe's place (run
+  // as root, --out /dev/full replaced the device node).
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    error = path + ": not a regular file (a device, pipe or folder is not replaced); name a file";
+    return false;
+  }
   staged_.push_back(path);
   std::string reason;
   if (write_whole_file(temporary_of(path), bytes, reason)) return true;

@@ -13,6 +13,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "ivoa/core/atomic_files.hpp"
 #include "ivoa/core/bus.hpp"
 #include "ivoa/core/flag_checks.hpp"
 #include "ivoa/core/heartbeat.hpp"
@@ -194,11 +195,21 @@ int run_until_stopped(Bus& bus, Heartbeat* heartbeat, const std::function<void()
 
 bool write_text_file(const std::string& path, const std::string& text) {
   if (path.empty()) return true;
-  errno = 0;
-  std::ofstream out(path);
-  // Flushed here: a full disk fails the flush, not the buffered <<.
-  if (out << text << std::flush) return true;
-  spdlog::error("cannot write {}{}", path, errno != 0 ? std::string(": ") + std::strerror(errno) : "");
+  std::error_code no_file;
+  const auto type = std::filesystem::status(path, no_file).type();
+  if (type != std::filesystem::file_type::regular && type != std::filesystem::file_type::not_found) {
+    errno = 0;  // /dev/stdout, a pipe: written through, not replaced
+    std::ofstream out(path);
+    // Flushed here: a full disk fails the flush, not the buffered <<.
+    if (out << text << std::flush) return true;
+    spdlog::error("cannot write {}{}", path, errno != 0 ? std::string(": ") + std::strerror(errno) : "");
+    return false;
+  }
+  // Replaced whole: a full disk left a cut or empty file where the last
+  // run's results had been.
+  std::string error;
+  if (replace_file(path, text, error)) return true;
+  spdlog::error("cannot write {}", error);
   return false;
 }
 
