@@ -95,6 +95,47 @@ TEST(Calibration, InvalidValuesAreRejected) {
   rig_calibration_t msg = to_message(test::make_test_rig(), 0);
   msg.left.width = 0;
   EXPECT_THROW(from_message(msg), CalibrationError);
+  msg = to_message(test::make_test_rig(), 0);  // a depth monitor took these and labelled with them
+  msg.depth_min_range = 1e-9;
+  EXPECT_THROW(from_message(msg), CalibrationError);
+  msg = to_message(test::make_test_rig(), 0);
+  msg.depth_max_range = 1e300;  // past what 16-bit millimetres can say
+  EXPECT_THROW(from_message(msg), CalibrationError);
+}
+
+// A saved rig's file with `key: value` in place of that key's line (or
+// added), loaded: the error, or "".
+std::string load_with(const test::TempDir& dir, const std::string& key, const std::string& value) {
+  save_rig_calibration(test::make_test_rig(), dir.file("rig.yml"));
+  std::istringstream saved(test::read_file(dir.file("rig.yml")));
+  std::string text;
+  for (std::string line; std::getline(saved, line);)
+    if (line.rfind(key + ":", 0) != 0) text += line + "\n";
+  std::ofstream(dir.file("rig.yml")) << text << key << ": " << value << "\n";
+  try {
+    load_rig_calibration(dir.file("rig.yml"));
+    return "";
+  } catch (const CalibrationError& e) {
+    return e.what();
+  }
+}
+
+// A misspelt key was dropped for the default, and a range given as a string
+// or a list loaded as DBL_MAX.
+TEST(Calibration, MisspeltKeysAndRangesThatAreNotNumbersAreNamed) {
+  test::TempDir dir;
+  EXPECT_NE(load_with(dir, "depth_max_rang", "8.")
+                .find("rig.yml: key 'depth_max_rang' is not a calibration key: "
+                      "'depth_max_range' misspelt?"),
+            std::string::npos);
+  EXPECT_NE(load_with(dir, "depth_max_range", "\"8\"").find("rig.yml: key 'depth_max_range' must be a number (metres)"),
+            std::string::npos);
+  EXPECT_NE(load_with(dir, "depth_min_range", "[8, 9]").find("key 'depth_min_range' must be a number"),
+            std::string::npos);
+  EXPECT_NE(load_with(dir, "rig_name", "[1, 2]").find("key 'rig_name' must be a string"), std::string::npos);
+  // A calibration tool's other keys are its business.
+  EXPECT_EQ(load_with(dir, "calibration_time", "\"2026-12-06\""), "");
+  EXPECT_EQ(load_with(dir, "P1", "[1, 2, 3]"), "");
 }
 
 // A lens no camera has: the simulator's renderer crashed (SIGSEGV) on

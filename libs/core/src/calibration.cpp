@@ -1,8 +1,10 @@
 #include "ivoa/core/calibration.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <climits>
 #include <cmath>
+#include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -118,6 +120,63 @@ CameraIntrinsics read_camera(const cv::FileStorage& fs, const std::string& name,
   return cam;
 }
 
+// An optional number in metres: a string or a list there loaded as DBL_MAX.
+void read_range(const cv::FileStorage& fs, const std::string& key, const std::string& path, double& value) {
+  const cv::FileNode node = fs[key];
+  if (node.empty()) return;
+  check(node.isReal() || node.isInt(), path, "key '" + key + "' must be a number (metres)");
+  value = static_cast<double>(node);
+}
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t substitute = diagonal + (a[i - 1] != b[j - 1]);
+      diagonal = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, substitute});
+    }
+  }
+  return row[b.size()];
+}
+
+// Other keys (a calibration tool's metadata, R1/P1/Q) are left alone, but
+// one a letter or two from a key of ours is a misspelling whose value
+// would be dropped for the default (depth_max_rang: 8 ran at 4.5 m).
+void refuse_misspelt_keys(const cv::FileStorage& fs, const std::string& path) {
+  static const std::vector<std::string> known = {"rig_name",
+                                                 "left_width",
+                                                 "left_height",
+                                                 "K1",
+                                                 "D1",
+                                                 "right_width",
+                                                 "right_height",
+                                                 "K2",
+                                                 "D2",
+                                                 "R",
+                                                 "T",
+                                                 "XR",
+                                                 "XT",
+                                                 "depth_width",
+                                                 "depth_height",
+                                                 "K_depth",
+                                                 "D_depth",
+                                                 "XR_depth",
+                                                 "XT_depth",
+                                                 "depth_min_range",
+                                                 "depth_max_range"};
+  for (const cv::FileNode& node : fs.root()) {
+    const std::string key = node.name();
+    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+    for (const std::string& k : known)
+      check(k.size() < 4 || edit_distance(key, k) > 2, path,
+            "key '" + key + "' is not a calibration key: '" + k + "' misspelt?");
+  }
+}
+
 Eigen::Isometry3d make_isometry(const Eigen::Matrix3d& R, const Eigen::Vector3d& T) {
   Eigen::Isometry3d iso = Eigen::Isometry3d::Identity();
   iso.linear() = R;
@@ -198,8 +257,9 @@ void validate(const RigCalibration& rig, const std::string& where) {
   };
   check(on_robot(rig.left_to_robot) && on_robot(rig.depth_to_robot), where,
         "camera -> robot translations must be finite and within 100 m of the robot");
-  check(rig.depth_min_range > 0 && rig.depth_max_range > rig.depth_min_range, where,
-        "depth range must satisfy 0 < min < max");
+  // Depth images are millimetres in 16 bits: 65.535 m is the farthest reading.
+  check(rig.depth_min_range >= 1e-3 && rig.depth_max_range > rig.depth_min_range && rig.depth_max_range <= 65.535,
+        where, "depth range must satisfy 1 mm <= min < max <= 65.535 m (16-bit millimetres)");
 }
 
 RigCalibration load_rig_calibration(const std::string& path) {
@@ -215,8 +275,11 @@ RigCalibration load_rig_calibration(const std::string& path) {
     throw CalibrationError(path + ": not a readable OpenCV YAML file (" + why + ")");
   }
   check(fs.isOpened(), path, "cannot open calibration file");
+  refuse_misspelt_keys(fs, path);
   RigCalibration rig;
-  fs["rig_name"] >> rig.rig_name;
+  const cv::FileNode name = fs["rig_name"];
+  check(name.empty() || name.isString(), path, "key 'rig_name' must be a string");
+  if (!name.empty()) name >> rig.rig_name;
   rig.left = read_camera(fs, "left", "K1", "D1", path);
   rig.right = read_camera(fs, "right", "K2", "D2", path);
   rig.stereo_R = read_matrix3(fs, "R", path);
@@ -224,8 +287,8 @@ RigCalibration load_rig_calibration(const std::string& path) {
   rig.left_to_robot = make_isometry(read_matrix3(fs, "XR", path), read_vector3(fs, "XT", path));
   rig.depth = read_camera(fs, "depth", "K_depth", "D_depth", path);
   rig.depth_to_robot = make_isometry(read_matrix3(fs, "XR_depth", path), read_vector3(fs, "XT_depth", path));
-  if (!fs["depth_min_range"].empty()) fs["depth_min_range"] >> rig.depth_min_range;
-  if (!fs["depth_max_range"].empty()) fs["depth_max_range"] >> rig.depth_max_range;
+  read_range(fs, "depth_min_range", path, rig.depth_min_range);
+  read_range(fs, "depth_max_range", path, rig.depth_max_range);
   validate(rig, path);
   return rig;
 }
