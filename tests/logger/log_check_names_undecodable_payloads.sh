@@ -65,4 +65,10 @@ cat "$d/fingerprint.txt"
 [ "$rc" = 3 ] || { echo "FAIL: exit $rc for a damaged fingerprint, expected 3 (damaged)"; exit 1; }
 grep -q "RIG_CALIBRATION: 1 messages are of no ivoa type among its ivoa.rig_calibration_t messages (damaged at or before the fingerprint, or another program's type; readers skip them), the first at byte $fp_offset" "$d/fingerprint.txt"
 grep -q "RIG_CALIBRATION: 1 of its 3 messages are not ivoa.rig_calibration_t (1 no ivoa type: another program's, or damaged before the fingerprint)" "$d/fingerprint.txt"
-echo "OK: a payload cut inside an intact frame is named; the intact log passes"
+
+# The same log twice read as repeats and a publisher's restart.
+rc=0
+"$B/bin/ivoa-log-check" "$d/fingerprint.lcmlog" "$d/../$(basename "$d")/fingerprint.lcmlog" > "$d/twice.txt" 2>&1 || rc=$?
+[ "$rc" = 2 ] || { cat "$d/twice.txt"; echo "FAIL: exit $rc for a log given twice, expected 2"; exit 1; }
+grep -q "is given twice" "$d/twice.txt" || { cat "$d/twice.txt"; exit 1; }
+echo "OK: a payload cut inside an intact frame is named; the intact log passes; a log given twice is refused"

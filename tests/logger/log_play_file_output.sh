@@ -37,4 +37,17 @@ code=0
 "$B/bin/ivoa-log-play" -s 0 --lcm-url "file://$out/copy.lcmlog" "$out/in.lcmlog" >"$out/read_only.txt" 2>&1 || code=$?
 [ "$code" = 1 ] || { cat "$out/read_only.txt"; echo "FAIL: an output LCM refused exited $code, expected 1" >&2; exit 1; }
 grep -q "refused by LCM: not published" "$out/read_only.txt" || { cat "$out/read_only.txt"; exit 1; }
-echo "OK: the input log kept, a copy played, refusals named"
+# A disk that fills (here a file size limit, SIGXFSZ ignored so the write
+# fails as on a full disk): LCM writes through stdio and reports nothing, so
+# the play ended "finished", exit 0, over a cut log.
+code=0
+(trap '' XFSZ && ulimit -f 200 && "$B/bin/ivoa-log-play" -s 0 --lcm-url "file://$out/cut.lcmlog?mode=w" "$out/in.lcmlog") \
+  >"$out/cut.txt" 2>&1 || code=$?
+[ "$code" = 4 ] || { cat "$out/cut.txt"; echo "FAIL: a cut output log exited $code, expected 4" >&2; exit 1; }
+grep -q "the output log is not whole: $out/cut.lcmlog holds" "$out/cut.txt" || { cat "$out/cut.txt"; exit 1; }
+
+code=0
+"$B/bin/ivoa-log-play" -s 0 --lcm-url memq:// "$out/in.lcmlog" "$out/./in.lcmlog" >"$out/twice.txt" 2>&1 || code=$?
+[ "$code" = 2 ] || { cat "$out/twice.txt"; echo "FAIL: a log given twice exited $code, expected 2" >&2; exit 1; }
+grep -q "is given twice" "$out/twice.txt" || { cat "$out/twice.txt"; exit 1; }
+echo "OK: the input log kept, a copy played, refusals named, a cut output and a log given twice refused"

@@ -271,6 +271,10 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
     return ivoa::kExitUsage;
   }
+  if (const std::string twice = ivoa::file_given_twice(cl.files); !twice.empty()) {
+    spdlog::error("{} is given twice: its messages would count twice (as repeats and a restart)", twice);
+    return ivoa::kExitUsage;
+  }
   if (const std::string log = ivoa::same_file_among(cl.json_path, cl.files); !log.empty()) {
     spdlog::error("--json {} is the log {}: it would be written over", cl.json_path, log);
     return ivoa::kExitUsage;

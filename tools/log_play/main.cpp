@@ -30,6 +30,57 @@ std::string output_among_inputs(const std::string& url, const std::vector<std::s
   return ivoa::same_file_among(url.substr(7, url.find('?') - 7), logs);
 }
 
+// Why a file://PATH?mode=w output does not hold the `published` events
+// ("" if it does, or the output is not such a file). LCM writes it through
+// stdio and says nothing of a full disk: the play reported success over a
+// cut log.
+std::string why_output_short(const std::string& url, int64_t published) {
+  if (url.rfind("file://", 0) != 0 || url.find("mode=w") == std::string::npos) return "";
+  const std::string path = url.substr(7, url.find('?') - 7);
+  try {
+    ivoa::logio::LogReader reader(path);
+    ivoa::logio::LogEvent e;
+    int64_t events = 0;
+    while (reader.next(e)) ++events;
+    // Our own heartbeats are in it too, so at least as many.
+    if (events >= published && reader.clean()) return "";
+    return fmt::format("{} holds {} whole events for {} published{} (a full disk?)", path, events, published,
+                       reader.clean() ? "" : ", then " + reader.problems().front().describe());
+  } catch (const ivoa::logio::LogReadError& e) {
+    return e.what();
+  }
+}
+
+struct PlayResult {
+  int exit_code = ivoa::kExitOk;
+  int64_t published = 0;
+};
+
+PlayResult play(const ivoa::CommonOptions& common, const std::vector<std::string>& logs,
+                const ivoa::log_play::LogPlayerOptions& options) {
+  ivoa::Bus bus(common.lcm_url);
+  ivoa::Heartbeat heartbeat(bus, "log_play", common.status_channel);
+  ivoa::log_play::LogPlayer player(bus, heartbeat, logs, options);
+  const bool whole = player.play();
+  const auto& c = player.counts();
+  heartbeat.set_state(whole ? "finished" : "stopped");
+  heartbeat.publish_now();
+  spdlog::info(
+      "{}: {} of {} files{}, {} events published{}, {} of other channels, {} damaged stretches skipped, "
+      "{} long pauses cut short",
+      whole ? "finished" : "stopped", c.files_done, logs.size(),
+      c.not_logs > 0 ? fmt::format(" ({} of them no LCM log: nothing played from it)", c.not_logs) : "", c.published,
+      c.publish_failures > 0 ? fmt::format(" ({} refused by LCM: not published)", c.publish_failures) : "",
+      c.filtered_out, c.damaged, c.shortened_pauses);
+  if (c.published == 0 && c.filtered_out > 0)
+    spdlog::warn("no event matched -c '{}'{}: the logs' channels were all left out", options.channels,
+                 options.exclude.empty() ? "" : " and -x '" + options.exclude + "'");
+  PlayResult r;
+  r.published = c.published;
+  r.exit_code = c.publish_failures > 0 ? ivoa::kExitFailure : c.not_logs > 0 ? ivoa::kExitBadInput : ivoa::kExitOk;
+  return r;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -68,23 +119,18 @@ int main(int argc, char** argv) {
     spdlog::error("split parts given out of order: give {} (played out of order, time would go back)", order);
     return ivoa::kExitUsage;
   }
+  if (const std::string twice = ivoa::file_given_twice(logs); !twice.empty()) {
+    spdlog::error("{} is given twice: it would play twice, time going back between", twice);
+    return ivoa::kExitUsage;
+  }
   try {
-    ivoa::Bus bus(common.lcm_url);
-    ivoa::Heartbeat heartbeat(bus, "log_play", common.status_channel);
-    ivoa::log_play::LogPlayer player(bus, heartbeat, logs, options);
-    const bool whole = player.play();
-    const auto& c = player.counts();
-    heartbeat.set_state(whole ? "finished" : "stopped");
-    heartbeat.publish_now();
-    spdlog::info(
-        "{}: {} of {} files{}, {} events published{}, {} of other channels, {} damaged stretches skipped, "
-        "{} long pauses cut short",
-        whole ? "finished" : "stopped", c.files_done, logs.size(),
-        c.not_logs > 0 ? fmt::format(" ({} of them no LCM log: nothing played from it)", c.not_logs) : "", c.published,
-        c.publish_failures > 0 ? fmt::format(" ({} refused by LCM: not published)", c.publish_failures) : "",
-        c.filtered_out, c.damaged, c.shortened_pauses);
-    if (c.publish_failures > 0) return ivoa::kExitFailure;
-    return c.not_logs > 0 ? ivoa::kExitBadInput : ivoa::kExitOk;
+    const PlayResult r = play(common, logs, options);  // the output file is closed on return
+    if (r.exit_code != ivoa::kExitOk) return r.exit_code;
+    if (const std::string why = why_output_short(common.lcm_url, r.published); !why.empty()) {
+      spdlog::error("the output log is not whole: {}", why);
+      return ivoa::kExitIoError;
+    }
+    return ivoa::kExitOk;
   } catch (const ivoa::logio::LogReadError& e) {
     spdlog::error("{}", e.what());
     return ivoa::kExitBadInput;

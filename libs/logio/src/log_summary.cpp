@@ -62,7 +62,10 @@ void LogSummary::add(const std::string& channel, int64_t timestamp, const void* 
     s.has_seq = type_has_seq(s.type);
     s.utime_ordered = !type_has_many_senders(s.type);
   }
-  if (fingerprint != s.fingerprint) {
+  // A channel of another program's types: its messages are all "unknown"
+  // alike, not one type among others ("4 of its 5 are not unknown").
+  const bool foreign_alike = s.type == "unknown" && !type;
+  if (fingerprint != s.fingerprint && !foreign_alike) {
     ++s.other_fingerprints;
     ++s.other_types[type ? std::string(*type) : kNoIvoaType];
     return;
