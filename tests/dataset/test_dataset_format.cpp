@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include "ivoa/dataset/builder.hpp"
 #include "ivoa/dataset/dataset_format.hpp"
 #include "ivoa/dataset/patch.hpp"
 #include "test_rig.hpp"
@@ -483,6 +484,23 @@ TEST(DatasetFormat, SessionNameThatIsNotAFolderOfItsOwnIsRefused) {
   }
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "patches.bin"));
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "data" / "patches.bin"));
+}
+
+// A log named hall,run2.lcmlog gave a session whose name ivoa-eval wrote
+// unquoted into predictions.csv; the report then refused the file.
+TEST(DatasetFormat, SessionNameTheCsvFilesCannotHoldIsRefusedBeforeAnyLogIsRead) {
+  test::TempDir dir;
+  const BuildOptions options;
+  for (const std::string name : {"hall,run2", "a\"b", "tab\there"}) {
+    try {
+      SessionBuilder builder(dir.file("data"), name, options);
+      FAIL() << "accepted session name '" << name << "'";
+    } catch (const DatasetError& e) {
+      EXPECT_NE(std::string(e.what()).find("has a comma, a quote or a control character"), std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_NO_THROW(check_session_name("hall_run2-b.c"));
 }
 
 // "--session dataset.json" moved the dataset's index aside and deleted it.

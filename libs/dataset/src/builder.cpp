@@ -441,6 +441,7 @@ std::vector<std::vector<float>> SessionBuilder::Impl::evidence_of(const introspe
 
 SessionBuilder::SessionBuilder(const std::string& dataset_root, const std::string& session, BuildOptions options)
     : impl_(std::make_unique<Impl>()) {
+  check_session_name(session);  // before a log is read, not at its first sample
   impl_->root = dataset_root;
   impl_->session = session;
   impl_->options = std::move(options);

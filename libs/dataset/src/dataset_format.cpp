@@ -298,16 +298,28 @@ void check_replaceable(const std::string& dir, const std::string& name) {
 
 }  // namespace
 
+void check_session_name(const std::string& name) {
+  // "..": the session's files would land beside the dataset
+  if (name.empty() || name[0] == '.' || name.find('/') != std::string::npos)
+    throw DatasetError("session name '" + name +
+                       "' must be a folder name (not empty, no '/', not starting with '.': the builder's own folders "
+                       "do)");
+  // Written unquoted into predictions.csv and causes.csv, a comma shifted
+  // every field after it and the report refused the file.
+  for (const char c : name)
+    if (c == ',' || c == '"' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      throw DatasetError("session name '" + name +
+                         "' has a comma, a quote or a control character, which the CSV files that name it "
+                         "cannot hold unquoted: rename the log or give --session");
+}
+
 SessionWriter::SessionWriter(const std::string& dataset_root, SessionInfo info)
     : dir_((fs::path(dataset_root) / info.session).string()),
       work_dir_((fs::path(dataset_root) / ("." + info.session + ".partial")).string()),
       info_(std::move(info)),
       files_(std::make_unique<Files>()) {
-  const std::string& name = info_.session;  // "..": the session's files would land beside the dataset
-  if (name.empty() || name[0] == '.' || name.find('/') != std::string::npos)
-    throw DatasetError("session name '" + name +
-                       "' must be a folder name (not empty, no '/', not starting with '.': the builder's own folders "
-                       "do)");
+  const std::string& name = info_.session;
+  check_session_name(name);
   std::error_code ec;
   if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
     throw DatasetError("session name '" + name + "': " + dir_ + " is a file, not a session folder; name another");

@@ -166,6 +166,12 @@ class SessionReader {
 void register_session(const std::string& dataset_root, const std::string& session, int patch_size);
 std::vector<std::string> list_sessions(const std::string& dataset_root);
 
+// Throws DatasetError unless `name` can name a session: a folder name (not
+// empty, no '/', not starting with '.', which the builder's own folders
+// do) that the CSV files it is written into need not quote (no ',', '"' or
+// control characters).
+void check_session_name(const std::string& name);
+
 // A split file: split name -> sessions. Throws DatasetError naming the file,
 // or a session listed in two splits.
 std::map<std::string, std::vector<std::string>> load_split(const std::string& path);
