@@ -69,4 +69,9 @@ for rate_said in "20:info :--rate 20, and its frames' times read as 10 Hz" \
     cat said.txt; echo "FAIL: --rate 10, the log's own, was questioned" >&2; exit 1
   fi
 done
-echo "OK: a log given twice, another scene, a wrong start and an output over an input or the other output refused by name; another --rate said"
+# Without its stereo pairs the re-rendering failed as "cannot encode unknown pixel format -1".
+mkdir nostereo
+"$B/bin/ivoa-log-play" -s 0 -x STEREO_IMAGES --log-level warn --lcm-url "file://$out/nostereo/office_s5.lcmlog?mode=w" \
+  office_s5.lcmlog
+expect 3 "nostereo/office_s5.lcmlog: no decodable STEREO_IMAGES message" nostereo/office_s5.lcmlog
+echo "OK: a log given twice, another scene, a wrong start, no stereo pairs and an output over an input or the other output refused by name; another --rate said"

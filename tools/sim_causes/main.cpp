@@ -170,6 +170,11 @@ SessionLog read_log(const std::string& path, const Options& opt, bool want_label
   if (log.truth.empty())
     throw std::runtime_error(path + ": no " + opt.truth_channel + " messages (causes need a simulated session)");
   if (want_labels && log.labels.empty()) throw std::runtime_error(path + ": no " + opt.labels_channel + " messages");
+  // The frames are re-rendered in the recorded pixel format (JPEG rounds):
+  // without it, "cannot encode unknown pixel format -1".
+  if (log.pixelformat < 0)
+    throw std::runtime_error(path + ": no decodable " + opt.stereo_channel +
+                             " message (its pixel format says how to re-render the frames)");
   return log;
 }
 
