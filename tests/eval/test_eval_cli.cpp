@@ -226,6 +226,21 @@ TEST_F(EvalCli, OverlaysComeOnlyFromALogOfTheSessionsSceneAndSeed) {
   EXPECT_TRUE(contains(r.output, "a log of scene lobby seed 31")) << r.output;
 }
 
+// A log whose stereo pairs do not decode, or without the session's frames,
+// gave fewer overlays (or none) without a word.
+TEST_F(EvalCli, StereoPairsThatGiveNoOverlayAreSaid) {
+  std::filesystem::create_directories(dir_.file("cut"));
+  {
+    logio::LogWriter log(dir_.file("cut/t.lcmlog"));
+    const uint8_t not_a_pair[12] = {1, 2, 3};
+    log.write("STEREO_IMAGES", 0, not_a_pair, sizeof not_a_pair);
+  }
+  const auto r = eval("test", "--logs " + dir_.file("cut/t.lcmlog"));
+  ASSERT_EQ(r.exit_code, kExitOk) << r.output;
+  EXPECT_TRUE(contains(r.output, "t.lcmlog: 1 STEREO_IMAGES messages do not decode as stereo pairs")) << r.output;
+  EXPECT_TRUE(contains(r.output, "t.lcmlog: none of session t's labelled frames is in it")) << r.output;
+}
+
 // A log the logger split (t.lcmlog.00, .01, ...) is the session "t", as
 // ivoa-dataset names it.
 TEST_F(EvalCli, APartOfASplitLogIsItsSessionsLog) {

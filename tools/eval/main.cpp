@@ -238,7 +238,8 @@ std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection
   // a full budget until the truth has been checked.
   bool scene_checked = session.info().scene.empty();
   std::vector<PendingOverlay> from_log;
-  std::unique_ptr<GroundWarp> warp;  // two-view models, from the log's calibration
+  std::unique_ptr<GroundWarp> warp;             // two-view models, from the log's calibration
+  int64_t undecodable = 0, session_frames = 0;  // stereo events; of the decoded, the session's labelled frames
   while ((from_log.size() < room || !scene_checked) && in.next(e)) {
     if (stop_requested()) throw Stopped{kKeptPredictions};  // a long log is minutes of reading
     if (!scene_checked && e.channel == o.truth_channel) {
@@ -254,15 +255,27 @@ std::vector<PendingOverlay> prepare_log_overlays(const Options& o, introspection
       continue;
     }
     stereo_image_t msg;
-    if (from_log.size() >= room || e.channel != o.stereo_channel || !logio::decode(e, msg)) continue;
+    if (from_log.size() >= room || e.channel != o.stereo_channel) continue;
+    if (!logio::decode(e, msg)) {
+      ++undecodable;
+      continue;
+    }
     const auto it = frames.find(msg.utime);
-    if (it == frames.end() || labelled_seen++ % o.overlay_every != 0) continue;
+    if (it == frames.end()) continue;
+    ++session_frames;
+    if (labelled_seen++ % o.overlay_every != 0) continue;
     if (model.info().views == 2 && !warp)
       throw dataset::DatasetError(log + ": no rig calibration before the first frame (a two-view model needs it)");
     const std::string path =
         o.out + "/overlays/" + logio::session_name_of(log) + "_" + std::to_string(msg.utime) + ".png";
     from_log.push_back(prepare_overlay(o, model, msg, warp.get(), it->second, path));
   }
+  if (undecodable > 0)
+    spdlog::warn("{}: {} {} messages do not decode as stereo pairs: no overlays from them", log, undecodable,
+                 o.stereo_channel);
+  if (session_frames == 0 && room > 0 && in.not_a_log().empty())
+    spdlog::warn("{}: none of session {}'s labelled frames is in it ({} messages by utime): no overlays from it", log,
+                 session.info().session, o.stereo_channel);
   if (const std::string why = in.not_a_log(); !why.empty()) spdlog::warn("{}: {}: no overlays from it", log, why);
   else
     for (const auto& p : in.problems())  // cut short or damaged: the frames there have no overlays
