@@ -626,6 +626,13 @@ class DegenerateAndBadInputTest(FabricatedInputsCase):
                 self.assertEqual(set(own), {colour}, f"{figure}: {name}")
                 self.assertNotIn(colour, tool.figures.CLASS_COLOURS)  # a model is not read as a class
 
+    def test_an_output_inside_an_input_folder_is_a_usage_error(self):
+        for out in (self.f.degenerate, os.path.join(self.f.degenerate, "report"), os.path.join(self.f.data2, "s")):
+            code, _, stderr = run_main(["--eval", self.f.degenerate, "--dataset", self.f.data2, "--out", out])
+            self.assertEqual(code, 2, stderr)
+            self.assertIn("or lies in it: name a folder of its own", stderr)
+            self.assertFalse(os.path.exists(os.path.join(out, "report.md")))
+
     def test_degenerate_inputs_are_reported(self):
         out = os.path.join(self.root, "report_degenerate")
         code, stdout, stderr = run_main(["--eval", self.f.degenerate, "--dataset", self.f.data2, "--out", out])

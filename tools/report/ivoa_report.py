@@ -128,6 +128,11 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
         p.error(f"--seed must be in 0 .. 4294967295 (numpy's and scikit-learn's range), not {a.seed}")
     if not math.isfinite(a.evidence_threshold):
         p.error(f"--evidence-threshold must be a number, not {a.evidence_threshold}")
+    # Inside an input its files mixed with the eval's, or a later ivoa-dataset
+    # build refused the session folder they landed in.
+    for folder in a.eval + a.dataset:
+        if _inside(a.out, folder):
+            p.error(f"--out {a.out} is the input {folder} or lies in it: name a folder of its own")
     return a
 
 
