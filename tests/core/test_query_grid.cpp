@@ -92,6 +92,9 @@ TEST(QueryGrid, ReceivedCellsThatCannotBeUsedAreNamed) {
   msg.u[seen] = std::nanf("");
   EXPECT_EQ(grid_content_error(msg).rfind("cell " + std::to_string(seen) + ": in_image, but its pixel (nan", 0), 0u);
   msg = good;
+  msg.v[seen] = 1e9f;  // was predicted at, and labelled as if in view
+  EXPECT_NE(grid_content_error(msg).find(") lies outside any image"), std::string::npos) << grid_content_error(msg);
+  msg = good;
   msg.in_image[seen] = 0;  // a cell out of view may have no pixel (behind the camera)
   msg.u[seen] = std::nanf("");
   EXPECT_EQ(grid_content_error(msg), "");

@@ -1,6 +1,7 @@
 #include "ivoa/core/grid_messages.hpp"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <iterator>
 #include <tuple>
@@ -81,6 +82,17 @@ obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& det
   return msg;
 }
 
+namespace {
+
+// No calibrated image is SHRT_MAX a side: a cell "in view" at pixel 1e9 was
+// predicted at, labelled and drawn.
+bool pixel_in_some_image(float u, float v) {
+  const auto in_range = [](float p) { return p >= -1.0f && p <= static_cast<float>(SHRT_MAX); };
+  return in_range(u) && in_range(v);
+}
+
+}  // namespace
+
 std::string grid_content_error(const obstacle_grid_t& msg) {
   // Cells are indexed ix * num_y + iy: a shape that is not the cells' count
   // was taken as the grid of every later frame and failed each of them.
@@ -106,6 +118,9 @@ std::string grid_content_error(const obstacle_grid_t& msg) {
     if (msg.in_image[i] && !(std::isfinite(msg.u[i]) && std::isfinite(msg.v[i])))
       return where() + "in_image, but its pixel (" + std::to_string(msg.u[i]) + ", " + std::to_string(msg.v[i]) +
              ") is not finite";
+    if (msg.in_image[i] && !pixel_in_some_image(msg.u[i], msg.v[i]))
+      return where() + "in_image, but its pixel (" + std::to_string(msg.u[i]) + ", " + std::to_string(msg.v[i]) +
+             ") lies outside any image";
   }
   return "";
 }
@@ -155,6 +170,9 @@ std::string labels_content_error(const introspection_labels_t& m) {
       return "cell " + std::to_string(i) + " has label " + std::to_string(m.label[i]) + ", not -1..3";
     if (!std::isfinite(m.x[i]) || !std::isfinite(m.y[i]))
       return "cell " + std::to_string(i) + " has no finite position";
+    if (m.label[i] != introspection_labels_t::LABEL_NONE && !pixel_in_some_image(m.u[i], m.v[i]))
+      return "cell " + std::to_string(i) + " is labelled, but its pixel (" + std::to_string(m.u[i]) + ", " +
+             std::to_string(m.v[i]) + ") lies outside any image";
     if (const std::string error = has_verdicts ? cell_verdicts_error(m, i) : ""; !error.empty()) return error;
   }
   return "";

@@ -23,12 +23,13 @@ obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& det
 
 // Empty if a received grid's cells can be used, otherwise the first thing
 // wrong: arrays not num_cells long, a state none of STATE_*, a position that
-// is not finite, or a cell in_image whose pixel is not.
+// is not finite, or a cell in_image whose pixel is not finite or lies
+// outside any image (SHRT_MAX a side).
 std::string grid_content_error(const obstacle_grid_t& msg);
 
 // The same for a labels message: a grid geometry or safety radius that is
 // not a finite distance, num_x by num_y not its cells, a label none of LABEL_*, a position not finite, a
-// verdict none of STATE_*, or a label its two verdicts do not give.
+// labelled cell's pixel outside any image, a verdict none of STATE_*, or a label its two verdicts do not give.
 std::string labels_content_error(const introspection_labels_t& msg);
 
 // Algorithm 1 of the IVOA paper, the label of a cell from the stereo
