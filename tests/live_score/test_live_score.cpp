@@ -152,6 +152,22 @@ TEST(LiveScorer, MessagesWithValuesItCannotScoreAreLeftOutAndSaidWhy) {
   EXPECT_EQ(scorer.add(labels_message(7, {{0.0f, -3e19f, kTN, kFree}})), "cell 0: position is over 1000 km away");
   EXPECT_EQ(scorer.add(prediction_message(5, {{1.0f, 0.0f, kTN, 1, kFree, 9, 1}})),
             "query 0: class given the verdict 9 is none of -1..3");
+  // Drawn by the viewer and scored here before: a NaN pixel, a probability
+  // of 7, a negative variance, an announced flag of 5, a P(wrong) of 7.
+  introspection_t bad_query = prediction_message(5, {{1.0f, 0.0f, kTN, 1, kFree, kTN, 1}});
+  bad_query.query_u[0] = std::nanf("");
+  EXPECT_EQ(scorer.add(bad_query).rfind("query 0: pixel (nan, 0.000000) lies outside any image", 0), 0u);
+  bad_query = prediction_message(5, {{1.0f, 0.0f, kTN, 1, kFree, kTN, 1}});
+  bad_query.query_probability[0] = 7;
+  EXPECT_EQ(scorer.add(bad_query), "query 0: probability 7.000000 is not a probability");
+  bad_query = prediction_message(5, {{1.0f, 0.0f, kTN, 1, kFree, kTN, 1}});
+  bad_query.query_uncertainty[0] = -5;
+  EXPECT_EQ(scorer.add(bad_query), "query 0: uncertainty -5.000000 is not a variance");
+  EXPECT_EQ(scorer.add(prediction_message(5, {{1.0f, 0.0f, kTN, 5, kFree, kTN, 1}})),
+            "query 0: announced flags (5, 1) are not 0 or 1");
+  bad_query = prediction_message(5, {{1.0f, 0.0f, kTN, 1, kFree, kTN, 1}});
+  bad_query.query_p_wrong[0] = 7;
+  EXPECT_EQ(scorer.add(bad_query).rfind("query 0: P(wrong) 7.000000 with variance", 0), 0u);
   EXPECT_EQ(scorer.add(prediction_message(5, {}, std::nan(""))).rfind("compute_ms nan", 0), 0u);
   EXPECT_EQ(scorer.add(prediction_message(5, {}, -1e9)).rfind("compute_ms -1e+09", 0), 0u);
   introspection_labels_t bad_label = labels_message(6, cells);
