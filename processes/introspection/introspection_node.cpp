@@ -303,6 +303,10 @@ void IntrospectionNode::check_image_size(cv::Size size) {
 }
 
 cv::Mat IntrospectionNode::model_input(const Frame& frame, const std::string& where, cv::Mat& left) {
+  if (const std::string why = stereo_times_error(frame.msg); !why.empty()) {
+    heartbeat_.bad_input(where + ": " + why);
+    return {};
+  }
   try {
     left = decode_image(frame.msg.left);
   } catch (const std::exception& e) {  // ImageError, or OpenCV's

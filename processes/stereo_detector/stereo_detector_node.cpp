@@ -136,6 +136,10 @@ void StereoDetectorNode::process(const Frame& frame) {
     return;
   }
   calibration_wait_.end();
+  if (const std::string why = stereo_times_error(frame.msg); !why.empty()) {
+    heartbeat_.bad_input(name + ": " + why);
+    return;
+  }
   const double start_ms = monotonic_ms();
   obstacle_grid_t out = make_obstacle_grid(*grid_, detector_->name(), frame.msg.utime);
   try {

@@ -5,6 +5,7 @@
 #include "ivoa/core/image_convert.hpp"
 #include "ivoa/depth_image_t.hpp"
 #include "ivoa/image_t.hpp"
+#include "ivoa/stereo_image_t.hpp"
 
 namespace ivoa {
 namespace {
@@ -32,6 +33,22 @@ TEST(ImageConvert, LosslessFormatsRoundTripExactly) {
   cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
   EXPECT_EQ(max_abs_diff(decode_image(encode_image(gray, image_t::PIXEL_FORMAT_GRAY, 1), ColorOutput::kGray), gray), 0);
   EXPECT_EQ(max_abs_diff(decode_image(encode_image(bgr, image_t::PIXEL_FORMAT_GRAY, 1), ColorOutput::kGray), gray), 0);
+}
+
+// A pair whose images were taken 5 s apart was matched as one view.
+TEST(ImageConvert, StereoPairTimesMustAgree) {
+  stereo_image_t pair{};
+  pair.utime = pair.left.utime = pair.right.utime = 1'700'000'000'000'000;
+  EXPECT_EQ(stereo_times_error(pair), "");
+  pair.right.utime += kMaxStereoSkewUs;  // a 1 Hz rig's half period: still a pair
+  EXPECT_EQ(stereo_times_error(pair), "");
+  pair.right.utime = pair.left.utime + 5'000'000;
+  EXPECT_EQ(stereo_times_error(pair), "its left and right images were taken 5000 ms apart");
+  pair.right.utime = pair.left.utime;
+  pair.utime += 7'000'000;
+  EXPECT_EQ(stereo_times_error(pair), "its images' utimes lie 7000 ms from the pair's");
+  pair.left.utime = pair.right.utime = 0;  // unknown: not compared
+  EXPECT_EQ(stereo_times_error(pair), "");
 }
 
 TEST(ImageConvert, RgbWireOrderIsRgb) {

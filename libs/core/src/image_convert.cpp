@@ -1,6 +1,7 @@
 #include "ivoa/core/image_convert.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <climits>
 #include <cstring>
 #include <optional>
@@ -11,6 +12,7 @@
 
 #include "ivoa/depth_image_t.hpp"
 #include "ivoa/image_t.hpp"
+#include "ivoa/stereo_image_t.hpp"
 
 namespace ivoa {
 namespace {
@@ -169,6 +171,17 @@ cv::Mat mosaic_bayer(const cv::Mat& bgr, int32_t f) {
     for (int c = 0; c < bgr.cols; ++c) dst[c] = src[c][row_pattern[c & 1]];
   }
   return raw;
+}
+
+std::string stereo_times_error(const stereo_image_t& msg) {
+  const auto apart = [](int64_t a, int64_t b) { return a != 0 && b != 0 && std::llabs(a - b) > kMaxStereoSkewUs; };
+  const auto ms = [](int64_t a, int64_t b) { return std::to_string(std::llabs(a - b) / 1000) + " ms"; };
+  if (apart(msg.left.utime, msg.right.utime))
+    return "its left and right images were taken " + ms(msg.left.utime, msg.right.utime) + " apart";
+  if (apart(msg.utime, msg.left.utime) || apart(msg.utime, msg.right.utime))
+    return "its images' utimes lie " +
+           ms(msg.utime, apart(msg.utime, msg.left.utime) ? msg.left.utime : msg.right.utime) + " from the pair's";
+  return "";
 }
 
 cv::Mat decode_image(const image_t& msg, ColorOutput output) {

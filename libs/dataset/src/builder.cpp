@@ -195,6 +195,9 @@ void SessionBuilder::Impl::on_stereo(const logio::LogEvent& e) {
   if (!logio::decode(e, msg))
     return bad(e.channel + " at byte " + std::to_string(e.offset) +
                ": does not decode as ivoa.stereo_image_t (another type, truncated or damaged)");
+  if (const std::string why = stereo_times_error(msg); !why.empty())
+    return bad(e.channel + " at byte " + std::to_string(e.offset) + ": stereo frame " + std::to_string(msg.utime) +
+               ": " + why);
   ++report.stereo_frames;
   try {
     cv::Mat left = decode_image(msg.left);

@@ -9,6 +9,7 @@
 namespace ivoa {
 class image_t;
 class depth_image_t;
+class stereo_image_t;
 
 // Thrown for an image message that cannot be decoded; what() says why.
 class ImageError : public std::runtime_error {
@@ -28,6 +29,14 @@ constexpr int64_t kMaxImagePixels = int64_t{1} << 26;
 // JPEG, PNG) into an 8-bit BGR or gray cv::Mat that owns its data. A JPEG
 // or PNG is decompressed only if its header's size is the message's.
 cv::Mat decode_image(const image_t& msg, ColorOutput output = ColorOutput::kBgr);
+
+// The most a stereo pair's two exposures, or an exposure and the pair's
+// utime, may lie apart: half the frame period of a 1 Hz rig.
+constexpr int64_t kMaxStereoSkewUs = 500'000;
+// Empty if the pair's times agree (an image utime of 0 is unknown and not
+// compared), otherwise which are how far apart: images 5 s apart were
+// matched as one view of the world.
+std::string stereo_times_error(const stereo_image_t& msg);
 
 // Encodes an 8-bit BGR (3 channels) or gray image. `pixelformat` picks the
 // wire format: GRAY, RGB, BGR, a BAYER_* layout (mosaiced here), JPEG or PNG.
