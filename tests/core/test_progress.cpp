@@ -20,6 +20,12 @@ TEST(Progress, GivesNoEtaFromTheFirstMomentsAndOneAfter) {
   EXPECT_NE(later.find("21/43 MB (49%)"), std::string::npos) << later;
   EXPECT_EQ(later.find("ETA ?"), std::string::npos) << later;
   EXPECT_NE(later.find(", 96 frames"), std::string::npos) << later;
+  // ivoa-train --steps 99999999999 said "ETA -596523h-14m": an int of seconds overflowed.
+  Progress long_run("steps", 1e15, "steps");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  const std::string far = long_run.line(1, "");
+  EXPECT_EQ(far.find("ETA -"), std::string::npos) << far;
+  EXPECT_NE(far.find("ETA over 10^6 h"), std::string::npos) << far;
 }
 
 }  // namespace

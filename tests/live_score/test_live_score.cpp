@@ -170,6 +170,7 @@ TEST(LiveScorer, MessagesWithValuesItCannotScoreAreLeftOutAndSaidWhy) {
   EXPECT_EQ(scorer.add(bad_query).rfind("query 0: P(wrong) 7.000000 with variance", 0), 0u);
   EXPECT_EQ(scorer.add(prediction_message(5, {}, std::nan(""))).rfind("compute_ms nan", 0), 0u);
   EXPECT_EQ(scorer.add(prediction_message(5, {}, -1e9)).rfind("compute_ms -1e+09", 0), 0u);
+  EXPECT_EQ(scorer.add(prediction_message(5, {}, 1e300)).rfind("compute_ms 1e+300", 0), 0u);
   introspection_labels_t bad_label = labels_message(6, cells);
   bad_label.label[1] = 5;
   EXPECT_EQ(scorer.add(bad_label), "cell 1 has label 5, not -1..3");

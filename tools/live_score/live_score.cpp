@@ -43,7 +43,8 @@ std::string LiveScorer::add(const introspection_labels_t& m) {
 }
 
 std::string LiveScorer::add(const introspection_t& m) {
-  if (!(std::isfinite(m.compute_ms) && m.compute_ms >= 0))
+  // Over a day for one frame is no timing either (1e300 printed as 300 digits).
+  if (!(std::isfinite(m.compute_ms) && m.compute_ms >= 0 && m.compute_ms <= 86'400'000))
     return fmt::format("compute_ms {:g} is no duration", m.compute_ms);
   if (std::string why = introspection_content_error(m); !why.empty()) return why;
   for (int i = 0; i < m.num_queries; ++i)

@@ -212,6 +212,10 @@ int main(int argc, char** argv) {
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   finish_config(cl);
   init_logging("train", common.log_level);
+  if (cl.calibrate_only && cl.config.init.empty()) {  // a flag error, not bad input (exit 3)
+    spdlog::error("--calibrate-only needs --init MODEL: the model whose gates to calibrate");
+    return kExitUsage;
+  }
   try {
     return cl.calibrate_only ? calibrate(cl.config) : train(cl.config);
   } catch (const introspection::TrainOutputError& e) {

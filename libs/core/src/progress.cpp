@@ -17,7 +17,10 @@ std::string duration(double s) {
   char buf[32];
   if (s < 60) std::snprintf(buf, sizeof(buf), "%.0fs", s);
   else if (s < 3600) std::snprintf(buf, sizeof(buf), "%dm%02ds", static_cast<int>(s) / 60, static_cast<int>(s) % 60);
-  else std::snprintf(buf, sizeof(buf), "%dh%02dm", static_cast<int>(s) / 3600, static_cast<int>(s) % 3600 / 60);
+  else if (s < 1e6 * 3600)  // an int of seconds overflowed past 68 years: "ETA -596523h-14m"
+    std::snprintf(buf, sizeof(buf), "%lldh%02lldm", static_cast<long long>(s) / 3600,
+                  static_cast<long long>(s) % 3600 / 60);
+  else std::snprintf(buf, sizeof(buf), "over 10^6 h");
   return buf;
 }
 

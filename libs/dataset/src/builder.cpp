@@ -102,6 +102,7 @@ struct SessionBuilder::Impl {
   void count_frames_of_other_sizes();
   std::string no_label_source() const;
   std::string no_samples() const;
+  bool replaces_samples() const;
 };
 
 void SessionBuilder::Impl::bad(const std::string& what) {
@@ -129,9 +130,19 @@ std::string SessionBuilder::Impl::no_label_source() const {
          "monitor? Label it offline from its depth frames with --labels jppc (or dense)" + kept;
 }
 
-// Why logs with frames and labels gave no sample at all (nothing paired,
-// every patch off the image): an empty session replaced a good one of the
-// same name, exit 0.
+// Whether a session of this name with samples is there to be replaced.
+bool SessionBuilder::Impl::replaces_samples() const {
+  try {
+    return SessionReader(root + "/" + session).size() > 0;
+  } catch (const std::exception&) {
+    return false;  // none, or one that cannot be read: replaced as before
+  }
+}
+
+// Why logs gave no sample at all where that is an error: nothing paired
+// (a --sync-tolerance-us too tight), or a session of the name with samples
+// would be replaced by an empty one (it was, exit 0). A session whose frames
+// paired but hold no cell the detector judged is written empty.
 std::string SessionBuilder::Impl::no_samples() const {
   std::string logs;
   for (const auto& log : info.logs) logs += (logs.empty() ? "" : ", ") + log;
@@ -521,9 +532,10 @@ BuildReport SessionBuilder::finish() {
   if (m.label_sources == 0 || m.report.stereo_frames == 0) throw DatasetError(m.no_label_source());
   if (m.pipeline) m.take(m.pipeline->flush());
   m.emit_ready(true);
-  if (m.report.samples == 0) throw DatasetError(m.no_samples());
+  if (m.report.samples == 0 && (m.report.frames_unmatched == m.report.stereo_frames || m.replaces_samples()))
+    throw DatasetError(m.no_samples());
   if (!m.writer && !m.frames_by_size.empty()) m.set_image_size(m.frames_by_size.front().first);
-  m.open_writer();  // opened by its first sample already
+  m.open_writer();  // a session without samples (no cell the detector judged) is still written, so it is listed
   m.count_frames_of_other_sizes();
   m.writer->close();
   return m.report;
