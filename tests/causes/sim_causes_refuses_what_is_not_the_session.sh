@@ -29,6 +29,8 @@ expect 2 "office_s5.lcmlog and ./office_s5.lcmlog are both session office_s5" of
 expect 3 "the log's scene is 'indoor_office', $S/libs/sim/scenes/home.yaml is 'home'" \
   --scene "$S/libs/sim/scenes/home.yaml" office_s5.lcmlog
 expect 3 "--start-utime 5 is not the session's first frame" --start-utime 5 office_s5.lcmlog
+# Detector settings no detector takes: a flag error before the logs are read (was exit 3 after them).
+expect 2 "rect_scale must be in [0.05, 1]" --rect_scale 0 office_s5.lcmlog
 # An output that is the log: it was truncated to a CSV header before it was read.
 before=$(md5sum <office_s5.lcmlog)
 for outputs in "--out office_s5.lcmlog" "--out c.csv --variants-out office_s5.lcmlog"; do

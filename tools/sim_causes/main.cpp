@@ -611,7 +611,9 @@ int main(int argc, char** argv) {
   add_options(app, cl);
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   init_logging("sim-causes", common.log_level);
-  try {
+  try {  // the detector's settings before minutes of reading logs (a bad one was exit 3 after them)
+    stereo::validate(cl.opt.detector.jpp);
+    stereo::validate(cl.opt.detector.dense);
     parse_variants(cl);
   } catch (const std::invalid_argument& e) {
     spdlog::error("{}", e.what());
