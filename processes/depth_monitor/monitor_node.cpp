@@ -11,6 +11,9 @@
 #include "ivoa/monitor/labeler.hpp"
 
 namespace ivoa {
+
+// Heartbeat counter of depth frames whose intrinsics are not the calibration's.
+constexpr const char* kDepthIntrinsicsDiffer = "depth_intrinsics_differ";
 namespace {
 
 // Stereo frames without a depth partner for this long (stream time), and at
@@ -37,6 +40,7 @@ MonitorNode::MonitorNode(Bus& bus, Heartbeat& heartbeat, MonitorNodeOptions opti
   bus_.subscribe<obstacle_grid_t>(options_.stereo_channel,
                                   [this](const obstacle_grid_t& m, const ReceiveInfo&) { on_stereo(m); });
   heartbeat_.set_counter(kFramesMissed, 0);
+  heartbeat_.set_counter(kDepthIntrinsicsDiffer, 0);
   heartbeat_.set_state("waiting for calibration");
 }
 
@@ -85,6 +89,7 @@ void MonitorNode::on_depth(const depth_image_t& msg) {
     heartbeat_.bad_input(where + ": intrinsics are not finite and positive");
     return;
   }
+  note_other_intrinsics(msg, where);
   try {
     cv::Mat depth = decode_depth(msg);
     if (cv::countNonZero(depth) == 0) {
@@ -95,6 +100,24 @@ void MonitorNode::on_depth(const depth_image_t& msg) {
   } catch (const std::exception& e) {  // ImageError; LabelError of the stereo frame it completes; OpenCV's
     heartbeat_.bad_input(where + ": " + e.what());
   }
+}
+
+// A sensor in another mode, or a calibration of another sensor, would
+// otherwise be labelled with in silence (fx 100 against 570 went unsaid).
+void MonitorNode::note_other_intrinsics(const depth_image_t& msg, const std::string& where) {
+  const CameraIntrinsics& cal = pipeline_->rig().depth;
+  const auto off = [](double got, double want, double scale) { return std::abs(got - want) > 0.05 * scale; };
+  if (!off(msg.fx, cal.K(0, 0), cal.K(0, 0)) && !off(msg.fy, cal.K(1, 1), cal.K(1, 1)) &&
+      !off(msg.cx, cal.K(0, 2), cal.width) && !off(msg.cy, cal.K(1, 2), cal.height))
+    return;
+  heartbeat_.add_to_counter(kDepthIntrinsicsDiffer, 1);
+  if (!std::exchange(warned_other_intrinsics_, true))
+    spdlog::warn(
+        "{}: its intrinsics (fx {:g}, fy {:g}, cx {:g}, cy {:g}) are not the calibration's ({:g}, {:g}, {:g}, "
+        "{:g}); labelled with the calibration's (another sensor or mode? recalibrate, or fix the driver's). "
+        "Such frames are counted as {}",
+        where, msg.fx, msg.fy, msg.cx, msg.cy, cal.K(0, 0), cal.K(1, 1), cal.K(0, 2), cal.K(1, 2),
+        kDepthIntrinsicsDiffer);
 }
 
 void MonitorNode::on_stereo(const obstacle_grid_t& msg) {

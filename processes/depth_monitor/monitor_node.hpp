@@ -43,6 +43,9 @@ class MonitorNode {
   void on_stereo(const obstacle_grid_t& msg);
   // False (counted, warned about once) while no calibration has arrived.
   bool has_calibration(const std::string& where);
+  // Counts (and warns once of) depth frames whose own intrinsics are not the
+  // calibration's: labelled with the calibration's, as always.
+  void note_other_intrinsics(const depth_image_t& msg, const std::string& where);
   // kFlushed: frames decided because nothing more will come (a stop, a new
   // calibration) say nothing about how the streams pair.
   enum class Pairing { kLive, kFlushed };
@@ -64,6 +67,7 @@ class MonitorNode {
   CalibrationChanges calibrations_;  // to tell a new one from the same one again
   std::unique_ptr<monitor::LabelingPipeline> pipeline_;
   int64_t labelled_cells_ = 0;
+  bool warned_other_intrinsics_ = false;
   struct UnpairedRun {
     int64_t frames = 0, first_utime = 0;
     bool said = false;  // the state says "unpaired"

@@ -78,6 +78,22 @@ TEST(MonitorNode, LabelsPairedFramesAgainstTheDepthVerdict) {
   EXPECT_EQ(f.heartbeat.bad_input_count(), 0);
 }
 
+// A depth frame whose own intrinsics are not the calibration's (fx 100
+// against 570) was labelled in silence: still labelled with the
+// calibration's, but counted (and warned of once).
+TEST(MonitorNode, DepthFramesOfOtherIntrinsicsAreCounted) {
+  NodeFixture f;
+  f.send_calibration();
+  const cv::Mat depth = test::render_depth(f.rig, test::DepthScene{});
+  f.send_depth(1'000'000, depth);
+  EXPECT_EQ(f.heartbeat.counter("depth_intrinsics_differ"), 0);
+  depth_image_t other = encode_depth(depth, 100, 100, 10, 10, 2'000'000);
+  f.bus.publish(channels::kDepthImage, other);
+  f.drain();
+  EXPECT_EQ(f.heartbeat.counter("depth_intrinsics_differ"), 1);
+  EXPECT_EQ(f.heartbeat.bad_input_count(), 0);
+}
+
 // A process started a moment before the drivers sees inputs before the
 // first RIG_CALIBRATION: skipped and counted, but not as bad input.
 TEST(MonitorNode, InputsBeforeTheCalibrationAreCountedApartFromBadInput) {

@@ -40,6 +40,7 @@ class LabelingPipeline {
   std::vector<PipelineOutcome> flush();
 
   const QueryGrid& grid() const { return grid_; }
+  const RigCalibration& rig() const { return rig_; }
   const PairingCounters& counters() const { return pairer_.counters(); }
   const std::string& last_clock_event() const { return pairer_.last_clock_event(); }
 
