@@ -6,7 +6,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <map>
 #include <set>
 
@@ -692,11 +691,6 @@ void copy_with_renamed_channels(const std::string& from, const std::string& to, 
   out.close();
 }
 
-std::string file_text(const std::string& path) {
-  std::ifstream in(path);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 // `ivoa-dataset build` reads such a log by the names given, into the same
 // samples as the original; without them it finds no frames and says so.
 TEST(DatasetBuildCli, RenamedChannelsAreReadWhenNamed) {
@@ -713,9 +707,9 @@ TEST(DatasetBuildCli, RenamedChannelsAreReadWhenNamed) {
       "--truth-channel R2_SIM_GROUND_TRUTH " +
       renamed);
   ASSERT_EQ(named.exit_code, kExitOk) << named.output;
-  const std::string samples = file_text(dir.file("plain") + "/office_s6/samples.csv");
+  const std::string samples = test::read_file(dir.file("plain") + "/office_s6/samples.csv");
   EXPECT_GT(std::count(samples.begin(), samples.end(), '\n'), 20) << samples;
-  EXPECT_EQ(file_text(dir.file("named") + "/office_s6/samples.csv"), samples);
+  EXPECT_EQ(test::read_file(dir.file("named") + "/office_s6/samples.csv"), samples);
 
   const auto unnamed = test::run_command(build + dir.file("unnamed") + " " + renamed);
   EXPECT_NE(unnamed.output.find("no RIG_CALIBRATION message in the log"), std::string::npos) << unnamed.output;

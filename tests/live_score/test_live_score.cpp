@@ -236,6 +236,14 @@ class LiveScoreTool : public ::testing::Test {
     m.encode(buf.data(), 0, static_cast<int>(buf.size()));
     log.write(channel, m.utime, buf.data(), buf.size());
   }
+  // A log of one labelled and predicted frame (one TN cell) on these channels.
+  static void write_one_frame_log(const std::string& path, const char* labels_channel,
+                                  const char* predictions_channel) {
+    logio::LogWriter log(path);
+    write(log, labels_channel, labels_message(1, {{1.0f, 0.0f, kTN, kFree}}));
+    write(log, predictions_channel, prediction_message(1, {{1.0f, 0.0f, kTN, 1, kFree, kTN, 1}}));
+    log.close();
+  }
   // Runs the tool; its exit code, and stdout + stderr in `output`.
   int run(const std::string& args, std::string& output) const {
     const std::string out_file = (dir / "out.txt").string();
@@ -276,12 +284,7 @@ TEST_F(LiveScoreTool, ScoresALogAndWritesJson) {
 // scored by naming them, and without the names it is refused by them.
 TEST_F(LiveScoreTool, RenamedChannelsAreReadWhenNamed) {
   const std::string log_path = (dir / "renamed.lcmlog").string();
-  {
-    logio::LogWriter log(log_path);
-    write(log, "ROBOT2_LABELS", labels_message(1, {{1.0f, 0.0f, kTN, kFree}}));
-    write(log, "ROBOT2_INTROSPECTION", prediction_message(1, {{1.0f, 0.0f, kTN, 1, kFree, kTN, 1}}));
-    log.close();
-  }
+  write_one_frame_log(log_path, "ROBOT2_LABELS", "ROBOT2_INTROSPECTION");
   std::string out;
   EXPECT_EQ(run(log_path, out), 3);
   EXPECT_NE(out.find("no INTROSPECTION messages to score"), std::string::npos) << out;
@@ -346,12 +349,7 @@ TEST_F(LiveScoreTool, MessagesAllLeftOutAreNotCalledMissing) {
 
 TEST_F(LiveScoreTool, ALogGivenTwiceIsRefusedRatherThanCountedTwice) {
   const std::string log_path = (dir / "live.lcmlog").string();
-  {
-    logio::LogWriter log(log_path);
-    write(log, "INTROSPECTION_LABELS", labels_message(1, {{1.0f, 0.0f, kTN, kFree}}));
-    write(log, "INTROSPECTION", prediction_message(1, {{1.0f, 0.0f, kTN, 1, kFree, kTN, 1}}));
-    log.close();
-  }
+  write_one_frame_log(log_path, "INTROSPECTION_LABELS", "INTROSPECTION");
   std::string out;
   EXPECT_EQ(run(log_path + " " + (dir / "." / "live.lcmlog").string(), out), 2);
   EXPECT_NE(out.find("live.lcmlog is given twice: its frames would count twice"), std::string::npos) << out;

@@ -82,16 +82,10 @@ obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& det
   return msg;
 }
 
-namespace {
-
-// No calibrated image is SHRT_MAX a side: a cell "in view" at pixel 1e9 was
-// predicted at, labelled and drawn.
 bool pixel_in_some_image(float u, float v) {
   const auto in_range = [](float p) { return p >= -1.0f && p <= static_cast<float>(SHRT_MAX); };
   return in_range(u) && in_range(v);
 }
-
-}  // namespace
 
 std::string grid_content_error(const obstacle_grid_t& msg) {
   // Cells are indexed ix * num_y + iy: a shape that is not the cells' count

@@ -1,11 +1,11 @@
 #include "ivoa/core/introspection_content.hpp"
 
-#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <utility>
 #include <vector>
 
+#include "ivoa/core/grid_messages.hpp"
 #include "ivoa/introspection_labels_t.hpp"
 #include "ivoa/obstacle_grid_t.hpp"
 
@@ -22,8 +22,6 @@ bool is_probability(float p) { return std::isfinite(p) && p >= -kRounding && p <
 bool is_variance(float v) { return std::isfinite(v) && v >= -1e-6f; }
 bool is_label(int8_t c) { return c >= Labels::LABEL_TP && c <= Labels::LABEL_FN; }
 bool is_flag(int8_t f) { return f == 0 || f == 1; }
-// As a grid cell's: no calibrated image is SHRT_MAX a side.
-bool is_pixel(float p) { return p >= -1.0f && p <= static_cast<float>(SHRT_MAX); }
 
 std::string heatmap_error(const introspection_t& m) {
   if (m.rows < 0 || m.cols < 0 || int64_t{m.rows} * m.cols != m.num_cells)
@@ -50,7 +48,7 @@ std::string query_error(const introspection_t& m, size_t i) {
   const std::string query = "query " + std::to_string(i) + ": ";
   if (!std::isfinite(m.query_x[i]) || !std::isfinite(m.query_y[i])) return query + "position is not finite";
   // The viewer drew a NaN pixel, a probability of 7 and a variance of -5.
-  if (!is_pixel(m.query_u[i]) || !is_pixel(m.query_v[i]))
+  if (!pixel_in_some_image(m.query_u[i], m.query_v[i]))
     return query + "pixel (" + std::to_string(m.query_u[i]) + ", " + std::to_string(m.query_v[i]) +
            ") lies outside any image";
   if (!is_label(m.query_class[i]))

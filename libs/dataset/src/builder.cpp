@@ -100,6 +100,7 @@ struct SessionBuilder::Impl {
   void open_writer();
   void set_image_size(cv::Size size);
   void count_frames_of_other_sizes();
+  std::string logs_read() const;  // "a.lcmlog, b.lcmlog", for messages
   std::string no_label_source() const;
   std::string no_samples() const;
   bool replaces_samples() const;
@@ -111,12 +112,17 @@ void SessionBuilder::Impl::bad(const std::string& what) {
   spdlog::warn("skipped: {}", what);
 }
 
+std::string SessionBuilder::Impl::logs_read() const {
+  std::string logs;
+  for (const auto& log : info.logs) logs += (logs.empty() ? "" : ", ") + log;
+  return logs;
+}
+
 // Why a session whose logs hold nothing to label from, or no stereo frame
 // to cut patches from, is refused, before an existing session of that name
 // is replaced by an empty one.
 std::string SessionBuilder::Impl::no_label_source() const {
-  std::string logs;
-  for (const auto& log : info.logs) logs += (logs.empty() ? "" : ", ") + log;
+  const std::string logs = logs_read();
   const std::string kept = "; session '" + session + "' not written (an existing one is kept)";
   if (report.stereo_frames == 0)
     return logs + ": no " + options.stereo_channel + " message after the calibration: no images to cut patches " +
@@ -144,15 +150,14 @@ bool SessionBuilder::Impl::replaces_samples() const {
 // would be replaced by an empty one (it was, exit 0). A session whose frames
 // paired but hold no cell the detector judged is written empty.
 std::string SessionBuilder::Impl::no_samples() const {
-  std::string logs;
-  for (const auto& log : info.logs) logs += (logs.empty() ? "" : ", ") + log;
   std::string why = fmt::format("{} of {} stereo frames labelled", report.frames_labelled, report.stereo_frames);
   if (report.frames_unmatched > 0)
     why += fmt::format(", {} without a depth frame within {:.1f} ms (--sync-tolerance-us)", report.frames_unmatched,
                        static_cast<double>(options.pairing.tolerance_us) / 1e3);
   if (report.patches_outside > 0) why += fmt::format(", {} cells whose patch leaves the image", report.patches_outside);
   if (report.tn_dropped > 0) why += fmt::format(", {} TN cells left out (--keep-tn)", report.tn_dropped);
-  return logs + ": no sample to store (" + why + "); session '" + session + "' not written (an existing one is kept)";
+  return logs_read() + ": no sample to store (" + why + "); session '" + session +
+         "' not written (an existing one is kept)";
 }
 
 void SessionBuilder::Impl::open_writer() {

@@ -27,6 +27,10 @@ obstacle_grid_t make_obstacle_grid(const QueryGrid& grid, const std::string& det
 // outside any image (SHRT_MAX a side).
 std::string grid_content_error(const obstacle_grid_t& msg);
 
+// Whether (u, v) can be a pixel of some calibrated image (none is SHRT_MAX a
+// side): a cell "in view" at pixel 1e9 was predicted at, labelled and drawn.
+bool pixel_in_some_image(float u, float v);
+
 // The same for a labels message: a grid geometry or safety radius that is
 // not a finite distance, num_x by num_y not its cells, a label none of LABEL_*, a position not finite, a
 // labelled cell's pixel outside any image, a verdict none of STATE_*, or a label its two verdicts do not give.
